@@ -1,0 +1,3 @@
+//! The motion: coordinate tables filtered and splined into per-frame q, u, u̇.
+pub mod coordinates;
+pub mod filter;

@@ -1,0 +1,63 @@
+//! Shared input loading for the tools: model, coordinates (filtered as
+//! OpenSim filters them), force classification.
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::model::{compile, Model};
+use crate::motion::filter;
+use crate::parse::osim::ModelSpec;
+use crate::storage::{self, Storage};
+use crate::xml::Element;
+
+/// Read and compile a model file.
+pub fn load_model(path: &Path) -> Result<(ModelSpec, Model)> {
+    let spec = ModelSpec::read(path)?;
+    let model = compile(&spec)?;
+    Ok((spec, model))
+}
+
+/// Read a coordinates file and, with a non-negative cutoff, pad it by half its
+/// length and low-pass filter it as OpenSim's tools do (§9.2).
+pub fn load_coordinates(path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
+    let mut table = storage::read(path)?;
+    if lowpass_cutoff >= 0.0 {
+        let n = table.time.len() / 2;
+        filter::pad(&mut table, n);
+        filter::lowpass_iir(&mut table, lowpass_cutoff).map_err(|e| e.context(format!("filtering {}", path.display())))?;
+    }
+    Ok(table)
+}
+
+/// The broad kind of a force element, for exclusion lists and for deciding
+/// what an analysis must evaluate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceKind {
+    Muscle,
+    /// Non-muscle actuator (force = control × optimal_force).
+    Actuator,
+    /// PointOnPlaneContact (or the original plugin's ContactPointOnPlane).
+    Contact,
+    Other,
+}
+
+pub fn force_kind(el: &Element) -> ForceKind {
+    let t = el.name.as_str();
+    if t.ends_with("Muscle") {
+        ForceKind::Muscle
+    } else if matches!(t, "CoordinateActuator" | "PointActuator" | "TorqueActuator" | "ActivationCoordinateActuator" | "PointToPointActuator") {
+        ForceKind::Actuator
+    } else if matches!(t, "PointOnPlaneContact" | "ContactPointOnPlane") {
+        ForceKind::Contact
+    } else {
+        ForceKind::Other
+    }
+}
+
+/// Whether a force element applies force (`appliesForce`, or 3.x `isDisabled`).
+pub fn applies_force(el: &Element) -> Result<bool> {
+    match el.child("appliesForce") {
+        Some(a) if !a.text().is_empty() => a.bool(),
+        _ => Ok(!el.child_bool_or("isDisabled", false)?),
+    }
+}
