@@ -288,3 +288,56 @@ mod tests {
         assert_eq!(st.value(2.0), 1.0);
     }
 }
+
+/// Every function in the validation models parses (both spellings occur
+/// there: `<MultiplierFunction name="function"><function><Constant>…`).
+#[cfg(test)]
+mod validation_models {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn walk<'a>(el: &'a Element, out: &mut Vec<&'a Element>) {
+        out.push(el);
+        for c in &el.children {
+            walk(c, out);
+        }
+    }
+
+    #[test]
+    fn all_functions_in_validation_models_parse() {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/validation");
+        if !root.exists() {
+            eprintln!("SKIP: {} absent", root.display());
+            return;
+        }
+        let mut n_fun = 0;
+        for case in ["arm26", "leg6dof9musc_stance", "gait10dof18musc_walk"] {
+            let path = root.join(case).join("model_40.osim");
+            if !path.exists() {
+                eprintln!("SKIP: {} absent", path.display());
+                continue;
+            }
+            let doc = crate::xml::parse_file(&path).unwrap();
+            let mut all = Vec::new();
+            walk(&doc, &mut all);
+            for el in all {
+                if el.name == "TransformAxis" {
+                    // absent function means Constant(0) to the caller
+                    let f = Function::find_property(el, "function").unwrap();
+                    if let Some(f) = f {
+                        n_fun += 1;
+                        for i in 0..=20 {
+                            let q = -2.0 + 0.2 * i as f64;
+                            let (a, b, c) = f.eval2(q);
+                            assert!(a.is_finite() && b.is_finite() && c.is_finite());
+                        }
+                    }
+                }
+                if FUNCTION_TAGS.contains(&el.name.as_str()) {
+                    Function::from_xml(el).unwrap_or_else(|e| panic!("{e}"));
+                }
+            }
+        }
+        eprintln!("{n_fun} TransformAxis functions parsed");
+    }
+}
