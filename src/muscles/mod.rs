@@ -2,6 +2,9 @@
 //! semantics §4 (4.1–4.5). Path geometry is not handled here: callers pass
 //! the musculotendon length L and lengthening speed dL/dt.
 
+// `!(x > 0.0)` is used on purpose throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+
 pub mod millard2012;
 pub mod pennation;
 pub mod thelen2003;
@@ -18,6 +21,7 @@ pub const LATEST_DOCUMENT_VERSION: i64 = 40600;
 
 /// The muscle model and its model-specific properties.
 #[derive(Debug, Clone, PartialEq)]
+#[allow(clippy::large_enum_variant)] // few muscles per model; keeps the plain API
 pub enum MuscleModel {
     Thelen2003(Thelen2003),
     Millard2012(Millard2012),

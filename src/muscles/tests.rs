@@ -603,3 +603,54 @@ fn find_text<'a>(el: &'a crate::xml::Element, name: &str) -> Option<&'a str> {
     }
     el.children.iter().find_map(|c| find_text(c, name))
 }
+
+#[test]
+fn thelen_default_curves_match_opensim() {
+    use super::thelen2003::{active_force_length, passive_force_length, tendon_force_length};
+    // OpenSim 4.6: Thelen2003Muscle("t", 1000, 0.1, 0.2, 0) in the slider model at
+    // coordinate L with setFiberLength(s, lce), realizeDynamics, then
+    // getActiveForceLengthMultiplier(s), getPassiveForceMultiplier(s) and
+    // getTendonForce(s)/1000 (tendon length L − lce, no pennation).
+    for (l, lce, fal, fpe, fse) in [
+        (
+            0.31,
+            0.104,
+            0.9964507579472123,
+            0.0026836981684301526,
+            0.5720320651184154,
+        ),
+        (0.31, 0.1, 1.0, 0.0, 1.4279679348815784),
+        (0.3, 0.07, 0.8187307530779819, 0.0, 5.707647283697441),
+        (
+            0.36,
+            0.15,
+            0.5737534207374331,
+            0.4307627178701834,
+            1.4279679348815784,
+        ),
+    ] {
+        let (lce_n, tl_n) = (lce / 0.1, (l - lce) / 0.2);
+        assert_close!(
+            active_force_length(lce_n, 0.45),
+            fal,
+            1e-13,
+            format!("thelen fal({lce_n})")
+        );
+        if fpe == 0.0 {
+            assert_eq!(passive_force_length(lce_n, 0.6, 5.0), 0.0);
+        } else {
+            assert_close!(
+                passive_force_length(lce_n, 0.6, 5.0),
+                fpe,
+                1e-12,
+                format!("thelen fpe({lce_n})")
+            );
+        }
+        assert_close!(
+            tendon_force_length(tl_n, 0.04),
+            fse,
+            1e-12,
+            format!("thelen fse({tl_n})")
+        );
+    }
+}

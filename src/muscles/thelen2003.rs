@@ -152,7 +152,7 @@ impl Thelen2003 {
         let ecc = |f: f64| {
             (
                 (2.0 + 2.0 / af) * (afl * flen - f) / (flen - 1.0),
-                (2.0 + 2.0 / af) * (-1.0) / (flen - 1.0),
+                -(2.0 + 2.0 / af) / (flen - 1.0),
             )
         };
         if fm > fm_asy_c && fm < fm_asy_e * thr {
