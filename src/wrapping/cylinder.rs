@@ -101,6 +101,7 @@ pub fn wrap_cylinder(
         let alpha = (r1am.dot(&r2bm) / (r1am.norm() * r2bm.norm())).acos();
         let beta = (r1bm.dot(&r2am) / (r1bm.norm() * r2am.norm())).acos();
         let on = |v: &V3| dsign(v[ax]) == s;
+        // Comparisons are written as in OpenSim so NaN behaves the same.
         // (r1b, r2a) pairs use far side iff alpha <= beta;
         // (r1a, r2b) pairs use far side iff alpha > beta.
         let pick_b_a = |far: &mut bool| {
@@ -256,21 +257,23 @@ pub(crate) fn make_spiral_path(
         let x = radius * theta;
         let y = axial_dist;
         let len = (x * x + y * y).sqrt();
-        let r1c = *r1;
-        let spiral = |t: f64| rotate_about(&r1c, &dn, sense * t * theta) + dn * (t * axial_dist);
+        // OpenSim's lambda reads the *current* r1, which the adjustment of
+        // r1 below may already have changed when r2's sample is taken.
+        let spiral =
+            |r1: &V3, t: f64| rotate_about(r1, &dn, sense * t * theta) + dn * (t * axial_dist);
         if single_wrap {
             // Visualization off and a single wrap: OpenSim keeps one chord.
-            return (len, vec![spiral(0.0), spiral(1.0)]);
+            return (len, vec![spiral(r1, 0.0), spiral(r1, 1.0)]);
         }
         // Samples every 0.002 m (model units assumed metres, as in OpenSim).
         let n = ((len / 0.002) as i64).max(1) as usize;
         let mut pts = Vec::with_capacity(n);
         for i in 0..n {
             let t = i as f64 / n as f64;
-            let wrap_pt = spiral(t);
+            let wrap_pt = spiral(r1, t);
             if i == 1 && iterations < MAX_ITERATIONS {
                 let adj1 = adjust_tangent_point(p1, &dn, r1, &wrap_pt);
-                let temp = spiral(1.0 - t);
+                let temp = spiral(r1, 1.0 - t);
                 let adj2 = adjust_tangent_point(p2, &dn, r2, &temp);
                 if adj1 || adj2 {
                     iterations += 1;

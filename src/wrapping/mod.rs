@@ -44,7 +44,7 @@ pub fn wrap_line(
     p2: Vector3<f64>,
     single_wrap: bool,
 ) -> WrapResult {
-    match &obj.shape {
+    let res = match &obj.shape {
         WrapShape::Cylinder { radius, length } => {
             cylinder::wrap_cylinder(*radius, *length, obj.quadrant, p1, p2, single_wrap)
         }
@@ -63,6 +63,19 @@ pub fn wrap_line(
             p2,
             single_wrap,
         ),
+    };
+    // Safety net for degenerate input (e.g. coincident endpoints on a
+    // torus) where OpenSim's arithmetic would produce NaN: report no wrap.
+    let finite = res.r1.iter().chain(res.r2.iter()).all(|x| x.is_finite())
+        && res.wrap_path_length.is_finite()
+        && res
+            .wrap_points
+            .iter()
+            .all(|p| p.iter().all(|x| x.is_finite()));
+    if finite {
+        res
+    } else {
+        WrapResult::no_wrap(WrapAction::NoWrap, p1, p2)
     }
 }
 

@@ -7,6 +7,7 @@
 //!   (metres) with 1.0;
 //! * a far-side wrap stores a **negative** arc length −r(2π − angle), which
 //!   `GeometryPath` then adds to the path length as is.
+//!
 //! Deviation: when the line passes within 1e-5 (normalized) of the centre
 //! OpenSim falls back to the previous wrap's tangent points, which are
 //! always NaN after `WrapResult`'s copy (its `factor` is not copied), so the
