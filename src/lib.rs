@@ -15,10 +15,10 @@ pub mod model;
 // pub mod motion;
 pub mod muscles;
 pub mod parse;
-// pub mod paths;
+pub mod paths;
 // pub mod storage;
 // pub mod tools;
-// pub mod wrapping;
+pub mod wrapping;
 pub mod xml;
 
 pub use error::{Error, Location, Result};

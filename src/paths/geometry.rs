@@ -155,7 +155,7 @@ fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data
                     _ => {}
                 }
             }
-            if let Some((at, wr)) = best {
+            if let Some((at, wr)) = best.filter(|(_, wr)| wr.wraps()) {
                 let body = wo.body;
                 let l1 = wo.rotation * wr.r1 + wo.translation;
                 let l2 = wo.rotation * wr.r2 + wo.translation;

@@ -12,7 +12,7 @@ pub mod geometry;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::functions::Function;
 use crate::model::{Model, Transform};
 use crate::wrapping::{PathWrap, WrapObject};
@@ -161,5 +161,3 @@ fn read_point(p: &Element, model: &Model) -> Result<PathPoint> {
     Ok(PathPoint { name: p.name_attr().to_string(), body, frame, location, kind })
 }
 
-#[allow(dead_code)]
-fn unused(_: Error) {}
