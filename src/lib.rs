@@ -9,15 +9,15 @@
 //! [`storage`] (OpenSim `.sto` tables).
 pub mod dynamics;
 pub mod error;
-// pub mod forces;
+pub mod forces;
 pub mod functions;
 pub mod model;
-// pub mod motion;
+pub mod motion;
 pub mod muscles;
 pub mod parse;
 pub mod paths;
-// pub mod storage;
-// pub mod tools;
+pub mod storage;
+pub mod tools;
 pub mod wrapping;
 pub mod xml;
 

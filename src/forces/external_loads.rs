@@ -80,7 +80,8 @@ pub struct ExternalLoads {
 }
 
 fn given(id: Option<&str>) -> Option<&str> {
-    id.map(str::trim).filter(|s| !s.is_empty() && *s != "Unassigned")
+    id.map(str::trim)
+        .filter(|s| !s.is_empty() && *s != "Unassigned")
 }
 
 impl ExternalLoads {
@@ -92,16 +93,32 @@ impl ExternalLoads {
         let el = if root.name == "ExternalLoads" {
             &root
         } else {
-            root.child("ExternalLoads").ok_or_else(|| root.error("no <ExternalLoads> element in file"))?
+            root.child("ExternalLoads")
+                .ok_or_else(|| root.error("no <ExternalLoads> element in file"))?
         };
         let datafile = el
             .child_text("datafile")
             .filter(|s| !s.is_empty())
             .ok_or_else(|| el.error("ExternalLoads has no <datafile>"))?;
-        let candidates = [setup_dir.join(datafile), path.parent().unwrap_or(Path::new(".")).join(datafile)];
-        let data_path = candidates.iter().find(|p| p.is_file()).cloned().ok_or_else(|| {
-            el.req("datafile").map(|d| d.error(format!("data file '{datafile}' not found (looked in {} and {})", candidates[0].display(), candidates[1].display()))).unwrap_or_else(|e| e)
-        })?;
+        let candidates = [
+            setup_dir.join(datafile),
+            path.parent().unwrap_or(Path::new(".")).join(datafile),
+        ];
+        let data_path = candidates
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or_else(|| {
+                el.req("datafile")
+                    .map(|d| {
+                        d.error(format!(
+                            "data file '{datafile}' not found (looked in {} and {})",
+                            candidates[0].display(),
+                            candidates[1].display()
+                        ))
+                    })
+                    .unwrap_or_else(|e| e)
+            })?;
         let table = storage::read(&data_path)?;
         let mut forces = Vec::new();
         if let Some(objs) = el.child("objects") {
@@ -111,10 +128,18 @@ impl ExternalLoads {
                 }
             }
         }
-        Ok(ExternalLoads { forces, data_file: data_path })
+        Ok(ExternalLoads {
+            forces,
+            data_file: data_path,
+        })
     }
 
-    fn read_force(f: &Element, table: &Storage, data_path: &Path, model: &Model) -> Result<Option<ExternalForce>> {
+    fn read_force(
+        f: &Element,
+        table: &Storage,
+        data_path: &Path,
+        model: &Model,
+    ) -> Result<Option<ExternalForce>> {
         let applies = match f.child("appliesForce") {
             Some(a) if !a.text().is_empty() => a.bool()?,
             _ => !f.child_bool_or("isDisabled", false)?,
@@ -128,12 +153,23 @@ impl ExternalLoads {
             let n = n.trim_start_matches('/').trim_start_matches("bodyset/");
             model.body_index(n)
         };
-        let applied_to_body = find_body(body_name)
-            .ok_or_else(|| f.error(format!("applied_to_body '{body_name}' is not a body of model '{}'", model.name)))?;
-        let expressed = |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
+        let applied_to_body = find_body(body_name).ok_or_else(|| {
+            f.error(format!(
+                "applied_to_body '{body_name}' is not a body of model '{}'",
+                model.name
+            ))
+        })?;
+        let expressed =
+            |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
         let series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
             let Some(id) = given(id) else { return Ok(None) };
-            let cols: Vec<usize> = table.labels.iter().enumerate().filter(|(_, l)| l.starts_with(id)).map(|(i, _)| i).collect();
+            let cols: Vec<usize> = table
+                .labels
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with(id))
+                .map(|(i, _)| i)
+                .collect();
             if cols.len() != 3 {
                 return Err(f.error(format!(
                     "identifier '{id}' matches {} columns of {} (labels must start with it; exactly 3 needed)",
@@ -141,7 +177,15 @@ impl ExternalLoads {
                     data_path.display()
                 )));
             }
-            let mk = |c: usize| Series::new(&table.time, &table.column(c)).map_err(|e| e.context(format!("column '{}' of {}", table.labels[c], data_path.display())));
+            let mk = |c: usize| {
+                Series::new(&table.time, &table.column(c)).map_err(|e| {
+                    e.context(format!(
+                        "column '{}' of {}",
+                        table.labels[c],
+                        data_path.display()
+                    ))
+                })
+            };
             Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
         };
         let force = series(f.child_text("force_identifier"))?;
@@ -155,7 +199,11 @@ impl ExternalLoads {
         }
         let body = &model.bodies[applied_to_body].name;
         let mut labels = Vec::new();
-        for (present, suffix) in [(force.is_some(), ["_Fx", "_Fy", "_Fz"]), (point.is_some(), ["_px", "_py", "_pz"]), (torque.is_some(), ["_Tx", "_Ty", "_Tz"])] {
+        for (present, suffix) in [
+            (force.is_some(), ["_Fx", "_Fy", "_Fz"]),
+            (point.is_some(), ["_px", "_py", "_pz"]),
+            (torque.is_some(), ["_Tx", "_Ty", "_Tz"]),
+        ] {
             if present {
                 labels.extend(suffix.iter().map(|s| format!("{body}_{name}{s}")));
             }
@@ -187,8 +235,16 @@ impl ExternalForce {
     /// Force, point of application and torque in ground at time `t`.
     pub fn evaluate(&self, t: f64, data: &Data) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let r_f = data.rotation[self.force_expressed_in];
-        let f_g = self.force.as_ref().map(|s| r_f * s.value(t)).unwrap_or_else(Vector3::zeros);
-        let t_g = self.torque.as_ref().map(|s| r_f * s.value(t)).unwrap_or_else(Vector3::zeros);
+        let f_g = self
+            .force
+            .as_ref()
+            .map(|s| r_f * s.value(t))
+            .unwrap_or_else(Vector3::zeros);
+        let t_g = self
+            .torque
+            .as_ref()
+            .map(|s| r_f * s.value(t))
+            .unwrap_or_else(Vector3::zeros);
         let p_g = match &self.point {
             Some(s) => data.station_position(self.point_expressed_in, &s.value(t)),
             None => data.position[self.applied_to_body],

@@ -44,11 +44,19 @@ pub fn column_for(table: &Storage, name: &str) -> Option<usize> {
 }
 
 impl CoordinateSplines {
-    pub fn new(model: &Model, table: &Storage, missing: MissingCoordinate, file: &std::path::Path) -> Result<Self> {
+    pub fn new(
+        model: &Model,
+        table: &Storage,
+        missing: MissingCoordinate,
+        file: &std::path::Path,
+    ) -> Result<Self> {
         if table.time.len() < 6 {
             return Err(Error::input(
                 Location::file(file),
-                format!("the motion has {} rows; at least 6 are needed for OpenSim's quintic splines", table.time.len()),
+                format!(
+                    "the motion has {} rows; at least 6 are needed for OpenSim's quintic splines",
+                    table.time.len()
+                ),
             ));
         }
         let mut values = Vec::with_capacity(model.nq());
@@ -83,7 +91,13 @@ impl CoordinateSplines {
                 }
             }
         }
-        Ok(CoordinateSplines { time: table.time.clone(), values, splines, constants, missing: missing_names })
+        Ok(CoordinateSplines {
+            time: table.time.clone(),
+            values,
+            splines,
+            constants,
+            missing: missing_names,
+        })
     }
 
     /// q = S(t), u = S'(t), u̇ = S''(t) for every coordinate (InverseDynamicsTool).

@@ -7,6 +7,7 @@
 
 pub mod millard2012;
 pub mod pennation;
+pub mod set;
 pub mod thelen2003;
 
 pub use millard2012::Millard2012;

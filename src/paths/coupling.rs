@@ -17,7 +17,13 @@ use crate::model::Model;
 /// Locked or prescribed coordinates other than k get no entry (their speed is
 /// held at zero).
 pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> {
-    let independent_of = |c: usize| model.couplers.iter().find(|cp| cp.dependent == c).map(|cp| cp.independent[0]);
+    let independent_of = |c: usize| {
+        model
+            .couplers
+            .iter()
+            .find(|cp| cp.dependent == c)
+            .map(|cp| cp.independent[0])
+    };
     let root = independent_of(k).unwrap_or(k);
     let mut w: Vec<(usize, f64)> = vec![(root, 1.0)];
     for cp in &model.couplers {
@@ -27,7 +33,11 @@ pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> 
         }
     }
     if root != k {
-        let wk = w.iter().find(|(i, _)| *i == k).map(|(_, v)| *v).unwrap_or(0.0);
+        let wk = w
+            .iter()
+            .find(|(i, _)| *i == k)
+            .map(|(_, v)| *v)
+            .unwrap_or(0.0);
         if wk == 0.0 {
             // The dependent coordinate cannot move alone: no finite coupling.
             return vec![(k, 1.0)];
@@ -41,5 +51,8 @@ pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> 
 
 /// `C_kᵀ f` for a dense generalized force `f`.
 pub fn project(model: &Model, q: &[f64], k: usize, f: &[f64]) -> f64 {
-    coupling_vector(model, q, k).iter().map(|(i, c)| c * f[*i]).sum()
+    coupling_vector(model, q, k)
+        .iter()
+        .map(|(i, c)| c * f[*i])
+        .sum()
 }

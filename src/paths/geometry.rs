@@ -43,9 +43,17 @@ fn point_local(model: &Model, path: &GeometryPath, i: usize, data: &Data) -> Vec
     let p = &path.points[i];
     let _ = model;
     let loc = match &p.kind {
-        PointKind::Moving { coordinate, functions, clamp } => {
+        PointKind::Moving {
+            coordinate,
+            functions,
+            clamp,
+        } => {
             let q = data.q[*coordinate].clamp(clamp[0], clamp[1]);
-            Vector3::new(functions[0].value(q), functions[1].value(q), functions[2].value(q))
+            Vector3::new(
+                functions[0].value(q),
+                functions[1].value(q),
+                functions[2].value(q),
+            )
         }
         _ => p.location,
     };
@@ -66,7 +74,16 @@ fn length_of(points: &[CurrentPoint], wrap_length: &[f64]) -> f64 {
     let mut l = 0.0;
     for w in points.windows(2) {
         match (w[0].origin, w[1].origin) {
-            (Origin::Wrap { wrap: a, second: false }, Origin::Wrap { wrap: b, second: true }) if a == b => l += wrap_length[a],
+            (
+                Origin::Wrap {
+                    wrap: a,
+                    second: false,
+                },
+                Origin::Wrap {
+                    wrap: b,
+                    second: true,
+                },
+            ) if a == b => l += wrap_length[a],
             _ => l += (w[1].ground - w[0].ground).norm(),
         }
     }
@@ -75,7 +92,13 @@ fn length_of(points: &[CurrentPoint], wrap_length: &[f64]) -> f64 {
 
 /// Compute the current path and its length at the positions in `data`
 /// (`kinematics::positions` must have run).
-pub fn evaluate(model: &Model, path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data, st: &mut PathState) {
+pub fn evaluate(
+    model: &Model,
+    path: &GeometryPath,
+    wraps: &[BodyWrapObject],
+    data: &Data,
+    st: &mut PathState,
+) {
     st.points.clear();
     st.wrap_length.clear();
     st.wrap_length.resize(path.wraps.len(), 0.0);
@@ -83,7 +106,12 @@ pub fn evaluate(model: &Model, path: &GeometryPath, wraps: &[BodyWrapObject], da
         if is_active(path, i, data) {
             let body = path.points[i].body;
             let local = point_local(model, path, i, data);
-            st.points.push(CurrentPoint { origin: Origin::Point(i), body, local, ground: data.station_position(body, &local) });
+            st.points.push(CurrentPoint {
+                origin: Origin::Point(i),
+                body,
+                local,
+                ground: data.station_position(body, &local),
+            });
         }
     }
     if !path.wraps.is_empty() && !st.points.is_empty() {
@@ -93,7 +121,12 @@ pub fn evaluate(model: &Model, path: &GeometryPath, wraps: &[BodyWrapObject], da
 }
 
 /// GeometryPath::applyWrapObjects: insert the tangent points of each wrap.
-fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data, st: &mut PathState) {
+fn apply_wrap_objects(
+    path: &GeometryPath,
+    wraps: &[BodyWrapObject],
+    data: &Data,
+    st: &mut PathState,
+) {
     let n = path.wraps.len();
     let max_iter = if n < 2 { 1 } else { 8 };
     let mut order: Vec<usize> = (0..n).collect();
@@ -107,19 +140,39 @@ fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data
             let wo = &wraps[pw.object];
             result[i] = WrapAction::NoWrap;
             // remove this wrap's previous tangent points
-            st.points.retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == wi));
+            st.points
+                .retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == wi));
             st.wrap_length[wi] = 0.0;
             if !wo.object.active {
                 continue;
             }
             let (rs, re) = pw.wrap.range;
             let wrap_start = if rs < 1 { 0 } else { (rs - 1) as usize };
-            let wrap_end = if re < 1 { npts - 1 } else { ((re - 1) as usize).min(npts - 1) };
-            let Some(jfwd) = (wrap_start..=wrap_end).find(|&j| is_active(path, j, data)) else { return };
-            let Some(jrev) = (wrap_start..=wrap_end).rev().find(|&j| is_active(path, j, data)) else { return };
-            let start = st.points.iter().position(|p| p.origin == Origin::Point(jfwd));
-            let end = st.points.iter().position(|p| p.origin == Origin::Point(jrev));
-            let (Some(start), Some(end)) = (start, end) else { return };
+            let wrap_end = if re < 1 {
+                npts - 1
+            } else {
+                ((re - 1) as usize).min(npts - 1)
+            };
+            let Some(jfwd) = (wrap_start..=wrap_end).find(|&j| is_active(path, j, data)) else {
+                return;
+            };
+            let Some(jrev) = (wrap_start..=wrap_end)
+                .rev()
+                .find(|&j| is_active(path, j, data))
+            else {
+                return;
+            };
+            let start = st
+                .points
+                .iter()
+                .position(|p| p.origin == Origin::Point(jfwd));
+            let end = st
+                .points
+                .iter()
+                .position(|p| p.origin == Origin::Point(jrev));
+            let (Some(start), Some(end)) = (start, end) else {
+                return;
+            };
             // Wrap object frame in ground.
             let r_gw = data.rotation[wo.body] * wo.rotation;
             let p_gw = data.station_position(wo.body, &wo.translation);
@@ -146,7 +199,9 @@ fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data
                     }
                     WrapAction::Wrapped => {
                         let straight = (p2 - p1).norm();
-                        let change = (wr.r1 - p1).norm() + wr.wrap_path_length + (p2 - wr.r2).norm() - straight;
+                        let change =
+                            (wr.r1 - p1).norm() + wr.wrap_path_length + (p2 - wr.r2).norm()
+                                - straight;
                         if change < min_change {
                             min_change = change;
                             best = Some((pt2, wr));
@@ -160,8 +215,24 @@ fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data
                 let l1 = wo.rotation * wr.r1 + wo.translation;
                 let l2 = wo.rotation * wr.r2 + wo.translation;
                 st.wrap_length[wi] = wr.wrap_path_length;
-                let p1 = CurrentPoint { origin: Origin::Wrap { wrap: wi, second: false }, body, local: l1, ground: data.station_position(body, &l1) };
-                let p2 = CurrentPoint { origin: Origin::Wrap { wrap: wi, second: true }, body, local: l2, ground: data.station_position(body, &l2) };
+                let p1 = CurrentPoint {
+                    origin: Origin::Wrap {
+                        wrap: wi,
+                        second: false,
+                    },
+                    body,
+                    local: l1,
+                    ground: data.station_position(body, &l1),
+                };
+                let p2 = CurrentPoint {
+                    origin: Origin::Wrap {
+                        wrap: wi,
+                        second: true,
+                    },
+                    body,
+                    local: l2,
+                    ground: data.station_position(body, &l2),
+                };
                 st.points.insert(at, p1);
                 st.points.insert(at + 1, p2);
             }
@@ -171,10 +242,15 @@ fn apply_wrap_objects(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data
             break;
         }
         last_length = length;
-        if kk == 0 && n > 1 && result[0] == WrapAction::NoWrap && result[1] == WrapAction::InsideRadius {
+        if kk == 0
+            && n > 1
+            && result[0] == WrapAction::NoWrap
+            && result[1] == WrapAction::InsideRadius
+        {
             order.swap(0, 1);
             let w0 = 0;
-            st.points.retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == w0));
+            st.points
+                .retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == w0));
             st.wrap_length[w0] = 0.0;
         }
     }
@@ -185,9 +261,18 @@ fn point_velocity(path: &GeometryPath, data: &Data, p: &CurrentPoint) -> Vector3
     let mut v = data.station_velocity(p.body, &p.local);
     if let Origin::Point(i) = p.origin {
         let pp = &path.points[i];
-        if let PointKind::Moving { coordinate, functions, .. } = &pp.kind {
+        if let PointKind::Moving {
+            coordinate,
+            functions,
+            ..
+        } = &pp.kind
+        {
             let q = data.q[*coordinate];
-            let d = Vector3::new(functions[0].derivative(q, 1), functions[1].derivative(q, 1), functions[2].derivative(q, 1));
+            let d = Vector3::new(
+                functions[0].derivative(q, 1),
+                functions[1].derivative(q, 1),
+                functions[2].derivative(q, 1),
+            );
             v += data.rotation[p.body] * (pp.frame.rotation * d) * data.u[*coordinate];
         }
     }
@@ -201,7 +286,11 @@ pub fn lengthening_speed(path: &GeometryPath, data: &Data, st: &PathState) -> f6
         let d = w[0].ground - w[1].ground;
         let dv = point_velocity(path, data, &w[0]) - point_velocity(path, data, &w[1]);
         let n = d.norm();
-        s += if n < f64::EPSILON { dv.norm() } else { dv.dot(&d) / n };
+        s += if n < f64::EPSILON {
+            dv.norm()
+        } else {
+            dv.dot(&d) / n
+        };
     }
     s
 }
@@ -210,7 +299,13 @@ pub fn lengthening_speed(path: &GeometryPath, data: &Data, st: &PathState) -> f6
 /// `gen` (OpenSim's `GeometryPath::produceForces`): at each point, unit
 /// vectors towards its neighbours on other bodies, plus the work of moving
 /// points. Moment arm about an unconstrained coordinate = this force.
-pub fn add_unit_tension_force(model: &Model, path: &GeometryPath, data: &Data, st: &PathState, gen: &mut [f64]) {
+pub fn add_unit_tension_force(
+    model: &Model,
+    path: &GeometryPath,
+    data: &Data,
+    st: &PathState,
+    gen: &mut [f64],
+) {
     let pts = &st.points;
     for k in 0..pts.len().saturating_sub(1) {
         let (a, b) = (&pts[k], &pts[k + 1]);
@@ -227,9 +322,18 @@ pub fn add_unit_tension_force(model: &Model, path: &GeometryPath, data: &Data, s
         for (p, f) in [(a, e), (b, -e)] {
             if let Origin::Point(i) = p.origin {
                 let pp = &path.points[i];
-                if let PointKind::Moving { coordinate, functions, .. } = &pp.kind {
+                if let PointKind::Moving {
+                    coordinate,
+                    functions,
+                    ..
+                } = &pp.kind
+                {
                     let q = data.q[*coordinate];
-                    let dp = Vector3::new(functions[0].derivative(q, 1), functions[1].derivative(q, 1), functions[2].derivative(q, 1));
+                    let dp = Vector3::new(
+                        functions[0].derivative(q, 1),
+                        functions[1].derivative(q, 1),
+                        functions[2].derivative(q, 1),
+                    );
                     let dp_g = data.rotation[p.body] * (pp.frame.rotation * dp);
                     gen[*coordinate] += dp_g.dot(&f);
                 }

@@ -22,10 +22,17 @@ use crate::xml::Element;
 pub enum PointKind {
     Fixed,
     /// Active iff `range[0] - 1e-5 <= q[coordinate] <= range[1] + 1e-5`.
-    Conditional { coordinate: usize, range: [f64; 2] },
+    Conditional {
+        coordinate: usize,
+        range: [f64; 2],
+    },
     /// Location (x, y, z) = functions of the clamped coordinate, in the
     /// parent frame.
-    Moving { coordinate: usize, functions: Box<[Function; 3]>, clamp: [f64; 2] },
+    Moving {
+        coordinate: usize,
+        functions: Box<[Function; 3]>,
+        clamp: [f64; 2],
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -70,42 +77,81 @@ pub fn resolve_frame(model: &Model, socket: &str, el: &Element) -> Result<(usize
         .frames
         .iter()
         .find(|f| f.path == s)
-        .or_else(|| model.frames.iter().find(|f| f.path == format!("/bodyset/{name}") && (s == name || s.ends_with(&format!("bodyset/{name}")))))
-        .or_else(|| if s == name { model.frames.iter().find(|f| f.name == name) } else { None })
-        .ok_or_else(|| el.error(format!("socket names a frame '{s}' that does not exist in the model")))?;
+        .or_else(|| {
+            model.frames.iter().find(|f| {
+                f.path == format!("/bodyset/{name}")
+                    && (s == name || s.ends_with(&format!("bodyset/{name}")))
+            })
+        })
+        .or_else(|| {
+            if s == name {
+                model.frames.iter().find(|f| f.name == name)
+            } else {
+                None
+            }
+        })
+        .ok_or_else(|| {
+            el.error(format!(
+                "socket names a frame '{s}' that does not exist in the model"
+            ))
+        })?;
     Ok((f.body, f.transform))
 }
 
 fn resolve_coordinate(model: &Model, socket: &str, el: &Element) -> Result<usize> {
     let name = socket.trim().rsplit('/').next().unwrap_or("");
-    model
-        .coordinate_index(name)
-        .ok_or_else(|| el.error(format!("socket names a coordinate '{}' that does not exist in the model", socket.trim())))
+    model.coordinate_index(name).ok_or_else(|| {
+        el.error(format!(
+            "socket names a coordinate '{}' that does not exist in the model",
+            socket.trim()
+        ))
+    })
 }
 
 /// Wrap objects of a model document, bound to body indices.
-pub fn compile_wrap_objects(model: &Model, wraps: &[(String, Element)]) -> Result<Vec<BodyWrapObject>> {
+pub fn compile_wrap_objects(
+    model: &Model,
+    wraps: &[(String, Element)],
+) -> Result<Vec<BodyWrapObject>> {
     wraps
         .iter()
         .map(|(body, el)| {
-            let b = model.body_index(body).ok_or_else(|| el.error(format!("wrap object on unknown body '{body}'")))?;
+            let b = model
+                .body_index(body)
+                .ok_or_else(|| el.error(format!("wrap object on unknown body '{body}'")))?;
             let object = WrapObject::from_xml(el)?;
-            Ok(BodyWrapObject { body: b, rotation: object.rotation, translation: object.translation, object })
+            Ok(BodyWrapObject {
+                body: b,
+                rotation: object.rotation,
+                translation: object.translation,
+                object,
+            })
         })
         .collect()
 }
 
 impl GeometryPath {
     /// Compile a `<GeometryPath>` element (4.0 or 3.x spelling).
-    pub fn from_xml(el: &Element, model: &Model, wrap_objects: &[BodyWrapObject]) -> Result<GeometryPath> {
-        let set = el.child("PathPointSet").ok_or_else(|| el.error("GeometryPath has no PathPointSet"))?;
-        let objs = set.child("objects").ok_or_else(|| set.error("PathPointSet has no <objects>"))?;
+    pub fn from_xml(
+        el: &Element,
+        model: &Model,
+        wrap_objects: &[BodyWrapObject],
+    ) -> Result<GeometryPath> {
+        let set = el
+            .child("PathPointSet")
+            .ok_or_else(|| el.error("GeometryPath has no PathPointSet"))?;
+        let objs = set
+            .child("objects")
+            .ok_or_else(|| set.error("PathPointSet has no <objects>"))?;
         let mut points = Vec::new();
         for p in &objs.children {
             points.push(read_point(p, model)?);
         }
         if points.len() < 2 {
-            return Err(el.error(format!("a path needs at least two points, found {}", points.len())));
+            return Err(el.error(format!(
+                "a path needs at least two points, found {}",
+                points.len()
+            )));
         }
         let mut wraps = Vec::new();
         if let Some(ws) = el.child("PathWrapSet").and_then(|s| s.child("objects")) {
@@ -114,7 +160,12 @@ impl GeometryPath {
                 let object = wrap_objects
                     .iter()
                     .position(|o| o.object.name == wrap.wrap_object)
-                    .ok_or_else(|| w.error(format!("wrap object '{}' does not exist in the model", wrap.wrap_object)))?;
+                    .ok_or_else(|| {
+                        w.error(format!(
+                            "wrap object '{}' does not exist in the model",
+                            wrap.wrap_object
+                        ))
+                    })?;
                 wraps.push(PathWrapRef { object, wrap });
             }
         }
@@ -127,37 +178,63 @@ fn read_point(p: &Element, model: &Model) -> Result<PathPoint> {
         .child_text("socket_parent_frame")
         .filter(|s| !s.is_empty())
         .map(str::to_string)
-        .or_else(|| p.child_text("body").filter(|s| !s.is_empty()).map(|b| format!("/bodyset/{b}")))
+        .or_else(|| {
+            p.child_text("body")
+                .filter(|s| !s.is_empty())
+                .map(|b| format!("/bodyset/{b}"))
+        })
         .ok_or_else(|| p.error("path point has no socket_parent_frame (or 3.x <body>)"))?;
     let (body, frame) = resolve_frame(model, &socket, p)?;
     let location = p.child_vec3_or("location", [0.0; 3])?;
     let coord_socket = |n4: &str, n3: &str| -> Option<String> {
-        p.child_text(n4).filter(|s| !s.is_empty()).or_else(|| p.child_text(n3).filter(|s| !s.is_empty())).map(str::to_string)
+        p.child_text(n4)
+            .filter(|s| !s.is_empty())
+            .or_else(|| p.child_text(n3).filter(|s| !s.is_empty()))
+            .map(str::to_string)
     };
     let kind = match p.name.as_str() {
         "PathPoint" => PointKind::Fixed,
         "ConditionalPathPoint" => {
-            let c = coord_socket("socket_coordinate", "coordinate").ok_or_else(|| p.error("ConditionalPathPoint has no coordinate"))?;
+            let c = coord_socket("socket_coordinate", "coordinate")
+                .ok_or_else(|| p.error("ConditionalPathPoint has no coordinate"))?;
             let range = p.req("range")?.numbers_n(2)?;
-            PointKind::Conditional { coordinate: resolve_coordinate(model, &c, p)?, range: [range[0], range[1]] }
+            PointKind::Conditional {
+                coordinate: resolve_coordinate(model, &c, p)?,
+                range: [range[0], range[1]],
+            }
         }
         "MovingPathPoint" => {
             let sx = coord_socket("socket_x_coordinate", "x_coordinate");
             let sy = coord_socket("socket_y_coordinate", "y_coordinate");
             let sz = coord_socket("socket_z_coordinate", "z_coordinate");
             let named: Vec<&String> = [&sx, &sy, &sz].into_iter().flatten().collect();
-            let first = named.first().ok_or_else(|| p.error("MovingPathPoint names no coordinate"))?;
+            let first = named
+                .first()
+                .ok_or_else(|| p.error("MovingPathPoint names no coordinate"))?;
             let cname = |s: &str| s.trim().rsplit('/').next().unwrap_or("").to_string();
             if named.iter().any(|s| cname(s) != cname(first)) || named.len() != 3 {
-                return Err(p.error("MovingPathPoint: x, y and z locations must depend on the same coordinate"));
+                return Err(p.error(
+                    "MovingPathPoint: x, y and z locations must depend on the same coordinate",
+                ));
             }
             let coordinate = resolve_coordinate(model, first, p)?;
-            let f = |n: &str| -> Result<Function> { Ok(Function::find_property(p, n)?.unwrap_or(Function::Constant(0.0))) };
+            let f = |n: &str| -> Result<Function> {
+                Ok(Function::find_property(p, n)?.unwrap_or(Function::Constant(0.0)))
+            };
             let c = &model.coordinates[coordinate];
-            PointKind::Moving { coordinate, functions: Box::new([f("x_location")?, f("y_location")?, f("z_location")?]), clamp: c.range }
+            PointKind::Moving {
+                coordinate,
+                functions: Box::new([f("x_location")?, f("y_location")?, f("z_location")?]),
+                clamp: c.range,
+            }
         }
         other => return Err(p.error(format!("unsupported path point type '{other}'"))),
     };
-    Ok(PathPoint { name: p.name_attr().to_string(), body, frame, location, kind })
+    Ok(PathPoint {
+        name: p.name_attr().to_string(),
+        body,
+        frame,
+        location,
+        kind,
+    })
 }
-

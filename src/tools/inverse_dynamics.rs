@@ -19,7 +19,17 @@ pub fn labels(model: &Model) -> Vec<String> {
     model
         .coordinates
         .iter()
-        .map(|c| format!("{}{}", c.name, if c.motion_type == MotionType::Rotational { "_moment" } else { "_force" }))
+        .map(|c| {
+            format!(
+                "{}{}",
+                c.name,
+                if c.motion_type == MotionType::Rotational {
+                    "_moment"
+                } else {
+                    "_force"
+                }
+            )
+        })
         .collect()
 }
 
@@ -36,7 +46,8 @@ fn check_forces(spec: &ModelSpec, exclude: &[String]) -> Result<bool> {
         }
         let kind = force_kind(f);
         let excluded = exclude.iter().any(|n| n == f.name_attr())
-            || (kind == ForceKind::Muscle && upper.iter().any(|s| s == "MUSCLES" || s == "ACTUATORS"))
+            || (kind == ForceKind::Muscle
+                && upper.iter().any(|s| s == "MUSCLES" || s == "ACTUATORS"))
             || (kind == ForceKind::Actuator && upper.iter().any(|s| s == "ACTUATORS"));
         if excluded {
             continue;
@@ -67,13 +78,21 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));
     }
     let use_loads = check_forces(&spec, &setup.forces_to_exclude)?;
-    let setup_dir = setup.setup_file.parent().unwrap_or(std::path::Path::new("."));
+    let setup_dir = setup
+        .setup_file
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
     let loads = match (&setup.external_loads_file, use_loads) {
         (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
         _ => None,
     };
     let table = load_coordinates(&setup.coordinates_file, setup.lowpass_cutoff)?;
-    let splines = CoordinateSplines::new(&model, &table, MissingCoordinate::DefaultValue, &setup.coordinates_file)?;
+    let splines = CoordinateSplines::new(
+        &model,
+        &table,
+        MissingCoordinate::DefaultValue,
+        &setup.coordinates_file,
+    )?;
     if !splines.missing.is_empty() {
         warnings.push(format!(
             "{}: no column for coordinates {:?}; using their default values, as OpenSim's InverseDynamicsTool does",
@@ -87,13 +106,19 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     if t0 > last || t1 < first {
         return Err(Error::input(
             crate::Location::file(&setup.setup_file).with_element("<time_range>"),
-            format!("time_range [{t0}, {t1}] lies outside the data of {} ([{first}, {last}])", setup.coordinates_file.display()),
+            format!(
+                "time_range [{t0}, {t1}] lies outside the data of {} ([{first}, {last}])",
+                setup.coordinates_file.display()
+            ),
         ));
     }
     let i0 = find_index(time, t0.max(first));
     let i1 = find_index(time, t1.min(last));
 
-    let dir = opts.results_dir.clone().unwrap_or_else(|| setup.results_directory.clone());
+    let dir = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| setup.results_directory.clone());
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let out = dir.join(&setup.output_gen_force_file);
     let mut writer = StoWriter::create(
@@ -113,11 +138,21 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         writer.write_row(t, &data.tau)?;
     }
     writer.finish()?;
-    Ok(RunSummary { frames: i1 + 1 - i0, files: vec![out], warnings })
+    Ok(RunSummary {
+        frames: i1 + 1 - i0,
+        files: vec![out],
+        warnings,
+    })
 }
 
 /// One frame of the InverseDynamicsTool: result in `data.tau`.
-pub fn inverse_dynamics_frame(model: &Model, loads: Option<&ExternalLoads>, splines: &CoordinateSplines, t: f64, data: &mut Data) {
+pub fn inverse_dynamics_frame(
+    model: &Model,
+    loads: Option<&ExternalLoads>,
+    splines: &CoordinateSplines,
+    t: f64,
+    data: &mut Data,
+) {
     splines.eval(t, &mut data.q, &mut data.u, &mut data.udot);
     kinematics::full(model, data);
     data.clear_applied();

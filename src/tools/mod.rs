@@ -1,7 +1,9 @@
 //! The tools a setup file can name. Each `run_*` reads its inputs, processes
 //! every frame and writes OpenSim-format results.
+pub mod analyze;
 pub mod inverse_dynamics;
 pub mod loading;
+pub mod muscle_analysis;
 
 use std::path::PathBuf;
 

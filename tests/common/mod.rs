@@ -35,15 +35,31 @@ pub struct ColumnError {
 
 /// Compare `ours` against `reference` column by column (matched by label),
 /// row by row (rows must have equal times within 1e-9).
-pub fn compare(ours: &statopt::storage::Storage, reference: &statopt::storage::Storage) -> Vec<ColumnError> {
-    assert_eq!(ours.time.len(), reference.time.len(), "row counts differ: ours {} vs reference {}", ours.time.len(), reference.time.len());
+pub fn compare(
+    ours: &statopt::storage::Storage,
+    reference: &statopt::storage::Storage,
+) -> Vec<ColumnError> {
+    assert_eq!(
+        ours.time.len(),
+        reference.time.len(),
+        "row counts differ: ours {} vs reference {}",
+        ours.time.len(),
+        reference.time.len()
+    );
     for (a, b) in ours.time.iter().zip(&reference.time) {
         assert!((a - b).abs() < 1e-9, "time {a} vs reference {b}");
     }
     let mut out = Vec::new();
     for (j, label) in reference.labels.iter().enumerate() {
-        let k = ours.column_index(label).unwrap_or_else(|| panic!("our output lacks column '{label}'"));
-        let mut e = ColumnError { label: label.clone(), max_abs: 0.0, peak: 0.0, worst_time: 0.0 };
+        let k = ours
+            .column_index(label)
+            .unwrap_or_else(|| panic!("our output lacks column '{label}'"));
+        let mut e = ColumnError {
+            label: label.clone(),
+            max_abs: 0.0,
+            peak: 0.0,
+            worst_time: 0.0,
+        };
         for i in 0..reference.time.len() {
             let (r, o) = (reference.rows[i][j], ours.rows[i][k]);
             e.peak = e.peak.max(r.abs());
