@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use criterion::{criterion_group, criterion_main, Criterion};
 use statopt::dynamics::{kinematics, rnea, Data};
 use statopt::model::compile;
+use statopt::muscles::set::{MuscleFrame, MuscleSet};
 use statopt::parse::osim::ModelSpec;
 
 fn models() -> Vec<(String, PathBuf)> {
@@ -52,6 +53,24 @@ fn bench(c: &mut Criterion) {
             data.q[i] = 0.1 * (i as f64 + 1.0).sin();
             data.u[i] = 0.5 * (i as f64).cos();
             data.udot[i] = (2.0 * i as f64).sin();
+        }
+        let spec = ModelSpec::read(path).unwrap();
+        let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+        if !set.is_empty() {
+            let mut frame = MuscleFrame::new(&set, &model);
+            kinematics::full(&model, &mut data);
+            c.bench_function(&format!("muscle_geometry_frame/{name} ({} muscles)", set.len()), |b| {
+                b.iter(|| {
+                    frame.evaluate(&set, &model, &data);
+                    let mut s = 0.0;
+                    for m in 0..set.len() {
+                        for k in 0..model.nq() {
+                            s += frame.moment_arm(&model, &data.q, m, k);
+                        }
+                    }
+                    std::hint::black_box(s)
+                })
+            });
         }
         c.bench_function(&format!("inverse_dynamics_frame/{name}"), |b| {
             b.iter(|| {

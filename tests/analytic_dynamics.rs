@@ -268,3 +268,50 @@ fn rnea_velocity_terms_satisfy_lagrange_on_spline_custom_joints() {
         }
     }
 }
+
+/// The 3.x layout (joints inside bodies, location_in_parent, inertia_xx...)
+/// gives the same model as the 4.0 layout, with OpenSim's 6-significant-digit
+/// rounding of joint offsets and inertias applied on upgrade.
+#[test]
+fn opensim_3x_layout_matches_40_layout() {
+    let body3 = |name: &str, m: f64, a: f64, i: f64, joint: &str| {
+        format!(
+            r#"<Body name="{name}"><mass>{m}</mass><mass_center>0 {} 0</mass_center>
+<inertia_xx>{i}</inertia_xx><inertia_yy>{i}</inertia_yy><inertia_zz>{i}</inertia_zz>
+<inertia_xy>0</inertia_xy><inertia_xz>0</inertia_xz><inertia_yz>0</inertia_yz><Joint>{joint}</Joint></Body>"#,
+            -a
+        )
+    };
+    let pin3 = |name: &str, parent: &str, loc: f64, coord: &str| {
+        format!(
+            r#"<PinJoint name="{name}"><parent_body>{parent}</parent_body><location_in_parent>0 {loc} 0</location_in_parent>
+<orientation_in_parent>0 0 0</orientation_in_parent><location>0 0 0</location><orientation>0 0 0</orientation>
+<CoordinateSet><objects><Coordinate name="{coord}"><default_value>0</default_value></Coordinate></objects></CoordinateSet></PinJoint>"#
+        )
+    };
+    let text = format!(
+        r#"<OpenSimDocument Version="30000"><Model name="dp3"><gravity>0 -{G} 0</gravity>
+<BodySet><objects><Body name="ground"><mass>0</mass><Joint/></Body>{}{}</objects></BodySet></Model></OpenSimDocument>"#,
+        body3("link1", M1, A1, I1, &pin3("j1", "ground", 0.0, "q1")),
+        body3("link2", M2, A2, I2, &pin3("j2", "link1", -L1, "q2")),
+    );
+    let m3 = model_from(&text);
+    let m4 = double_pendulum(pin);
+    assert_eq!(m3.nq(), 2);
+    let (mut d3, mut d4) = (Data::new(&m3), Data::new(&m4));
+    for d in [&mut d3, &mut d4] {
+        d.q.copy_from_slice(&[0.4, -0.9]);
+        d.u.copy_from_slice(&[1.0, 0.3]);
+        d.udot.copy_from_slice(&[-0.5, 2.0]);
+    }
+    rnea::inverse_dynamics(&m3, &mut d3);
+    rnea::inverse_dynamics(&m4, &mut d4);
+    for i in 0..2 {
+        assert!((d3.tau[i] - d4.tau[i]).abs() < 1e-12, "{} vs {}", d3.tau[i], d4.tau[i]);
+    }
+    // 6 significant digits on upgrade: 0.123456789 -> 0.123457
+    let text = text.replacen("<location_in_parent>0 0 0</location_in_parent>", "<location_in_parent>0.123456789 0 0</location_in_parent>", 1);
+    let m = model_from(&text);
+    let x = m.joints[1].x_pf.translation.x;
+    assert_eq!(x, 0.123457, "offset {x} was not rounded as OpenSim's 3.x upgrade rounds it");
+}

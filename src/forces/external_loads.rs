@@ -232,6 +232,24 @@ impl ExternalLoads {
 }
 
 impl ExternalForce {
+    /// The values OpenSim's ForceReporter records (labels in [`Self::labels`]):
+    /// force in ground, point in the applied body's frame, torque in ground.
+    pub fn record(&self, f_g: &Vector3<f64>, p_g: &Vector3<f64>, t_g: &Vector3<f64>, data: &Data) -> Vec<f64> {
+        let mut v = Vec::with_capacity(9);
+        if self.force.is_some() {
+            v.extend(f_g.iter());
+        }
+        if self.point.is_some() {
+            let b = self.applied_to_body;
+            let local = data.rotation[b].transpose() * (p_g - data.position[b]);
+            v.extend(local.iter());
+        }
+        if self.torque.is_some() {
+            v.extend(t_g.iter());
+        }
+        v
+    }
+
     /// Force, point of application and torque in ground at time `t`.
     pub fn evaluate(&self, t: f64, data: &Data) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let r_f = data.rotation[self.force_expressed_in];

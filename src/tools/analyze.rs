@@ -7,7 +7,7 @@ use crate::motion::coordinates::find_index;
 use crate::motion::states::States;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
 use crate::tools::loading::load_coordinates;
-use crate::tools::{muscle_analysis, RunOptions, RunSummary};
+use crate::tools::{muscle_analysis, static_optimization, RunOptions, RunSummary};
 
 /// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
 /// t <= final_time; a row is recorded when it is the first, the last, or its

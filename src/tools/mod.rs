@@ -4,6 +4,8 @@ pub mod analyze;
 pub mod inverse_dynamics;
 pub mod loading;
 pub mod muscle_analysis;
+pub mod progress;
+pub mod static_optimization;
 
 use std::path::PathBuf;
 
