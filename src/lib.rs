@@ -9,7 +9,7 @@
 //! [`storage`] (OpenSim `.sto` tables).
 pub mod dynamics;
 pub mod error;
-// pub mod forces;
+pub mod forces;
 pub mod functions;
 pub mod model;
 // pub mod motion;
