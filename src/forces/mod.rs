@@ -9,6 +9,8 @@ pub mod external_loads;
 pub mod actuators;
 pub mod lepton;
 pub mod passive;
+#[cfg(test)]
+mod tests;
 
 pub use actuators::{Actuator, ActuatorKind};
 pub use passive::PassiveForce;
