@@ -29,12 +29,15 @@ pub enum ActuatorKind {
         direction: Vector3<f64>,
         force_is_global: bool,
     },
-    /// A torque of unit `axis` on `body_a` and its opposite on `body_b`.
+    /// A torque of unit `axis` on `body_a` and its opposite on `body_b`
+    /// (bodies may be ground).
     Torque {
         body_a: usize,
         body_b: usize,
-        /// Unit vector, in ground when `torque_is_global`, otherwise in
-        /// body A's frame (`axis_frame` below already applied).
+        /// Unit vector, in ground when `torque_is_global`, otherwise in the
+        /// frame of body A's base body (an offset frame's rotation already
+        /// applied). +axis acts on A and −axis on B, as in OpenSim's
+        /// `TorqueActuator::implProduceForces`.
         axis: Vector3<f64>,
         torque_is_global: bool,
     },

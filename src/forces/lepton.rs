@@ -14,6 +14,10 @@
 //! definitions (`step(x)` = 1 for x ≥ 0, `delta(x)` = 1 for x = 0, …). That
 //! string is compiled once with [`evalexpr::build_operator_tree`] and
 //! evaluated with a small stack-allocated context holding `q` and `qdot`.
+//!
+//! Not reproduced: Lepton's `optimize()` algebraic rewrites (constant
+//! folding, `0*x` → 0, `x-x` → 0, merged constant factors). They change
+//! results only in the last bits, or where `x` is NaN or infinite.
 
 use evalexpr::{
     error::EvalexprResultValue, Context, DefaultNumericTypes, EvalexprError, EvalexprResult, Node,
