@@ -80,21 +80,6 @@ pub struct AnalysisModel {
     pub warnings: Vec<String>,
 }
 
-/// Read the force elements of a force-set file (`<ForceSet>` document).
-pub fn read_force_set_file(path: &Path) -> Result<Vec<Element>> {
-    let root = crate::xml::parse_file(path)?;
-    let set = if root.name == "ForceSet" {
-        Some(&root)
-    } else {
-        root.child("ForceSet")
-    };
-    let set = set.ok_or_else(|| root.error("no <ForceSet> element in force-set file"))?;
-    Ok(set
-        .child("objects")
-        .map(|o| o.children.clone())
-        .unwrap_or_default())
-}
-
 pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<AnalysisModel> {
     let (spec, model) = load_model(&setup.model_file)?;
     let mut forces = if setup.replace_force_set {
@@ -103,7 +88,7 @@ pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<
         spec.forces.clone()
     };
     for f in &setup.force_set_files {
-        forces.extend(read_force_set_file(f)?);
+        forces.extend(crate::forces::read_force_set_file(f)?);
     }
     let mut warnings = model.warnings.clone();
     for (what, loc) in &spec.unsupported {
