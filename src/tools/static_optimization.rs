@@ -143,6 +143,7 @@ impl SoProblem {
                     min_control: f64::NEG_INFINITY,
                     max_control: f64::INFINITY,
                     applies_force: true,
+                    type_name: "CoordinateActuator".into(),
                 }));
                 labels.push(name.clone());
                 force_labels.push(name);
