@@ -1,0 +1,444 @@
+//! Reading `.sto` / `.mot` files (semantics §1.2–1.4).
+
+use super::Storage;
+use crate::error::{Error, Location, Result};
+use std::path::Path;
+
+/// Read an OpenSim table file.
+///
+/// The header (up to `endheader`) is parsed first (§1.2). A `version` ≤ 1
+/// (a missing `version` counts as 0) selects the legacy `Storage` rules:
+/// labels and values separated by spaces or tabs, `nRows` rows read (lines
+/// after them are ignored, as OpenSim does; when `nRows` is absent, all rows
+/// to the end of the file are read), version-0 `.mot` files forced to degrees
+/// (§1.3). A higher version selects the `TimeSeriesTable` rules (§1.4):
+/// tab-delimited, first label exactly `time`, data up to the first empty
+/// line, `DataType` double, `Vec3` (flattened `_x _y _z`) or `SpatialVec`
+/// (flattened `_rx _ry _rz _tx _ty _tz`).
+///
+/// Stricter than OpenSim, on purpose: the first label must be `time` in both
+/// formats, the label count must match `nColumns`, every row must hold
+/// exactly one value per column, values must be finite numbers and time must
+/// strictly increase. Each violation is an [`Error::Input`] naming the file,
+/// the line and (where there is one) the column.
+pub fn read(path: &Path) -> Result<Storage> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        Error::input(
+            Location::file(path),
+            format!(
+                "file is not valid UTF-8 text (byte offset {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })?;
+    // Lines with their 1-based numbers, trailing CR removed.
+    let lines: Vec<(usize, &str)> = text
+        .split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
+        .collect();
+    let is_mot = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase().contains(".mot"))
+        .unwrap_or(false);
+    let header = parse_header(path, &lines)?;
+    let body = &lines[header.end_index + 1..];
+    if header.version <= 1 {
+        read_legacy(path, header, body, is_mot)
+    } else {
+        read_table(path, header, body)
+    }
+}
+
+/// What the header block says.
+struct Header {
+    version: i64,
+    n_rows: i64,
+    n_columns: i64,
+    /// Line number of `nColumns` (for error messages).
+    n_columns_line: usize,
+    in_degrees: Option<bool>,
+    /// `Angles are in degrees/radians.` seen while version was 0.
+    legacy_angles: Option<bool>,
+    name: Option<String>,
+    data_type: Option<(usize, String)>,
+    metadata: Vec<(String, String)>,
+    /// Index into `lines` of the `endheader` line.
+    end_index: usize,
+}
+
+fn loc(path: &Path, line: usize) -> Location {
+    Location::file(path).with_line(line)
+}
+
+/// C `atoi`-like parse of a header integer, but an error if no digits.
+fn header_int(path: &Path, line: usize, key: &str, value: &str) -> Result<i64> {
+    let v = value.trim();
+    let end = v
+        .char_indices()
+        .find(|&(i, c)| !(c.is_ascii_digit() || (i == 0 && (c == '-' || c == '+'))))
+        .map(|(i, _)| i)
+        .unwrap_or(v.len());
+    v[..end].parse::<i64>().map_err(|_| {
+        Error::input(
+            loc(path, line),
+            format!("header key '{key}' needs an integer, found '{value}'"),
+        )
+    })
+}
+
+/// Does a line look like data (TimeSeriesTable's `[0-9][0-9.\t -]+`)?
+fn looks_like_data(line: &str) -> bool {
+    let mut chars = line.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_digit())
+        && line.len() >= 2
+        && chars.all(|c| c.is_ascii_digit() || matches!(c, '.' | '\t' | ' ' | '-'))
+}
+
+fn parse_header(path: &Path, lines: &[(usize, &str)]) -> Result<Header> {
+    let mut h = Header {
+        version: 0,
+        n_rows: 0,
+        n_columns: 0,
+        n_columns_line: 0,
+        in_degrees: None,
+        legacy_angles: None,
+        name: None,
+        data_type: None,
+        metadata: Vec::new(),
+        end_index: 0,
+    };
+    let mut first_line = true;
+    let mut free_text: Vec<&str> = Vec::new();
+    let mut first_data_like: Option<usize> = None;
+    for (idx, &(no, raw)) in lines.iter().enumerate() {
+        let line = raw.trim_matches(|c| c == ' ' || c == '\t');
+        if line.is_empty() {
+            continue;
+        }
+        let delim = line.find([' ', '\t', '=']).unwrap_or(line.len());
+        let key = &line[..delim];
+        let rest = line[delim..].trim_start_matches([' ', '\t', '=']);
+        let was_first = first_line;
+        first_line = false;
+        match key {
+            "endheader" => {
+                h.end_index = idx;
+                if !free_text.is_empty() {
+                    h.metadata.push(("header".into(), free_text.join("\n")));
+                }
+                return Ok(h);
+            }
+            "name" => h.name = Some(rest.to_string()),
+            "nr" | "nRows" | "datarows" => h.n_rows = header_int(path, no, key, rest)?,
+            "nc" | "nColumns" | "datacolumns" => {
+                h.n_columns = header_int(path, no, key, rest)?;
+                h.n_columns_line = no;
+            }
+            "version" => h.version = header_int(path, no, key, rest)?,
+            "inDegrees" => {
+                let l = rest.to_ascii_lowercase();
+                h.in_degrees = Some(l == "yes" || l == "y");
+            }
+            "DataType" => h.data_type = Some((no, rest.to_string())),
+            "OpenSimVersion" => {}
+            "Angles" if h.version == 0 => {
+                if line == "Angles are in degrees." {
+                    h.legacy_angles = Some(true);
+                } else if line == "Angles are in radians." {
+                    h.legacy_angles = Some(false);
+                }
+                free_text.push(line);
+            }
+            _ => {
+                if first_data_like.is_none() && looks_like_data(line) {
+                    first_data_like = Some(no);
+                }
+                if let Some((k, v)) = line.split_once('=') {
+                    h.metadata
+                        .push((k.trim().to_string(), v.trim().to_string()));
+                } else if was_first && h.name.is_none() {
+                    h.name = Some(line.to_string());
+                } else {
+                    free_text.push(line);
+                }
+            }
+        }
+    }
+    let msg = match first_data_like {
+        Some(l) => format!("missing 'endheader' line (line {l} already looks like data)"),
+        None => "missing 'endheader' line: the file has no end of header".to_string(),
+    };
+    Err(Error::input(Location::file(path), msg))
+}
+
+/// Parse one data value; `label` names the column for errors.
+fn value(path: &Path, line: usize, label: &str, token: &str) -> Result<f64> {
+    let at = || {
+        Location::file(path)
+            .with_line(line)
+            .with_element(format!("column '{label}'"))
+    };
+    match crate::xml::parse_number(token) {
+        Some(v) if v.is_finite() => Ok(v),
+        Some(_) => Err(Error::input(
+            at(),
+            format!("value '{token}' is not finite (NaN/Inf are not accepted in input data)"),
+        )),
+        None => Err(Error::input(at(), format!("'{token}' is not a number"))),
+    }
+}
+
+fn check_time(path: &Path, st: &Storage, line: usize) -> Result<()> {
+    let n = st.time.len();
+    if n >= 2 && st.time[n - 1] <= st.time[n - 2] {
+        return Err(Error::input(
+            Location::file(path)
+                .with_line(line)
+                .with_element("column 'time'"),
+            format!(
+                "time must increase from row to row, but {} follows {}",
+                st.time[n - 1],
+                st.time[n - 2]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> Result<Storage> {
+    let end_line = body.first().map(|l| l.0 - 1).unwrap_or(0);
+    if h.n_rows < 1 && h.n_columns < 1 {
+        return Err(Error::input(
+            Location::file(path),
+            "header gives neither nRows nor nColumns (a legacy storage file needs them)",
+        ));
+    }
+    let mut it = body
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|&(n, l)| (n, l));
+    let (label_line, label_text) = it
+        .next()
+        .ok_or_else(|| Error::input(loc(path, end_line), "no column labels after 'endheader'"))?;
+    let mut labels: Vec<String> = label_text
+        .split([' ', '\t', '\r'])
+        .filter(|t| !t.is_empty())
+        .map(str::to_string)
+        .collect();
+    if labels.first().map(String::as_str) != Some("time") {
+        return Err(Error::input(
+            loc(path, label_line),
+            format!(
+                "the first column label must be 'time', found '{}' (files without a time column are not supported)",
+                labels.first().map(String::as_str).unwrap_or("")
+            ),
+        ));
+    }
+    if h.n_columns > 0 && labels.len() as i64 != h.n_columns {
+        return Err(Error::input(
+            loc(path, label_line),
+            format!(
+                "header says nColumns={} (line {}) but the label line has {} labels",
+                h.n_columns,
+                h.n_columns_line,
+                labels.len()
+            ),
+        ));
+    }
+    labels.remove(0);
+    let nc = labels.len();
+    let in_degrees = if h.version < 1 && is_mot {
+        true // §1.3: version-0 .mot files are always in degrees
+    } else {
+        h.in_degrees
+            .or(if h.version == 0 {
+                h.legacy_angles
+            } else {
+                None
+            })
+            .unwrap_or(false)
+    };
+    let mut st = Storage {
+        name: h.name.unwrap_or_default(),
+        labels,
+        time: Vec::new(),
+        rows: Vec::new(),
+        in_degrees,
+        metadata: h.metadata,
+    };
+    let limit = if h.n_rows > 0 {
+        h.n_rows as usize
+    } else {
+        usize::MAX
+    };
+    let mut last_line = label_line;
+    for (no, text) in it {
+        if st.time.len() >= limit {
+            break; // OpenSim reads exactly nRows rows and ignores the rest
+        }
+        last_line = no;
+        let toks: Vec<&str> = text.split_whitespace().collect();
+        push_row(path, &mut st, no, &toks, nc)?;
+    }
+    if h.n_rows > 0 && st.time.len() < limit {
+        return Err(Error::input(
+            loc(path, last_line),
+            format!(
+                "header says nRows={} but the file ends after {} data rows",
+                h.n_rows,
+                st.time.len()
+            ),
+        ));
+    }
+    Ok(st)
+}
+
+/// Parse `toks` = time then `nc` values into a new row of `st`.
+fn push_row(path: &Path, st: &mut Storage, no: usize, toks: &[&str], nc: usize) -> Result<()> {
+    if toks.len() < nc + 1 {
+        let missing = if toks.is_empty() {
+            "time".to_string()
+        } else {
+            st.labels[toks.len() - 1].clone()
+        };
+        return Err(Error::input(
+            Location::file(path)
+                .with_line(no)
+                .with_element(format!("column '{missing}'")),
+            format!(
+                "row has {} values, expected {} (time + {} columns)",
+                toks.len(),
+                nc + 1,
+                nc
+            ),
+        ));
+    }
+    if toks.len() > nc + 1 {
+        return Err(Error::input(
+            loc(path, no),
+            format!(
+                "row has {} values, expected {} (time + {} columns)",
+                toks.len(),
+                nc + 1,
+                nc
+            ),
+        ));
+    }
+    let t = value(path, no, "time", toks[0])?;
+    let mut row = Vec::with_capacity(nc);
+    for (j, tok) in toks[1..].iter().enumerate() {
+        row.push(value(path, no, &st.labels[j], tok)?);
+    }
+    st.time.push(t);
+    st.rows.push(row);
+    check_time(path, st, no)
+}
+
+/// Split a TimeSeriesTable line on tabs like `FileAdapter::tokenize`
+/// (tokens trimmed; empty inner tokens kept; a trailing tab adds nothing).
+fn tab_tokens(line: &str) -> Vec<&str> {
+    let mut toks: Vec<&str> = line.split('\t').map(str::trim).collect();
+    if line.ends_with('\t') {
+        toks.pop();
+    }
+    toks
+}
+
+fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage> {
+    let end_line = body.first().map(|l| l.0 - 1).unwrap_or(0);
+    let (width, suffixes): (usize, &[&str]) = match &h.data_type {
+        None => (1, &[""]),
+        Some((_, t)) if t == "double" => (1, &[""]),
+        Some((_, t)) if t == "Vec3" => (3, &["_x", "_y", "_z"]),
+        Some((_, t)) if t == "SpatialVec" => (6, &["_rx", "_ry", "_rz", "_tx", "_ty", "_tz"]),
+        Some((no, t)) => {
+            return Err(Error::input(
+                loc(path, *no),
+                format!("DataType '{t}' is not supported (double, Vec3 and SpatialVec are)"),
+            ))
+        }
+    };
+    let mut it = body
+        .iter()
+        .copied()
+        .skip_while(|(_, l)| l.trim().is_empty());
+    let (label_line, label_text) = it
+        .next()
+        .ok_or_else(|| Error::input(loc(path, end_line), "no column labels after 'endheader'"))?;
+    let raw: Vec<&str> = tab_tokens(label_text)
+        .into_iter()
+        .filter(|t| !t.is_empty())
+        .collect();
+    if raw.first() != Some(&"time") {
+        return Err(Error::input(
+            loc(path, label_line),
+            format!(
+                "the first column label must be exactly 'time' (tab-delimited), found '{}'",
+                raw.first().copied().unwrap_or("")
+            ),
+        ));
+    }
+    let elems: Vec<String> = raw[1..].iter().map(|s| s.to_string()).collect();
+    let labels: Vec<String> = elems
+        .iter()
+        .flat_map(|l| suffixes.iter().map(move |s| format!("{l}{s}")))
+        .collect();
+    let mut st = Storage {
+        name: h.name.clone().unwrap_or_default(),
+        labels,
+        time: Vec::new(),
+        rows: Vec::new(),
+        in_degrees: h.in_degrees.unwrap_or(false),
+        metadata: h.metadata,
+    };
+    for (no, text) in it {
+        if text.trim().is_empty() {
+            break; // TimeSeriesTable stops at the first empty line
+        }
+        let toks = tab_tokens(text);
+        if toks.len() != elems.len() + 1 {
+            let at = if toks.len() < elems.len() + 1 && !toks.is_empty() {
+                Location::file(path)
+                    .with_line(no)
+                    .with_element(format!("column '{}'", elems[toks.len() - 1]))
+            } else {
+                loc(path, no)
+            };
+            return Err(Error::input(
+                at,
+                format!(
+                    "row has {} tab-separated elements, expected {} (time + {} columns)",
+                    toks.len(),
+                    elems.len() + 1,
+                    elems.len()
+                ),
+            ));
+        }
+        let t = value(path, no, "time", toks[0])?;
+        let mut row = Vec::with_capacity(st.labels.len());
+        for (j, tok) in toks[1..].iter().enumerate() {
+            let comps: Vec<&str> = if width == 1 {
+                vec![tok]
+            } else {
+                tok.split(',').map(str::trim).collect()
+            };
+            if comps.len() != width {
+                return Err(Error::input(
+                    Location::file(path)
+                        .with_line(no)
+                        .with_element(format!("column '{}'", elems[j])),
+                    format!("element '{tok}' must have {width} comma-separated components"),
+                ));
+            }
+            for (k, c) in comps.iter().enumerate() {
+                row.push(value(path, no, &st.labels[j * width + k], c)?);
+            }
+        }
+        st.time.push(t);
+        st.rows.push(row);
+        check_time(path, &st, no)?;
+    }
+    Ok(st)
+}

@@ -1,0 +1,296 @@
+use super::*;
+use std::path::{Path, PathBuf};
+
+fn validation_dir() -> Option<PathBuf> {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/validation");
+    if d.is_dir() {
+        Some(d)
+    } else {
+        println!("SKIP: {} absent", d.display());
+        None
+    }
+}
+
+/// A fresh temporary file path (no tempfile crate: pid + test name).
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("statopt-storage-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn write_text(name: &str, text: &str) -> PathBuf {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn c_fixed_matches_printf() {
+    // Expected strings are what C printf("%16.8f") / glibc prints; checked with
+    // Python's '%16.8f' % x, which follows C's rules (exact value, round half even).
+    assert_eq!(format_c_fixed(0.59999926, 16, 8), "      0.59999926");
+    assert_eq!(format_c_fixed(-1e-12, 16, 8), "     -0.00000000");
+    assert_eq!(format_c_fixed(-0.0, 16, 8), "     -0.00000000");
+    assert_eq!(format_c_fixed(0.0, 16, 8), "      0.00000000");
+    assert_eq!(format_c_fixed(0.125, 6, 2), "  0.12"); // exact tie -> even
+    assert_eq!(format_c_fixed(0.375, 6, 2), "  0.38");
+    assert_eq!(format_c_fixed(2.5, 3, 0), "  2");
+    assert_eq!(format_c_fixed(0.045, 0, 2), "0.04"); // 0.045 is below the tie in binary
+    assert_eq!(format_c_fixed(f64::NAN, 16, 8), "             nan");
+    assert_eq!(format_c_fixed(-f64::NAN, 6, 2), "  -nan");
+    assert_eq!(format_c_fixed(f64::INFINITY, 16, 8), "             inf");
+    assert_eq!(format_c_fixed(f64::NEG_INFINITY, 16, 8), "            -inf");
+    // wider than the field: no truncation
+    assert_eq!(format_c_fixed(123456789.5, 4, 1), "123456789.5");
+    assert_eq!(format_c_fixed(0.1, 28, 20), "      0.10000000000000000555");
+}
+
+/// Re-write OpenSim 4.6's ID output (printed with output_precision 20) and
+/// compare the files line by line. The only difference allowed is the
+/// padding after the `nRows=` number (our streaming writer reserves a fixed
+/// width for it), so that one line is compared with trailing spaces removed.
+#[test]
+fn rewrite_matches_opensim_byte_for_byte() {
+    let Some(v) = validation_dir() else { return };
+    let src = v.join("arm26/results/arm26_ID_generalized_forces.sto");
+    let st = read(&src).unwrap();
+    assert_eq!(st.name, "Inverse Dynamics Generalized Forces");
+    assert_eq!(st.len(), 121);
+    let out = tmp("id_rewrite.sto");
+    write(&out, &st, 20).unwrap();
+    let want = std::fs::read_to_string(&src).unwrap();
+    let got = std::fs::read_to_string(&out).unwrap();
+    let (w, g): (Vec<&str>, Vec<&str>) = (want.lines().collect(), got.lines().collect());
+    assert_eq!(w.len(), g.len());
+    let mut data_lines = 0;
+    for (i, (a, b)) in w.iter().zip(&g).enumerate() {
+        if a.starts_with("nRows=") {
+            assert_eq!(*a, b.trim_end(), "line {}", i + 1);
+            assert_ne!(*a, *b, "nRows should be padded");
+        } else {
+            assert_eq!(a, b, "line {}", i + 1);
+            if i > 6 {
+                data_lines += 1;
+            }
+        }
+    }
+    assert_eq!(data_lines, 121);
+    assert_eq!(want.len() + (g[2].len() - w[2].len()), got.len());
+}
+
+#[test]
+fn round_trip_exact_at_precision_20_and_close_at_8() {
+    let st = Storage {
+        name: "Round trip".into(),
+        labels: vec!["a".into(), "b_tx".into(), "c".into()],
+        time: vec![-0.5, 0.0, 0.1, 0.30000000000000004],
+        rows: vec![
+            vec![1.0, -2.5, std::f64::consts::PI],
+            vec![0.001234567890123, 987.6543210987654, -0.1],
+            vec![-123.456, 0.3333333333333333, 42.0],
+            vec![0.5, -0.007, 1.0 / 7.0],
+        ],
+        in_degrees: true,
+        metadata: vec![
+            ("DataRate".into(), "60".into()),
+            ("header".into(), "line one\nline two".into()),
+        ],
+    };
+    let p = tmp("rt20.sto");
+    write(&p, &st, 20).unwrap();
+    let back = read(&p).unwrap();
+    // 20 decimals give >= 17 significant digits for |x| >= 1e-3: bitwise round trip.
+    assert_eq!(back, st);
+
+    let p8 = tmp("rt8.mot");
+    write(&p8, &st, 8).unwrap();
+    let b8 = read(&p8).unwrap();
+    assert_eq!(b8.labels, st.labels);
+    assert!(b8.in_degrees);
+    for (r, s) in b8.rows.iter().zip(&st.rows) {
+        for (x, y) in r.iter().zip(s) {
+            assert!((x - y).abs() <= 5e-9, "{x} vs {y}");
+        }
+    }
+    assert_eq!(b8.column_index("c"), Some(2));
+    assert_eq!(b8.column_index("time"), None);
+    assert_eq!(b8.column(1), vec![-2.5, 987.65432110, 0.33333333, -0.007]);
+}
+
+#[test]
+fn streaming_file_is_valid_after_every_row() {
+    let p = tmp("stream.sto");
+    let labels = vec!["x".to_string(), "y".to_string()];
+    let mut w = StoWriter::create(&p, "Streaming", "\nsome text\n\n", &labels, 8, false).unwrap();
+    let r0 = read(&p).unwrap();
+    assert_eq!(r0.len(), 0);
+    for i in 0..5 {
+        w.write_row(i as f64 * 0.1, &[i as f64, -(i as f64)])
+            .unwrap();
+        // Read without finishing, as if the process were killed now.
+        let r = read(&p).unwrap();
+        assert_eq!(r.len(), i + 1);
+        assert_eq!(r.rows[i], vec![i as f64, -(i as f64)]);
+    }
+    assert!(w.write_row(1.0, &[1.0]).is_err());
+    drop(w);
+    // A half-written row after the counted rows is ignored, as OpenSim does.
+    let mut text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.contains("nRows=5           \n"));
+    text.push_str("      0.50000000\t    1.0");
+    std::fs::write(&p, &text).unwrap();
+    let r = read(&p).unwrap();
+    assert_eq!(r.len(), 5);
+    assert_eq!(r.meta("header"), Some("some text"));
+}
+
+#[test]
+fn writer_rejects_labels_with_spaces() {
+    let p = tmp("badlabel.sto");
+    let e = StoWriter::create(&p, "n", "", &["a b".to_string()], 8, false);
+    assert!(e.is_err());
+}
+
+#[test]
+fn reads_every_validation_table() {
+    let Some(v) = validation_dir() else { return };
+    let mut files = Vec::new();
+    let mut stack = vec![v];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if matches!(
+                p.extension().and_then(|e| e.to_str()),
+                Some("sto") | Some("mot")
+            ) {
+                files.push(p);
+            }
+        }
+    }
+    assert!(files.len() > 10);
+    for f in &files {
+        let st = read(f).unwrap_or_else(|e| panic!("{e}"));
+        let text = std::fs::read_to_string(f).unwrap();
+        let nrows: usize = text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("nRows="))
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        let ncols: usize = text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("nColumns="))
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        assert_eq!(st.len(), nrows, "{}", f.display());
+        assert_eq!(st.labels.len() + 1, ncols, "{}", f.display());
+        assert!(st.rows.iter().all(|r| r.len() == st.labels.len()));
+    }
+    println!("read {} files", files.len());
+    let ik = read(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/validation/arm26/inputs/arm26_InverseKinematics.mot"),
+    )
+    .unwrap();
+    assert!(ik.in_degrees);
+    assert_eq!(ik.name, "Coordinates");
+    assert_eq!(ik.labels, ["r_shoulder_elev", "r_elbow_flex"]);
+    assert_eq!(ik.time[1], 0.00833333);
+    assert_eq!(ik.rows[0], vec![-0.03394423, -0.05440752]);
+}
+
+#[test]
+fn version0_mot_is_in_degrees_even_if_it_says_radians() {
+    let text =
+        "motion\nnRows=2\nnColumns=2\nAngles are in radians.\nendheader\ntime q\n0 1\n0.5 2\n";
+    let st = read(&write_text("v0.mot", text)).unwrap();
+    assert!(st.in_degrees);
+    assert_eq!(st.name, "motion");
+    let st = read(&write_text("v0.sto", text)).unwrap();
+    assert!(!st.in_degrees);
+    let st = read(&write_text(
+        "v0deg.sto",
+        &text.replace("radians", "degrees"),
+    ))
+    .unwrap();
+    assert!(st.in_degrees);
+    assert_eq!(st.time, vec![0.0, 0.5]);
+}
+
+#[test]
+fn reads_time_series_table_v3() {
+    // Layout as written by OpenSim 4.6's STOFileAdapter (§1.4).
+    let text = "inDegrees=yes\nDataType=double\nversion=3\nOpenSimVersion=4.6\nendheader\ntime\tq1\tq2\n0.1\t3.123456789012345\t4\n0.2\t1\t2\n\n9\t9\t9\n";
+    let st = read(&write_text("v3.sto", text)).unwrap();
+    assert!(st.in_degrees);
+    assert_eq!(st.labels, ["q1", "q2"]);
+    assert_eq!(st.rows, vec![vec![3.123456789012345, 4.0], vec![1.0, 2.0]]);
+
+    let vec3 = "DataType=Vec3\nversion=3\nendheader\ntime\tm\n0\t1,2,3\n1\t4,5,6\n";
+    let st = read(&write_text("v3vec.sto", vec3)).unwrap();
+    assert_eq!(st.labels, ["m_x", "m_y", "m_z"]);
+    assert_eq!(st.rows[1], vec![4.0, 5.0, 6.0]);
+
+    let bad = "version=3\nendheader\nt\tq\n0\t1\n";
+    let e = read(&write_text("v3bad.sto", bad)).unwrap_err().to_string();
+    assert!(e.contains("'time'") && e.contains("line 3"), "{e}");
+    let spaces = "version=3\nendheader\ntime q\n0 1\n";
+    assert!(read(&write_text("v3sp.sto", spaces)).is_err());
+}
+
+fn err_of(name: &str, text: &str) -> String {
+    let e = read(&write_text(name, text)).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    e.to_string()
+}
+
+const HEAD: &str = "test\nversion=1\nnRows=3\nnColumns=3\ninDegrees=no\nendheader\ntime\ta\tb\n";
+
+#[test]
+fn input_errors_name_file_line_and_column() {
+    let e = read(Path::new("/nonexistent/dir/x.sto"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("/nonexistent/dir/x.sto"), "{e}");
+
+    let e = err_of(
+        "noend.sto",
+        "test\nversion=1\nnRows=1\nnColumns=2\ntime a\n0 1\n",
+    );
+    assert!(e.contains("endheader") && e.contains("noend.sto"), "{e}");
+
+    let e = err_of("few.sto", &format!("{HEAD}0 1 2\n0.1 1\n0.2 1 2\n"));
+    assert!(e.contains("line 9") && e.contains("column 'b'"), "{e}");
+
+    let e = err_of("word.sto", &format!("{HEAD}0 1 2\n0.1 1 abc\n0.2 1 2\n"));
+    assert!(
+        e.contains("line 9") && e.contains("column 'b'") && e.contains("abc"),
+        "{e}"
+    );
+
+    let e = err_of("nan.sto", &format!("{HEAD}0 1 2\n0.1 NaN 2\n0.2 1 2\n"));
+    assert!(
+        e.contains("line 9") && e.contains("column 'a'") && e.contains("NaN"),
+        "{e}"
+    );
+
+    let e = err_of("inf.sto", &format!("{HEAD}0 1 2\n0.1 1 2\n0.2 1 -inf\n"));
+    assert!(e.contains("line 10") && e.contains("column 'b'"), "{e}");
+
+    let e = err_of("time.sto", &format!("{HEAD}0 1 2\n0.1 1 2\n0.1 1 2\n"));
+    assert!(e.contains("line 10") && e.contains("column 'time'"), "{e}");
+
+    let e = err_of("short.sto", &format!("{HEAD}0 1 2\n0.1 1 2\n"));
+    assert!(e.contains("nRows=3"), "{e}");
+
+    let e = err_of(
+        "ncol.sto",
+        "x\nnRows=1\nnColumns=4\nendheader\ntime a b\n0 1 2\n",
+    );
+    assert!(e.contains("nColumns=4") && e.contains("line 5"), "{e}");
+}
