@@ -1,1 +1,67 @@
-fn main() {}
+//! Model loading and one inverse-dynamics frame, on the shipped example and
+//! on the OpenSim validation models when ../shared/validation is present.
+//! `cargo bench --bench dynamics`
+
+use std::path::{Path, PathBuf};
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use statopt::dynamics::{kinematics, rnea, Data};
+use statopt::model::compile;
+use statopt::parse::osim::ModelSpec;
+
+fn models() -> Vec<(String, PathBuf)> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut v = vec![(
+        "double_pendulum".to_string(),
+        root.join("models/double_pendulum.osim"),
+    )];
+    let val = root.join("../shared/validation");
+    for (case, file) in [
+        ("arm26", "arm26/inputs/arm26.osim"),
+        (
+            "leg6dof9musc",
+            "leg6dof9musc_stance/inputs/leg6dof9musc.osim",
+        ),
+        (
+            "gait10dof18musc",
+            "gait10dof18musc_walk/inputs/subject01.osim",
+        ),
+    ] {
+        if val.join(file).is_file() {
+            v.push((case.to_string(), val.join(file)));
+        } else {
+            eprintln!("SKIP {case}: ../shared/validation is absent");
+        }
+    }
+    let gait2392 = root.join("../shared/models/gait2392/gait2392_thelen2003muscle.osim");
+    if gait2392.is_file() {
+        v.push(("gait2392".to_string(), gait2392));
+    }
+    v
+}
+
+fn bench(c: &mut Criterion) {
+    for (name, path) in models() {
+        let path: &Path = &path;
+        c.bench_function(&format!("load_model/{name}"), |b| {
+            b.iter(|| compile(&ModelSpec::read(path).unwrap()).unwrap())
+        });
+        let model = compile(&ModelSpec::read(path).unwrap()).unwrap();
+        let mut data = Data::new(&model);
+        for i in 0..model.nq() {
+            data.q[i] = 0.1 * (i as f64 + 1.0).sin();
+            data.u[i] = 0.5 * (i as f64).cos();
+            data.udot[i] = (2.0 * i as f64).sin();
+        }
+        c.bench_function(&format!("inverse_dynamics_frame/{name}"), |b| {
+            b.iter(|| {
+                kinematics::full(&model, &mut data);
+                rnea::inverse_dynamics_after_kinematics(&model, &mut data, true);
+                std::hint::black_box(data.tau[0])
+            })
+        });
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

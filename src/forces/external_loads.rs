@@ -1,0 +1,254 @@
+//! OpenSim `ExternalLoads` / `ExternalForce` (opensim-semantics.md §8.1):
+//! forces, points and torques read from a data file, interpolated in time
+//! (constant for 1 row, linear for 2–3, natural cubic GCV spline for ≥ 4)
+//! and applied to bodies.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+
+use crate::dynamics::{BodyForce, Data};
+use crate::error::Result;
+use crate::functions::GcvSpline;
+use crate::model::Model;
+use crate::storage::{self, Storage};
+use crate::xml::{self, Element};
+
+/// One column of load data as a function of time.
+#[derive(Debug, Clone)]
+enum Series {
+    Constant(f64),
+    /// Linear interpolation with linear extrapolation (PiecewiseLinearFunction).
+    Linear(Vec<f64>, Vec<f64>),
+    Spline(GcvSpline),
+}
+
+impl Series {
+    fn new(t: &[f64], y: &[f64]) -> Result<Series> {
+        Ok(match t.len() {
+            0 => Series::Constant(0.0),
+            1 => Series::Constant(y[0]),
+            2 | 3 => Series::Linear(t.to_vec(), y.to_vec()),
+            _ => Series::Spline(GcvSpline::interpolating(3, t, y)?),
+        })
+    }
+    fn value(&self, x: f64) -> f64 {
+        match self {
+            Series::Constant(c) => *c,
+            Series::Linear(t, y) => {
+                let n = t.len();
+                let k = match t.iter().position(|&ti| ti > x) {
+                    Some(0) => 0,
+                    Some(i) => i - 1,
+                    None => n - 2,
+                };
+                let slope = (y[k + 1] - y[k]) / (t[k + 1] - t[k]).max(1e-7);
+                y[k] + slope * (x - t[k])
+            }
+            Series::Spline(s) => s.value(x),
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Vec3Series([Series; 3]);
+
+impl Vec3Series {
+    fn value(&self, t: f64) -> Vector3<f64> {
+        Vector3::new(self.0[0].value(t), self.0[1].value(t), self.0[2].value(t))
+    }
+}
+
+/// One ExternalForce, resolved against a model.
+#[derive(Debug, Clone)]
+pub struct ExternalForce {
+    pub name: String,
+    pub applied_to_body: usize,
+    pub force_expressed_in: usize,
+    pub point_expressed_in: usize,
+    force: Option<Vec3Series>,
+    point: Option<Vec3Series>,
+    torque: Option<Vec3Series>,
+    /// Labels for the force reporter (`<body>_<name>_Fx`, ...).
+    pub labels: Vec<String>,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct ExternalLoads {
+    pub forces: Vec<ExternalForce>,
+    pub data_file: PathBuf,
+}
+
+fn given(id: Option<&str>) -> Option<&str> {
+    id.map(str::trim)
+        .filter(|s| !s.is_empty() && *s != "Unassigned")
+}
+
+impl ExternalLoads {
+    /// Read an ExternalLoads XML file and its data file and bind them to `model`.
+    /// `setup_dir` is the folder of the setup that named the file (OpenSim
+    /// looks for the data file there first, then beside the XML).
+    pub fn load(path: &Path, setup_dir: &Path, model: &Model) -> Result<ExternalLoads> {
+        let root = xml::parse_file(path)?;
+        let el = if root.name == "ExternalLoads" {
+            &root
+        } else {
+            root.child("ExternalLoads")
+                .ok_or_else(|| root.error("no <ExternalLoads> element in file"))?
+        };
+        let datafile = el
+            .child_text("datafile")
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| el.error("ExternalLoads has no <datafile>"))?;
+        let candidates = [
+            setup_dir.join(datafile),
+            path.parent().unwrap_or(Path::new(".")).join(datafile),
+        ];
+        let data_path = candidates
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or_else(|| {
+                el.req("datafile")
+                    .map(|d| {
+                        d.error(format!(
+                            "data file '{datafile}' not found (looked in {} and {})",
+                            candidates[0].display(),
+                            candidates[1].display()
+                        ))
+                    })
+                    .unwrap_or_else(|e| e)
+            })?;
+        let table = storage::read(&data_path)?;
+        let mut forces = Vec::new();
+        if let Some(objs) = el.child("objects") {
+            for f in objs.children_named("ExternalForce") {
+                if let Some(ef) = Self::read_force(f, &table, &data_path, model)? {
+                    forces.push(ef);
+                }
+            }
+        }
+        Ok(ExternalLoads {
+            forces,
+            data_file: data_path,
+        })
+    }
+
+    fn read_force(
+        f: &Element,
+        table: &Storage,
+        data_path: &Path,
+        model: &Model,
+    ) -> Result<Option<ExternalForce>> {
+        let applies = match f.child("appliesForce") {
+            Some(a) if !a.text().is_empty() => a.bool()?,
+            _ => !f.child_bool_or("isDisabled", false)?,
+        };
+        if !applies {
+            return Ok(None);
+        }
+        let name = f.name_attr().to_string();
+        let body_name = f.child_text("applied_to_body").unwrap_or("");
+        let find_body = |n: &str| -> Option<usize> {
+            let n = n.trim_start_matches('/').trim_start_matches("bodyset/");
+            model.body_index(n)
+        };
+        let applied_to_body = find_body(body_name).ok_or_else(|| {
+            f.error(format!(
+                "applied_to_body '{body_name}' is not a body of model '{}'",
+                model.name
+            ))
+        })?;
+        let expressed =
+            |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
+        let series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
+            let Some(id) = given(id) else { return Ok(None) };
+            let cols: Vec<usize> = table
+                .labels
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with(id))
+                .map(|(i, _)| i)
+                .collect();
+            if cols.len() != 3 {
+                return Err(f.error(format!(
+                    "identifier '{id}' matches {} columns of {} (labels must start with it; exactly 3 needed)",
+                    cols.len(),
+                    data_path.display()
+                )));
+            }
+            let mk = |c: usize| {
+                Series::new(&table.time, &table.column(c)).map_err(|e| {
+                    e.context(format!(
+                        "column '{}' of {}",
+                        table.labels[c],
+                        data_path.display()
+                    ))
+                })
+            };
+            Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
+        };
+        let force = series(f.child_text("force_identifier"))?;
+        let point = series(f.child_text("point_identifier"))?;
+        let torque = series(f.child_text("torque_identifier"))?;
+        if force.is_none() && torque.is_none() {
+            return Err(f.error("ExternalForce needs a force_identifier or a torque_identifier"));
+        }
+        if point.is_some() && force.is_none() {
+            return Err(f.error("ExternalForce has a point_identifier but no force_identifier"));
+        }
+        let body = &model.bodies[applied_to_body].name;
+        let mut labels = Vec::new();
+        for (present, suffix) in [
+            (force.is_some(), ["_Fx", "_Fy", "_Fz"]),
+            (point.is_some(), ["_px", "_py", "_pz"]),
+            (torque.is_some(), ["_Tx", "_Ty", "_Tz"]),
+        ] {
+            if present {
+                labels.extend(suffix.iter().map(|s| format!("{body}_{name}{s}")));
+            }
+        }
+        Ok(Some(ExternalForce {
+            name,
+            applied_to_body,
+            force_expressed_in: expressed("force_expressed_in_body"),
+            point_expressed_in: expressed("point_expressed_in_body"),
+            force,
+            point,
+            torque,
+            labels,
+        }))
+    }
+
+    /// Add every load at time `t` to `data.applied` (body positions must be current).
+    pub fn apply(&self, t: f64, data: &mut Data) {
+        for ef in &self.forces {
+            let (f_g, p_g, t_g) = ef.evaluate(t, data);
+            let mut bf = BodyForce::torque(t_g);
+            bf.add(&BodyForce::at_point(f_g, p_g));
+            data.applied[ef.applied_to_body].add(&bf);
+        }
+    }
+}
+
+impl ExternalForce {
+    /// Force, point of application and torque in ground at time `t`.
+    pub fn evaluate(&self, t: f64, data: &Data) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        let r_f = data.rotation[self.force_expressed_in];
+        let f_g = self
+            .force
+            .as_ref()
+            .map(|s| r_f * s.value(t))
+            .unwrap_or_else(Vector3::zeros);
+        let t_g = self
+            .torque
+            .as_ref()
+            .map(|s| r_f * s.value(t))
+            .unwrap_or_else(Vector3::zeros);
+        let p_g = match &self.point {
+            Some(s) => data.station_position(self.point_expressed_in, &s.value(t)),
+            None => data.position[self.applied_to_body],
+        };
+        (f_g, p_g, t_g)
+    }
+}

@@ -1,0 +1,3 @@
+//! Forces that are known at a frame (not optimisation unknowns): external
+//! loads from data files.
+pub mod external_loads;

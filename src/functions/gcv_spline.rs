@@ -1,0 +1,634 @@
+//! `GCVSpline`: Woltring's GCVSPL natural spline, interpolating case only
+//! (opensim-semantics.md §3.2; `OpenSim/Common/GCVSpline.cpp`, simbody
+//! `SplineFitter`/`GCVSPLUtil`).
+//!
+//! With `error_variance = 0` (what OpenSim uses for coordinates, speeds and
+//! external-force data) GCVSPL produces the *natural interpolating spline* of
+//! degree 2m−1 (m = half order): the unique minimiser of ∫(f⁽ᵐ⁾)² through the
+//! data. It is piecewise polynomial of degree 2m−1, C^(2m−2) at the knots,
+//! with f⁽ʲ⁾ = 0 at both end knots for j = m…2m−2. Outside the knots it
+//! continues as the degree m−1 Taylor polynomial of the end knot (quintic
+//! splines extrapolate quadratically, cubic ones linearly). Derivatives of
+//! order ≥ 2m are zero.
+//!
+//! Construction: B-spline basis of degree k = 2m−1 on the data abscissae
+//! (end knots repeated k+1 times). The n interpolation conditions plus the
+//! 2(m−1) natural end conditions give a square system whose rows, ordered
+//! along x, form a band matrix with m−1 sub- and super-diagonals; it is
+//! solved by banded Gaussian elimination with partial pivoting in O(n m²).
+//! The result is converted to per-interval Taylor coefficients so that
+//! evaluation is a binary search plus one Horner scheme, without allocation.
+
+#![allow(clippy::needless_range_loop)] // index loops mirror the band-matrix math
+
+use crate::error::{Error, Result};
+
+/// Largest supported degree (half order 4, "heptic").
+const MAX_DEGREE: usize = 7;
+const MAX_COEF: usize = MAX_DEGREE + 1;
+
+/// An interpolating natural spline of odd degree 1, 3, 5 or 7.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GcvSpline {
+    half_order: usize,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    /// Taylor coefficients f⁽ʲ⁾(base)/j! of n+1 segments: segment 0 is the
+    /// left extrapolation (base x₀), segment s (1 ≤ s ≤ n−1) covers
+    /// [x_{s−1}, x_s) with base x_{s−1}, segment n is the right
+    /// extrapolation (base x_{n−1}). Unused high coefficients are 0.
+    seg: Vec<[f64; MAX_COEF]>,
+}
+
+impl GcvSpline {
+    /// Interpolating natural spline of odd degree (1, 3, 5, 7) through
+    /// (x, y); x strictly increasing; needs n ≥ degree+1 points.
+    pub fn interpolating(degree: usize, x: &[f64], y: &[f64]) -> Result<GcvSpline> {
+        if degree % 2 == 0 || !(1..=MAX_DEGREE).contains(&degree) {
+            return Err(Error::msg(format!(
+                "GCVSpline degree must be 1, 3, 5 or 7, got {degree}"
+            )));
+        }
+        let m = degree.div_ceil(2);
+        if x.len() != y.len() {
+            return Err(Error::msg(format!(
+                "GCVSpline: {} x values but {} y values",
+                x.len(),
+                y.len()
+            )));
+        }
+        let n = x.len();
+        if n < 2 * m {
+            return Err(Error::msg(format!(
+                "GCVSpline: Too few data points: a degree {degree} spline needs at least {} points, got {n}",
+                2 * m
+            )));
+        }
+        if let Some(i) = x.iter().chain(y).position(|v| !v.is_finite()) {
+            let (what, j) = if i < n { ("x", i) } else { ("y", i - n) };
+            return Err(Error::msg(format!(
+                "GCVSpline: {what}[{j}] is not a finite number"
+            )));
+        }
+        if let Some(i) = (1..n).find(|&i| x[i] <= x[i - 1]) {
+            return Err(Error::msg(format!(
+                "GCVSpline: x values must be strictly increasing, but x[{}] = {} and x[{}] = {}",
+                i - 1,
+                x[i - 1],
+                i,
+                x[i]
+            )));
+        }
+        let coef = solve_bspline_coefficients(m, x, y)?;
+        let seg = taylor_segments(m, x, y, &coef);
+        Ok(GcvSpline {
+            half_order: m,
+            x: x.to_vec(),
+            y: y.to_vec(),
+            seg,
+        })
+    }
+
+    pub fn degree(&self) -> usize {
+        2 * self.half_order - 1
+    }
+    pub fn half_order(&self) -> usize {
+        self.half_order
+    }
+    pub fn x(&self) -> &[f64] {
+        &self.x
+    }
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// Segment index (0 = left extrapolation, n = right extrapolation) and
+    /// its base abscissa.
+    #[inline]
+    fn locate(&self, x: f64) -> (usize, f64) {
+        let n = self.x.len();
+        if x < self.x[0] {
+            return (0, self.x[0]);
+        }
+        if x > self.x[n - 1] {
+            return (n, self.x[n - 1]);
+        }
+        // Largest i with x_i <= x, restricted to 0..=n-2 (x = x_{n-1} uses
+        // the last interval).
+        let i = self.x[..n - 1].partition_point(|&k| k <= x).max(1) - 1;
+        (i + 1, self.x[i])
+    }
+
+    pub fn value(&self, x: f64) -> f64 {
+        self.derivative(x, 0)
+    }
+
+    /// Derivative of the given order (0 = value); orders ≥ 2m are 0.
+    pub fn derivative(&self, x: f64, order: usize) -> f64 {
+        let deg = self.degree();
+        if order > deg {
+            return 0.0;
+        }
+        let (s, base) = self.locate(x);
+        let a = &self.seg[s];
+        let t = x - base;
+        // Σ_{j≥order} a_j j!/(j−order)! t^(j−order), by Horner.
+        let mut acc = 0.0;
+        for j in (order..=deg).rev() {
+            acc = acc * t + a[j] * falling(j, order);
+        }
+        acc
+    }
+
+    /// (value, first, second derivative) with one interval search.
+    pub fn eval2(&self, x: f64) -> (f64, f64, f64) {
+        let deg = self.degree();
+        let (s, base) = self.locate(x);
+        let a = &self.seg[s];
+        let t = x - base;
+        // Horner for p, p', p'' simultaneously.
+        let mut p = a[deg];
+        let mut d1 = 0.0;
+        let mut d2 = 0.0;
+        for j in (0..deg).rev() {
+            d2 = d2 * t + d1;
+            d1 = d1 * t + p;
+            p = p * t + a[j];
+        }
+        (p, d1, 2.0 * d2)
+    }
+}
+
+/// j!/(j−r)! for r ≤ j.
+#[inline]
+fn falling(j: usize, r: usize) -> f64 {
+    let mut f = 1.0;
+    for i in (j - r + 1)..=j {
+        f *= i as f64;
+    }
+    f
+}
+
+/// Knot vector of the degree-k B-spline space on the data abscissae, with
+/// the end abscissae repeated k+1 times. Length n + 2k.
+fn knot_vector(k: usize, x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut t = Vec::with_capacity(n + 2 * k);
+    t.extend(std::iter::repeat_n(x[0], k + 1));
+    t.extend_from_slice(&x[1..n - 1]);
+    t.extend(std::iter::repeat_n(x[n - 1], k + 1));
+    t
+}
+
+/// Values and derivatives up to order `nd` of the k+1 B-splines of degree
+/// `k` that are nonzero on knot span `span` (t[span] < t[span+1]), i.e.
+/// B_{span−k} … B_span, evaluated with the polynomial piece of that span at
+/// `u` (which may lie on either end of the span). `ders[d][r]` is the d-th
+/// derivative of B_{span−k+r}. Cox–de Boor triangle with derivative
+/// recurrences on the coefficients of the differentiated basis.
+fn basis_derivatives(
+    t: &[f64],
+    span: usize,
+    k: usize,
+    u: f64,
+    nd: usize,
+) -> [[f64; MAX_COEF]; MAX_COEF] {
+    // ndu[j][r], r < j: knot differences; ndu[r][j], r ≤ j: basis of degree j.
+    let mut ndu = [[0.0; MAX_COEF]; MAX_COEF];
+    let mut left = [0.0; MAX_COEF];
+    let mut right = [0.0; MAX_COEF];
+    ndu[0][0] = 1.0;
+    for j in 1..=k {
+        left[j] = u - t[span + 1 - j];
+        right[j] = t[span + j] - u;
+        let mut saved = 0.0;
+        for r in 0..j {
+            ndu[j][r] = right[r + 1] + left[j - r];
+            let tmp = ndu[r][j - 1] / ndu[j][r];
+            ndu[r][j] = saved + right[r + 1] * tmp;
+            saved = left[j - r] * tmp;
+        }
+        ndu[j][j] = saved;
+    }
+    let mut ders = [[0.0; MAX_COEF]; MAX_COEF];
+    for r in 0..=k {
+        ders[0][r] = ndu[r][k];
+    }
+    let nd = nd.min(k);
+    // a[s][j]: coefficients of the d-th derivative as a combination of
+    // degree k−d basis functions (two alternating rows).
+    for r in 0..=k {
+        let mut a = [[0.0; MAX_COEF]; 2];
+        let (mut s1, mut s2) = (0usize, 1usize);
+        a[0][0] = 1.0;
+        for d in 1..=nd {
+            let mut sum = 0.0;
+            let rk = r as isize - d as isize;
+            let pk = k - d;
+            if rk >= 0 {
+                let rk = rk as usize;
+                a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+                sum = a[s2][0] * ndu[rk][pk];
+            }
+            let j1: usize = if rk >= -1 { 1 } else { (-rk) as usize };
+            let j2: usize = if r as isize - 1 <= pk as isize {
+                d - 1
+            } else {
+                k - r
+            };
+            for j in j1..=j2 {
+                let idx = (rk + j as isize) as usize;
+                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
+                sum += a[s2][j] * ndu[idx][pk];
+            }
+            if r <= pk {
+                a[s2][d] = -a[s1][d - 1] / ndu[pk + 1][r];
+                sum += a[s2][d] * ndu[r][pk];
+            }
+            ders[d][r] = sum;
+            std::mem::swap(&mut s1, &mut s2);
+        }
+    }
+    // Multiply by k!/(k−d)!.
+    let mut f = k as f64;
+    for (d, row) in ders.iter_mut().enumerate().take(nd + 1).skip(1) {
+        for v in row.iter_mut().take(k + 1) {
+            *v *= f;
+        }
+        f *= (k - d) as f64;
+    }
+    ders
+}
+
+/// Solve for the B-spline coefficients of the natural interpolating spline.
+fn solve_bspline_coefficients(m: usize, x: &[f64], y: &[f64]) -> Result<Vec<f64>> {
+    let n = x.len();
+    let k = 2 * m - 1;
+    let nb = n + k - 1; // number of basis functions = number of equations
+    let t = knot_vector(k, x);
+    let bw = m - 1; // sub- and super-diagonals of the (unpivoted) matrix
+    let mut a = Band::new(nb, bw, bw);
+    let mut rhs = vec![0.0; nb];
+
+    // Left end: value row 0, then rows s = 1..m-1 for f^(m-1+s)(x0) = 0.
+    // Derivative rows are scaled by h^d (h = first interval) to O(1).
+    {
+        let span = k;
+        let ders = basis_derivatives(&t, span, k, x[0], k - 1);
+        let h = x[1] - x[0];
+        a.set(0, 0, 1.0);
+        rhs[0] = y[0];
+        for s in 1..m {
+            let d = m - 1 + s;
+            let scale = h.powi(d as i32);
+            for c in 0..=d {
+                a.set(s, c, ders[d][c] * scale);
+            }
+        }
+    }
+    // Interior knots x_i (i = 1..n-2): row m-1+i, columns i..i+k-1
+    // (B_{i+k} vanishes at the left end of its span).
+    for i in 1..n - 1 {
+        let span = k + i;
+        let ders = basis_derivatives(&t, span, k, x[i], 0);
+        let row = m - 1 + i;
+        for r in 0..k {
+            a.set(row, i + r, ders[0][r]);
+        }
+        rhs[row] = y[i];
+    }
+    // Right end: rows nb-1-s for f^(m-1+s)(x_{n-1}) = 0, value row nb-1.
+    {
+        let span = k + n - 2;
+        let ders = basis_derivatives(&t, span, k, x[n - 1], k - 1);
+        let h = x[n - 1] - x[n - 2];
+        let first = span - k; // column of ders[.][0]
+        a.set(nb - 1, nb - 1, 1.0);
+        rhs[nb - 1] = y[n - 1];
+        for s in 1..m {
+            let d = m - 1 + s;
+            let scale = h.powi(d as i32);
+            for c in (nb - 1 - d)..nb {
+                a.set(nb - 1 - s, c, ders[d][c - first] * scale);
+            }
+        }
+    }
+    a.solve(&mut rhs)?;
+    Ok(rhs)
+}
+
+/// Convert B-spline coefficients to the Taylor segments of [`GcvSpline`].
+fn taylor_segments(m: usize, x: &[f64], y: &[f64], coef: &[f64]) -> Vec<[f64; MAX_COEF]> {
+    let n = x.len();
+    let k = 2 * m - 1;
+    let t = knot_vector(k, x);
+    let mut seg = Vec::with_capacity(n + 1);
+    let taylor = |span: usize, u: f64, upto: usize| {
+        let ders = basis_derivatives(&t, span, k, u, upto);
+        let first = span - k;
+        let mut out = [0.0; MAX_COEF];
+        let mut fact = 1.0;
+        for (d, o) in out.iter_mut().enumerate().take(upto + 1) {
+            if d > 0 {
+                fact *= d as f64;
+            }
+            let s: f64 = (0..=k).map(|r| coef[first + r] * ders[d][r]).sum();
+            *o = s / fact;
+        }
+        out
+    };
+    let mut interior = Vec::with_capacity(n - 1);
+    for i in 0..n - 1 {
+        let mut a = taylor(k + i, x[i], k);
+        a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
+        interior.push(a);
+    }
+    // Left extrapolation: Taylor polynomial of degree m-1 at x0.
+    let mut left = interior[0];
+    left[m..].iter_mut().for_each(|v| *v = 0.0);
+    seg.push(left);
+    seg.extend(interior);
+    let mut right = taylor(k + n - 2, x[n - 1], m - 1);
+    right[0] = y[n - 1];
+    seg.push(right);
+    seg
+}
+
+/// A square band matrix with room for the fill-in of partial pivoting.
+/// Row r stores absolute columns r−kl … r+kl+ku.
+struct Band {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    w: usize,
+    data: Vec<f64>,
+}
+
+impl Band {
+    fn new(n: usize, kl: usize, ku: usize) -> Band {
+        let w = 2 * kl + ku + 1;
+        Band {
+            n,
+            kl,
+            ku,
+            w,
+            data: vec![0.0; n * w],
+        }
+    }
+    #[inline]
+    fn idx(&self, r: usize, c: usize) -> usize {
+        debug_assert!(c + self.kl >= r && c <= r + self.kl + self.ku);
+        r * self.w + (c + self.kl - r)
+    }
+    fn set(&mut self, r: usize, c: usize, v: f64) {
+        let i = self.idx(r, c);
+        self.data[i] = v;
+    }
+    fn get(&self, r: usize, c: usize) -> f64 {
+        self.data[self.idx(r, c)]
+    }
+
+    /// Gaussian elimination with partial pivoting; `b` is overwritten with
+    /// the solution.
+    fn solve(&mut self, b: &mut [f64]) -> Result<()> {
+        let n = self.n;
+        let (kl, ku) = (self.kl, self.ku);
+        let scale = self.data.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for p in 0..n {
+            let last_row = (p + kl).min(n - 1);
+            let last_col = (p + kl + ku).min(n - 1);
+            let (mut piv, mut big) = (p, self.get(p, p).abs());
+            for r in p + 1..=last_row {
+                let v = self.get(r, p).abs();
+                if v > big {
+                    piv = r;
+                    big = v;
+                }
+            }
+            if big <= scale * 1e-14 || !big.is_finite() {
+                return Err(Error::internal(
+                    "GCVSpline: singular spline system (ill-conditioned abscissae?)",
+                ));
+            }
+            if piv != p {
+                for c in p..=last_col {
+                    let (i, j) = (self.idx(p, c), self.idx(piv, c));
+                    self.data.swap(i, j);
+                }
+                b.swap(p, piv);
+            }
+            let d = self.get(p, p);
+            for r in p + 1..=last_row {
+                let l = self.get(r, p) / d;
+                if l == 0.0 {
+                    continue;
+                }
+                for c in p..=last_col {
+                    let v = self.get(p, c);
+                    let i = self.idx(r, c);
+                    self.data[i] -= l * v;
+                }
+                b[r] -= l * b[p];
+            }
+        }
+        for p in (0..n).rev() {
+            let last_col = (p + kl + ku).min(n - 1);
+            let mut s = b[p];
+            for c in p + 1..=last_col {
+                s -= self.get(p, c) * b[c];
+            }
+            b[p] = s / self.get(p, p);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(t: f64) -> f64 {
+        (2.0 * std::f64::consts::PI * t).sin() + 0.3 * t.powi(3)
+    }
+
+    /// Derivative of order `d` at `x` of the polynomial piece stored in
+    /// segment `si` (segment i+1 covers [x_i, x_{i+1}]), evaluated
+    /// directly from its Taylor coefficients — used to compare the two
+    /// pieces meeting at a knot.
+    fn piece_derivative(s: &GcvSpline, si: usize, x: f64, d: usize) -> f64 {
+        let base = if si == 0 { s.x[0] } else { s.x[si - 1] };
+        let t = x - base;
+        (d..=s.degree())
+            .map(|j| s.seg[si][j] * falling(j, d) * t.powi((j - d) as i32))
+            .sum()
+    }
+
+    #[test]
+    fn opensim_46_double_splining_example() {
+        // opensim-semantics.md §6.3 (OpenSim 4.6): q = sin 2πt + 0.3t³ at
+        // t = k/20. Also reproduced with the 4.6 venv: GCVSpline XML with
+        // half_order 3, error_variance 0 loaded by
+        // opensim.OpenSimObject.makeObjectFromFile, calcDerivative([0,0], t):
+        // S_q''(0) = -8.097650734633703, S_u'(0) = -5.75735504217664,
+        // S_q''(0.05) = -10.95737007403919, S_u'(0.05) = -12.121769565770084,
+        // S_q''(1) = 9.897650734633043, S_u'(1) = 7.557355042175499.
+        let t: Vec<f64> = (0..21).map(|k| k as f64 / 20.0).collect();
+        let y: Vec<f64> = t.iter().map(|&t| q(t)).collect();
+        let sq = GcvSpline::interpolating(5, &t, &y).unwrap();
+        let u: Vec<f64> = t.iter().map(|&t| sq.derivative(t, 1)).collect();
+        let su = GcvSpline::interpolating(5, &t, &u).unwrap();
+        let cases = [
+            (sq.derivative(0.0, 2), -8.097650734633703),
+            (su.derivative(0.0, 1), -5.75735504217664),
+            (sq.derivative(0.05, 2), -10.95737007403919),
+            (su.derivative(0.05, 1), -12.121769565770084),
+            (sq.derivative(1.0, 2), 9.897650734633043),
+            (su.derivative(1.0, 1), 7.557355042175499),
+        ];
+        for (i, (got, want)) in cases.iter().enumerate() {
+            assert!((got - want).abs() < 1e-8, "case {i}: {got} vs {want}");
+        }
+        // printed digits of the doc
+        assert_eq!(format!("{:.3}", su.derivative(0.0, 1)), "-5.757");
+        assert_eq!(format!("{:.3}", sq.derivative(0.0, 2)), "-8.098");
+    }
+
+    #[test]
+    fn interpolates_and_natural_end_conditions() {
+        // non-uniform abscissae shaped like storage time stamps
+        let x: Vec<f64> = (0..40)
+            .map(|i| 0.59999926 + 0.01 * i as f64 + 0.0031 * ((i * 7 % 5) as f64))
+            .collect();
+        let y: Vec<f64> = x.iter().map(|&t| (3.0 * t).cos() + t * t).collect();
+        for deg in [1usize, 3, 5, 7] {
+            let s = GcvSpline::interpolating(deg, &x, &y).unwrap();
+            let m = deg.div_ceil(2);
+            for (xi, yi) in x.iter().zip(&y) {
+                assert!((s.value(*xi) - yi).abs() < 1e-12, "deg {deg}");
+            }
+            let n = x.len();
+            // High derivatives are compared in units of the mean spacing
+            // (f^(j)·h̄^j): their round-off grows like h^-j and with the
+            // spacing ratio (~23 here), so absolute zeros are not expected.
+            let hbar = (x[n - 1] - x[0]) / (n - 1) as f64;
+            let scaled = |v: f64, j: usize| v * hbar.powi(j as i32);
+            for j in m..=(2 * m).saturating_sub(2) {
+                for &xe in &[x[0], x[n - 1]] {
+                    let v = scaled(s.derivative(xe, j), j);
+                    assert!(v.abs() < 1e-10, "deg {deg} j {j} at {xe}: {v}");
+                }
+            }
+            // C^(2m-2) at interior knots: the pieces of [x_{i-1}, x_i]
+            // (segment i) and [x_i, x_{i+1}] (segment i+1) agree at x_i
+            for i in 1..n - 1 {
+                for j in 0..=(2 * m - 2) {
+                    let l = scaled(piece_derivative(&s, i, x[i], j), j);
+                    let r = scaled(piece_derivative(&s, i + 1, x[i], j), j);
+                    assert!(
+                        (l - r).abs() < 1e-10,
+                        "deg {deg} j {j} at {}: {l} vs {r}",
+                        x[i]
+                    );
+                }
+            }
+            // derivatives of order >= 2m are 0
+            assert_eq!(s.derivative(x[3] + 0.001, 2 * m), 0.0);
+        }
+    }
+
+    #[test]
+    fn reproduces_polynomials_below_m() {
+        let x: Vec<f64> = (0..12).map(|i| (i as f64).powf(1.3) * 0.1).collect();
+        // quadratic is reproduced by the quintic (m = 3) and septic (m = 4)
+        let p = |t: f64| 2.0 - 1.5 * t + 0.7 * t * t;
+        let y: Vec<f64> = x.iter().map(|&t| p(t)).collect();
+        for deg in [5usize, 7] {
+            let s = GcvSpline::interpolating(deg, &x, &y).unwrap();
+            for i in 0..50 {
+                let t = -0.5 + i as f64 * 0.05;
+                assert!((s.value(t) - p(t)).abs() < 1e-11);
+                assert!((s.derivative(t, 1) - (-1.5 + 1.4 * t)).abs() < 1e-10);
+                assert!((s.derivative(t, 2) - 1.4).abs() < 1e-9);
+            }
+        }
+        // cubic: lines are reproduced
+        let y: Vec<f64> = x.iter().map(|&t| 3.0 * t - 1.0).collect();
+        let s = GcvSpline::interpolating(3, &x, &y).unwrap();
+        assert!((s.value(0.123) - (3.0 * 0.123 - 1.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn extrapolation_is_degree_m_minus_1_taylor() {
+        let x: Vec<f64> = (0..10).map(|i| i as f64 * 0.1).collect();
+        let y: Vec<f64> = x.iter().map(|&t| (5.0 * t).sin()).collect();
+        let s = GcvSpline::interpolating(5, &x, &y).unwrap();
+        let (f0, d0, dd0) = s.eval2(0.0);
+        for dx in [-0.3, -0.05] {
+            let want = f0 + d0 * dx + 0.5 * dd0 * dx * dx;
+            assert!((s.value(dx) - want).abs() < 1e-12);
+            assert!((s.derivative(dx, 2) - dd0).abs() < 1e-12);
+            assert_eq!(s.derivative(dx, 3), 0.0);
+        }
+        let xe = 0.9;
+        let (f1, d1, dd1) = s.eval2(xe);
+        let dx = 0.2;
+        let want = f1 + d1 * dx + 0.5 * dd1 * dx * dx;
+        assert!((s.value(xe + dx) - want).abs() < 1e-12);
+        // cubic extrapolates linearly
+        let c = GcvSpline::interpolating(3, &x, &y).unwrap();
+        assert_eq!(c.derivative(-1.0, 2), 0.0);
+        assert!((c.derivative(-1.0, 1) - c.derivative(0.0, 1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn eval2_matches_derivative() {
+        let x: Vec<f64> = (0..15)
+            .map(|i| i as f64 * 0.07 + 0.01 * (i % 3) as f64)
+            .collect();
+        let y: Vec<f64> = x.iter().map(|&t| t.exp().sin()).collect();
+        let s = GcvSpline::interpolating(5, &x, &y).unwrap();
+        for i in 0..60 {
+            let t = -0.2 + i as f64 * 0.02;
+            let (a, b, c) = s.eval2(t);
+            assert!((a - s.value(t)).abs() < 1e-13);
+            assert!((b - s.derivative(t, 1)).abs() < 1e-11);
+            assert!((c - s.derivative(t, 2)).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn errors() {
+        let x = [0.0, 1.0, 2.0, 3.0, 4.0];
+        let y = [0.0; 5];
+        let e = GcvSpline::interpolating(5, &x, &y).unwrap_err();
+        assert!(e.to_string().contains("Too few data points"), "{e}");
+        assert!(GcvSpline::interpolating(3, &[0.0, 1.0, 1.0, 2.0], &[0.0; 4]).is_err());
+        assert!(GcvSpline::interpolating(4, &x, &y).is_err());
+        assert!(GcvSpline::interpolating(3, &x, &y[..4]).is_err());
+        assert!(GcvSpline::interpolating(1, &[0.0, f64::NAN], &[0.0, 1.0]).is_err());
+        // minimum sizes work
+        assert!(GcvSpline::interpolating(5, &[0., 1., 2., 3., 4., 5.], &[1.; 6]).is_ok());
+        assert!(GcvSpline::interpolating(1, &[0., 1.], &[1., 3.]).is_ok());
+    }
+
+    #[test]
+    fn large_series_is_fast_and_accurate() {
+        let n = 2000;
+        let x: Vec<f64> = (0..n).map(|i| 0.59999926 + i as f64 / 120.0).collect();
+        let y: Vec<f64> = x.iter().map(|&t| q(t)).collect();
+        let start = std::time::Instant::now();
+        let s = GcvSpline::interpolating(5, &x, &y).unwrap();
+        let el = start.elapsed();
+        eprintln!("n = {n} quintic build: {el:?}");
+        // generous bound: opt-level 1 test profile, shared CPUs
+        assert!(el.as_millis() < 200, "took {el:?}");
+        for i in (0..n).step_by(97) {
+            assert!((s.value(x[i]) - y[i]).abs() < 1e-12);
+        }
+        // interior derivative close to the true one
+        let tm = x[n / 2] + 0.003;
+        let dq =
+            2.0 * std::f64::consts::PI * (2.0 * std::f64::consts::PI * tm).cos() + 0.9 * tm * tm;
+        assert!((s.derivative(tm, 1) - dq).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,146 @@
+//! From a coordinates table to per-frame (q, u, u̇) the way OpenSim's tools
+//! do it (opensim-semantics.md §1.3, §6.3, §9.2): columns are matched to model
+//! coordinates by name, rotational columns converted from degrees, and every
+//! coordinate is splined with a quintic interpolating GCV spline.
+
+use crate::error::{Error, Location, Result};
+use crate::functions::GcvSpline;
+use crate::model::{Model, MotionType};
+use crate::storage::Storage;
+
+/// What a coordinate missing from the table gets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MissingCoordinate {
+    /// The coordinate's `default_value` (InverseDynamicsTool).
+    DefaultValue,
+    /// Zero (AnalyzeTool's `formCompleteStorages`).
+    Zero,
+}
+
+/// One spline per model coordinate (tree order) through the table's rows.
+#[derive(Debug, Clone)]
+pub struct CoordinateSplines {
+    /// The table's time column (frames are selected among these rows).
+    pub time: Vec<f64>,
+    /// Coordinate values at the rows (radians / meters), `values[c][row]`.
+    pub values: Vec<Vec<f64>>,
+    splines: Vec<Option<GcvSpline>>,
+    constants: Vec<f64>,
+    /// Coordinates the table lacks.
+    pub missing: Vec<String>,
+}
+
+/// Index of the table column holding coordinate `name`: the label itself, or
+/// a state-variable path whose last or second-to-last segment is the name.
+pub fn column_for(table: &Storage, name: &str) -> Option<usize> {
+    table.labels.iter().position(|l| l == name).or_else(|| {
+        table.labels.iter().position(|l| {
+            let segs: Vec<&str> = l.split('/').filter(|s| !s.is_empty()).collect();
+            segs.len() > 1
+                && (segs[segs.len() - 1] == name
+                    || (segs[segs.len() - 2] == name && segs[segs.len() - 1] == "value"))
+        })
+    })
+}
+
+impl CoordinateSplines {
+    pub fn new(
+        model: &Model,
+        table: &Storage,
+        missing: MissingCoordinate,
+        file: &std::path::Path,
+    ) -> Result<Self> {
+        if table.time.len() < 6 {
+            return Err(Error::input(
+                Location::file(file),
+                format!(
+                    "the motion has {} rows; at least 6 are needed for OpenSim's quintic splines",
+                    table.time.len()
+                ),
+            ));
+        }
+        let mut values = Vec::with_capacity(model.nq());
+        let mut splines = Vec::with_capacity(model.nq());
+        let mut constants = Vec::with_capacity(model.nq());
+        let mut missing_names = Vec::new();
+        for c in &model.coordinates {
+            match column_for(table, &c.name) {
+                Some(j) => {
+                    let scale = if table.in_degrees && c.motion_type == MotionType::Rotational {
+                        std::f64::consts::PI / 180.0
+                    } else {
+                        1.0
+                    };
+                    let v: Vec<f64> = table.rows.iter().map(|r| r[j] * scale).collect();
+                    let s = GcvSpline::interpolating(5, &table.time, &v).map_err(|e| {
+                        e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
+                    })?;
+                    values.push(v);
+                    splines.push(Some(s));
+                    constants.push(0.0);
+                }
+                None => {
+                    let k = match missing {
+                        MissingCoordinate::DefaultValue => c.default_value,
+                        MissingCoordinate::Zero => 0.0,
+                    };
+                    missing_names.push(c.name.clone());
+                    values.push(vec![k; table.time.len()]);
+                    splines.push(None);
+                    constants.push(k);
+                }
+            }
+        }
+        Ok(CoordinateSplines {
+            time: table.time.clone(),
+            values,
+            splines,
+            constants,
+            missing: missing_names,
+        })
+    }
+
+    /// q = S(t), u = S'(t), u̇ = S''(t) for every coordinate (InverseDynamicsTool).
+    pub fn eval(&self, t: f64, q: &mut [f64], u: &mut [f64], udot: &mut [f64]) {
+        for (c, s) in self.splines.iter().enumerate() {
+            match s {
+                Some(s) => {
+                    q[c] = s.value(t);
+                    u[c] = s.derivative(t, 1);
+                    udot[c] = s.derivative(t, 2);
+                }
+                None => {
+                    q[c] = self.constants[c];
+                    u[c] = 0.0;
+                    udot[c] = 0.0;
+                }
+            }
+        }
+    }
+}
+
+/// OpenSim's `Storage::findIndex`: the last row whose time is <= t (exact
+/// comparison), 0 if t precedes every row.
+pub fn find_index(time: &[f64], t: f64) -> usize {
+    match time.iter().position(|&ti| t < ti) {
+        Some(0) | None if time.is_empty() => 0,
+        Some(0) => 0,
+        Some(i) => i - 1,
+        None => time.len() - 1,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::find_index;
+
+    #[test]
+    fn find_index_semantics() {
+        let t = [0.0, 0.1, 0.2, 0.30000000000000004];
+        assert_eq!(find_index(&t, -1.0), 0);
+        assert_eq!(find_index(&t, 0.1), 1);
+        assert_eq!(find_index(&t, 0.15), 1);
+        assert_eq!(find_index(&t, 0.3), 2);
+        assert_eq!(find_index(&t, 9.0), 3);
+    }
+}

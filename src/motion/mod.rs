@@ -1,0 +1,4 @@
+//! The motion: coordinate tables filtered and splined into per-frame q, u, u̇.
+pub mod coordinates;
+pub mod filter;
+pub mod states;

@@ -1,0 +1,88 @@
+//! AnalyzeTool's states (opensim-semantics.md §9.2): coordinates filtered,
+//! mapped to the model (missing columns → 0), converted from degrees, speeds
+//! from quintic splines at the table's own rows, and each row "assembled":
+//! locked coordinates at their lock value with zero speed, prescribed ones
+//! at their function, dependent coordinates of couplers from their
+//! independent coordinate.
+
+use std::path::Path;
+
+use crate::error::{Error, Location, Result};
+use crate::functions::GcvSpline;
+use crate::model::Model;
+use crate::motion::coordinates::{CoordinateSplines, MissingCoordinate};
+use crate::storage::Storage;
+
+/// q and u at every row of the (possibly padded and resampled) table.
+#[derive(Debug, Clone)]
+pub struct States {
+    pub time: Vec<f64>,
+    /// `q[row][coordinate]`, tree order.
+    pub q: Vec<Vec<f64>>,
+    pub u: Vec<Vec<f64>>,
+    /// Coordinates the table lacked (set to 0, as AnalyzeTool does).
+    pub missing: Vec<String>,
+}
+
+impl States {
+    pub fn from_coordinates(model: &Model, table: &Storage, file: &Path) -> Result<States> {
+        let splines = CoordinateSplines::new(model, table, MissingCoordinate::Zero, file)?;
+        let n = table.time.len();
+        let nq = model.nq();
+        let mut q = vec![vec![0.0; nq]; n];
+        let mut u = vec![vec![0.0; nq]; n];
+        let (mut qq, mut uu, mut aa) = (vec![0.0; nq], vec![0.0; nq], vec![0.0; nq]);
+        for (i, &t) in table.time.iter().enumerate() {
+            splines.eval(t, &mut qq, &mut uu, &mut aa);
+            for c in 0..nq {
+                // q at the rows is the data itself; u the spline's derivative.
+                q[i][c] = splines.values[c][i];
+                u[i][c] = uu[c];
+            }
+            assemble(model, t, &mut q[i], &mut u[i]);
+        }
+        Ok(States {
+            time: table.time.clone(),
+            q,
+            u,
+            missing: splines.missing,
+        })
+    }
+
+    /// Target accelerations for static optimization (§6.3): the derivative of
+    /// a quintic spline through each coordinate's speeds, at the rows.
+    pub fn speed_derivatives(&self, file: &Path) -> Result<Vec<Vec<f64>>> {
+        let n = self.time.len();
+        let nq = self.q.first().map_or(0, |r| r.len());
+        let mut udot = vec![vec![0.0; nq]; n];
+        for c in 0..nq {
+            let col: Vec<f64> = self.u.iter().map(|r| r[c]).collect();
+            let s = GcvSpline::interpolating(5, &self.time, &col)
+                .map_err(|e| Error::input(Location::file(file), format!("splining speeds: {e}")))?;
+            for i in 0..n {
+                udot[i][c] = s.derivative(self.time[i], 1);
+            }
+        }
+        Ok(udot)
+    }
+}
+
+/// Make (q, u) satisfy the model's locks, prescriptions and couplers, moving
+/// only the constrained coordinates.
+pub fn assemble(model: &Model, t: f64, q: &mut [f64], u: &mut [f64]) {
+    for (c, coord) in model.coordinates.iter().enumerate() {
+        if let Some(f) = &coord.prescribed {
+            q[c] = f.value(t);
+            u[c] = f.derivative(t, 1);
+        } else if coord.locked {
+            q[c] = coord.default_value;
+            u[c] = 0.0;
+        }
+    }
+    for cp in &model.couplers {
+        let i = cp.independent[0];
+        let (v, d1, _) = cp.function.eval2(q[i]);
+        q[cp.dependent] = cp.scale * v;
+        u[cp.dependent] = cp.scale * d1 * u[i];
+    }
+}

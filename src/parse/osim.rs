@@ -1,0 +1,612 @@
+//! Reading OpenSim model documents (`.osim`) into a [`ModelSpec`]: the
+//! document's content with names still unresolved, in file order.
+//!
+//! Both layouts found in the wild are accepted (opensim-semantics.md §2, §2.8):
+//! - 4.0 (document versions 40000..40600): `JointSet` with `socket_parent_frame`
+//!   / `socket_child_frame` and `PhysicalOffsetFrame`s;
+//! - 3.x (versions 30000..30516): joints nested inside bodies with
+//!   `parent_body`, `location_in_parent`, `orientation_in_parent`, converted
+//!   here exactly as OpenSim converts them, including its rounding of offsets
+//!   and inertias to 6 significant digits.
+//!
+//! Elements that do not change dynamics (geometry, markers, display, probes,
+//! controllers) are skipped. Anything else the reader does not know is kept
+//! in [`ModelSpec::unsupported`] with its location, so that an analysis that
+//! needs it can refuse with a clear message.
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use crate::error::{Error, Location, Result};
+use crate::functions::Function;
+use crate::xml::{self, Element};
+
+/// A model document, as written, with names unresolved.
+#[derive(Debug, Clone)]
+pub struct ModelSpec {
+    pub name: String,
+    pub file: std::path::PathBuf,
+    pub version: u32,
+    pub gravity: Vector3<f64>,
+    pub ground_name: String,
+    pub bodies: Vec<BodySpec>,
+    pub joints: Vec<JointSpec>,
+    /// Every PhysicalOffsetFrame, keyed by its absolute component path.
+    pub frames: Vec<FrameSpec>,
+    pub couplers: Vec<CouplerSpec>,
+    /// Force elements (muscles, actuators, contacts, ...) kept as XML for the
+    /// modules that read them.
+    pub forces: Vec<Element>,
+    /// Wrap objects per body (and ground), kept as XML.
+    pub wrap_objects: Vec<(String, Element)>,
+    /// Elements that may affect dynamics but that this reader does not support.
+    pub unsupported: Vec<(String, Location)>,
+    /// Non-fatal remarks for the user.
+    pub warnings: Vec<String>,
+}
+
+#[derive(Debug, Clone)]
+pub struct BodySpec {
+    pub name: String,
+    pub mass: f64,
+    pub mass_center: Vector3<f64>,
+    /// `[Ixx Iyy Izz Ixy Ixz Iyz]` about the mass center, body axes.
+    pub inertia: [f64; 6],
+    pub loc: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct CoordinateSpec {
+    pub name: String,
+    pub default_value: f64,
+    pub default_speed: f64,
+    pub range: [f64; 2],
+    pub clamped: bool,
+    pub locked: bool,
+    pub prescribed: bool,
+    pub prescribed_function: Option<Function>,
+    pub free_to_satisfy_constraints: bool,
+    pub loc: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct AxisSpec {
+    /// Coordinate names listed on the axis.
+    pub coordinates: Vec<String>,
+    pub axis: Vector3<f64>,
+    /// `None` when the element has no function: OpenSim then uses Constant(0).
+    pub function: Option<Function>,
+    pub loc: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct JointSpec {
+    pub name: String,
+    /// Element tag: `PinJoint`, `CustomJoint`, ...
+    pub kind: String,
+    /// Socket paths exactly as written (relative to the joint's own path).
+    pub parent_frame: String,
+    pub child_frame: String,
+    /// `/jointset/<name>`: the path sockets are resolved against.
+    pub path: String,
+    pub coordinates: Vec<CoordinateSpec>,
+    /// rotation1..3, translation1..3 for CustomJoint.
+    pub spatial_transform: Option<Vec<AxisSpec>>,
+    pub loc: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct FrameSpec {
+    /// Absolute path, e.g. `/jointset/hip_r/pelvis_offset`.
+    pub path: String,
+    pub name: String,
+    /// Socket path as written, relative to `path`.
+    pub parent: String,
+    pub translation: Vector3<f64>,
+    /// Body-fixed X-Y-Z Euler angles (rad).
+    pub orientation: Vector3<f64>,
+    pub loc: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct CouplerSpec {
+    pub name: String,
+    pub enforced: bool,
+    pub function: Function,
+    pub independent: Vec<String>,
+    pub dependent: String,
+    pub scale_factor: f64,
+    pub loc: Location,
+}
+
+/// Elements with no effect on dynamics; skipped silently.
+const IGNORED: &[&str] = &[
+    "credits",
+    "publications",
+    "length_units",
+    "force_units",
+    "assembly_accuracy",
+    "MarkerSet",
+    "ContactGeometrySet",
+    "ProbeSet",
+    "ControllerSet",
+    "defaults",
+    "ModelVisualPreferences",
+    "attached_geometry",
+    "FrameGeometry",
+    "Appearance",
+    "validationFlag",
+];
+
+impl ModelSpec {
+    pub fn read(path: &Path) -> Result<ModelSpec> {
+        let root = xml::parse_file(path)?;
+        Self::from_document(&root, path)
+    }
+
+    pub fn from_document(root: &Element, path: &Path) -> Result<ModelSpec> {
+        if root.name != "OpenSimDocument" {
+            return Err(
+                root.error("not an OpenSim document: root element must be <OpenSimDocument>")
+            );
+        }
+        let version: u32 = match root.attr("Version") {
+            Some(v) => v
+                .trim()
+                .parse()
+                .map_err(|_| root.error(format!("Version attribute '{v}' is not a number")))?,
+            None => return Err(root.error("missing Version attribute")),
+        };
+        let model = root
+            .child("Model")
+            .ok_or_else(|| root.error("document holds no <Model> element"))?;
+        let mut spec = ModelSpec {
+            name: model.name_attr().to_string(),
+            file: path.to_path_buf(),
+            version,
+            gravity: model.child_vec3_or("gravity", [0.0, -9.80665, 0.0])?,
+            ground_name: "ground".into(),
+            bodies: Vec::new(),
+            joints: Vec::new(),
+            frames: Vec::new(),
+            couplers: Vec::new(),
+            forces: Vec::new(),
+            wrap_objects: Vec::new(),
+            unsupported: Vec::new(),
+            warnings: Vec::new(),
+        };
+        if version >= 30505 {
+            read_40(&mut spec, model)?;
+        } else if version >= 30000 {
+            read_3x(&mut spec, model)?;
+        } else {
+            return Err(root.error(format!(
+                "document version {version} is older than OpenSim 3.0 (30000); open and save it with OpenSim first"
+            )));
+        }
+        Ok(spec)
+    }
+}
+
+fn read_40(spec: &mut ModelSpec, model: &Element) -> Result<()> {
+    for child in &model.children {
+        match child.name.as_str() {
+            "Ground" => {
+                spec.ground_name = child.attr("name").unwrap_or("ground").to_string();
+                collect_wraps(spec, "ground", child);
+            }
+            "gravity" => {}
+            "BodySet" => {
+                for b in objects(child) {
+                    if b.name != "Body" {
+                        unsupported(spec, b, "body type");
+                        continue;
+                    }
+                    spec.bodies.push(read_body(b)?);
+                    collect_wraps(spec, b.name_attr(), b);
+                    for c in &b.children {
+                        if c.name == "components" || c.name == "frames" {
+                            for f in &c.children {
+                                if f.name == "PhysicalOffsetFrame" {
+                                    let base = format!("/bodyset/{}", b.name_attr());
+                                    spec.frames.push(read_frame(f, &base)?);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            "JointSet" => {
+                for j in objects(child) {
+                    let joint = read_joint_40(spec, j)?;
+                    spec.joints.push(joint);
+                }
+            }
+            "ConstraintSet" => read_constraints(spec, child)?,
+            "ForceSet" => {
+                for f in objects(child) {
+                    spec.forces.push(f.clone());
+                }
+            }
+            "components" | "ComponentSet" => {
+                for c in components(child) {
+                    if c.name == "PhysicalOffsetFrame" {
+                        let base = if child.name == "ComponentSet" {
+                            "/componentset".to_string()
+                        } else {
+                            String::new()
+                        };
+                        spec.frames.push(read_frame(c, &base)?);
+                    } else {
+                        unsupported(spec, c, "component");
+                    }
+                }
+            }
+            name if IGNORED.contains(&name) => {}
+            _ => unsupported(spec, child, "model element"),
+        }
+    }
+    Ok(())
+}
+
+fn components(el: &Element) -> impl Iterator<Item = &Element> {
+    let inner: Vec<&Element> = match el.child("objects") {
+        Some(o) => o.children.iter().collect(),
+        None => el.children.iter().filter(|c| c.name != "groups").collect(),
+    };
+    inner.into_iter()
+}
+
+/// The members of a `<XSet><objects>...</objects></XSet>`.
+fn objects(set: &Element) -> impl Iterator<Item = &Element> {
+    set.child("objects")
+        .into_iter()
+        .flat_map(|o| o.children.iter())
+}
+
+fn unsupported(spec: &mut ModelSpec, el: &Element, what: &str) {
+    spec.unsupported
+        .push((format!("{what} {}", el.describe()), el.loc()));
+}
+
+fn collect_wraps(spec: &mut ModelSpec, body: &str, el: &Element) {
+    if let Some(set) = el.child("WrapObjectSet") {
+        for w in objects(set) {
+            spec.wrap_objects.push((body.to_string(), w.clone()));
+        }
+    }
+}
+
+fn read_body(b: &Element) -> Result<BodySpec> {
+    let mass = b.child_f64_or("mass", 0.0)?;
+    let inertia = match b.child("inertia") {
+        Some(i) if !i.text().is_empty() => {
+            let v = i.numbers_n(6)?;
+            [v[0], v[1], v[2], v[3], v[4], v[5]]
+        }
+        _ => {
+            // 3.x spelling: inertia_xx ... inertia_yz (defaults 1 1 1 0 0 0).
+            let names = [
+                "inertia_xx",
+                "inertia_yy",
+                "inertia_zz",
+                "inertia_xy",
+                "inertia_xz",
+                "inertia_yz",
+            ];
+            let defaults = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+            let mut v = [0.0; 6];
+            for k in 0..6 {
+                v[k] = b.child_f64_or(names[k], defaults[k])?;
+            }
+            v
+        }
+    };
+    if !(mass.is_finite() && mass >= 0.0) {
+        return Err(b.req("mass")?.error(format!(
+            "body mass must be a finite, non-negative number, found {mass}"
+        )));
+    }
+    if inertia.iter().any(|x| !x.is_finite()) {
+        return Err(b.error("body inertia holds a non-finite value"));
+    }
+    Ok(BodySpec {
+        name: b.name_attr().to_string(),
+        mass,
+        mass_center: b.child_vec3_or("mass_center", [0.0; 3])?,
+        inertia,
+        loc: b.loc(),
+    })
+}
+
+fn read_frame(f: &Element, owner: &str) -> Result<FrameSpec> {
+    let name = f.name_attr().to_string();
+    Ok(FrameSpec {
+        path: format!("{owner}/{name}"),
+        parent: f
+            .child_text("socket_parent")
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| f.error("PhysicalOffsetFrame has no <socket_parent>"))?
+            .to_string(),
+        name,
+        translation: f.child_vec3_or("translation", [0.0; 3])?,
+        orientation: f.child_vec3_or("orientation", [0.0; 3])?,
+        loc: f.loc(),
+    })
+}
+
+fn read_coordinate(c: &Element) -> Result<CoordinateSpec> {
+    let range = match c.child("range") {
+        Some(r) if !r.text().is_empty() => {
+            let v = r.numbers_n(2)?;
+            [v[0], v[1]]
+        }
+        _ => [-10.0, 10.0],
+    };
+    let prescribed_function = Function::find_property(c, "prescribed_function")?;
+    let prescribed = c.child_bool_or("prescribed", false)? && prescribed_function.is_some();
+    Ok(CoordinateSpec {
+        name: c.name_attr().to_string(),
+        default_value: c.child_f64_or("default_value", 0.0)?,
+        default_speed: c.child_f64_or("default_speed_value", 0.0)?,
+        range,
+        clamped: c.child_bool_or("clamped", false)?,
+        locked: c.child_bool_or("locked", false)?,
+        prescribed,
+        prescribed_function,
+        free_to_satisfy_constraints: c.child_bool_or("is_free_to_satisfy_constraints", false)?,
+        loc: c.loc(),
+    })
+}
+
+fn read_spatial_transform(j: &Element) -> Result<Option<Vec<AxisSpec>>> {
+    let Some(st) = j.child("SpatialTransform") else {
+        return Ok(None);
+    };
+    let names = [
+        "rotation1",
+        "rotation2",
+        "rotation3",
+        "translation1",
+        "translation2",
+        "translation3",
+    ];
+    let mut axes = Vec::with_capacity(6);
+    for n in names {
+        let ax = st
+            .children_named("TransformAxis")
+            .find(|a| a.name_attr() == n)
+            .ok_or_else(|| st.error(format!("SpatialTransform lacks TransformAxis '{n}'")))?;
+        let axis = ax.req("axis")?.vec3()?;
+        if axis.norm() < 1e-12 || !axis.iter().all(|x| x.is_finite()) {
+            return Err(ax
+                .req("axis")?
+                .error("transform axis must be a finite, non-zero vector"));
+        }
+        axes.push(AxisSpec {
+            coordinates: ax
+                .child("coordinates")
+                .map(|c| c.words())
+                .unwrap_or_default(),
+            axis: axis.normalize(),
+            function: Function::find_property(ax, "function")?,
+            loc: ax.loc(),
+        });
+    }
+    Ok(Some(axes))
+}
+
+fn read_joint_40(spec: &mut ModelSpec, j: &Element) -> Result<JointSpec> {
+    let name = j.name_attr().to_string();
+    let path = format!("/jointset/{name}");
+    let mut coordinates = Vec::new();
+    if let Some(cs) = j.child("coordinates") {
+        for c in cs.children_named("Coordinate") {
+            coordinates.push(read_coordinate(c)?);
+        }
+    }
+    if let Some(fr) = j.child("frames") {
+        for f in &fr.children {
+            if f.name == "PhysicalOffsetFrame" {
+                spec.frames.push(read_frame(f, &path)?);
+            } else {
+                unsupported(spec, f, "joint frame");
+            }
+        }
+    }
+    let socket = |s: &str| -> Result<String> {
+        j.child_text(s)
+            .filter(|t| !t.is_empty())
+            .map(str::to_string)
+            .ok_or_else(|| j.error(format!("joint has no <{s}>")))
+    };
+    Ok(JointSpec {
+        parent_frame: socket("socket_parent_frame")?,
+        child_frame: socket("socket_child_frame")?,
+        kind: j.name.clone(),
+        path,
+        coordinates,
+        spatial_transform: read_spatial_transform(j)?,
+        name,
+        loc: j.loc(),
+    })
+}
+
+fn read_constraints(spec: &mut ModelSpec, set: &Element) -> Result<()> {
+    for c in objects(set) {
+        if c.name != "CoordinateCouplerConstraint" {
+            unsupported(spec, c, "constraint");
+            continue;
+        }
+        let enforced = match c.child("isEnforced") {
+            Some(e) if !e.text().is_empty() => e.bool()?,
+            _ => !c.child_bool_or("isDisabled", false)?,
+        };
+        let function =
+            Function::find_property(c, "coupled_coordinates_function")?.ok_or_else(|| {
+                c.error("CoordinateCouplerConstraint has no coupled_coordinates_function")
+            })?;
+        let independent = c
+            .child("independent_coordinate_names")
+            .map(|e| e.words())
+            .unwrap_or_default();
+        let dependent = c
+            .child_text("dependent_coordinate_name")
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| c.error("CoordinateCouplerConstraint has no dependent_coordinate_name"))?
+            .to_string();
+        spec.couplers.push(CouplerSpec {
+            name: c.name_attr().to_string(),
+            enforced,
+            function,
+            independent,
+            dependent,
+            scale_factor: c.child_f64_or("scale_factor", 1.0)?,
+            loc: c.loc(),
+        });
+    }
+    Ok(())
+}
+
+/// Round to 6 significant digits, as OpenSim's 3.x → 4.0 upgrade does when it
+/// re-serialises joint offsets and inertias with default stream precision.
+fn sig6(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    format!("{x:.5e}").parse().unwrap_or(x)
+}
+
+fn sig6v(v: Vector3<f64>) -> Vector3<f64> {
+    v.map(sig6)
+}
+
+/// 3.x layout: joints nested in bodies; converted as OpenSim's
+/// `updateFromXMLNode` does (opensim-semantics.md §2.8).
+fn read_3x(spec: &mut ModelSpec, model: &Element) -> Result<()> {
+    let body_set = model
+        .child("BodySet")
+        .ok_or_else(|| model.error("3.x model has no <BodySet>"))?;
+    // Ground is the body named "ground" in 3.x files.
+    for b in objects(body_set) {
+        if b.name != "Body" {
+            unsupported(spec, b, "body type");
+            continue;
+        }
+        let name = b.name_attr();
+        if name == "ground" {
+            spec.ground_name = "ground".into();
+            collect_wraps(spec, "ground", b);
+            continue;
+        }
+        let mut body = read_body(b)?;
+        if spec.version < 30500 {
+            body.inertia = body.inertia.map(sig6);
+        }
+        spec.bodies.push(body);
+        collect_wraps(spec, name, b);
+    }
+    for b in objects(body_set) {
+        let child = b.name_attr();
+        if child == "ground" || b.name != "Body" {
+            continue;
+        }
+        let Some(jw) = b.child("Joint") else { continue };
+        for j in &jw.children {
+            read_joint_3x(spec, j, child)?;
+        }
+    }
+    for child in &model.children {
+        match child.name.as_str() {
+            "ConstraintSet" => read_constraints(spec, child)?,
+            "ForceSet" => {
+                for f in objects(child) {
+                    spec.forces.push(f.clone());
+                }
+            }
+            "BodySet" | "gravity" => {}
+            name if IGNORED.contains(&name) => {}
+            _ => unsupported(spec, child, "model element"),
+        }
+    }
+    Ok(())
+}
+
+fn read_joint_3x(spec: &mut ModelSpec, j: &Element, child_body: &str) -> Result<()> {
+    let name = j.name_attr().to_string();
+    let path = format!("/jointset/{name}");
+    let mut parent_body = j
+        .child_text("parent_body")
+        .filter(|s| !s.is_empty())
+        .ok_or_else(|| j.error("joint has no <parent_body>"))?
+        .to_string();
+    let mut child_body = child_body.to_string();
+    let v3 = |n: &str| j.child_vec3_or(n, [0.0; 3]);
+    let mut loc_parent = v3("location_in_parent")?;
+    let mut ori_parent = v3("orientation_in_parent")?;
+    let mut loc_child = if j.child("location_in_child").is_some() {
+        v3("location_in_child")?
+    } else {
+        v3("location")?
+    };
+    let mut ori_child = if j.child("orientation_in_child").is_some() {
+        v3("orientation_in_child")?
+    } else {
+        v3("orientation")?
+    };
+    if spec.version < 30514 && j.child_bool_or("reverse", false)? {
+        std::mem::swap(&mut parent_body, &mut child_body);
+        std::mem::swap(&mut loc_parent, &mut loc_child);
+        std::mem::swap(&mut ori_parent, &mut ori_child);
+    }
+    let parent_path = if parent_body == "ground" {
+        "/ground".to_string()
+    } else {
+        format!("/bodyset/{parent_body}")
+    };
+    let pf = format!("{parent_body}_offset");
+    let cf = format!("{child_body}_offset");
+    spec.frames.push(FrameSpec {
+        path: format!("{path}/{pf}"),
+        name: pf.clone(),
+        parent: parent_path,
+        translation: sig6v(loc_parent),
+        orientation: sig6v(ori_parent),
+        loc: j.loc(),
+    });
+    spec.frames.push(FrameSpec {
+        path: format!("{path}/{cf}"),
+        name: cf.clone(),
+        parent: format!("/bodyset/{child_body}"),
+        translation: sig6v(loc_child),
+        orientation: sig6v(ori_child),
+        loc: j.loc(),
+    });
+    let mut coordinates = Vec::new();
+    if let Some(cs) = j.child("CoordinateSet") {
+        for c in objects(cs) {
+            coordinates.push(read_coordinate(c)?);
+        }
+    } else if let Some(cs) = j.child("coordinates") {
+        for c in cs.children_named("Coordinate") {
+            coordinates.push(read_coordinate(c)?);
+        }
+    }
+    spec.joints.push(JointSpec {
+        name,
+        kind: j.name.clone(),
+        parent_frame: pf,
+        child_frame: cf,
+        path,
+        coordinates,
+        spatial_transform: read_spatial_transform(j)?,
+        loc: j.loc(),
+    });
+    Ok(())
+}
+
+#[allow(dead_code)]
+fn located(loc: &Location, msg: impl Into<String>) -> Error {
+    Error::input(loc.clone(), msg)
+}

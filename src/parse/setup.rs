@@ -1,0 +1,271 @@
+//! Tool setup files (OpenSim style): which tool a setup describes and its
+//! properties, with every path resolved relative to the setup's folder, as
+//! OpenSim does (opensim-semantics.md §9.1).
+
+use std::path::{Path, PathBuf};
+
+use crate::error::Result;
+use crate::xml::{self, Element};
+
+/// A parsed setup file.
+#[derive(Debug, Clone)]
+pub enum Setup {
+    InverseDynamics(InverseDynamicsSetup),
+    Analyze(AnalyzeSetup),
+}
+
+/// OpenSim's AnalyzeTool setup (opensim-semantics.md §9.1).
+#[derive(Debug, Clone)]
+pub struct AnalyzeSetup {
+    /// The tool's `name` attribute: prefix of every output file.
+    pub name: String,
+    pub setup_file: PathBuf,
+    pub model_file: PathBuf,
+    pub replace_force_set: bool,
+    pub force_set_files: Vec<PathBuf>,
+    pub results_directory: PathBuf,
+    pub output_precision: usize,
+    pub initial_time: f64,
+    pub final_time: f64,
+    pub external_loads_file: Option<PathBuf>,
+    pub states_file: Option<PathBuf>,
+    pub coordinates_file: Option<PathBuf>,
+    pub speeds_file: Option<PathBuf>,
+    pub lowpass_cutoff: f64,
+    pub analyses: Vec<Analysis>,
+}
+
+/// Properties every OpenSim analysis has.
+#[derive(Debug, Clone)]
+pub struct AnalysisCommon {
+    pub name: String,
+    pub on: bool,
+    pub step_interval: usize,
+    pub in_degrees: bool,
+}
+
+#[derive(Debug, Clone)]
+pub enum Analysis {
+    MuscleAnalysis(MuscleAnalysisSetup),
+    /// Other analyses are read by the modules that run them; kept as XML.
+    Other {
+        common: AnalysisCommon,
+        element: Element,
+    },
+}
+
+#[derive(Debug, Clone)]
+pub struct MuscleAnalysisSetup {
+    pub common: AnalysisCommon,
+    /// Muscle names, or `all`.
+    pub muscle_list: Vec<String>,
+    /// Coordinates for moment-arm files, or `all`.
+    pub moment_arm_coordinate_list: Vec<String>,
+    pub compute_moments: bool,
+}
+
+#[derive(Debug, Clone)]
+pub struct InverseDynamicsSetup {
+    /// The tool's `name` attribute.
+    pub name: String,
+    pub setup_file: PathBuf,
+    pub model_file: PathBuf,
+    pub coordinates_file: PathBuf,
+    /// Negative: no filtering.
+    pub lowpass_cutoff: f64,
+    pub time_range: (f64, f64),
+    pub forces_to_exclude: Vec<String>,
+    pub external_loads_file: Option<PathBuf>,
+    pub results_directory: PathBuf,
+    pub output_gen_force_file: String,
+    pub joints_to_report_body_forces: Vec<String>,
+    pub output_body_forces_file: Option<String>,
+}
+
+/// Resolve a path from a setup relative to the setup's folder.
+pub fn resolve(setup_dir: &Path, p: &str) -> PathBuf {
+    let p = Path::new(p.trim());
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        setup_dir.join(p)
+    }
+}
+
+fn opt_text(el: &Element, name: &str) -> Option<String> {
+    el.child_text(name)
+        .filter(|s| !s.is_empty() && *s != "Unassigned")
+        .map(str::to_string)
+}
+
+impl Setup {
+    pub fn read(path: &Path) -> Result<Setup> {
+        let root = xml::parse_file(path)?;
+        let tool = if root.name == "OpenSimDocument" {
+            root.children
+                .first()
+                .ok_or_else(|| root.error("the setup holds no tool element"))?
+        } else {
+            &root
+        };
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let dir = if dir.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            dir
+        };
+        match tool.name.as_str() {
+            "InverseDynamicsTool" => Ok(Setup::InverseDynamics(read_id(tool, path, &dir)?)),
+            "AnalyzeTool" => Ok(Setup::Analyze(read_analyze(tool, path, &dir)?)),
+            other => Err(tool.error(format!(
+                "'{other}' setups are not supported; supported: InverseDynamicsTool, AnalyzeTool"
+            ))),
+        }
+    }
+}
+
+fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSetup> {
+    let req_path = |name: &str| -> Result<PathBuf> {
+        let t = opt_text(tool, name).ok_or_else(|| tool.error(format!("missing <{name}>")))?;
+        Ok(resolve(dir, &t))
+    };
+    let time_range = match tool.child("time_range") {
+        Some(t) if !t.text().is_empty() => {
+            let v = t.numbers_n(2)?;
+            if v[0] > v[1] {
+                return Err(t.error(format!(
+                    "time_range start {} is after its end {}",
+                    v[0], v[1]
+                )));
+            }
+            (v[0], v[1])
+        }
+        _ => (f64::NEG_INFINITY, f64::INFINITY),
+    };
+    let joints = tool
+        .child("joints_to_report_body_forces")
+        .map(|e| e.words())
+        .unwrap_or_default();
+    Ok(InverseDynamicsSetup {
+        name: tool.attr("name").unwrap_or("").to_string(),
+        setup_file: path.to_path_buf(),
+        model_file: req_path("model_file")?,
+        coordinates_file: req_path("coordinates_file")?,
+        lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
+        time_range,
+        forces_to_exclude: tool
+            .child("forces_to_exclude")
+            .map(|e| e.words())
+            .unwrap_or_default(),
+        external_loads_file: opt_text(tool, "external_loads_file").map(|p| resolve(dir, &p)),
+        results_directory: resolve(
+            dir,
+            &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
+        ),
+        output_gen_force_file: opt_text(tool, "output_gen_force_file")
+            .unwrap_or_else(|| "inverse_dynamics.sto".into()),
+        joints_to_report_body_forces: joints,
+        output_body_forces_file: opt_text(tool, "output_body_forces_file"),
+    })
+}
+
+fn words_or_all(el: &Element, name: &str) -> Vec<String> {
+    match el.child(name) {
+        Some(c) if !c.text().is_empty() => c.words(),
+        _ => vec!["all".into()],
+    }
+}
+
+fn read_common(a: &Element) -> Result<AnalysisCommon> {
+    let step = match a.child("step_interval") {
+        Some(s) if !s.text().is_empty() => {
+            let v = s.int()?;
+            if v < 1 {
+                return Err(s.error(format!(
+                    "step_interval must be a positive integer, found {v}"
+                )));
+            }
+            v as usize
+        }
+        _ => 1,
+    };
+    Ok(AnalysisCommon {
+        name: a.attr("name").unwrap_or(&a.name).to_string(),
+        on: a.child_bool_or("on", true)?,
+        step_interval: step,
+        in_degrees: a.child_bool_or("in_degrees", true)?,
+    })
+}
+
+fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup> {
+    let model_file =
+        opt_text(tool, "model_file").ok_or_else(|| tool.error("missing <model_file>"))?;
+    let precision = match tool.child("output_precision") {
+        Some(p) if !p.text().is_empty() => {
+            let v = p.int()?;
+            if !(1..=20).contains(&v) {
+                return Err(p.error(format!(
+                    "output_precision must be between 1 and 20, found {v}"
+                )));
+            }
+            v as usize
+        }
+        _ => 8,
+    };
+    let mut analyses = Vec::new();
+    if let Some(set) = tool.child("AnalysisSet").and_then(|s| s.child("objects")) {
+        for a in &set.children {
+            let common = read_common(a)?;
+            analyses.push(match a.name.as_str() {
+                "MuscleAnalysis" => Analysis::MuscleAnalysis(MuscleAnalysisSetup {
+                    muscle_list: words_or_all(a, "muscle_list"),
+                    moment_arm_coordinate_list: words_or_all(a, "moment_arm_coordinate_list"),
+                    compute_moments: a.child_bool_or("compute_moments", true)?,
+                    common,
+                }),
+                _ => Analysis::Other {
+                    common,
+                    element: a.clone(),
+                },
+            });
+        }
+    }
+    let initial_time = tool.child_f64_or("initial_time", 0.0)?;
+    let final_time = tool.child_f64_or("final_time", 1.0)?;
+    if initial_time > final_time {
+        return Err(tool.req("initial_time")?.error(format!(
+            "initial_time {initial_time} is after final_time {final_time}"
+        )));
+    }
+    let coordinates_file = opt_text(tool, "coordinates_file").map(|p| resolve(dir, &p));
+    let states_file = opt_text(tool, "states_file").map(|p| resolve(dir, &p));
+    if coordinates_file.is_none() && states_file.is_none() {
+        return Err(tool.error("the setup names neither a <coordinates_file> nor a <states_file>"));
+    }
+    Ok(AnalyzeSetup {
+        name: tool.attr("name").unwrap_or("").to_string(),
+        setup_file: path.to_path_buf(),
+        model_file: resolve(dir, &model_file),
+        replace_force_set: tool.child_bool_or("replace_force_set", false)?,
+        force_set_files: tool
+            .child("force_set_files")
+            .map(|e| e.words())
+            .unwrap_or_default()
+            .iter()
+            .map(|p| resolve(dir, p))
+            .collect(),
+        results_directory: resolve(
+            dir,
+            &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
+        ),
+        output_precision: precision,
+        initial_time,
+        final_time,
+        external_loads_file: opt_text(tool, "external_loads_file").map(|p| resolve(dir, &p)),
+        states_file,
+        coordinates_file,
+        speeds_file: opt_text(tool, "speeds_file").map(|p| resolve(dir, &p)),
+        lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
+        analyses,
+    })
+}

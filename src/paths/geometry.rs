@@ -1,0 +1,343 @@
+//! Per-frame path evaluation: the current path (active points plus wrap
+//! tangent points), its length, lengthening speed, and the generalized force
+//! a unit tension produces (OpenSim's `GeometryPath::produceForces`), from
+//! which moment arms follow (opensim-semantics.md §5.2–5.4).
+
+use nalgebra::Vector3;
+
+use super::{BodyWrapObject, GeometryPath, PointKind};
+use crate::dynamics::{jacobian, Data};
+use crate::model::Model;
+use crate::wrapping::{wrap_line, WrapAction};
+
+/// What a point of the current path is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Origin {
+    /// Index into `GeometryPath::points`.
+    Point(usize),
+    /// Tangent point of path wrap `wrap` (index into `GeometryPath::wraps`):
+    /// first (`false`) or second (`true`).
+    Wrap { wrap: usize, second: bool },
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct CurrentPoint {
+    pub origin: Origin,
+    pub body: usize,
+    /// Location in the body frame.
+    pub local: Vector3<f64>,
+    /// Location in ground.
+    pub ground: Vector3<f64>,
+}
+
+/// Reusable per-path workspace.
+#[derive(Debug, Clone, Default)]
+pub struct PathState {
+    pub points: Vec<CurrentPoint>,
+    /// Arc length over each path wrap (0 when it does not wrap).
+    pub wrap_length: Vec<f64>,
+    pub length: f64,
+}
+
+fn point_local(model: &Model, path: &GeometryPath, i: usize, data: &Data) -> Vector3<f64> {
+    let p = &path.points[i];
+    let _ = model;
+    let loc = match &p.kind {
+        PointKind::Moving {
+            coordinate,
+            functions,
+            clamp,
+        } => {
+            let q = data.q[*coordinate].clamp(clamp[0], clamp[1]);
+            Vector3::new(
+                functions[0].value(q),
+                functions[1].value(q),
+                functions[2].value(q),
+            )
+        }
+        _ => p.location,
+    };
+    p.frame.apply(&loc)
+}
+
+fn is_active(path: &GeometryPath, i: usize, data: &Data) -> bool {
+    match &path.points[i].kind {
+        PointKind::Conditional { coordinate, range } => {
+            let q = data.q[*coordinate];
+            q >= range[0] - 1e-5 && q <= range[1] + 1e-5
+        }
+        _ => true,
+    }
+}
+
+fn length_of(points: &[CurrentPoint], wrap_length: &[f64]) -> f64 {
+    let mut l = 0.0;
+    for w in points.windows(2) {
+        match (w[0].origin, w[1].origin) {
+            (
+                Origin::Wrap {
+                    wrap: a,
+                    second: false,
+                },
+                Origin::Wrap {
+                    wrap: b,
+                    second: true,
+                },
+            ) if a == b => l += wrap_length[a],
+            _ => l += (w[1].ground - w[0].ground).norm(),
+        }
+    }
+    l
+}
+
+/// Compute the current path and its length at the positions in `data`
+/// (`kinematics::positions` must have run).
+pub fn evaluate(
+    model: &Model,
+    path: &GeometryPath,
+    wraps: &[BodyWrapObject],
+    data: &Data,
+    st: &mut PathState,
+) {
+    st.points.clear();
+    st.wrap_length.clear();
+    st.wrap_length.resize(path.wraps.len(), 0.0);
+    for i in 0..path.points.len() {
+        if is_active(path, i, data) {
+            let body = path.points[i].body;
+            let local = point_local(model, path, i, data);
+            st.points.push(CurrentPoint {
+                origin: Origin::Point(i),
+                body,
+                local,
+                ground: data.station_position(body, &local),
+            });
+        }
+    }
+    if !path.wraps.is_empty() && !st.points.is_empty() {
+        apply_wrap_objects(path, wraps, data, st);
+    }
+    st.length = length_of(&st.points, &st.wrap_length);
+}
+
+/// GeometryPath::applyWrapObjects: insert the tangent points of each wrap.
+fn apply_wrap_objects(
+    path: &GeometryPath,
+    wraps: &[BodyWrapObject],
+    data: &Data,
+    st: &mut PathState,
+) {
+    let n = path.wraps.len();
+    let max_iter = if n < 2 { 1 } else { 8 };
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut result = vec![WrapAction::NoWrap; n];
+    let mut last_length = f64::INFINITY;
+    let npts = path.points.len();
+    for kk in 0..max_iter {
+        for i in 0..n {
+            let wi = order[i];
+            let pw = &path.wraps[wi];
+            let wo = &wraps[pw.object];
+            result[i] = WrapAction::NoWrap;
+            // remove this wrap's previous tangent points
+            st.points
+                .retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == wi));
+            st.wrap_length[wi] = 0.0;
+            if !wo.object.active {
+                continue;
+            }
+            let (rs, re) = pw.wrap.range;
+            let wrap_start = if rs < 1 { 0 } else { (rs - 1) as usize };
+            let wrap_end = if re < 1 {
+                npts - 1
+            } else {
+                ((re - 1) as usize).min(npts - 1)
+            };
+            let Some(jfwd) = (wrap_start..=wrap_end).find(|&j| is_active(path, j, data)) else {
+                return;
+            };
+            let Some(jrev) = (wrap_start..=wrap_end)
+                .rev()
+                .find(|&j| is_active(path, j, data))
+            else {
+                return;
+            };
+            let start = st
+                .points
+                .iter()
+                .position(|p| p.origin == Origin::Point(jfwd));
+            let end = st
+                .points
+                .iter()
+                .position(|p| p.origin == Origin::Point(jrev));
+            let (Some(start), Some(end)) = (start, end) else {
+                return;
+            };
+            // Wrap object frame in ground.
+            let r_gw = data.rotation[wo.body] * wo.rotation;
+            let p_gw = data.station_position(wo.body, &wo.translation);
+            let to_wrap = |g: &Vector3<f64>| r_gw.transpose() * (g - p_gw);
+            let mut best: Option<(usize, crate::wrapping::WrapResult)> = None;
+            let mut min_change = f64::INFINITY;
+            for pt1 in start..end {
+                let pt2 = pt1 + 1;
+                let same_other_wrap = match (st.points[pt1].origin, st.points[pt2].origin) {
+                    (Origin::Wrap { wrap: a, .. }, Origin::Wrap { wrap: b, .. }) => a == b,
+                    _ => false,
+                };
+                if same_other_wrap {
+                    continue;
+                }
+                let p1 = to_wrap(&st.points[pt1].ground);
+                let p2 = to_wrap(&st.points[pt2].ground);
+                let wr = wrap_line(&wo.object, pw.wrap.method, p1, p2, n == 1);
+                result[i] = wr.action;
+                match wr.action {
+                    WrapAction::MandatoryWrap => {
+                        best = Some((pt2, wr));
+                        break;
+                    }
+                    WrapAction::Wrapped => {
+                        let straight = (p2 - p1).norm();
+                        let change =
+                            (wr.r1 - p1).norm() + wr.wrap_path_length + (p2 - wr.r2).norm()
+                                - straight;
+                        if change < min_change {
+                            min_change = change;
+                            best = Some((pt2, wr));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            if let Some((at, wr)) = best.filter(|(_, wr)| wr.wraps()) {
+                let body = wo.body;
+                let l1 = wo.rotation * wr.r1 + wo.translation;
+                let l2 = wo.rotation * wr.r2 + wo.translation;
+                st.wrap_length[wi] = wr.wrap_path_length;
+                let p1 = CurrentPoint {
+                    origin: Origin::Wrap {
+                        wrap: wi,
+                        second: false,
+                    },
+                    body,
+                    local: l1,
+                    ground: data.station_position(body, &l1),
+                };
+                let p2 = CurrentPoint {
+                    origin: Origin::Wrap {
+                        wrap: wi,
+                        second: true,
+                    },
+                    body,
+                    local: l2,
+                    ground: data.station_position(body, &l2),
+                };
+                st.points.insert(at, p1);
+                st.points.insert(at + 1, p2);
+            }
+        }
+        let length = length_of(&st.points, &st.wrap_length);
+        if (length - last_length).abs() < 0.0005 {
+            break;
+        }
+        last_length = length;
+        if kk == 0
+            && n > 1
+            && result[0] == WrapAction::NoWrap
+            && result[1] == WrapAction::InsideRadius
+        {
+            order.swap(0, 1);
+            let w0 = 0;
+            st.points
+                .retain(|p| !matches!(p.origin, Origin::Wrap { wrap, .. } if wrap == w0));
+            st.wrap_length[w0] = 0.0;
+        }
+    }
+}
+
+/// Ground velocity of a current-path point.
+fn point_velocity(path: &GeometryPath, data: &Data, p: &CurrentPoint) -> Vector3<f64> {
+    let mut v = data.station_velocity(p.body, &p.local);
+    if let Origin::Point(i) = p.origin {
+        let pp = &path.points[i];
+        if let PointKind::Moving {
+            coordinate,
+            functions,
+            ..
+        } = &pp.kind
+        {
+            let q = data.q[*coordinate];
+            let d = Vector3::new(
+                functions[0].derivative(q, 1),
+                functions[1].derivative(q, 1),
+                functions[2].derivative(q, 1),
+            );
+            v += data.rotation[p.body] * (pp.frame.rotation * d) * data.u[*coordinate];
+        }
+    }
+    v
+}
+
+/// Lengthening speed (positions and velocities in `data` must be current).
+pub fn lengthening_speed(path: &GeometryPath, data: &Data, st: &PathState) -> f64 {
+    let mut s = 0.0;
+    for w in st.points.windows(2) {
+        let d = w[0].ground - w[1].ground;
+        let dv = point_velocity(path, data, &w[0]) - point_velocity(path, data, &w[1]);
+        let n = d.norm();
+        s += if n < f64::EPSILON {
+            dv.norm()
+        } else {
+            dv.dot(&d) / n
+        };
+    }
+    s
+}
+
+/// Generalized force of a unit tension along the current path, added to
+/// `gen` (OpenSim's `GeometryPath::produceForces`): at each point, unit
+/// vectors towards its neighbours on other bodies, plus the work of moving
+/// points. Moment arm about an unconstrained coordinate = this force.
+pub fn add_unit_tension_force(
+    model: &Model,
+    path: &GeometryPath,
+    data: &Data,
+    st: &PathState,
+    gen: &mut [f64],
+) {
+    let pts = &st.points;
+    for k in 0..pts.len().saturating_sub(1) {
+        let (a, b) = (&pts[k], &pts[k + 1]);
+        if a.body == b.body {
+            continue;
+        }
+        let d = b.ground - a.ground;
+        let n = d.norm();
+        // OpenSim gives NaN for coincident points on different bodies; a zero
+        // direction keeps the outputs defined.
+        let e = if n > 0.0 { d / n } else { Vector3::zeros() };
+        jacobian::add_point_force(model, data, a.body, &a.ground, &e, gen);
+        jacobian::add_point_force(model, data, b.body, &b.ground, &(-e), gen);
+        for (p, f) in [(a, e), (b, -e)] {
+            if let Origin::Point(i) = p.origin {
+                let pp = &path.points[i];
+                if let PointKind::Moving {
+                    coordinate,
+                    functions,
+                    ..
+                } = &pp.kind
+                {
+                    let q = data.q[*coordinate];
+                    let dp = Vector3::new(
+                        functions[0].derivative(q, 1),
+                        functions[1].derivative(q, 1),
+                        functions[2].derivative(q, 1),
+                    );
+                    let dp_g = data.rotation[p.body] * (pp.frame.rotation * dp);
+                    gen[*coordinate] += dp_g.dot(&f);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,107 @@
+//! OpenSim's AnalyzeTool: build the states from the coordinates file, select
+//! the frames (rows i0..=i1 of the states table; opensim-semantics.md §9.3),
+//! and run each analysis of the setup on them.
+
+use crate::error::{Error, Location, Result};
+use crate::motion::coordinates::find_index;
+use crate::motion::states::States;
+use crate::parse::setup::{Analysis, AnalyzeSetup};
+use crate::tools::loading::load_coordinates;
+use crate::tools::{muscle_analysis, RunOptions, RunSummary};
+
+/// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
+/// t <= final_time; a row is recorded when it is the first, the last, or its
+/// absolute index is a multiple of `step_interval`.
+pub fn frame_rows(time: &[f64], initial: f64, final_: f64, step_interval: usize) -> Vec<usize> {
+    let i0 = find_index(time, initial);
+    let i1 = find_index(time, final_);
+    (i0..=i1)
+        .filter(|&i| i == i0 || i == i1 || i % step_interval.max(1) == 0)
+        .collect()
+}
+
+/// Read the setup's motion into states.
+pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
+    if let Some(sf) = &setup.states_file {
+        return Err(Error::input(
+            Location::file(&setup.setup_file).with_element("<states_file>"),
+            format!(
+                "states files ({}) are not supported yet; give a <coordinates_file>",
+                sf.display()
+            ),
+        ));
+    }
+    if let Some(sp) = &setup.speeds_file {
+        return Err(Error::input(
+            Location::file(&setup.setup_file).with_element("<speeds_file>"),
+            format!(
+                "speeds files ({}) are not supported yet; speeds are computed from the coordinates",
+                sp.display()
+            ),
+        ));
+    }
+    let file = setup
+        .coordinates_file
+        .as_ref()
+        .ok_or_else(|| Error::input(Location::file(&setup.setup_file), "no <coordinates_file>"))?;
+    let table = load_coordinates(file, setup.lowpass_cutoff)?;
+    let states = States::from_coordinates(model, &table, file)?;
+    let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
+    if setup.initial_time > last || setup.final_time < first {
+        return Err(Error::input(
+            Location::file(&setup.setup_file).with_element("<initial_time>/<final_time>"),
+            format!(
+                "[{}, {}] lies outside the data of {} ([{first}, {last}])",
+                setup.initial_time,
+                setup.final_time,
+                file.display()
+            ),
+        ));
+    }
+    Ok(states)
+}
+
+pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
+    let mut summary = RunSummary::default();
+    let active: Vec<&Analysis> = setup
+        .analyses
+        .iter()
+        .filter(|a| match a {
+            Analysis::MuscleAnalysis(m) => m.common.on,
+            Analysis::Other { common, .. } => common.on,
+        })
+        .collect();
+    if active.is_empty() {
+        return Err(Error::input(
+            Location::file(&setup.setup_file).with_element("<AnalysisSet>"),
+            "the setup has no analysis that is on",
+        ));
+    }
+    for a in active {
+        match a {
+            Analysis::MuscleAnalysis(m) => {
+                let s = muscle_analysis::run(setup, m, opts)?;
+                summary.frames = summary.frames.max(s.frames);
+                summary.files.extend(s.files);
+                summary.warnings.extend(s.warnings);
+            }
+            Analysis::Other { element, .. } => {
+                return Err(element.error(format!(
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis",
+                    element.name
+                )));
+            }
+        }
+    }
+    Ok(summary)
+}
+
+/// The results directory: the command-line override or the setup's.
+pub fn results_dir(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<std::path::PathBuf> {
+    let dir = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| setup.results_directory.clone());
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    Ok(dir)
+}

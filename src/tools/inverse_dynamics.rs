@@ -1,0 +1,163 @@
+//! OpenSim's InverseDynamicsTool: q, u, u̇ from one quintic spline per
+//! coordinate (S, S', S''), external loads and gravity applied, generalized
+//! forces from RNEA ignoring constraints, written in multibody-tree order as
+//! `<coordinate>_moment` (rotational) or `<coordinate>_force`.
+
+use crate::dynamics::{kinematics, rnea, Data};
+use crate::error::{Error, Result};
+use crate::forces::external_loads::ExternalLoads;
+use crate::model::{Model, MotionType};
+use crate::motion::coordinates::{find_index, CoordinateSplines, MissingCoordinate};
+use crate::parse::osim::ModelSpec;
+use crate::parse::setup::InverseDynamicsSetup;
+use crate::storage::StoWriter;
+use crate::tools::loading::{applies_force, force_kind, load_coordinates, load_model, ForceKind};
+use crate::tools::{RunOptions, RunSummary};
+
+/// Output column labels, tree order.
+pub fn labels(model: &Model) -> Vec<String> {
+    model
+        .coordinates
+        .iter()
+        .map(|c| {
+            format!(
+                "{}{}",
+                c.name,
+                if c.motion_type == MotionType::Rotational {
+                    "_moment"
+                } else {
+                    "_force"
+                }
+            )
+        })
+        .collect()
+}
+
+/// Check which model forces remain after `forces_to_exclude` and refuse those
+/// this tool cannot evaluate. Returns whether external loads stay included.
+fn check_forces(spec: &ModelSpec, exclude: &[String]) -> Result<bool> {
+    let upper: Vec<String> = exclude.iter().map(|s| s.to_uppercase()).collect();
+    if upper.iter().any(|s| s == "ALL") {
+        return Ok(false);
+    }
+    for f in &spec.forces {
+        if !applies_force(f)? {
+            continue;
+        }
+        let kind = force_kind(f);
+        let excluded = exclude.iter().any(|n| n == f.name_attr())
+            || (kind == ForceKind::Muscle
+                && upper.iter().any(|s| s == "MUSCLES" || s == "ACTUATORS"))
+            || (kind == ForceKind::Actuator && upper.iter().any(|s| s == "ACTUATORS"));
+        if excluded {
+            continue;
+        }
+        match kind {
+            // Without controls an actuator produces no force, as in OpenSim.
+            ForceKind::Actuator => {}
+            ForceKind::Muscle => {
+                return Err(f.error(
+                    "muscles must be excluded from inverse dynamics (forces_to_exclude: Muscles); statopt does not evaluate muscle forces from default states",
+                ))
+            }
+            ForceKind::Contact => {
+                return Err(f.error("contact elements have no force in inverse dynamics; exclude them or run static optimization"))
+            }
+            ForceKind::Other => {
+                return Err(f.error(format!("force type '{}' is not supported by statopt's inverse dynamics yet; exclude it with forces_to_exclude", f.name)))
+            }
+        }
+    }
+    Ok(true)
+}
+
+pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary> {
+    let (spec, model) = load_model(&setup.model_file)?;
+    let mut warnings: Vec<String> = model.warnings.clone();
+    for (what, loc) in &spec.unsupported {
+        warnings.push(format!("{loc}: {what} is not supported and was ignored"));
+    }
+    let use_loads = check_forces(&spec, &setup.forces_to_exclude)?;
+    let setup_dir = setup
+        .setup_file
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let loads = match (&setup.external_loads_file, use_loads) {
+        (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
+        _ => None,
+    };
+    let table = load_coordinates(&setup.coordinates_file, setup.lowpass_cutoff)?;
+    let splines = CoordinateSplines::new(
+        &model,
+        &table,
+        MissingCoordinate::DefaultValue,
+        &setup.coordinates_file,
+    )?;
+    if !splines.missing.is_empty() {
+        warnings.push(format!(
+            "{}: no column for coordinates {:?}; using their default values, as OpenSim's InverseDynamicsTool does",
+            setup.coordinates_file.display(),
+            splines.missing
+        ));
+    }
+    let time = &splines.time;
+    let (first, last) = (time[0], time[time.len() - 1]);
+    let (t0, t1) = setup.time_range;
+    if t0 > last || t1 < first {
+        return Err(Error::input(
+            crate::Location::file(&setup.setup_file).with_element("<time_range>"),
+            format!(
+                "time_range [{t0}, {t1}] lies outside the data of {} ([{first}, {last}])",
+                setup.coordinates_file.display()
+            ),
+        ));
+    }
+    let i0 = find_index(time, t0.max(first));
+    let i1 = find_index(time, t1.min(last));
+
+    let dir = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| setup.results_directory.clone());
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let out = dir.join(&setup.output_gen_force_file);
+    let mut writer = StoWriter::create(
+        &out,
+        "Inverse Dynamics Generalized Forces",
+        "",
+        &labels(&model),
+        opts.precision.unwrap_or(8),
+        false,
+    )?;
+    if !setup.joints_to_report_body_forces.is_empty() && setup.output_body_forces_file.is_some() {
+        warnings.push("joints_to_report_body_forces: the body-forces-at-joints file is not written by statopt yet".into());
+    }
+    let mut data = Data::new(&model);
+    for &t in &time[i0..=i1] {
+        inverse_dynamics_frame(&model, loads.as_ref(), &splines, t, &mut data);
+        writer.write_row(t, &data.tau)?;
+    }
+    writer.finish()?;
+    Ok(RunSummary {
+        frames: i1 + 1 - i0,
+        files: vec![out],
+        warnings,
+    })
+}
+
+/// One frame of the InverseDynamicsTool: result in `data.tau`.
+pub fn inverse_dynamics_frame(
+    model: &Model,
+    loads: Option<&ExternalLoads>,
+    splines: &CoordinateSplines,
+    t: f64,
+    data: &mut Data,
+) {
+    splines.eval(t, &mut data.q, &mut data.u, &mut data.udot);
+    kinematics::full(model, data);
+    data.clear_applied();
+    if let Some(l) = loads {
+        l.apply(t, data);
+    }
+    rnea::inverse_dynamics_after_kinematics(model, data, true);
+}

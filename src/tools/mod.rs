@@ -1,0 +1,27 @@
+//! The tools a setup file can name. Each `run_*` reads its inputs, processes
+//! every frame and writes OpenSim-format results.
+pub mod analyze;
+pub mod inverse_dynamics;
+pub mod loading;
+pub mod muscle_analysis;
+
+use std::path::PathBuf;
+
+/// Options from the command line that override or extend a setup.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Overrides the setup's results directory.
+    pub results_dir: Option<PathBuf>,
+    /// Digits after the decimal point in `.sto` output (OpenSim's default 8).
+    pub precision: Option<usize>,
+    /// Print progress and warnings.
+    pub verbose: bool,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone, Default)]
+pub struct RunSummary {
+    pub frames: usize,
+    pub files: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}

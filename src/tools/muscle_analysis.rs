@@ -1,0 +1,164 @@
+//! OpenSim's MuscleAnalysis: per frame, each muscle's length, lengthening
+//! speed, moment arms about the listed coordinates, and its strength (maximum
+//! active fiber force and passive fiber force with a rigid tendon), written
+//! as `<name>_<analysis>_Length.sto`, `_LengtheningSpeed.sto`,
+//! `_MomentArm_<coordinate>.sto`, `_MaxActiveFiberForceRigidTendon.sto`,
+//! `_PassiveFiberForceRigidTendon.sto`. Moment arms are analytic (path
+//! Jacobians through the coupling vectors), not perturbations.
+
+use crate::dynamics::{kinematics, Data};
+use crate::error::Result;
+use crate::muscles::set::{MuscleFrame, MuscleSet};
+use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
+use crate::storage::StoWriter;
+use crate::tools::analyze::{frame_rows, load_states, results_dir};
+use crate::tools::loading::{load_analysis_model, AnalysisModel};
+use crate::tools::{RunOptions, RunSummary};
+
+fn select<'a>(list: &[String], all: impl Iterator<Item = &'a str>) -> Vec<String> {
+    if list.iter().any(|s| s.eq_ignore_ascii_case("all")) {
+        all.map(str::to_string).collect()
+    } else {
+        list.to_vec()
+    }
+}
+
+pub fn run(
+    setup: &AnalyzeSetup,
+    ma: &MuscleAnalysisSetup,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
+    let AnalysisModel {
+        model,
+        spec,
+        forces,
+        mut warnings,
+    } = load_analysis_model(setup)?;
+    let set = MuscleSet::compile(&spec, &forces, &model)?;
+    let states = load_states(setup, &model)?;
+    if !states.missing.is_empty() {
+        warnings.push(format!(
+            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
+            states.missing
+        ));
+    }
+    // Muscles and coordinates to report.
+    let names = select(
+        &ma.muscle_list,
+        set.muscles.iter().map(|m| m.muscle.name.as_str()),
+    );
+    let mut muscles = Vec::new();
+    for n in &names {
+        match set.muscles.iter().position(|m| &m.muscle.name == n) {
+            Some(i) => muscles.push(i),
+            None => warnings.push(format!(
+                "MuscleAnalysis: muscle '{n}' is not in the model; skipped"
+            )),
+        }
+    }
+    let coord_names = select(
+        &ma.moment_arm_coordinate_list,
+        model
+            .coordinate_set_order
+            .iter()
+            .map(|&c| model.coordinates[c].name.as_str()),
+    );
+    let mut coords = Vec::new();
+    if ma.compute_moments {
+        for n in &coord_names {
+            match model.coordinate_index(n) {
+                Some(c) => coords.push(c),
+                None => warnings.push(format!(
+                    "MuscleAnalysis: coordinate '{n}' is not in the model; skipped"
+                )),
+            }
+        }
+    }
+    let labels: Vec<String> = muscles
+        .iter()
+        .map(|&m| set.muscles[m].muscle.name.clone())
+        .collect();
+    let dir = results_dir(setup, opts)?;
+    let prefix = format!("{}_{}_", setup.name, ma.common.name);
+    let precision = opts.precision.unwrap_or(setup.output_precision);
+    let open = |suffix: &str, name: &str, desc: &str| -> Result<(StoWriter, std::path::PathBuf)> {
+        let p = dir.join(format!("{prefix}{suffix}.sto"));
+        Ok((
+            StoWriter::create(&p, name, desc, &labels, precision, false)?,
+            p,
+        ))
+    };
+    let mut writers = vec![
+        open("Length", "Length", "Musculotendon (path) length [m].")?,
+        open(
+            "LengtheningSpeed",
+            "LengtheningSpeed",
+            "Musculotendon lengthening speed [m/s].",
+        )?,
+        open(
+            "MaxActiveFiberForceRigidTendon",
+            "MaxActiveFiberForceRigidTendon",
+            "Active fiber force along the tendon at activation 1 with an inextensible tendon [N].",
+        )?,
+        open(
+            "PassiveFiberForceRigidTendon",
+            "PassiveFiberForceRigidTendon",
+            "Passive fiber force along the tendon with an inextensible tendon [N].",
+        )?,
+    ];
+    for &c in &coords {
+        let n = &model.coordinates[c].name;
+        writers.push(open(
+            &format!("MomentArm_{n}"),
+            &format!("MomentArm_{n}"),
+            &format!("Moment arm about coordinate {n} [m] (generalized force per unit tension)."),
+        )?);
+    }
+    let rows = frame_rows(
+        &states.time,
+        setup.initial_time,
+        setup.final_time,
+        ma.common.step_interval,
+    );
+    let mut data = Data::new(&model);
+    let mut frame = MuscleFrame::new(&set, &model);
+    let mut row = vec![0.0; muscles.len()];
+    for &i in &rows {
+        data.q.copy_from_slice(&states.q[i]);
+        data.u.copy_from_slice(&states.u[i]);
+        data.udot.iter_mut().for_each(|x| *x = 0.0);
+        kinematics::full(&model, &mut data);
+        frame.evaluate(&set, &model, &data);
+        let t = states.time[i];
+        for (w, values) in [
+            &frame.length,
+            &frame.speed,
+            &frame.max_active_force,
+            &frame.passive_force,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for (k, &m) in muscles.iter().enumerate() {
+                row[k] = values[m];
+            }
+            writers[w].0.write_row(t, &row)?;
+        }
+        for (j, &c) in coords.iter().enumerate() {
+            for (k, &m) in muscles.iter().enumerate() {
+                row[k] = frame.moment_arm(&model, &data.q, m, c);
+            }
+            writers[4 + j].0.write_row(t, &row)?;
+        }
+    }
+    let mut files = Vec::new();
+    for (w, p) in writers {
+        w.finish()?;
+        files.push(p);
+    }
+    Ok(RunSummary {
+        frames: rows.len(),
+        files,
+        warnings,
+    })
+}
