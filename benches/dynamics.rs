@@ -11,12 +11,21 @@ use statopt::parse::osim::ModelSpec;
 
 fn models() -> Vec<(String, PathBuf)> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut v = vec![("double_pendulum".to_string(), root.join("models/double_pendulum.osim"))];
+    let mut v = vec![(
+        "double_pendulum".to_string(),
+        root.join("models/double_pendulum.osim"),
+    )];
     let val = root.join("../shared/validation");
     for (case, file) in [
         ("arm26", "arm26/inputs/arm26.osim"),
-        ("leg6dof9musc", "leg6dof9musc_stance/inputs/leg6dof9musc.osim"),
-        ("gait10dof18musc", "gait10dof18musc_walk/inputs/subject01.osim"),
+        (
+            "leg6dof9musc",
+            "leg6dof9musc_stance/inputs/leg6dof9musc.osim",
+        ),
+        (
+            "gait10dof18musc",
+            "gait10dof18musc_walk/inputs/subject01.osim",
+        ),
     ] {
         if val.join(file).is_file() {
             v.push((case.to_string(), val.join(file)));

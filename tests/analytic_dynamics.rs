@@ -32,7 +32,11 @@ fn pin(name: &str, parent: &str, child: &str, loc: f64, coord: &str) -> String {
     <PhysicalOffsetFrame name="{child}_offset"><socket_parent>/bodyset/{child}</socket_parent><translation>0 0 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
   </frames>
 </PinJoint>"#,
-        ppath = if parent == "ground" { "/ground".to_string() } else { format!("/bodyset/{parent}") }
+        ppath = if parent == "ground" {
+            "/ground".to_string()
+        } else {
+            format!("/bodyset/{parent}")
+        }
     )
 }
 
@@ -57,12 +61,19 @@ fn custom_pin(name: &str, parent: &str, child: &str, loc: f64, coord: &str) -> S
     <TransformAxis name="translation3"><coordinates/><axis>0 0 1</axis></TransformAxis>
   </SpatialTransform>
 </CustomJoint>"#,
-        ppath = if parent == "ground" { "/ground".to_string() } else { format!("/bodyset/{parent}") }
+        ppath = if parent == "ground" {
+            "/ground".to_string()
+        } else {
+            format!("/bodyset/{parent}")
+        }
     )
 }
 
 fn body(name: &str, m: f64, a: f64, i: f64) -> String {
-    format!(r#"<Body name="{name}"><mass>{m}</mass><mass_center>0 {} 0</mass_center><inertia>{i} {i} {i} 0 0 0</inertia></Body>"#, -a)
+    format!(
+        r#"<Body name="{name}"><mass>{m}</mass><mass_center>0 {} 0</mass_center><inertia>{i} {i} {i} 0 0 0</inertia></Body>"#,
+        -a
+    )
 }
 
 fn double_pendulum(joint: fn(&str, &str, &str, f64, &str) -> String) -> Model {
@@ -107,13 +118,23 @@ fn check(model: &Model) {
         rnea::inverse_dynamics(model, &mut data);
         let (m, tau) = closed_form(q, u, ud);
         for i in 0..2 {
-            assert!((data.tau[i] - tau[i]).abs() < 1e-9, "tau[{i}] = {} vs closed form {}", data.tau[i], tau[i]);
+            assert!(
+                (data.tau[i] - tau[i]).abs() < 1e-9,
+                "tau[{i}] = {} vs closed form {}",
+                data.tau[i],
+                tau[i]
+            );
         }
         kinematics::positions(model, &mut data);
         let mm = mass_matrix(model, &data);
         for i in 0..2 {
             for j in 0..2 {
-                assert!((mm[(i, j)] - m[i][j]).abs() < 1e-9, "M[{i}{j}] = {} vs {}", mm[(i, j)], m[i][j]);
+                assert!(
+                    (mm[(i, j)] - m[i][j]).abs() < 1e-9,
+                    "M[{i}{j}] = {} vs {}",
+                    mm[(i, j)],
+                    m[i][j]
+                );
             }
         }
     }
@@ -135,7 +156,12 @@ fn pendulum_inverse_dynamics_closed_form() {
         data.udot[0] = ud;
         rnea::inverse_dynamics(&model, &mut data);
         let expect = (I1 + M1 * A1 * A1) * ud + M1 * G * A1 * f64::sin(q);
-        assert!((data.tau[0] - expect).abs() < 1e-9, "{} vs {}", data.tau[0], expect);
+        assert!(
+            (data.tau[0] - expect).abs() < 1e-9,
+            "{} vs {}",
+            data.tau[0],
+            expect
+        );
     }
 }
 
@@ -162,7 +188,12 @@ fn custom_joint_reproducing_pin_joint_gives_identical_results() {
     rnea::inverse_dynamics(&a, &mut da);
     rnea::inverse_dynamics(&b, &mut db);
     for i in 0..2 {
-        assert!((da.tau[i] - db.tau[i]).abs() < 1e-12, "{} vs {}", da.tau[i], db.tau[i]);
+        assert!(
+            (da.tau[i] - db.tau[i]).abs() < 1e-12,
+            "{} vs {}",
+            da.tau[i],
+            db.tau[i]
+        );
         assert!((da.position[2] - db.position[2]).norm() < 1e-14);
     }
 }
@@ -173,7 +204,8 @@ fn custom_joint_reproducing_pin_joint_gives_identical_results() {
 /// Ṁ = Σ_k ∂M/∂q_k u_k and T = ½ uᵀ M u (q̇ = u for these joints).
 #[test]
 fn rnea_velocity_terms_satisfy_lagrange_on_spline_custom_joints() {
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/gait2392/gait2392_thelen2003muscle.osim");
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models/gait2392/gait2392_thelen2003muscle.osim");
     if !path.is_file() {
         eprintln!("SKIP rnea_velocity_terms_satisfy_lagrange_on_spline_custom_joints: ../shared/models is absent");
         return;
@@ -182,7 +214,9 @@ fn rnea_velocity_terms_satisfy_lagrange_on_spline_custom_joints() {
     model.gravity = nalgebra::Vector3::zeros();
     let n = model.nq();
     let mut data = Data::new(&model);
-    let q0: Vec<f64> = (0..n).map(|i| 0.3 * ((i as f64) * 1.7).sin() - 0.4 * (i % 3 == 0) as i32 as f64).collect();
+    let q0: Vec<f64> = (0..n)
+        .map(|i| 0.3 * ((i as f64) * 1.7).sin() - 0.4 * (i % 3 == 0) as i32 as f64)
+        .collect();
     let u: Vec<f64> = (0..n).map(|i| 0.8 * ((i as f64) * 0.9).cos()).collect();
     let mass_at = |q: &[f64], data: &mut Data| {
         data.q.copy_from_slice(q);
@@ -211,14 +245,23 @@ fn rnea_velocity_terms_satisfy_lagrange_on_spline_custom_joints() {
     let scale = expect.amax().max(1.0);
     for i in 0..n {
         let lagrange = expect[i] - dtdq[i];
-        assert!((data.tau[i] - lagrange).abs() < 1e-6 * scale, "{}: RNEA {} vs Lagrange {}", model.coordinates[i].name, data.tau[i], lagrange);
+        assert!(
+            (data.tau[i] - lagrange).abs() < 1e-6 * scale,
+            "{}: RNEA {} vs Lagrange {}",
+            model.coordinates[i].name,
+            data.tau[i],
+            lagrange
+        );
     }
     // And the mass matrix equals RNEA's response to unit accelerations.
     data.u.iter_mut().for_each(|x| *x = 0.0);
     let m = mass_at(&q0, &mut data);
     for j in 0..n {
         data.q.copy_from_slice(&q0);
-        data.udot.iter_mut().enumerate().for_each(|(i, x)| *x = (i == j) as i32 as f64);
+        data.udot
+            .iter_mut()
+            .enumerate()
+            .for_each(|(i, x)| *x = (i == j) as i32 as f64);
         rnea::inverse_dynamics(&model, &mut data);
         for i in 0..n {
             assert!((data.tau[i] - m[(i, j)]).abs() < 1e-10, "M[{i},{j}]");

@@ -18,11 +18,17 @@ pub struct BodyForce {
 impl BodyForce {
     /// A force `f` acting at point `p` (both in ground).
     pub fn at_point(f: Vector3<f64>, p: Vector3<f64>) -> Self {
-        BodyForce { force: f, moment: p.cross(&f) }
+        BodyForce {
+            force: f,
+            moment: p.cross(&f),
+        }
     }
     /// A pure torque (ground frame).
     pub fn torque(t: Vector3<f64>) -> Self {
-        BodyForce { force: Vector3::zeros(), moment: t }
+        BodyForce {
+            force: Vector3::zeros(),
+            moment: t,
+        }
     }
     pub fn add(&mut self, other: &BodyForce) {
         self.force += other.force;
@@ -104,7 +110,9 @@ impl Data {
 
     /// Clear applied body and generalized forces.
     pub fn clear_applied(&mut self) {
-        self.applied.iter_mut().for_each(|f| *f = BodyForce::default());
+        self.applied
+            .iter_mut()
+            .for_each(|f| *f = BodyForce::default());
         self.applied_gen.iter_mut().for_each(|f| *f = 0.0);
     }
 }

@@ -9,7 +9,14 @@ use crate::model::Model;
 /// Add to `out` (3 × nu) the Jacobian of the ground velocity of the point at
 /// ground position `x`, fixed on body `b`, scaled by `scale`. Requires
 /// positions to be current.
-pub fn add_station_jacobian(model: &Model, data: &Data, b: usize, x: &Vector3<f64>, scale: f64, out: &mut DMatrix<f64>) {
+pub fn add_station_jacobian(
+    model: &Model,
+    data: &Data,
+    b: usize,
+    x: &Vector3<f64>,
+    scale: f64,
+    out: &mut DMatrix<f64>,
+) {
     let mut body = b;
     while body != 0 {
         let j = &model.joints[body];
@@ -30,7 +37,14 @@ pub fn add_station_jacobian(model: &Model, data: &Data, b: usize, x: &Vector3<f6
 
 /// Generalized force produced by a force `f` (ground) acting at ground point
 /// `x` on body `b`: Jᵀ f, accumulated into `gen`.
-pub fn add_point_force(model: &Model, data: &Data, b: usize, x: &Vector3<f64>, f: &Vector3<f64>, gen: &mut [f64]) {
+pub fn add_point_force(
+    model: &Model,
+    data: &Data,
+    b: usize,
+    x: &Vector3<f64>,
+    f: &Vector3<f64>,
+    gen: &mut [f64],
+) {
     let mut body = b;
     while body != 0 {
         let j = &model.joints[body];

@@ -37,7 +37,8 @@ pub fn full(model: &Model, data: &mut Data) {
         let p = j.parent_body;
         let m = &data.joint_motion[b];
         let r_gf = data.r_gf[b];
-        let (mut w_fm, mut v_fm, mut a_w, mut a_v) = (Vector3::zeros(), Vector3::zeros(), m.c_w, m.c_v);
+        let (mut w_fm, mut v_fm, mut a_w, mut a_v) =
+            (Vector3::zeros(), Vector3::zeros(), m.c_w, m.c_v);
         for k in 0..j.nq {
             let (u, ud) = (data.u[j.q_start + k], data.udot[j.q_start + k]);
             w_fm += m.h_w[k] * u;
@@ -47,7 +48,12 @@ pub fn full(model: &Model, data: &mut Data) {
         }
         let w_rel = r_gf * w_fm;
         let v_rel = r_gf * v_fm;
-        let (wp, vp, alp, ap) = (data.omega[p], data.velocity[p], data.alpha[p], data.accel[p]);
+        let (wp, vp, alp, ap) = (
+            data.omega[p],
+            data.velocity[p],
+            data.alpha[p],
+            data.accel[p],
+        );
         let r_pm = data.p_gm[b] - data.position[p]; // parent origin → M origin
         let r_mb = data.position[b] - data.p_gm[b]; // M origin → body origin
         let w = wp + w_rel;
@@ -55,7 +61,11 @@ pub fn full(model: &Model, data: &mut Data) {
         data.omega[b] = w;
         data.velocity[b] = v_m + w.cross(&r_mb);
         let al = alp + r_gf * a_w + wp.cross(&w_rel);
-        let a_m = ap + alp.cross(&r_pm) + wp.cross(&wp.cross(&r_pm)) + 2.0 * wp.cross(&v_rel) + r_gf * a_v;
+        let a_m = ap
+            + alp.cross(&r_pm)
+            + wp.cross(&wp.cross(&r_pm))
+            + 2.0 * wp.cross(&v_rel)
+            + r_gf * a_v;
         data.alpha[b] = al;
         data.accel[b] = a_m + al.cross(&r_mb) + w.cross(&w.cross(&r_mb));
     }

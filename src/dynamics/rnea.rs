@@ -17,7 +17,11 @@ pub fn inverse_dynamics(model: &Model, data: &mut Data) {
 /// RNEA backward pass only (kinematics already computed). With
 /// `gravity == false`, gravity is omitted (used for mass-matrix columns).
 pub fn inverse_dynamics_after_kinematics(model: &Model, data: &mut Data, gravity: bool) {
-    let g = if gravity { model.gravity } else { nalgebra::Vector3::zeros() };
+    let g = if gravity {
+        model.gravity
+    } else {
+        nalgebra::Vector3::zeros()
+    };
     let nb = model.nbodies();
     // Net spatial force each body needs (about the ground origin), minus applied.
     for b in 1..nb {
@@ -31,7 +35,10 @@ pub fn inverse_dynamics_after_kinematics(model: &Model, data: &mut Data, gravity
         let f = body.mass * (a_c - g);
         let n_c = i_g * data.alpha[b] + w.cross(&(i_g * w));
         let ap = data.applied[b];
-        data.joint_force[b] = BodyForce { force: f - ap.force, moment: n_c + c.cross(&f) - ap.moment };
+        data.joint_force[b] = BodyForce {
+            force: f - ap.force,
+            moment: n_c + c.cross(&f) - ap.moment,
+        };
     }
     // Accumulate subtrees from leaves to root (tree order guarantees parents first).
     for b in (1..nb).rev() {

@@ -7,14 +7,20 @@ use std::collections::HashMap;
 use nalgebra::{Matrix3, Vector3};
 
 use super::joint::{JointKind, TransformAxis};
-use super::{body_fixed_xyz, Body, Coordinate, Coupler, Frame, Joint, Model, MotionType, Transform};
+use super::{
+    body_fixed_xyz, Body, Coordinate, Coupler, Frame, Joint, Model, MotionType, Transform,
+};
 use crate::error::{Error, Location, Result};
 use crate::functions::Function;
 use crate::parse::osim::{JointSpec, ModelSpec};
 
 /// Join a component path with a (possibly relative) socket path.
 fn resolve_path(owner: &str, rel: &str) -> String {
-    let mut parts: Vec<&str> = if rel.starts_with('/') { Vec::new() } else { owner.split('/').filter(|s| !s.is_empty()).collect() };
+    let mut parts: Vec<&str> = if rel.starts_with('/') {
+        Vec::new()
+    } else {
+        owner.split('/').filter(|s| !s.is_empty()).collect()
+    };
     for seg in rel.split('/').filter(|s| !s.is_empty()) {
         match seg {
             "." => {}
@@ -37,7 +43,10 @@ impl<'a> FrameResolver<'a> {
     /// Resolve an absolute frame path to (body index, transform of the frame in that body).
     fn resolve(&self, path: &str, depth: usize, loc: &Location) -> Result<(usize, Transform)> {
         if depth > 64 {
-            return Err(Error::input(loc.clone(), format!("frame '{path}' is part of a cycle of offset frames")));
+            return Err(Error::input(
+                loc.clone(),
+                format!("frame '{path}' is part of a cycle of offset frames"),
+            ));
         }
         let ground_path = format!("/{}", self.spec.ground_name);
         if path == ground_path || path == "/ground" {
@@ -61,13 +70,24 @@ impl<'a> FrameResolver<'a> {
                     self.resolve(&alt, depth + 1, &f.loc).map_err(|_| e)?
                 }
             };
-            let local = Transform { rotation: body_fixed_xyz(&f.orientation), translation: f.translation };
+            let local = Transform {
+                rotation: body_fixed_xyz(&f.orientation),
+                translation: f.translation,
+            };
             return Ok((b, x_parent.compose(&local)));
         }
-        Err(Error::input(loc.clone(), format!("socket names a frame '{path}' that does not exist in the model")))
+        Err(Error::input(
+            loc.clone(),
+            format!("socket names a frame '{path}' that does not exist in the model"),
+        ))
     }
 
-    fn resolve_socket(&self, owner: &str, socket: &str, loc: &Location) -> Result<(usize, Transform, String)> {
+    fn resolve_socket(
+        &self,
+        owner: &str,
+        socket: &str,
+        loc: &Location,
+    ) -> Result<(usize, Transform, String)> {
         let path = resolve_path(owner, socket);
         let name = path.rsplit('/').next().unwrap_or("").to_string();
         let first = self.resolve(&path, 0, loc);
@@ -77,7 +97,10 @@ impl<'a> FrameResolver<'a> {
                 // A bare body name is accepted where OpenSim would resolve it
                 // through the BodySet (e.g. "../femur_r" from a joint).
                 if let Some(&b) = self.body_index.get(&name) {
-                    if path.ends_with(&format!("/{name}")) && !self.frame_specs.contains_key(&path) && socket.trim_start_matches("../") == name {
+                    if path.ends_with(&format!("/{name}"))
+                        && !self.frame_specs.contains_key(&path)
+                        && socket.trim_start_matches("../") == name
+                    {
                         return Ok((b, Transform::identity(), name));
                     }
                 }
@@ -95,16 +118,26 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
     body_index.insert(spec.ground_name.clone(), 0);
     for (i, b) in spec.bodies.iter().enumerate() {
         if body_index.insert(b.name.clone(), i + 1).is_some() {
-            return Err(Error::input(b.loc.clone(), format!("two bodies are named '{}'", b.name)));
+            return Err(Error::input(
+                b.loc.clone(),
+                format!("two bodies are named '{}'", b.name),
+            ));
         }
     }
     let mut frame_specs = HashMap::new();
     for (i, f) in spec.frames.iter().enumerate() {
         if frame_specs.insert(f.path.clone(), i).is_some() {
-            return Err(Error::input(f.loc.clone(), format!("two frames have the path '{}'", f.path)));
+            return Err(Error::input(
+                f.loc.clone(),
+                format!("two frames have the path '{}'", f.path),
+            ));
         }
     }
-    let resolver = FrameResolver { spec, body_index: body_index.clone(), frame_specs };
+    let resolver = FrameResolver {
+        spec,
+        body_index: body_index.clone(),
+        frame_specs,
+    };
 
     // Resolve every joint's frames (file-order body indices for now).
     struct Resolved<'s> {
@@ -124,11 +157,21 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
         if child == 0 {
             return Err(Error::input(
                 j.loc.clone(),
-                format!("joint '{}' has ground as its child frame; reversed joints are not supported", j.name),
+                format!(
+                    "joint '{}' has ground as its child frame; reversed joints are not supported",
+                    j.name
+                ),
             ));
         }
         if parent == child {
-            return Err(Error::input(j.loc.clone(), format!("joint '{}' connects body '{}' to itself", j.name, spec.bodies[child - 1].name)));
+            return Err(Error::input(
+                j.loc.clone(),
+                format!(
+                    "joint '{}' connects body '{}' to itself",
+                    j.name,
+                    spec.bodies[child - 1].name
+                ),
+            ));
         }
         if let Some(prev) = inboard.insert(child, ji) {
             return Err(Error::input(
@@ -139,11 +182,25 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
                 ),
             ));
         }
-        resolved.push(Resolved { spec: j, parent, child, x_pf, x_bm, pname, cname });
+        resolved.push(Resolved {
+            spec: j,
+            parent,
+            child,
+            x_pf,
+            x_bm,
+            pname,
+            cname,
+        });
     }
     for (i, b) in spec.bodies.iter().enumerate() {
         if !inboard.contains_key(&(i + 1)) {
-            return Err(Error::input(b.loc.clone(), format!("body '{}' is not connected to the model by any joint", b.name)));
+            return Err(Error::input(
+                b.loc.clone(),
+                format!(
+                    "body '{}' is not connected to the model by any joint",
+                    b.name
+                ),
+            ));
         }
     }
 
@@ -167,8 +224,18 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
         current += 1;
     }
     if order.len() != resolved.len() {
-        let r = resolved.iter().find(|r| !level.contains_key(&r.child)).map(|r| r.spec).unwrap_or(&spec.joints[0]);
-        return Err(Error::input(r.loc.clone(), format!("joint '{}' is not connected to ground through other joints (kinematic loop?)", r.name)));
+        let r = resolved
+            .iter()
+            .find(|r| !level.contains_key(&r.child))
+            .map(|r| r.spec)
+            .unwrap_or(&spec.joints[0]);
+        return Err(Error::input(
+            r.loc.clone(),
+            format!(
+                "joint '{}' is not connected to ground through other joints (kinematic loop?)",
+                r.name
+            ),
+        ));
     }
     // new body index for each file-order body index
     let mut new_index = vec![0usize; spec.bodies.len() + 1];
@@ -219,11 +286,23 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
         let q_start = coordinates.len();
         for (k, &ci) in coord_order.iter().enumerate() {
             let cs = &r.spec.coordinates[ci];
-            if coord_by_name.insert(cs.name.clone(), coordinates.len()).is_some() {
-                return Err(Error::input(cs.loc.clone(), format!("two coordinates are named '{}'", cs.name)));
+            if coord_by_name
+                .insert(cs.name.clone(), coordinates.len())
+                .is_some()
+            {
+                return Err(Error::input(
+                    cs.loc.clone(),
+                    format!("two coordinates are named '{}'", cs.name),
+                ));
             }
             if cs.range[0] > cs.range[1] {
-                return Err(Error::input(cs.loc.clone(), format!("coordinate '{}' has range [{}, {}] with min > max", cs.name, cs.range[0], cs.range[1])));
+                return Err(Error::input(
+                    cs.loc.clone(),
+                    format!(
+                        "coordinate '{}' has range [{}, {}] with min > max",
+                        cs.name, cs.range[0], cs.range[1]
+                    ),
+                ));
             }
             coordinates.push(Coordinate {
                 name: cs.name.clone(),
@@ -234,7 +313,11 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
                 range: cs.range,
                 clamped: cs.clamped,
                 locked: cs.locked,
-                prescribed: if cs.prescribed { cs.prescribed_function.clone() } else { None },
+                prescribed: if cs.prescribed {
+                    cs.prescribed_function.clone()
+                } else {
+                    None
+                },
                 dependent: cs.free_to_satisfy_constraints,
             });
         }
@@ -263,28 +346,61 @@ pub fn compile(spec: &ModelSpec) -> Result<Model> {
     }
 
     // Frames: ground, bodies, offset frames.
-    let mut frames = vec![Frame { path: format!("/{}", spec.ground_name), name: spec.ground_name.clone(), body: 0, transform: Transform::identity() }];
+    let mut frames = vec![Frame {
+        path: format!("/{}", spec.ground_name),
+        name: spec.ground_name.clone(),
+        body: 0,
+        transform: Transform::identity(),
+    }];
     for (b, body) in bodies.iter().enumerate().skip(1) {
-        frames.push(Frame { path: format!("/bodyset/{}", body.name), name: body.name.clone(), body: b, transform: Transform::identity() });
+        frames.push(Frame {
+            path: format!("/bodyset/{}", body.name),
+            name: body.name.clone(),
+            body: b,
+            transform: Transform::identity(),
+        });
     }
     for f in &spec.frames {
         let (b, x) = resolver.resolve(&f.path, 0, &f.loc)?;
-        frames.push(Frame { path: f.path.clone(), name: f.name.clone(), body: new_index[b], transform: x });
+        frames.push(Frame {
+            path: f.path.clone(),
+            name: f.name.clone(),
+            body: new_index[b],
+            transform: x,
+        });
     }
 
     // Coupler constraints.
     let mut couplers = Vec::new();
     for c in spec.couplers.iter().filter(|c| c.enforced) {
         let find = |n: &str| {
-            coord_by_name.get(n).copied().ok_or_else(|| Error::input(c.loc.clone(), format!("constraint '{}' names coordinate '{n}', which does not exist", c.name)))
+            coord_by_name.get(n).copied().ok_or_else(|| {
+                Error::input(
+                    c.loc.clone(),
+                    format!(
+                        "constraint '{}' names coordinate '{n}', which does not exist",
+                        c.name
+                    ),
+                )
+            })
         };
         let dependent = find(&c.dependent)?;
-        let independent = c.independent.iter().map(|n| find(n)).collect::<Result<Vec<_>>>()?;
+        let independent = c
+            .independent
+            .iter()
+            .map(|n| find(n))
+            .collect::<Result<Vec<_>>>()?;
         if independent.len() != 1 && !matches!(c.function, Function::Constant(_)) {
             return Err(Error::input(c.loc.clone(), format!("constraint '{}': couplers with {} independent coordinates are not supported (only one)", c.name, independent.len())));
         }
         coordinates[dependent].dependent = true;
-        couplers.push(Coupler { name: c.name.clone(), function: c.function.clone(), independent, dependent, scale: c.scale_factor });
+        couplers.push(Coupler {
+            name: c.name.clone(),
+            function: c.function.clone(),
+            independent,
+            dependent,
+            scale: c.scale_factor,
+        });
     }
 
     Ok(Model {
@@ -308,12 +424,20 @@ fn checked_inertia(b: &crate::parse::osim::BodySpec, warnings: &mut Vec<String>)
     let m = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
     if b.mass == 0.0 {
         if m.iter().any(|v| *v != 0.0) {
-            warnings.push(format!("body '{}' is massless but has inertia; using zero inertia as OpenSim does", b.name));
+            warnings.push(format!(
+                "body '{}' is massless but has inertia; using zero inertia as OpenSim does",
+                b.name
+            ));
         }
         return Matrix3::zeros();
     }
     let tol = 1e-12 * (xx.abs() + yy.abs() + zz.abs()).max(1e-300);
-    let valid = xx >= -tol && yy >= -tol && zz >= -tol && xx + yy + tol >= zz && xx + zz + tol >= yy && yy + zz + tol >= xx;
+    let valid = xx >= -tol
+        && yy >= -tol
+        && zz >= -tol
+        && xx + yy + tol >= zz
+        && xx + zz + tol >= yy
+        && yy + zz + tol >= xx;
     if !valid {
         let d = (xx * xx + yy * yy + zz * zz).sqrt() / 3f64.sqrt();
         warnings.push(format!("body '{}' has an invalid inertia {:?}; using a spherical inertia of {d} as OpenSim does", b.name, b.inertia));
@@ -326,9 +450,20 @@ fn checked_inertia(b: &crate::parse::osim::BodySpec, warnings: &mut Vec<String>)
 /// and their motion types.
 fn joint_kind(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>)> {
     use MotionType::*;
-    let fixed = |kind: JointKind, types: &[MotionType]| -> Result<(JointKind, Vec<usize>, Vec<MotionType>)> {
+    let fixed = |kind: JointKind,
+                 types: &[MotionType]|
+     -> Result<(JointKind, Vec<usize>, Vec<MotionType>)> {
         if j.coordinates.len() != types.len() {
-            return Err(Error::input(j.loc.clone(), format!("{} '{}' needs {} coordinates, found {}", j.kind, j.name, types.len(), j.coordinates.len())));
+            return Err(Error::input(
+                j.loc.clone(),
+                format!(
+                    "{} '{}' needs {} coordinates, found {}",
+                    j.kind,
+                    j.name,
+                    types.len(),
+                    j.coordinates.len()
+                ),
+            ));
         }
         Ok((kind, (0..types.len()).collect(), types.to_vec()))
     };
@@ -347,7 +482,12 @@ fn joint_kind(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>)>
 }
 
 fn custom_joint(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>)> {
-    let axes = j.spatial_transform.as_ref().ok_or_else(|| Error::input(j.loc.clone(), format!("CustomJoint '{}' has no SpatialTransform", j.name)))?;
+    let axes = j.spatial_transform.as_ref().ok_or_else(|| {
+        Error::input(
+            j.loc.clone(),
+            format!("CustomJoint '{}' has no SpatialTransform", j.name),
+        )
+    })?;
     // Unique coordinates in order of first appearance across the six axes.
     let mut order: Vec<usize> = Vec::new();
     for a in axes {
@@ -361,15 +501,35 @@ fn custom_joint(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>
         }
     }
     if order.len() != j.coordinates.len() {
-        let unused: Vec<&str> = j.coordinates.iter().enumerate().filter(|(i, _)| !order.contains(i)).map(|(_, c)| c.name.as_str()).collect();
-        return Err(Error::input(j.loc.clone(), format!("CustomJoint '{}': coordinates {:?} drive no transform axis", j.name, unused)));
+        let unused: Vec<&str> = j
+            .coordinates
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !order.contains(i))
+            .map(|(_, c)| c.name.as_str())
+            .collect();
+        return Err(Error::input(
+            j.loc.clone(),
+            format!(
+                "CustomJoint '{}': coordinates {:?} drive no transform axis",
+                j.name, unused
+            ),
+        ));
     }
     // Pairwise non-collinear rotation axes and translation axes.
     for (lo, hi) in [(0, 3), (3, 6)] {
         for a in lo..hi {
             for b in a + 1..hi {
                 if axes[a].axis.cross(&axes[b].axis).norm() < 1e-5 {
-                    return Err(Error::input(axes[b].loc.clone(), format!("CustomJoint '{}': transform axes {} and {} are collinear", j.name, a + 1, b + 1)));
+                    return Err(Error::input(
+                        axes[b].loc.clone(),
+                        format!(
+                            "CustomJoint '{}': transform axes {} and {} are collinear",
+                            j.name,
+                            a + 1,
+                            b + 1
+                        ),
+                    ));
                 }
             }
         }
@@ -381,7 +541,11 @@ fn custom_joint(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>
         let coordinate = match a.coordinates.len() {
             0 => None,
             1 => {
-                let ci = j.coordinates.iter().position(|c| c.name == a.coordinates[0]).unwrap_or(0);
+                let ci = j
+                    .coordinates
+                    .iter()
+                    .position(|c| c.name == a.coordinates[0])
+                    .unwrap_or(0);
                 order.iter().position(|&o| o == ci)
             }
             _ => {
@@ -393,11 +557,19 @@ fn custom_joint(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>
         };
         // Motion type (§2.6): slope ±1 LinearFunction → pure; anything else → Coupled unless already pure.
         for name in &a.coordinates {
-            let ci = j.coordinates.iter().position(|c| &c.name == name).unwrap_or(0);
+            let ci = j
+                .coordinates
+                .iter()
+                .position(|c| &c.name == name)
+                .unwrap_or(0);
             let k = order.iter().position(|&o| o == ci).unwrap_or(0);
             let pure = matches!(function, Function::Linear { slope, .. } if slope.abs() == 1.0);
             let t = if pure {
-                Some(if i < 3 { MotionType::Rotational } else { MotionType::Translational })
+                Some(if i < 3 {
+                    MotionType::Rotational
+                } else {
+                    MotionType::Translational
+                })
             } else {
                 match motion[k] {
                     Some(MotionType::Rotational) | Some(MotionType::Translational) => motion[k],
@@ -406,10 +578,23 @@ fn custom_joint(j: &JointSpec) -> Result<(JointKind, Vec<usize>, Vec<MotionType>
             };
             motion[k] = t;
         }
-        built.push(TransformAxis { axis: a.axis, coordinate, function });
+        built.push(TransformAxis {
+            axis: a.axis,
+            coordinate,
+            function,
+        });
     }
-    let arr: [TransformAxis; 6] = built.try_into().map_err(|_| Error::internal("six axes expected"))?;
-    Ok((JointKind::Custom(Box::new(arr)), order, motion.into_iter().map(|m| m.unwrap_or(MotionType::Coupled)).collect()))
+    let arr: [TransformAxis; 6] = built
+        .try_into()
+        .map_err(|_| Error::internal("six axes expected"))?;
+    Ok((
+        JointKind::Custom(Box::new(arr)),
+        order,
+        motion
+            .into_iter()
+            .map(|m| m.unwrap_or(MotionType::Coupled))
+            .collect(),
+    ))
 }
 
 #[cfg(test)]
@@ -418,8 +603,17 @@ mod tests {
 
     #[test]
     fn socket_paths() {
-        assert_eq!(resolve_path("/jointset/hip_r", "pelvis_offset"), "/jointset/hip_r/pelvis_offset");
-        assert_eq!(resolve_path("/jointset/hip_r", "/bodyset/pelvis"), "/bodyset/pelvis");
-        assert_eq!(resolve_path("/jointset/hip_r/pelvis_offset", "../../../bodyset/pelvis"), "/bodyset/pelvis");
+        assert_eq!(
+            resolve_path("/jointset/hip_r", "pelvis_offset"),
+            "/jointset/hip_r/pelvis_offset"
+        );
+        assert_eq!(
+            resolve_path("/jointset/hip_r", "/bodyset/pelvis"),
+            "/bodyset/pelvis"
+        );
+        assert_eq!(
+            resolve_path("/jointset/hip_r/pelvis_offset", "../../../bodyset/pelvis"),
+            "/bodyset/pelvis"
+        );
     }
 }

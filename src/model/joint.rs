@@ -169,8 +169,22 @@ impl JointKind {
             JointKind::Planar => {
                 m.rotation = rot_z(q[0]);
                 m.translation = Vector3::new(q[1], q[2], 0.0);
-                m.h_w = [z, Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), Vector3::zeros()];
-                m.h_v = [Vector3::zeros(), x, y, Vector3::zeros(), Vector3::zeros(), Vector3::zeros()];
+                m.h_w = [
+                    z,
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                ];
+                m.h_v = [
+                    Vector3::zeros(),
+                    x,
+                    y,
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                ];
             }
             JointKind::Custom(axes) => custom_motion(axes, q, u, m),
         }
@@ -248,7 +262,11 @@ mod tests {
             let h = 1e-6;
             let qp: Vec<f64> = q0.iter().zip(&u).map(|(q, u)| q + h * u).collect();
             let qm: Vec<f64> = q0.iter().zip(&u).map(|(q, u)| q - h * u).collect();
-            let (mut m0, mut mp, mut mm) = (JointMotion::default(), JointMotion::default(), JointMotion::default());
+            let (mut m0, mut mp, mut mm) = (
+                JointMotion::default(),
+                JointMotion::default(),
+                JointMotion::default(),
+            );
             kind.motion(&q0, &u, &mut m0);
             kind.motion(&qp, &u, &mut mp);
             kind.motion(&qm, &u, &mut mm);

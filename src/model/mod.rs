@@ -29,7 +29,10 @@ pub struct Transform {
 
 impl Transform {
     pub fn identity() -> Self {
-        Transform { rotation: Matrix3::identity(), translation: Vector3::zeros() }
+        Transform {
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
     }
     /// `self * other`: other's child frame expressed in self's parent frame.
     pub fn compose(&self, other: &Transform) -> Transform {
@@ -40,7 +43,10 @@ impl Transform {
     }
     pub fn inverse(&self) -> Transform {
         let rt = self.rotation.transpose();
-        Transform { rotation: rt, translation: -(rt * self.translation) }
+        Transform {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
     }
     pub fn apply(&self, x: &Vector3<f64>) -> Vector3<f64> {
         self.rotation * x + self.translation
@@ -180,7 +186,11 @@ impl Model {
         self.coordinates.iter().position(|c| c.name == name)
     }
     pub fn joint_index(&self, name: &str) -> Option<usize> {
-        self.joints.iter().skip(1).position(|j| j.name == name).map(|i| i + 1)
+        self.joints
+            .iter()
+            .skip(1)
+            .position(|j| j.name == name)
+            .map(|i| i + 1)
     }
     pub fn frame(&self, path_or_name: &str) -> Option<&Frame> {
         self.frames

@@ -147,7 +147,9 @@ impl ModelSpec {
 
     pub fn from_document(root: &Element, path: &Path) -> Result<ModelSpec> {
         if root.name != "OpenSimDocument" {
-            return Err(root.error("not an OpenSim document: root element must be <OpenSimDocument>"));
+            return Err(
+                root.error("not an OpenSim document: root element must be <OpenSimDocument>")
+            );
         }
         let version: u32 = match root.attr("Version") {
             Some(v) => v
@@ -156,8 +158,9 @@ impl ModelSpec {
                 .map_err(|_| root.error(format!("Version attribute '{v}' is not a number")))?,
             None => return Err(root.error("missing Version attribute")),
         };
-        let model =
-            root.child("Model").ok_or_else(|| root.error("document holds no <Model> element"))?;
+        let model = root
+            .child("Model")
+            .ok_or_else(|| root.error("document holds no <Model> element"))?;
         let mut spec = ModelSpec {
             name: model.name_attr().to_string(),
             file: path.to_path_buf(),
@@ -229,7 +232,11 @@ fn read_40(spec: &mut ModelSpec, model: &Element) -> Result<()> {
             "components" | "ComponentSet" => {
                 for c in components(child) {
                     if c.name == "PhysicalOffsetFrame" {
-                        let base = if child.name == "ComponentSet" { "/componentset".to_string() } else { String::new() };
+                        let base = if child.name == "ComponentSet" {
+                            "/componentset".to_string()
+                        } else {
+                            String::new()
+                        };
                         spec.frames.push(read_frame(c, &base)?);
                     } else {
                         unsupported(spec, c, "component");
@@ -253,11 +260,14 @@ fn components(el: &Element) -> impl Iterator<Item = &Element> {
 
 /// The members of a `<XSet><objects>...</objects></XSet>`.
 fn objects(set: &Element) -> impl Iterator<Item = &Element> {
-    set.child("objects").into_iter().flat_map(|o| o.children.iter())
+    set.child("objects")
+        .into_iter()
+        .flat_map(|o| o.children.iter())
 }
 
 fn unsupported(spec: &mut ModelSpec, el: &Element, what: &str) {
-    spec.unsupported.push((format!("{what} {}", el.describe()), el.loc()));
+    spec.unsupported
+        .push((format!("{what} {}", el.describe()), el.loc()));
 }
 
 fn collect_wraps(spec: &mut ModelSpec, body: &str, el: &Element) {
@@ -277,7 +287,14 @@ fn read_body(b: &Element) -> Result<BodySpec> {
         }
         _ => {
             // 3.x spelling: inertia_xx ... inertia_yz (defaults 1 1 1 0 0 0).
-            let names = ["inertia_xx", "inertia_yy", "inertia_zz", "inertia_xy", "inertia_xz", "inertia_yz"];
+            let names = [
+                "inertia_xx",
+                "inertia_yy",
+                "inertia_zz",
+                "inertia_xy",
+                "inertia_xz",
+                "inertia_yz",
+            ];
             let defaults = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
             let mut v = [0.0; 6];
             for k in 0..6 {
@@ -287,7 +304,9 @@ fn read_body(b: &Element) -> Result<BodySpec> {
         }
     };
     if !(mass.is_finite() && mass >= 0.0) {
-        return Err(b.req("mass")?.error(format!("body mass must be a finite, non-negative number, found {mass}")));
+        return Err(b.req("mass")?.error(format!(
+            "body mass must be a finite, non-negative number, found {mass}"
+        )));
     }
     if inertia.iter().any(|x| !x.is_finite()) {
         return Err(b.error("body inertia holds a non-finite value"));
@@ -342,8 +361,17 @@ fn read_coordinate(c: &Element) -> Result<CoordinateSpec> {
 }
 
 fn read_spatial_transform(j: &Element) -> Result<Option<Vec<AxisSpec>>> {
-    let Some(st) = j.child("SpatialTransform") else { return Ok(None) };
-    let names = ["rotation1", "rotation2", "rotation3", "translation1", "translation2", "translation3"];
+    let Some(st) = j.child("SpatialTransform") else {
+        return Ok(None);
+    };
+    let names = [
+        "rotation1",
+        "rotation2",
+        "rotation3",
+        "translation1",
+        "translation2",
+        "translation3",
+    ];
     let mut axes = Vec::with_capacity(6);
     for n in names {
         let ax = st
@@ -352,10 +380,15 @@ fn read_spatial_transform(j: &Element) -> Result<Option<Vec<AxisSpec>>> {
             .ok_or_else(|| st.error(format!("SpatialTransform lacks TransformAxis '{n}'")))?;
         let axis = ax.req("axis")?.vec3()?;
         if axis.norm() < 1e-12 || !axis.iter().all(|x| x.is_finite()) {
-            return Err(ax.req("axis")?.error("transform axis must be a finite, non-zero vector"));
+            return Err(ax
+                .req("axis")?
+                .error("transform axis must be a finite, non-zero vector"));
         }
         axes.push(AxisSpec {
-            coordinates: ax.child("coordinates").map(|c| c.words()).unwrap_or_default(),
+            coordinates: ax
+                .child("coordinates")
+                .map(|c| c.words())
+                .unwrap_or_default(),
             axis: axis.normalize(),
             function: Function::find_property(ax, "function")?,
             loc: ax.loc(),
@@ -410,9 +443,14 @@ fn read_constraints(spec: &mut ModelSpec, set: &Element) -> Result<()> {
             Some(e) if !e.text().is_empty() => e.bool()?,
             _ => !c.child_bool_or("isDisabled", false)?,
         };
-        let function = Function::find_property(c, "coupled_coordinates_function")?
-            .ok_or_else(|| c.error("CoordinateCouplerConstraint has no coupled_coordinates_function"))?;
-        let independent = c.child("independent_coordinate_names").map(|e| e.words()).unwrap_or_default();
+        let function =
+            Function::find_property(c, "coupled_coordinates_function")?.ok_or_else(|| {
+                c.error("CoordinateCouplerConstraint has no coupled_coordinates_function")
+            })?;
+        let independent = c
+            .child("independent_coordinate_names")
+            .map(|e| e.words())
+            .unwrap_or_default();
         let dependent = c
             .child_text("dependent_coordinate_name")
             .filter(|s| !s.is_empty())
@@ -447,8 +485,9 @@ fn sig6v(v: Vector3<f64>) -> Vector3<f64> {
 /// 3.x layout: joints nested in bodies; converted as OpenSim's
 /// `updateFromXMLNode` does (opensim-semantics.md §2.8).
 fn read_3x(spec: &mut ModelSpec, model: &Element) -> Result<()> {
-    let body_set =
-        model.child("BodySet").ok_or_else(|| model.error("3.x model has no <BodySet>"))?;
+    let body_set = model
+        .child("BodySet")
+        .ok_or_else(|| model.error("3.x model has no <BodySet>"))?;
     // Ground is the body named "ground" in 3.x files.
     for b in objects(body_set) {
         if b.name != "Body" {
@@ -506,16 +545,26 @@ fn read_joint_3x(spec: &mut ModelSpec, j: &Element, child_body: &str) -> Result<
     let v3 = |n: &str| j.child_vec3_or(n, [0.0; 3]);
     let mut loc_parent = v3("location_in_parent")?;
     let mut ori_parent = v3("orientation_in_parent")?;
-    let mut loc_child = if j.child("location_in_child").is_some() { v3("location_in_child")? } else { v3("location")? };
-    let mut ori_child =
-        if j.child("orientation_in_child").is_some() { v3("orientation_in_child")? } else { v3("orientation")? };
+    let mut loc_child = if j.child("location_in_child").is_some() {
+        v3("location_in_child")?
+    } else {
+        v3("location")?
+    };
+    let mut ori_child = if j.child("orientation_in_child").is_some() {
+        v3("orientation_in_child")?
+    } else {
+        v3("orientation")?
+    };
     if spec.version < 30514 && j.child_bool_or("reverse", false)? {
         std::mem::swap(&mut parent_body, &mut child_body);
         std::mem::swap(&mut loc_parent, &mut loc_child);
         std::mem::swap(&mut ori_parent, &mut ori_child);
     }
-    let parent_path =
-        if parent_body == "ground" { "/ground".to_string() } else { format!("/bodyset/{parent_body}") };
+    let parent_path = if parent_body == "ground" {
+        "/ground".to_string()
+    } else {
+        format!("/bodyset/{parent_body}")
+    };
     let pf = format!("{parent_body}_offset");
     let cf = format!("{child_body}_offset");
     spec.frames.push(FrameSpec {

@@ -42,19 +42,27 @@ pub fn resolve(setup_dir: &Path, p: &str) -> PathBuf {
 }
 
 fn opt_text(el: &Element, name: &str) -> Option<String> {
-    el.child_text(name).filter(|s| !s.is_empty() && *s != "Unassigned").map(str::to_string)
+    el.child_text(name)
+        .filter(|s| !s.is_empty() && *s != "Unassigned")
+        .map(str::to_string)
 }
 
 impl Setup {
     pub fn read(path: &Path) -> Result<Setup> {
         let root = xml::parse_file(path)?;
         let tool = if root.name == "OpenSimDocument" {
-            root.children.first().ok_or_else(|| root.error("the setup holds no tool element"))?
+            root.children
+                .first()
+                .ok_or_else(|| root.error("the setup holds no tool element"))?
         } else {
             &root
         };
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let dir = if dir.as_os_str().is_empty() { PathBuf::from(".") } else { dir };
+        let dir = if dir.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            dir
+        };
         match tool.name.as_str() {
             "InverseDynamicsTool" => Ok(Setup::InverseDynamics(read_id(tool, path, &dir)?)),
             other => Err(tool.error(format!(
@@ -73,13 +81,19 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
         Some(t) if !t.text().is_empty() => {
             let v = t.numbers_n(2)?;
             if v[0] > v[1] {
-                return Err(t.error(format!("time_range start {} is after its end {}", v[0], v[1])));
+                return Err(t.error(format!(
+                    "time_range start {} is after its end {}",
+                    v[0], v[1]
+                )));
             }
             (v[0], v[1])
         }
         _ => (f64::NEG_INFINITY, f64::INFINITY),
     };
-    let joints = tool.child("joints_to_report_body_forces").map(|e| e.words()).unwrap_or_default();
+    let joints = tool
+        .child("joints_to_report_body_forces")
+        .map(|e| e.words())
+        .unwrap_or_default();
     Ok(InverseDynamicsSetup {
         name: tool.attr("name").unwrap_or("").to_string(),
         setup_file: path.to_path_buf(),
@@ -87,10 +101,17 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
         coordinates_file: req_path("coordinates_file")?,
         lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
         time_range,
-        forces_to_exclude: tool.child("forces_to_exclude").map(|e| e.words()).unwrap_or_default(),
+        forces_to_exclude: tool
+            .child("forces_to_exclude")
+            .map(|e| e.words())
+            .unwrap_or_default(),
         external_loads_file: opt_text(tool, "external_loads_file").map(|p| resolve(dir, &p)),
-        results_directory: resolve(dir, &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into())),
-        output_gen_force_file: opt_text(tool, "output_gen_force_file").unwrap_or_else(|| "inverse_dynamics.sto".into()),
+        results_directory: resolve(
+            dir,
+            &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
+        ),
+        output_gen_force_file: opt_text(tool, "output_gen_force_file")
+            .unwrap_or_else(|| "inverse_dynamics.sto".into()),
         joints_to_report_body_forces: joints,
         output_body_forces_file: opt_text(tool, "output_body_forces_file"),
     })
