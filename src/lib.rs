@@ -14,6 +14,7 @@ pub mod functions;
 pub mod model;
 pub mod motion;
 pub mod muscles;
+pub mod optimize;
 pub mod parse;
 pub mod paths;
 pub mod storage;

@@ -1,0 +1,30 @@
+//! Per-frame force-sharing optimisation: OpenSim static optimization
+//! (opensim-semantics.md §6.4–6.5) extended by the frictional point-on-plane
+//! contacts of Krüger & Wartzack (2017, §2.2).
+//!
+//! The physics (moment arms, contact Jacobians, target accelerations) is
+//! assembled elsewhere; this module receives plain matrices in a
+//! [`FrameProblem`] and solves the convex program
+//!
+//! ```text
+//! minimise   Σ_i weight_i · |x_i|^p
+//! subject to A x = b,  lower ≤ x ≤ upper,
+//!            friction constraints of every contact in the static regime
+//! ```
+//!
+//! with the conic interior-point solver Clarabel ([`solve`]). For p = 2 the
+//! program is a QP; for other p ≥ 1 each weighted variable gets an epigraph
+//! variable t_i ≥ |x_i|^p expressed with a 3-D power cone.
+//!
+//! Files: [`problem`] (data types and validation), [`friction`] (contact
+//! constraint geometry), [`solve`](mod@solve) (Clarabel formulation).
+pub mod friction;
+pub mod problem;
+pub mod solve;
+
+pub use friction::FrictionModel;
+pub use problem::{FrameProblem, FrameSolution, SolveSettings, SolveStatus, StaticContact};
+pub use solve::solve;
+
+#[cfg(test)]
+mod tests;

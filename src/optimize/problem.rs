@@ -1,0 +1,248 @@
+//! Data of one frame's force-sharing problem and of its solution.
+use std::time::Duration;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::friction::FrictionModel;
+use crate::{Error, Result};
+
+/// A contact in the static friction regime (Krüger & Wartzack 2017, eq. 2
+/// and 16): indices of its normal multiplier λn and its two shear
+/// multipliers λs1, λs2 among the problem variables, and the static friction
+/// coefficient μ_s. The friction constraint couples them as
+/// ‖(λs1, λs2)‖ ≤ μ_s λn (approximated according to
+/// [`FrameProblem::friction`]). The unilateral bound λn ≥ 0 (eq. 10) is not
+/// implied by this struct: set it through [`FrameProblem::lower`]. (Any of the
+/// friction models does force λn ≥ 0 when μ_s > 0.)
+///
+/// Contacts in the kinetic regime are not listed here: their shear force is
+/// a fixed multiple of the normal force (eq. 3) and belongs in the columns
+/// of `A` that the physics layer builds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticContact {
+    pub normal: usize,
+    pub shear: [usize; 2],
+    pub mu: f64,
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveSettings {
+    /// Clarabel's absolute and relative duality-gap tolerance and its
+    /// primal/dual feasibility tolerance (`tol_gap_abs`, `tol_gap_rel`,
+    /// `tol_feas`). Default 1e-8. (OpenSim's IPOPT uses the
+    /// `optimizer_convergence_criterion`, 1e-4, §6.4; a tighter tolerance
+    /// here only makes the answer closer to the exact optimum.)
+    pub tolerance: f64,
+    /// Maximum number of interior-point iterations (OpenSim's
+    /// `optimizer_max_iterations`, default 100).
+    pub max_iter: u32,
+}
+
+impl Default for SolveSettings {
+    fn default() -> Self {
+        SolveSettings {
+            tolerance: 1e-8,
+            max_iter: 100,
+        }
+    }
+}
+
+/// One frame's convex program (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameProblem {
+    /// Equality constraints A x = b (n_eq × n_var).
+    pub a: DMatrix<f64>,
+    pub b: DVector<f64>,
+    /// Objective Σ_i weight_i · |x_i|^p. Weights must be finite and ≥ 0
+    /// (1 for muscles and actuators as in OpenSim §6.4; 1/w0 for contact
+    /// multipliers as in Krüger & Wartzack eq. 6). A weight of 0 leaves the
+    /// variable out of the objective.
+    pub weights: Vec<f64>,
+    /// The activation exponent p (OpenSim `activation_exponent`, default 2).
+    /// Must be finite and ≥ 1: for p < 1 the objective is not convex.
+    pub exponent: f64,
+    /// Bounds per variable; ±∞ allowed, `lower == upper` fixes a variable.
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Contacts in the static friction regime.
+    pub static_contacts: Vec<StaticContact>,
+    /// How the friction cone of the static contacts is represented.
+    pub friction: FrictionModel,
+    pub settings: SolveSettings,
+}
+
+/// Outcome of a solve, mapped from Clarabel's `SolverStatus`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolveStatus {
+    /// Clarabel `Solved`: optimal to the requested tolerance.
+    Solved,
+    /// Clarabel `AlmostSolved`: optimal to Clarabel's reduced tolerances
+    /// (gap 5e-5, feasibility 1e-4) — comparable to OpenSim's IPOPT 1e-4
+    /// (`Solved_To_Acceptable_Level`, §6.5).
+    AlmostSolved,
+    /// Clarabel `PrimalInfeasible` or `AlmostPrimalInfeasible`: no x satisfies
+    /// the equalities, bounds and friction constraints together. The returned
+    /// x is the solution of the elastic problem (see [`super::solve()`]).
+    Infeasible,
+    /// Clarabel `MaxIterations`.
+    MaxIterations,
+    /// Clarabel `MaxTime` (no time limit is set, so this should not occur).
+    TimeLimit,
+    /// Clarabel `NumericalError`, `InsufficientProgress`, `DualInfeasible`,
+    /// `AlmostDualInfeasible` (impossible in exact arithmetic, because the
+    /// objective is bounded below by 0), `Unsolved`, `CallbackTerminated`,
+    /// or Clarabel refused the data.
+    NumericalError,
+    /// The problem failed [`FrameProblem::validate`]; x is all zeros
+    /// (projected onto the bounds where they are valid).
+    InvalidProblem,
+}
+
+impl SolveStatus {
+    /// `Solved` or `AlmostSolved`: the statuses OpenSim accepts without
+    /// entering its failure handling (§6.5).
+    pub fn is_ok(self) -> bool {
+        matches!(self, SolveStatus::Solved | SolveStatus::AlmostSolved)
+    }
+}
+
+/// Result of [`super::solve()`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameSolution {
+    /// The variables; always finite and of length n_var.
+    pub x: Vec<f64>,
+    pub status: SolveStatus,
+    /// Clarabel iterations (including those of the elastic re-solve of an
+    /// infeasible frame).
+    pub iterations: u32,
+    /// Σ weight_i |x_i|^p evaluated at `x`.
+    pub objective: f64,
+    /// max_j |(A x − b)_j| at `x` (0 when there are no equalities).
+    pub eq_residual: f64,
+    /// Wall-clock time of the whole call (validation, assembly, solve).
+    pub solve_time: Duration,
+}
+
+impl FrameProblem {
+    /// Number of variables.
+    pub fn n_var(&self) -> usize {
+        self.a.ncols()
+    }
+
+    /// Number of equality constraints.
+    pub fn n_eq(&self) -> usize {
+        self.a.nrows()
+    }
+
+    /// Checks dimensions and values; the error message says what is wrong.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.n_var();
+        let m = self.n_eq();
+        let bad = |msg: String| Err(Error::msg(format!("optimisation problem: {msg}")));
+        if self.b.len() != m {
+            return bad(format!("A has {m} rows but b has {} entries", self.b.len()));
+        }
+        for (name, len) in [
+            ("weights", self.weights.len()),
+            ("lower", self.lower.len()),
+            ("upper", self.upper.len()),
+        ] {
+            if len != n {
+                return bad(format!("A has {n} columns but {name} has {len} entries"));
+            }
+        }
+        if !(self.exponent.is_finite() && self.exponent >= 1.0) {
+            return bad(format!(
+                "activation exponent {} is not allowed: it must be a finite number >= 1 \
+                 (for exponents below 1 the objective is not convex)",
+                self.exponent
+            ));
+        }
+        if let Some((i, j)) = (0..n)
+            .flat_map(|j| (0..m).map(move |i| (i, j)))
+            .find(|&(i, j)| !self.a[(i, j)].is_finite())
+        {
+            return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
+        }
+        if let Some(i) = self.b.iter().position(|v| !v.is_finite()) {
+            return bad(format!("b[{i}] = {} is not finite", self.b[i]));
+        }
+        for i in 0..n {
+            let (w, lo, hi) = (self.weights[i], self.lower[i], self.upper[i]);
+            if !(w.is_finite() && w >= 0.0) {
+                return bad(format!(
+                    "weight of variable {i} is {w}; it must be finite and >= 0"
+                ));
+            }
+            if lo.is_nan() || hi.is_nan() || lo == f64::INFINITY || hi == f64::NEG_INFINITY {
+                return bad(format!("variable {i} has invalid bounds [{lo}, {hi}]"));
+            }
+            if lo > hi {
+                return bad(format!(
+                    "variable {i} has lower bound {lo} above its upper bound {hi}"
+                ));
+            }
+        }
+        let mut used = vec![false; n];
+        for (k, c) in self.static_contacts.iter().enumerate() {
+            if !(c.mu.is_finite() && c.mu >= 0.0) {
+                return bad(format!(
+                    "contact {k}: friction coefficient {} must be finite and >= 0",
+                    c.mu
+                ));
+            }
+            for idx in [c.normal, c.shear[0], c.shear[1]] {
+                if idx >= n {
+                    return bad(format!(
+                        "contact {k}: variable index {idx} out of range (n_var = {n})"
+                    ));
+                }
+                if used[idx] {
+                    return bad(format!(
+                        "contact {k}: variable {idx} is already used by a contact"
+                    ));
+                }
+                used[idx] = true;
+            }
+        }
+        let s = &self.settings;
+        if !(s.tolerance.is_finite() && s.tolerance > 0.0) {
+            return bad(format!("tolerance {} must be > 0", s.tolerance));
+        }
+        if s.max_iter == 0 {
+            return bad("max_iter must be at least 1".to_string());
+        }
+        Ok(())
+    }
+
+    /// Σ weight_i |x_i|^p.
+    pub fn objective(&self, x: &[f64]) -> f64 {
+        let p = self.exponent;
+        self.weights
+            .iter()
+            .zip(x)
+            .filter(|(w, _)| **w != 0.0)
+            .map(|(w, xi)| {
+                if p == 2.0 {
+                    w * xi * xi
+                } else {
+                    w * xi.abs().powf(p)
+                }
+            })
+            .sum()
+    }
+
+    /// max_j |(A x − b)_j|, 0 without equalities.
+    pub fn eq_residual(&self, x: &[f64]) -> f64 {
+        let mut worst = 0.0f64;
+        for i in 0..self.n_eq() {
+            let mut r = -self.b[i];
+            for (j, xj) in x.iter().enumerate() {
+                r += self.a[(i, j)] * xj;
+            }
+            worst = worst.max(r.abs());
+        }
+        worst
+    }
+}
