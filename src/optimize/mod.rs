@@ -12,7 +12,7 @@
 //!            friction constraints of every contact in the static regime
 //! ```
 //!
-//! with the conic interior-point solver Clarabel ([`solve`]). For p = 2 the
+//! with the conic interior-point solver Clarabel ([`solve()`]). For p = 2 the
 //! program is a QP; for other p ≥ 1 each weighted variable gets an epigraph
 //! variable t_i ≥ |x_i|^p expressed with a 3-D power cone.
 //!

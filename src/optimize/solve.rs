@@ -37,10 +37,11 @@ use super::friction::FrictionModel;
 use super::problem::{FrameProblem, FrameSolution, SolveStatus};
 
 /// Weight of ‖A x − b‖² in the elastic problem solved when a frame is
-/// infeasible. It is large compared with the objective (activations are
-/// O(1)), so the elastic optimum is, to a relative 1e-6 or so, the x within
-/// bounds and friction limits that comes closest to satisfying the
-/// equalities.
+/// infeasible, relative to the objective normalised as described at `objective_scale`
+/// (cheapest variable weight 1). It is large compared with that objective
+/// (activations are O(1)), so the elastic optimum is, to a relative 1e-6 or
+/// so, the x within bounds and friction limits that comes closest to
+/// satisfying the equalities in the least-squares sense.
 pub const ELASTIC_PENALTY: f64 = 1e6;
 
 const NONE: usize = usize::MAX;
@@ -86,9 +87,19 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         };
     }
 
-    let (mut x, mut status, mut iterations) = run(p, false);
-    if status == SolveStatus::Infeasible {
-        let (xe, _, it) = run(p, true);
+    let (mut x, mut status, mut iterations) = if n == 0 {
+        // Nothing to optimise (Clarabel cannot factor an empty system).
+        let status = if p.b.iter().all(|v| *v == 0.0) {
+            SolveStatus::Solved
+        } else {
+            SolveStatus::Infeasible
+        };
+        (Vec::new(), status, 0)
+    } else {
+        run_guarded(p, false)
+    };
+    if status == SolveStatus::Infeasible && n > 0 {
+        let (xe, _, it) = run_guarded(p, true);
         x = xe;
         iterations += it;
     }
@@ -111,6 +122,14 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         iterations,
         solve_time: start.elapsed(),
     }
+}
+
+/// [`run`], with a panic inside Clarabel (an internal assertion or index
+/// error on data it should have refused) turned into `NumericalError`, so
+/// that one bad frame cannot abort a whole analysis.
+fn run_guarded(p: &FrameProblem, elastic: bool) -> (Vec<f64>, SolveStatus, u32) {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(p, elastic)))
+        .unwrap_or_else(|_| (vec![0.0; p.n_var()], SolveStatus::NumericalError, 0))
 }
 
 /// Builds and solves the conic program; returns (x, status, iterations).

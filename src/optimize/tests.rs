@@ -84,23 +84,27 @@ fn so_closed_form_with_active_upper_bound() {
 #[test]
 fn so_infeasible_frame_reports_status_and_elastic_x() {
     // Σ r_i · 1 = 120 < τ = 200: no activation in [0.01, 1] reaches τ.
-    let sol = solve(&so_problem(200.0));
-    assert_eq!(sol.status, SolveStatus::Infeasible);
-    assert!(!sol.status.is_ok());
-    assert_eq!(sol.x.len(), 4);
-    for &xi in &sol.x {
-        assert!(
-            xi.is_finite() && (0.01..=1.0).contains(&xi),
-            "x = {:?}",
-            sol.x
-        );
+    for exponent in [2.0, 3.0] {
+        let mut p = so_problem(200.0);
+        p.exponent = exponent;
+        let sol = solve(&p);
+        assert_eq!(sol.status, SolveStatus::Infeasible);
+        assert!(!sol.status.is_ok());
+        assert_eq!(sol.x.len(), 4);
+        for &xi in &sol.x {
+            assert!(
+                xi.is_finite() && (0.01..=1.0).contains(&xi),
+                "x = {:?}",
+                sol.x
+            );
+        }
+        // The elastic re-solve gets as close as the bounds allow: every muscle
+        // at full activation, leaving 200 − 120 = 80 unbalanced.
+        for (i, &xi) in sol.x.iter().enumerate() {
+            assert_close(xi, 1.0, 1e-4, &format!("elastic a[{i}]"));
+        }
+        assert_close(sol.eq_residual, 80.0, 1e-3, "residual");
     }
-    // The elastic re-solve gets as close as the bounds allow: every muscle
-    // at full activation, leaving 200 − 120 = 80 unbalanced.
-    for (i, &xi) in sol.x.iter().enumerate() {
-        assert_close(xi, 1.0, 1e-4, &format!("elastic a[{i}]"));
-    }
-    assert_close(sol.eq_residual, 80.0, 1e-3, "residual");
 }
 
 // ---------------------------------------------------------------------
@@ -666,4 +670,33 @@ fn forty_by_hundred_frames_solve_and_report_time() {
             iters as f64 / reps as f64
         );
     }
+}
+
+#[test]
+fn degenerate_problems_do_not_panic() {
+    // No variables at all.
+    let p = problem(&[], &[], &[], &[], &[]);
+    let sol = solve(&p);
+    assert!(sol.x.is_empty());
+    println!("empty: {:?}", sol.status);
+    // Only an unweighted free variable: every x is optimal.
+    let p = problem(&[], &[], &[0.0], &[-INF], &[INF]);
+    let sol = solve(&p);
+    assert!(sol.x[0].is_finite());
+    println!("free unweighted: {:?} {:?}", sol.status, sol.x);
+    // Inconsistent equalities 0·x = 1.
+    let p = problem(&[&[0.0, 0.0]], &[1.0], &[1.0, 1.0], &[-INF; 2], &[INF; 2]);
+    let sol = solve(&p);
+    println!(
+        "0 = 1: {:?} {:?} res {}",
+        sol.status, sol.x, sol.eq_residual
+    );
+    assert_eq!(sol.status, SolveStatus::Infeasible);
+    assert_close(sol.eq_residual, 1.0, 1e-9, "residual of 0 = 1");
+    // Contradictory equalities x = 1, x = 2 (elastic answer: x = 1.5).
+    let p = problem(&[&[1.0], &[1.0]], &[1.0, 2.0], &[1.0], &[-INF], &[INF]);
+    let sol = solve(&p);
+    println!("x=1,x=2: {:?} {:?}", sol.status, sol.x);
+    assert_eq!(sol.status, SolveStatus::Infeasible);
+    assert_close(sol.x[0], 1.5, 1e-5, "elastic compromise");
 }
