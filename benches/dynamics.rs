@@ -59,18 +59,21 @@ fn bench(c: &mut Criterion) {
         if !set.is_empty() {
             let mut frame = MuscleFrame::new(&set, &model);
             kinematics::full(&model, &mut data);
-            c.bench_function(&format!("muscle_geometry_frame/{name} ({} muscles)", set.len()), |b| {
-                b.iter(|| {
-                    frame.evaluate(&set, &model, &data);
-                    let mut s = 0.0;
-                    for m in 0..set.len() {
-                        for k in 0..model.nq() {
-                            s += frame.moment_arm(&model, &data.q, m, k);
+            c.bench_function(
+                &format!("muscle_geometry_frame/{name} ({} muscles)", set.len()),
+                |b| {
+                    b.iter(|| {
+                        frame.evaluate(&set, &model, &data);
+                        let mut s = 0.0;
+                        for m in 0..set.len() {
+                            for k in 0..model.nq() {
+                                s += frame.moment_arm(&model, &data.q, m, k);
+                            }
                         }
-                    }
-                    std::hint::black_box(s)
-                })
-            });
+                        std::hint::black_box(s)
+                    })
+                },
+            );
         }
         c.bench_function(&format!("inverse_dynamics_frame/{name}"), |b| {
             b.iter(|| {

@@ -307,11 +307,23 @@ fn opensim_3x_layout_matches_40_layout() {
     rnea::inverse_dynamics(&m3, &mut d3);
     rnea::inverse_dynamics(&m4, &mut d4);
     for i in 0..2 {
-        assert!((d3.tau[i] - d4.tau[i]).abs() < 1e-12, "{} vs {}", d3.tau[i], d4.tau[i]);
+        assert!(
+            (d3.tau[i] - d4.tau[i]).abs() < 1e-12,
+            "{} vs {}",
+            d3.tau[i],
+            d4.tau[i]
+        );
     }
     // 6 significant digits on upgrade: 0.123456789 -> 0.123457
-    let text = text.replacen("<location_in_parent>0 0 0</location_in_parent>", "<location_in_parent>0.123456789 0 0</location_in_parent>", 1);
+    let text = text.replacen(
+        "<location_in_parent>0 0 0</location_in_parent>",
+        "<location_in_parent>0.123456789 0 0</location_in_parent>",
+        1,
+    );
     let m = model_from(&text);
     let x = m.joints[1].x_pf.translation.x;
-    assert_eq!(x, 0.123457, "offset {x} was not rounded as OpenSim's 3.x upgrade rounds it");
+    assert_eq!(
+        x, 0.123457,
+        "offset {x} was not rounded as OpenSim's 3.x upgrade rounds it"
+    );
 }

@@ -234,7 +234,13 @@ impl ExternalLoads {
 impl ExternalForce {
     /// The values OpenSim's ForceReporter records (labels in [`Self::labels`]):
     /// force in ground, point in the applied body's frame, torque in ground.
-    pub fn record(&self, f_g: &Vector3<f64>, p_g: &Vector3<f64>, t_g: &Vector3<f64>, data: &Data) -> Vec<f64> {
+    pub fn record(
+        &self,
+        f_g: &Vector3<f64>,
+        p_g: &Vector3<f64>,
+        t_g: &Vector3<f64>,
+        data: &Data,
+    ) -> Vec<f64> {
         let mut v = Vec::with_capacity(9);
         if self.force.is_some() {
             v.extend(f_g.iter());

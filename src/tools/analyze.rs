@@ -85,9 +85,15 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 summary.files.extend(s.files);
                 summary.warnings.extend(s.warnings);
             }
+            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
+                let s = static_optimization::run(setup, element, common, opts)?;
+                summary.frames = summary.frames.max(s.frames);
+                summary.files.extend(s.files);
+                summary.warnings.extend(s.warnings);
+            }
             Analysis::Other { element, .. } => {
                 return Err(element.error(format!(
-                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis",
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization",
                     element.name
                 )));
             }

@@ -10,7 +10,9 @@ pub fn bar(len: u64, verbose: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}") {
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
+    {
         pb.set_style(style);
     }
     pb

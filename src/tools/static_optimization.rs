@@ -24,7 +24,9 @@ use crate::forces::passive::PassiveForce;
 use crate::model::Model;
 use crate::motion::states::{assemble, States};
 use crate::muscles::set::{MuscleFrame, MuscleSet};
-use crate::optimize::{self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus};
+use crate::optimize::{
+    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus,
+};
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
 use crate::storage::StoWriter;
@@ -60,7 +62,9 @@ impl StaticOptimizationSetup {
         }
         let max_iter = el.child_f64_or("optimizer_max_iterations", 100.0)?;
         if !(max_iter >= 1.0) {
-            return Err(el.req("optimizer_max_iterations")?.error("optimizer_max_iterations must be positive"));
+            return Err(el
+                .req("optimizer_max_iterations")?
+                .error("optimizer_max_iterations must be positive"));
         }
         Ok(StaticOptimizationSetup {
             common,
@@ -113,7 +117,10 @@ pub struct FrameResult {
 }
 
 impl SoProblem {
-    pub fn build(setup: &AnalyzeSetup, so: &StaticOptimizationSetup) -> Result<(SoProblem, Vec<String>)> {
+    pub fn build(
+        setup: &AnalyzeSetup,
+        so: &StaticOptimizationSetup,
+    ) -> Result<(SoProblem, Vec<String>)> {
         let am = load_analysis_model(setup)?;
         let model = am.model;
         let mut warnings = am.warnings;
@@ -123,7 +130,9 @@ impl SoProblem {
                 forces.push(f);
             }
         }
-        let rows: Vec<usize> = (0..model.nq()).filter(|&c| !model.coordinates[c].is_constrained()).collect();
+        let rows: Vec<usize> = (0..model.nq())
+            .filter(|&c| !model.coordinates[c].is_constrained())
+            .collect();
         let mut controls = Vec::new();
         let mut labels = Vec::new();
         let mut lower = Vec::new();
@@ -168,7 +177,8 @@ impl SoProblem {
                     next_muscle += 1;
                 }
                 ForceKind::Actuator => {
-                    let a = Actuator::from_xml(f, &model)?.ok_or_else(|| f.error("not an actuator"))?;
+                    let a =
+                        Actuator::from_xml(f, &model)?.ok_or_else(|| f.error("not an actuator"))?;
                     labels.push(a.name.clone());
                     force_labels.push(a.name.clone());
                     lower.push(a.min_control);
@@ -183,17 +193,29 @@ impl SoProblem {
                         force_labels.extend(p.record_labels());
                         passive.push(p);
                     }
-                    None => return Err(f.error(format!("force type '{}' is not supported by statopt's static optimization", f.name))),
+                    None => {
+                        return Err(f.error(format!(
+                            "force type '{}' is not supported by statopt's static optimization",
+                            f.name
+                        )))
+                    }
                 },
             }
         }
         if controls.len() < rows.len() {
             return Err(Error::input(
                 Location::file(&setup.model_file),
-                format!("over-constrained: {} actuators for {} unconstrained coordinates", controls.len(), rows.len()),
+                format!(
+                    "over-constrained: {} actuators for {} unconstrained coordinates",
+                    controls.len(),
+                    rows.len()
+                ),
             ));
         }
-        let setup_dir = setup.setup_file.parent().unwrap_or(std::path::Path::new("."));
+        let setup_dir = setup
+            .setup_file
+            .parent()
+            .unwrap_or(std::path::Path::new("."));
         let loads = match &setup.external_loads_file {
             Some(p) => Some(ExternalLoads::load(p, setup_dir, &model)?),
             None => None,
@@ -204,13 +226,40 @@ impl SoProblem {
             }
         }
         if so.activation_exponent != 2.0 {
-            warnings.push(format!("activation_exponent {} is solved with power cones", so.activation_exponent));
+            warnings.push(format!(
+                "activation_exponent {} is solved with power cones",
+                so.activation_exponent
+            ));
         }
-        Ok((SoProblem { model, muscles, controls, labels, lower, upper, passive, loads, rows, settings: so.clone(), force_labels }, warnings))
+        Ok((
+            SoProblem {
+                model,
+                muscles,
+                controls,
+                labels,
+                lower,
+                upper,
+                passive,
+                loads,
+                rows,
+                settings: so.clone(),
+                force_labels,
+            },
+            warnings,
+        ))
     }
 
-    /// Solve one frame. `data` and `mf` are per-thread workspaces.
-    pub fn solve_frame(&self, t: f64, q: &[f64], u: &[f64], udot_target: &[f64], data: &mut Data, mf: &mut MuscleFrame) -> FrameResult {
+    /// Build one frame's optimisation problem: returns the problem, each
+    /// variable's force scale (f_i) and the passive forces' record values.
+    pub fn frame_problem(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> (FrameProblem, Vec<f64>, Vec<f64>) {
         let model = &self.model;
         let nq = model.nq();
         data.q.copy_from_slice(q);
@@ -219,7 +268,11 @@ impl SoProblem {
         // Accelerations: targets for the unconstrained coordinates; the
         // constrained ones follow from their constraints.
         for c in 0..nq {
-            data.udot[c] = if model.coordinates[c].is_constrained() { 0.0 } else { udot_target[c] };
+            data.udot[c] = if model.coordinates[c].is_constrained() {
+                0.0
+            } else {
+                udot_target[c]
+            };
         }
         for cp in &model.couplers {
             let i = cp.independent[0];
@@ -260,7 +313,11 @@ impl SoProblem {
         let nv = self.controls.len();
         let mut a = DMatrix::zeros(nr, nv);
         let mut b = DVector::zeros(nr);
-        let couplings: Vec<Vec<(usize, f64)>> = self.rows.iter().map(|&k| coupling::coupling_vector(model, &data.q, k)).collect();
+        let couplings: Vec<Vec<(usize, f64)>> = self
+            .rows
+            .iter()
+            .map(|&k| coupling::coupling_vector(model, &data.q, k))
+            .collect();
         for (r, cv) in couplings.iter().enumerate() {
             b[r] = cv.iter().map(|(i, c)| c * data.tau[*i]).sum();
         }
@@ -270,7 +327,11 @@ impl SoProblem {
             let (f, gen): (f64, &[f64]) = match ctl {
                 Control::Muscle(m) => {
                     let pm = &self.muscles.muscles[*m];
-                    let f = if self.settings.use_muscle_physiology { mf.max_active_force[*m] } else { pm.muscle.params.max_isometric_force };
+                    let f = if self.settings.use_muscle_physiology {
+                        mf.max_active_force[*m]
+                    } else {
+                        pm.muscle.params.max_isometric_force
+                    };
                     (f, &mf.unit_force[*m])
                 }
                 Control::Actuator(act) => {
@@ -299,9 +360,27 @@ impl SoProblem {
                 ..SolveSettings::default()
             },
         };
+        (problem, scale, passive_values)
+    }
+
+    /// Solve one frame. `data` and `mf` are per-thread workspaces.
+    pub fn solve_frame(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> FrameResult {
+        let (problem, scale, passive_values) = self.frame_problem(t, q, u, udot_target, data, mf);
         let solution = optimize::solve(&problem);
         let bmax = problem.b.amax();
-        let relative_residual = if bmax > 0.0 { solution.eq_residual / bmax } else { solution.eq_residual };
+        let relative_residual = if bmax > 0.0 {
+            solution.eq_residual / bmax
+        } else {
+            solution.eq_residual
+        };
         let forces: Vec<f64> = solution.x.iter().zip(&scale).map(|(x, f)| x * f).collect();
         let mut force_row = forces.clone();
         force_row.extend(passive_values);
@@ -311,7 +390,13 @@ impl SoProblem {
                 force_row.extend(ef.record(&f, &p, &tq, data));
             }
         }
-        FrameResult { time: t, solution, forces, force_row, relative_residual }
+        FrameResult {
+            time: t,
+            solution,
+            forces,
+            force_row,
+            relative_residual,
+        }
     }
 }
 
@@ -324,32 +409,68 @@ fn status_code(s: SolveStatus) -> f64 {
     }
 }
 
-pub fn run(setup: &AnalyzeSetup, el: &Element, common: &AnalysisCommon, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run(
+    setup: &AnalyzeSetup,
+    el: &Element,
+    common: &AnalysisCommon,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
     let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
     let (problem, mut warnings) = SoProblem::build(setup, &so)?;
     let states: States = load_states(setup, &problem.model)?;
     if !states.missing.is_empty() {
-        warnings.push(format!("the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does", states.missing));
+        warnings.push(format!(
+            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
+            states.missing
+        ));
     }
     let coordinates_file = setup.coordinates_file.clone().unwrap_or_default();
     let udot = states.speed_derivatives(&coordinates_file)?;
-    let rows = frame_rows(&states.time, setup.initial_time, setup.final_time, so.common.step_interval);
+    let rows = frame_rows(
+        &states.time,
+        setup.initial_time,
+        setup.final_time,
+        so.common.step_interval,
+    );
     let dir = results_dir(setup, opts)?;
     let prefix = format!("{}_{}_", setup.name, so.common.name);
     let precision = opts.precision.unwrap_or(setup.output_precision);
     let act_path = dir.join(format!("{prefix}activation.sto"));
     let force_path = dir.join(format!("{prefix}force.sto"));
     let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
-    let mut act_w = StoWriter::create(&act_path, "Static Optimization", "This file contains static optimization results.\n", &problem.labels, precision, false)?;
-    let mut force_w = StoWriter::create(&force_path, "ModelForces", FORCE_DESCRIPTION, &problem.force_labels, precision, false)?;
-    let diag_labels: Vec<String> =
-        ["status", "iterations", "objective", "equation_residual", "relative_residual", "solve_time_ms"].iter().map(|s| s.to_string()).collect();
+    let mut act_w = StoWriter::create(
+        &act_path,
+        "Static Optimization",
+        "This file contains static optimization results.\n",
+        &problem.labels,
+        precision,
+        false,
+    )?;
+    let mut force_w = StoWriter::create(
+        &force_path,
+        "ModelForces",
+        FORCE_DESCRIPTION,
+        &problem.force_labels,
+        precision,
+        false,
+    )?;
+    let diag_labels: Vec<String> = [
+        "status",
+        "iterations",
+        "objective",
+        "equation_residual",
+        "relative_residual",
+        "solve_time_ms",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     let mut diag_w = StoWriter::create(
         &diag_path,
         "Static Optimization Diagnostics",
         "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|.\n",
         &diag_labels,
-        precision.min(12),
+        16,
         false,
     )?;
     // Frames in chunks: solved in parallel, written in order, so memory stays flat.
@@ -361,14 +482,31 @@ pub fn run(setup: &AnalyzeSetup, el: &Element, common: &AnalysisCommon, opts: &R
         let results: Vec<FrameResult> = chunk
             .par_iter()
             .map_init(
-                || (Data::new(&problem.model), MuscleFrame::new(&problem.muscles, &problem.model)),
-                |(data, mf), &i| problem.solve_frame(states.time[i], &states.q[i], &states.u[i], &udot[i], data, mf),
+                || {
+                    (
+                        Data::new(&problem.model),
+                        MuscleFrame::new(&problem.muscles, &problem.model),
+                    )
+                },
+                |(data, mf), &i| {
+                    problem.solve_frame(
+                        states.time[i],
+                        &states.q[i],
+                        &states.u[i],
+                        &udot[i],
+                        data,
+                        mf,
+                    )
+                },
             )
             .collect();
         for r in results {
             if !r.solution.status.is_ok() {
                 failed_any.store(true, Ordering::Relaxed);
-                failures.push(format!("t={}: {:?}, equation residual {:.3e}", r.time, r.solution.status, r.solution.eq_residual));
+                failures.push(format!(
+                    "t={}: {:?}, equation residual {:.3e}",
+                    r.time, r.solution.status, r.solution.eq_residual
+                ));
             }
             act_w.write_row(r.time, &r.solution.x)?;
             force_w.write_row(r.time, &r.force_row)?;
@@ -401,9 +539,18 @@ pub fn run(setup: &AnalyzeSetup, el: &Element, common: &AnalysisCommon, opts: &R
     }
     if opts.verbose {
         let secs = start.elapsed().as_secs_f64();
-        warnings.push(format!("static optimization: {} frames in {:.3} s ({:.0} frames/s)", rows.len(), secs, rows.len() as f64 / secs.max(1e-12)));
+        warnings.push(format!(
+            "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
+            rows.len(),
+            secs,
+            rows.len() as f64 / secs.max(1e-12)
+        ));
     }
-    Ok(RunSummary { frames: rows.len(), files: vec![act_path, force_path, diag_path], warnings })
+    Ok(RunSummary {
+        frames: rows.len(),
+        files: vec![act_path, force_path, diag_path],
+        warnings,
+    })
 }
 
 /// OpenSim's ForceReporter description.
