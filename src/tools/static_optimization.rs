@@ -49,6 +49,10 @@ pub struct StaticOptimizationSetup {
     /// statopt: add passive fiber force to each muscle (off by default, as
     /// OpenSim ignores it).
     pub passive_fiber_forces: bool,
+    /// statopt: add a CoordinateActuator `<coordinate>_reserve` with this
+    /// optimal force to every unconstrained coordinate, so that every frame
+    /// can be solved; the run reports how much they carried.
+    pub reserve_actuators: Option<f64>,
 }
 
 /// Clarabel's feasibility/gap tolerance unless the setup asks for tighter.
@@ -74,6 +78,16 @@ impl StaticOptimizationSetup {
             convergence_criterion: el.child_f64_or("optimizer_convergence_criterion", 1e-4)?,
             max_iterations: max_iter as u32,
             passive_fiber_forces: el.child_bool_or("passive_fiber_forces", false)?,
+            reserve_actuators: match el.child("reserve_actuators") {
+                Some(r) if !r.text().is_empty() => {
+                    let v = r.f64()?;
+                    if !(v > 0.0 && v.is_finite()) {
+                        return Err(r.error(format!("reserve_actuators is the reserves' optimal force and must be positive, found {v}")));
+                    }
+                    Some(v)
+                }
+                _ => None,
+            },
         })
     }
 }
@@ -200,6 +214,29 @@ impl SoProblem {
                         )))
                     }
                 },
+            }
+        }
+        if let Some(opt) = so.reserve_actuators {
+            for &c in &rows {
+                let name = format!("{}_reserve", model.coordinates[c].name);
+                if labels.contains(&name) {
+                    return Err(Error::input(Location::file(&setup.setup_file), format!("reserve_actuators: the model already has a force named '{name}'")));
+                }
+                controls.push(Control::Actuator(Actuator {
+                    name: name.clone(),
+                    kind: ActuatorKind::Coordinate { coordinate: c },
+                    optimal_force: opt,
+                    min_control: f64::NEG_INFINITY,
+                    max_control: f64::INFINITY,
+                    applies_force: true,
+                    type_name: "CoordinateActuator".into(),
+                }));
+                // Reserve columns follow the ForceSet's actuators in both files.
+                let at = labels.len();
+                labels.insert(at, name.clone());
+                force_labels.insert(at, name);
+                lower.push(f64::NEG_INFINITY);
+                upper.push(f64::INFINITY);
             }
         }
         if controls.len() < rows.len() {
@@ -477,6 +514,8 @@ pub fn run(
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
     let failed_any = AtomicBool::new(false);
     let mut failures: Vec<String> = Vec::new();
+    let reserve_vars: Vec<usize> = problem.labels.iter().enumerate().filter(|(_, l)| so.reserve_actuators.is_some() && l.ends_with("_reserve")).map(|(i, _)| i).collect();
+    let mut reserve_peak = (0.0f64, String::new());
     let start = Instant::now();
     for chunk in rows.chunks(256) {
         let results: Vec<FrameResult> = chunk
@@ -508,6 +547,11 @@ pub fn run(
                     r.time, r.solution.status, r.solution.eq_residual
                 ));
             }
+            for &v in &reserve_vars {
+                if r.forces[v].abs() > reserve_peak.0 {
+                    reserve_peak = (r.forces[v].abs(), format!("{} at t={}", problem.labels[v], r.time));
+                }
+            }
             act_w.write_row(r.time, &r.solution.x)?;
             force_w.write_row(r.time, &r.force_row)?;
             diag_w.write_row(
@@ -537,8 +581,16 @@ pub fn run(
             diag_path.display()
         ));
     }
+    let loop_seconds = start.elapsed().as_secs_f64();
+    if !reserve_vars.is_empty() {
+        warnings.push(format!(
+            "reserve actuators carried at most {:.6} (N or N m){}",
+            reserve_peak.0,
+            if reserve_peak.1.is_empty() { String::new() } else { format!(", {}", reserve_peak.1) }
+        ));
+    }
     if opts.verbose {
-        let secs = start.elapsed().as_secs_f64();
+        let secs = loop_seconds;
         warnings.push(format!(
             "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
             rows.len(),
@@ -550,6 +602,7 @@ pub fn run(
         frames: rows.len(),
         files: vec![act_path, force_path, diag_path],
         warnings,
+        loop_seconds,
     })
 }
 
