@@ -74,7 +74,10 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         verbose: !a.quiet,
         threads: a.threads.map(usize::from),
     };
-    let setup = a.setup.as_ref().ok_or_else(|| statopt::Error::msg("no setup file given"))?;
+    let setup = a
+        .setup
+        .as_ref()
+        .ok_or_else(|| statopt::Error::msg("no setup file given"))?;
     match Setup::read(setup)? {
         Setup::InverseDynamics(s) => tools::inverse_dynamics::run(&s, &opts),
         Setup::Analyze(s) => tools::analyze::run(&s, &opts),
@@ -89,12 +92,23 @@ fn fail(e: statopt::Error) -> ExitCode {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match &cli.command {
-        Some(Command::Bench { setup, threads, repeat, tile }) => {
-            let opts = bench::BenchOptions { threads: threads.clone(), repeat: *repeat, tile: *tile };
+        Some(Command::Bench {
+            setup,
+            threads,
+            repeat,
+            tile,
+        }) => {
+            let opts = bench::BenchOptions {
+                threads: threads.clone(),
+                repeat: *repeat,
+                tile: *tile,
+            };
             match bench::run(setup, &opts) {
                 Ok(rows) => {
                     println!("setup\tthreads\tframes\tloop_s\tframes_per_s\tms_per_frame\ttotal_s\tpeak_MiB");
-                    let mem = bench::peak_memory_mib().map(|m| format!("{m:.1}")).unwrap_or_else(|| "n/a".into());
+                    let mem = bench::peak_memory_mib()
+                        .map(|m| format!("{m:.1}"))
+                        .unwrap_or_else(|| "n/a".into());
                     for r in rows {
                         println!(
                             "{}\t{}\t{}\t{:.4}\t{:.0}\t{:.4}\t{:.3}\t{}",

@@ -38,7 +38,12 @@ pub fn peak_memory_mib() -> Option<f64> {
 
 /// The setup's motion repeated `n` times (time shifted), written to `dir`.
 fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<AnalyzeSetup> {
-    let file = setup.coordinates_file.as_ref().ok_or_else(|| Error::input(Location::file(&setup.setup_file), "bench --tile needs a <coordinates_file>"))?;
+    let file = setup.coordinates_file.as_ref().ok_or_else(|| {
+        Error::input(
+            Location::file(&setup.setup_file),
+            "bench --tile needs a <coordinates_file>",
+        )
+    })?;
     let t = storage::read(file)?;
     let len = t.time.len();
     if len < 2 {
@@ -46,7 +51,11 @@ fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<Analyz
     }
     let dt = t.time[len - 1] - t.time[len - 2];
     let period = t.time[len - 1] - t.time[0] + dt;
-    let mut out = Storage { time: Vec::with_capacity(len * n), rows: Vec::with_capacity(len * n), ..t.clone() };
+    let mut out = Storage {
+        time: Vec::with_capacity(len * n),
+        rows: Vec::with_capacity(len * n),
+        ..t.clone()
+    };
     for k in 0..n {
         for i in 0..len {
             out.time.push(t.time[i] + k as f64 * period);
@@ -65,16 +74,35 @@ fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<Analyz
 pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<BenchRow>> {
     let setup = match Setup::read(setup_file)? {
         Setup::Analyze(s) => s,
-        Setup::InverseDynamics(_) => return Err(Error::input(Location::file(setup_file), "bench runs AnalyzeTool setups (static optimization)")),
+        Setup::InverseDynamics(_) => {
+            return Err(Error::input(
+                Location::file(setup_file),
+                "bench runs AnalyzeTool setups (static optimization)",
+            ))
+        }
     };
     let dir: PathBuf = std::env::temp_dir().join(format!("statopt-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let setup = if opts.tile > 1 { tiled(&setup, opts.tile, &dir)? } else { setup };
+    let setup = if opts.tile > 1 {
+        tiled(&setup, opts.tile, &dir)?
+    } else {
+        setup
+    };
     let mut rows = Vec::new();
     for &threads in &opts.threads {
-        let mut best = BenchRow { threads, frames: 0, loop_seconds: f64::INFINITY, total_seconds: f64::INFINITY };
+        let mut best = BenchRow {
+            threads,
+            frames: 0,
+            loop_seconds: f64::INFINITY,
+            total_seconds: f64::INFINITY,
+        };
         for _ in 0..opts.repeat.max(1) {
-            let run_opts = RunOptions { results_dir: Some(dir.clone()), threads: Some(threads), verbose: false, ..Default::default() };
+            let run_opts = RunOptions {
+                results_dir: Some(dir.clone()),
+                threads: Some(threads),
+                verbose: false,
+                ..Default::default()
+            };
             let start = Instant::now();
             let s = analyze::run(&setup, &run_opts)?;
             let total = start.elapsed().as_secs_f64();

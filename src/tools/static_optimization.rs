@@ -220,7 +220,10 @@ impl SoProblem {
             for &c in &rows {
                 let name = format!("{}_reserve", model.coordinates[c].name);
                 if labels.contains(&name) {
-                    return Err(Error::input(Location::file(&setup.setup_file), format!("reserve_actuators: the model already has a force named '{name}'")));
+                    return Err(Error::input(
+                        Location::file(&setup.setup_file),
+                        format!("reserve_actuators: the model already has a force named '{name}'"),
+                    ));
                 }
                 controls.push(Control::Actuator(Actuator {
                     name: name.clone(),
@@ -514,7 +517,13 @@ pub fn run(
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
     let failed_any = AtomicBool::new(false);
     let mut failures: Vec<String> = Vec::new();
-    let reserve_vars: Vec<usize> = problem.labels.iter().enumerate().filter(|(_, l)| so.reserve_actuators.is_some() && l.ends_with("_reserve")).map(|(i, _)| i).collect();
+    let reserve_vars: Vec<usize> = problem
+        .labels
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| so.reserve_actuators.is_some() && l.ends_with("_reserve"))
+        .map(|(i, _)| i)
+        .collect();
     let mut reserve_peak = (0.0f64, String::new());
     let start = Instant::now();
     for chunk in rows.chunks(256) {
@@ -549,7 +558,10 @@ pub fn run(
             }
             for &v in &reserve_vars {
                 if r.forces[v].abs() > reserve_peak.0 {
-                    reserve_peak = (r.forces[v].abs(), format!("{} at t={}", problem.labels[v], r.time));
+                    reserve_peak = (
+                        r.forces[v].abs(),
+                        format!("{} at t={}", problem.labels[v], r.time),
+                    );
                 }
             }
             act_w.write_row(r.time, &r.solution.x)?;
@@ -586,7 +598,11 @@ pub fn run(
         warnings.push(format!(
             "reserve actuators carried at most {:.6} (N or N m){}",
             reserve_peak.0,
-            if reserve_peak.1.is_empty() { String::new() } else { format!(", {}", reserve_peak.1) }
+            if reserve_peak.1.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", reserve_peak.1)
+            }
         ));
     }
     if opts.verbose {
