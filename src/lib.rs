@@ -16,6 +16,7 @@ pub mod model;
 pub mod motion;
 pub mod muscles;
 pub mod optimize;
+pub mod output;
 pub mod parse;
 pub mod paths;
 pub mod storage;
