@@ -311,12 +311,13 @@ impl SoProblem {
                 upper.push(f64::INFINITY);
             }
         }
-        if controls.len() < rows.len() {
+        if controls.len() + 3 * contacts.len() < rows.len() {
             return Err(Error::input(
                 Location::file(&setup.model_file),
                 format!(
-                    "over-constrained: {} actuators for {} unconstrained coordinates",
+                    "over-constrained: {} actuators and {} contact multipliers for {} unconstrained coordinates",
                     controls.len(),
+                    3 * contacts.len(),
                     rows.len()
                 ),
             ));
