@@ -27,6 +27,7 @@ use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::optimize::{
     self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, StaticContact,
 };
+use crate::output::mcap_log;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
 use crate::storage::StoWriter;
@@ -159,6 +160,10 @@ pub struct FrameResult {
     pub relative_residual: f64,
     /// Largest friction-constraint violation over static contacts (≤ 0 when met).
     pub friction_violation: f64,
+    /// The frame's assembled coordinates, speeds and accelerations (tree order).
+    pub q: Vec<f64>,
+    pub u: Vec<f64>,
+    pub udot: Vec<f64>,
     pub contacts: ContactRows,
 }
 
@@ -660,6 +665,9 @@ impl SoProblem {
             relative_residual,
             friction_violation,
             contacts,
+            q: data.q.clone(),
+            u: data.u.clone(),
+            udot: data.udot.clone(),
         }
     }
 }
@@ -924,6 +932,9 @@ fn run_once(
         files.extend([cpath, bpath, lpath, xpath]);
         contact_w = Some((cw, bw, lw));
     }
+    let log_path = dir.join(format!("{prefix}log.mcap"));
+    let mut log = FrameLog::create(problem, &log_path)?;
+    files.push(log_path);
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
     let mut failures: Vec<String> = Vec::new();
     let reserve_vars: Vec<usize> = problem
@@ -989,6 +1000,7 @@ fn run_once(
                     r.solution.solve_time.as_secs_f64() * 1e3,
                 ],
             )?;
+            log.frame(problem, &r)?;
             if let Some((cw, bw, lw)) = contact_w.as_mut() {
                 cw.write_row(r.time, &r.contacts.contact)?;
                 bw.write_row(r.time, &r.contacts.bodies)?;
@@ -1001,6 +1013,7 @@ fn run_once(
     act_w.finish()?;
     force_w.finish()?;
     diag_w.finish()?;
+    log.finish()?;
     if let Some((cw, bw, lw)) = contact_w {
         cw.finish()?;
         bw.finish()?;
@@ -1045,3 +1058,102 @@ fn run_once(
 
 /// OpenSim's ForceReporter description.
 pub const FORCE_DESCRIPTION: &str = "\nThis file contains the forces exerted on a model during a simulation.\n\nA force is a generalized force, meaning that it can be either a force (N) or a torque (Nm).\n\nUnits are S.I. units (second, meters, Newtons, ...)\nIf the header above contains a line with 'inDegrees', this indicates whether rotational values are in degrees (yes) or radians (no).\n\n";
+
+/// The run's MCAP log: one message per frame on each channel (see
+/// `output::mcap_log` for the channels and message layout).
+struct FrameLog {
+    log: mcap_log::McapLog,
+    coordinates: Vec<String>,
+    contacts: Vec<String>,
+}
+
+impl FrameLog {
+    fn create(problem: &SoProblem, path: &std::path::Path) -> Result<FrameLog> {
+        let coordinates: Vec<String> = problem
+            .model
+            .coordinates
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        let contacts: Vec<String> = problem.contacts.iter().map(|c| c.name.clone()).collect();
+        let channels = mcap_log::StatoptChannels {
+            coordinates: coordinates.clone(),
+            activations: problem.labels.clone(),
+            forces: problem.labels.clone(),
+            contacts: contacts.clone(),
+            joints: Vec::new(),
+        };
+        let log = mcap_log::McapLog::create(path, &channels.specs()?)?;
+        Ok(FrameLog {
+            log,
+            coordinates,
+            contacts,
+        })
+    }
+
+    fn frame(&mut self, problem: &SoProblem, r: &FrameResult) -> Result<()> {
+        fn names(v: &[String]) -> Vec<&str> {
+            v.iter().map(String::as_str).collect()
+        }
+        let coords = names(&self.coordinates);
+        let labels = names(&problem.labels);
+        let nv = problem.controls.len();
+        self.log.log(
+            mcap_log::KINEMATICS,
+            r.time,
+            &mcap_log::kinematics_message(&coords, &r.q, &r.u, &r.udot)?,
+        )?;
+        self.log.log(
+            mcap_log::ACTIVATIONS,
+            r.time,
+            &mcap_log::named_values_message(&labels, &r.solution.x[..nv])?,
+        )?;
+        self.log.log(
+            mcap_log::MUSCLE_FORCES,
+            r.time,
+            &mcap_log::named_values_message(&labels, &r.forces)?,
+        )?;
+        if !self.contacts.is_empty() {
+            let k = CONTACT_COLUMNS.len();
+            let samples: Vec<mcap_log::ContactSample> = r
+                .contacts
+                .contact
+                .chunks(k)
+                .map(|c| mcap_log::ContactSample {
+                    force: [c[0], c[1], c[2]],
+                    point: [c[3], c[4], c[5]],
+                    distance: c[6],
+                    weight: c[7],
+                    slip_speed: c[8],
+                    regime: if c[9] == 1.0 {
+                        "kinetic".into()
+                    } else {
+                        "static".into()
+                    },
+                })
+                .collect();
+            self.log.log(
+                mcap_log::CONTACTS,
+                r.time,
+                &mcap_log::contacts_message(&names(&self.contacts), &samples)?,
+            )?;
+        }
+        let status = format!("{:?}", r.solution.status);
+        self.log.log(
+            mcap_log::SOLVER,
+            r.time,
+            &mcap_log::solver_message(
+                &status,
+                r.solution.iterations,
+                r.solution.objective,
+                r.solution.eq_residual,
+                r.solution.solve_time,
+            ),
+        )?;
+        Ok(())
+    }
+
+    fn finish(self) -> Result<()> {
+        self.log.finish()
+    }
+}
