@@ -2,6 +2,7 @@
 //! every frame and writes OpenSim-format results.
 pub mod analyze;
 pub mod inverse_dynamics;
+pub mod joint_reaction;
 pub mod loading;
 pub mod muscle_analysis;
 pub mod progress;
