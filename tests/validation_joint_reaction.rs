@@ -53,7 +53,7 @@ fn joint_reactions_match_opensim_on_every_validation_case() {
                 })
                 .unwrap();
             println!(
-                "{case} {which}: worst column {} max |diff| {:.4} (peak {:.2}, tolerance {:.3}) at t={:.4}",
+                "{case} {which}: worst column {} max |diff| {:.3e} (peak {:.2}, tolerance {:.3}) at t={:.4}",
                 worst.label,
                 worst.max_abs,
                 worst.peak,
@@ -75,4 +75,50 @@ fn joint_reactions_match_opensim_on_every_validation_case() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A forces file lacking an actuator, or no forces file, is an error naming
+/// the actuators (OpenSim silently falls back to default muscle states).
+#[test]
+fn missing_actuator_forces_are_reported() {
+    let Some(root) = common::validation_dir("missing_actuator_forces_are_reported") else {
+        return;
+    };
+    let dir = root.join("arm26");
+    let out = common::out_dir("jr_missing_actuator");
+    // The SO force file without its BRA column.
+    let mut forces =
+        storage::read(&dir.join("results/arm26_StaticOptimization_force.sto")).unwrap();
+    let j = forces.column_index("BRA").unwrap();
+    forces.labels.remove(j);
+    for r in &mut forces.rows {
+        r.remove(j);
+    }
+    let forces_path = out.join("no_bra.sto");
+    storage::write(&forces_path, &forces, 8).unwrap();
+    let text = std::fs::read_to_string(dir.join("setup_JR_child.xml")).unwrap();
+    let abs = |t: &str| t.replace("inputs/", &format!("{}/inputs/", dir.display()));
+    for (forces_file, expect) in [
+        (forces_path.display().to_string(), "BRA"),
+        (String::new(), "no <forces_file>"),
+    ] {
+        let setup_text =
+            abs(&text).replace("results/arm26_StaticOptimization_force.sto", &forces_file);
+        let setup_path = out.join("setup.xml");
+        std::fs::write(&setup_path, setup_text).unwrap();
+        let setup = match Setup::read(&setup_path).unwrap() {
+            Setup::Analyze(s) => s,
+            _ => unreachable!(),
+        };
+        let opts = RunOptions {
+            results_dir: Some(out.clone()),
+            precision: None,
+            verbose: false,
+        };
+        let err = analyze::run(&setup, &opts)
+            .expect_err("must refuse")
+            .to_string();
+        assert!(err.contains(expect), "error should name {expect}: {err}");
+        println!("{err}");
+    }
 }
