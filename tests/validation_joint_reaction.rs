@@ -122,3 +122,111 @@ fn missing_actuator_forces_are_reported() {
         println!("{err}");
     }
 }
+
+/// The per-frame entry point for static optimization
+/// (`static_optimization_reactions`, fed the frame's solved forces) gives the
+/// same reactions as a JointReaction run reading those forces from a file.
+#[test]
+fn static_optimization_frames_give_the_reactions_of_their_force_file() {
+    use statopt::dynamics::Data;
+    use statopt::muscles::set::MuscleFrame;
+    use statopt::parse::setup::Analysis;
+    use statopt::tools::analyze::{frame_rows, load_states};
+    use statopt::tools::joint_reaction::{
+        resolve_reactions, static_optimization_reactions, JointReactionSetup,
+    };
+    use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
+    let Some(root) =
+        common::validation_dir("static_optimization_frames_give_the_reactions_of_their_force_file")
+    else {
+        return;
+    };
+    for case in ["arm26", "leg6dof9musc_stance"] {
+        let dir = root.join(case);
+        let out = common::out_dir(&format!("jr_so_{case}"));
+        let analyze_setup = |name: &str| match Setup::read(&dir.join(name)).unwrap() {
+            Setup::Analyze(s) => s,
+            _ => unreachable!(),
+        };
+        let other = |s: &statopt::parse::setup::AnalyzeSetup| match &s.analyses[0] {
+            Analysis::Other { element, common } => (element.clone(), common.clone()),
+            _ => unreachable!(),
+        };
+        let so_setup = analyze_setup("setup_SO.xml");
+        let (so_el, so_common) = other(&so_setup);
+        let so = StaticOptimizationSetup::from_xml(&so_el, so_common).unwrap();
+        let (problem, _) = SoProblem::build(&so_setup, &so).unwrap();
+        let states = load_states(&so_setup, &problem.model).unwrap();
+        let udot = states
+            .speed_derivatives(so_setup.coordinates_file.as_ref().unwrap())
+            .unwrap();
+        let rows: Vec<usize> =
+            frame_rows(&states.time, so_setup.initial_time, so_setup.final_time, 1)
+                .into_iter()
+                .step_by(7)
+                .collect();
+        let jr_setup = analyze_setup("setup_JR_child.xml");
+        let (jr_el, jr_common) = other(&jr_setup);
+        let jr = JointReactionSetup::from_xml(&jr_el, jr_common, &dir).unwrap();
+        let (specs, _) = resolve_reactions(&problem.model, &jr).unwrap();
+        let mut data = Data::new(&problem.model);
+        let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
+        let mut forces = storage::Storage {
+            name: "forces".into(),
+            labels: problem.labels.clone(),
+            ..Default::default()
+        };
+        let mut direct = Vec::new();
+        for &i in &rows {
+            let (t, q, u) = (states.time[i], &states.q[i], &states.u[i]);
+            let r = problem.solve_frame(t, q, u, &udot[i], &mut data, &mut mf);
+            let mut o = vec![0.0; 9 * specs.len()];
+            static_optimization_reactions(
+                &problem, t, q, u, &r.forces, &mut data, &mut mf, &specs, &mut o,
+            )
+            .unwrap();
+            forces.time.push(t);
+            forces.rows.push(r.forces.clone());
+            direct.push(o);
+        }
+        let forces_path = out.join("so_forces.sto");
+        storage::write(&forces_path, &forces, 16).unwrap();
+        // The JR setup, reading that file, with absolute input paths.
+        let text = std::fs::read_to_string(dir.join("setup_JR_child.xml")).unwrap();
+        let so_file = text
+            .split("<forces_file>")
+            .nth(1)
+            .and_then(|s| s.split("</forces_file>").next())
+            .unwrap()
+            .to_string();
+        let text = text
+            .replace("inputs/", &format!("{}/inputs/", dir.display()))
+            .replace(&so_file, &forces_path.display().to_string());
+        let setup_path = out.join("setup.xml");
+        std::fs::write(&setup_path, text).unwrap();
+        let setup = match Setup::read(&setup_path).unwrap() {
+            Setup::Analyze(s) => s,
+            _ => unreachable!(),
+        };
+        let opts = RunOptions {
+            results_dir: Some(out.clone()),
+            precision: Some(16),
+            verbose: false,
+        };
+        let summary = analyze::run(&setup, &opts).unwrap();
+        let file = storage::read(&summary.files[0]).unwrap();
+        let mut worst = 0.0f64;
+        for (k, &i) in rows.iter().enumerate() {
+            let row = file
+                .time
+                .iter()
+                .position(|&t| (t - states.time[i]).abs() < 1e-9)
+                .unwrap();
+            for (a, b) in direct[k].iter().zip(&file.rows[row]) {
+                worst = worst.max((a - b).abs() / (1.0 + b.abs()));
+            }
+        }
+        println!("{case}: SO-direct vs forces-file reactions: max relative difference {worst:.2e} over {} frames", rows.len());
+        assert!(worst < 1e-7, "{case}: {worst}");
+    }
+}
