@@ -7,6 +7,7 @@
 //! (kinematics, inverse dynamics) → [`paths`] and [`muscles`] (muscle
 //! geometry and strength) → [`tools`] (the analyses users run) →
 //! [`storage`] (OpenSim `.sto` tables).
+pub mod contacts;
 pub mod dynamics;
 pub mod error;
 pub mod forces;
@@ -15,6 +16,7 @@ pub mod model;
 pub mod motion;
 pub mod muscles;
 pub mod optimize;
+pub mod output;
 pub mod parse;
 pub mod paths;
 pub mod storage;

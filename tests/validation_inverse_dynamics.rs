@@ -29,6 +29,7 @@ fn inverse_dynamics_matches_opensim_on_every_validation_case() {
             results_dir: Some(out.clone()),
             precision: Some(12),
             verbose: false,
+            ..Default::default()
         };
         let summary =
             inverse_dynamics::run(&setup, &opts).unwrap_or_else(|e| panic!("{case}: {e}"));

@@ -54,6 +54,7 @@ fn muscle_analysis_matches_opensim_on_every_validation_case() {
             results_dir: Some(out.clone()),
             precision: Some(16),
             verbose: false,
+            ..Default::default()
         };
         analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{case}: {e}"));
         let base = format!("{}_MuscleAnalysis_", setup.name);

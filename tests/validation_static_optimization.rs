@@ -32,6 +32,7 @@ fn static_optimization_matches_opensim_on_every_validation_case() {
             results_dir: Some(out.clone()),
             precision: Some(12),
             verbose: false,
+            ..Default::default()
         };
         let summary = analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{case}: {e}"));
         for w in &summary.warnings {
@@ -205,7 +206,7 @@ fn statopt_optimum_is_never_worse_than_opensims_on_the_same_equations() {
         let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
         let (mut worse, mut max_gain, mut max_res) = (0, 0.0f64, 0.0f64);
         for (f, &i) in rows.iter().enumerate() {
-            let (fp, _, _) = problem.frame_problem(
+            let (fp, _, _, _) = problem.frame_problem(
                 states.time[i],
                 &states.q[i],
                 &states.u[i],
@@ -256,6 +257,7 @@ fn static_optimization_matches_converged_opensim_arm26() {
         results_dir: Some(out.clone()),
         precision: Some(12),
         verbose: false,
+        ..Default::default()
     };
     analyze::run(&setup, &opts).unwrap();
     let data =

@@ -62,6 +62,19 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
 }
 
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
+    match opts.threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
+            pool.install(|| run_analyses(setup, opts))
+        }
+        None => run_analyses(setup, opts),
+    }
+}
+
+fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     let mut summary = RunSummary::default();
     let active: Vec<&Analysis> = setup
         .analyses
@@ -87,6 +100,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
             }
             Analysis::Other { element, common } if element.name == "StaticOptimization" => {
                 let s = static_optimization::run(setup, element, common, opts)?;
+                summary.loop_seconds += s.loop_seconds;
                 summary.frames = summary.frames.max(s.frames);
                 summary.files.extend(s.files);
                 summary.warnings.extend(s.warnings);

@@ -142,6 +142,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         frames: i1 + 1 - i0,
         files: vec![out],
         warnings,
+        ..Default::default()
     })
 }
 

@@ -1,6 +1,7 @@
 //! The tools a setup file can name. Each `run_*` reads its inputs, processes
 //! every frame and writes OpenSim-format results.
 pub mod analyze;
+pub mod bench;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod loading;
@@ -19,6 +20,9 @@ pub struct RunOptions {
     pub precision: Option<usize>,
     /// Print progress and warnings.
     pub verbose: bool,
+    /// Worker threads for per-frame work (None: all cores). Results do not
+    /// depend on it.
+    pub threads: Option<usize>,
 }
 
 /// What a run produced.
@@ -27,4 +31,6 @@ pub struct RunSummary {
     pub frames: usize,
     pub files: Vec<PathBuf>,
     pub warnings: Vec<String>,
+    /// Wall time of the per-frame loop (solving and writing), seconds.
+    pub loop_seconds: f64,
 }

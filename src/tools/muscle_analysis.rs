@@ -160,5 +160,6 @@ pub fn run(
         frames: rows.len(),
         files,
         warnings,
+        ..Default::default()
     })
 }

@@ -10,12 +10,12 @@
 //! acceleration-level constraint `u̇_I(x) = u̇_target` multiplied by the
 //! (constraint-reduced) mass matrix.
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
+use crate::contacts::{Contact, ContactState, Regime};
 use crate::dynamics::{kinematics, rnea, Data};
 use crate::error::{Error, Location, Result};
 use crate::forces::actuators::{Actuator, ActuatorKind};
@@ -25,7 +25,7 @@ use crate::model::Model;
 use crate::motion::states::{assemble, States};
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::optimize::{
-    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus,
+    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, StaticContact,
 };
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
@@ -49,6 +49,16 @@ pub struct StaticOptimizationSetup {
     /// statopt: add passive fiber force to each muscle (off by default, as
     /// OpenSim ignores it).
     pub passive_fiber_forces: bool,
+    /// statopt: add a CoordinateActuator `<coordinate>_reserve` with this
+    /// optimal force to every unconstrained coordinate, so that every frame
+    /// can be solved; the run reports how much they carried.
+    pub reserve_actuators: Option<f64>,
+    /// statopt (Krüger & Wartzack eq. 6): the global contact weight w0; the
+    /// objective is a'a + (1/w0) l'l. Several values run a sweep.
+    pub contact_weights: Vec<f64>,
+    /// Static-regime friction constraint: the paper's four-sided pyramid
+    /// (eq. 16), an eight-sided one, or the exact cone (eq. 2; default).
+    pub friction: FrictionModel,
 }
 
 /// Clarabel's feasibility/gap tolerance unless the setup asks for tighter.
@@ -74,6 +84,35 @@ impl StaticOptimizationSetup {
             convergence_criterion: el.child_f64_or("optimizer_convergence_criterion", 1e-4)?,
             max_iterations: max_iter as u32,
             passive_fiber_forces: el.child_bool_or("passive_fiber_forces", false)?,
+            contact_weights: match el.child("contact_weight") {
+                Some(w) if !w.text().is_empty() => {
+                    let v = w.numbers()?;
+                    if v.is_empty() || v.iter().any(|x| !(*x > 0.0 && x.is_finite())) {
+                        return Err(w.error(format!("contact_weight must be one or more positive numbers, found '{}'", w.text())));
+                    }
+                    v
+                }
+                _ => vec![1000.0],
+            },
+            friction: match el.child("friction_cone") {
+                Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
+                    "cone" => FrictionModel::Cone,
+                    "pyramid" | "pyramid4" => FrictionModel::Pyramid4,
+                    "pyramid8" => FrictionModel::Pyramid8,
+                    other => return Err(f.error(format!("friction_cone must be 'cone', 'pyramid' (four-sided, the paper's eq. 16) or 'pyramid8', found '{other}'"))),
+                },
+                _ => FrictionModel::Cone,
+            },
+            reserve_actuators: match el.child("reserve_actuators") {
+                Some(r) if !r.text().is_empty() => {
+                    let v = r.f64()?;
+                    if !(v > 0.0 && v.is_finite()) {
+                        return Err(r.error(format!("reserve_actuators is the reserves' optimal force and must be positive, found {v}")));
+                    }
+                    Some(v)
+                }
+                _ => None,
+            },
         })
     }
 }
@@ -101,6 +140,10 @@ pub struct SoProblem {
     pub settings: StaticOptimizationSetup,
     /// Labels of the force file (ForceSet record labels, then external forces).
     pub force_labels: Vec<String>,
+    /// Point-on-plane contacts; three multipliers each follow the controls.
+    pub contacts: Vec<Contact>,
+    /// The contact weight w0 of the current run.
+    pub w0: f64,
 }
 
 /// Result of one frame.
@@ -114,7 +157,41 @@ pub struct FrameResult {
     pub force_row: Vec<f64>,
     /// max |A x − b| relative to the largest |b| (1 when b = 0).
     pub relative_residual: f64,
+    /// Largest friction-constraint violation over static contacts (≤ 0 when met).
+    pub friction_violation: f64,
+    pub contacts: ContactRows,
 }
+
+/// Per-frame contact outputs, one row for each contact table.
+#[derive(Debug, Clone, Default)]
+pub struct ContactRows {
+    /// Per contact: force on the point body (ground), point, distance,
+    /// w(d), slip speed, regime (0 static, 1 kinetic), multipliers.
+    pub contact: Vec<f64>,
+    /// Per body touched by a contact: force (ground) and moment about the
+    /// body origin (ground).
+    pub bodies: Vec<f64>,
+    /// ExternalLoads data: per contact, force and point on the point body,
+    /// then (plane body not ground) force and point on the plane body.
+    pub loads: Vec<f64>,
+}
+
+/// Column suffixes of the contact table.
+pub const CONTACT_COLUMNS: [&str; 13] = [
+    "fx",
+    "fy",
+    "fz",
+    "px",
+    "py",
+    "pz",
+    "distance",
+    "weight",
+    "slip_speed",
+    "regime",
+    "lambda_n",
+    "lambda_s1",
+    "lambda_s2",
+];
 
 impl SoProblem {
     pub fn build(
@@ -139,6 +216,7 @@ impl SoProblem {
         let mut upper = Vec::new();
         let mut passive = Vec::new();
         let mut force_labels = Vec::new();
+        let mut contacts: Vec<Contact> = Vec::new();
         let muscles;
         if !so.use_model_force_set {
             // OpenSim: a CoordinateActuator "<coord>_actuator" (optimal force 1)
@@ -186,7 +264,12 @@ impl SoProblem {
                     controls.push(Control::Actuator(a));
                 }
                 ForceKind::Contact => {
-                    return Err(f.error("contact elements in static optimization arrive with the contact model (not yet supported)"));
+                    if let Some(c) = Contact::from_xml(f, &model)? {
+                        if contacts.iter().any(|x: &Contact| x.name == c.name) {
+                            return Err(f.error(format!("two contacts are named '{}'", c.name)));
+                        }
+                        contacts.push(c);
+                    }
                 }
                 ForceKind::Other => match PassiveForce::from_xml(f, &model)? {
                     Some(p) => {
@@ -200,6 +283,32 @@ impl SoProblem {
                         )))
                     }
                 },
+            }
+        }
+        if let Some(opt) = so.reserve_actuators {
+            for &c in &rows {
+                let name = format!("{}_reserve", model.coordinates[c].name);
+                if labels.contains(&name) {
+                    return Err(Error::input(
+                        Location::file(&setup.setup_file),
+                        format!("reserve_actuators: the model already has a force named '{name}'"),
+                    ));
+                }
+                controls.push(Control::Actuator(Actuator {
+                    name: name.clone(),
+                    kind: ActuatorKind::Coordinate { coordinate: c },
+                    optimal_force: opt,
+                    min_control: f64::NEG_INFINITY,
+                    max_control: f64::INFINITY,
+                    applies_force: true,
+                    type_name: "CoordinateActuator".into(),
+                }));
+                // Reserve columns follow the ForceSet's actuators in both files.
+                let at = labels.len();
+                labels.insert(at, name.clone());
+                force_labels.insert(at, name);
+                lower.push(f64::NEG_INFINITY);
+                upper.push(f64::INFINITY);
             }
         }
         if controls.len() < rows.len() {
@@ -244,6 +353,8 @@ impl SoProblem {
                 rows,
                 settings: so.clone(),
                 force_labels,
+                contacts,
+                w0: so.contact_weights[0],
             },
             warnings,
         ))
@@ -259,7 +370,7 @@ impl SoProblem {
         udot_target: &[f64],
         data: &mut Data,
         mf: &mut MuscleFrame,
-    ) -> (FrameProblem, Vec<f64>, Vec<f64>) {
+    ) -> (FrameProblem, Vec<f64>, Vec<f64>, Vec<ContactState>) {
         let model = &self.model;
         let nq = model.nq();
         data.q.copy_from_slice(q);
@@ -345,22 +456,160 @@ impl SoProblem {
                 a[(r, v)] = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
             }
         }
+        // Contacts (Krüger & Wartzack eqs. 1-3, 10, 15-16): three multipliers
+        // each, weighted 1/w0; static regime: free shear inside the friction
+        // cone; kinetic regime: the shear follows the normal force (eq. 3)
+        // and the shear multipliers are held at zero.
+        let nc = self.contacts.len();
+        let mut a = a.resize_horizontally(nv + 3 * nc, 0.0);
+        let mut lower = self.lower.clone();
+        let mut upper = self.upper.clone();
+        let mut weights = vec![1.0; nv];
+        let mut static_contacts = Vec::new();
+        let mut states = Vec::with_capacity(nc);
+        let mut cols = [vec![0.0; nq], vec![0.0; nq], vec![0.0; nq]];
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let st = c.state(model, data);
+            let v0 = nv + 3 * ci;
+            cols.iter_mut()
+                .for_each(|col| col.iter_mut().for_each(|x| *x = 0.0));
+            let kinetic = st.regime == Regime::Kinetic;
+            if kinetic {
+                c.add_kinetic_normal_column(model, data, &st, &mut cols[0]);
+            } else {
+                c.add_unit_generalized_forces(model, data, &st, &mut cols);
+            }
+            for (k, col) in cols.iter().enumerate() {
+                for (r, cv) in couplings.iter().enumerate() {
+                    a[(r, v0 + k)] = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
+                }
+            }
+            let shear = if kinetic {
+                (0.0, 0.0)
+            } else {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            };
+            lower.extend([0.0, shear.0, shear.0]);
+            upper.extend([f64::INFINITY, shear.1, shear.1]);
+            weights.extend([1.0 / self.w0; 3]);
+            if !kinetic {
+                static_contacts.push(StaticContact {
+                    normal: v0,
+                    shear: [v0 + 1, v0 + 2],
+                    mu: c.mu_s,
+                });
+            }
+            states.push(st);
+        }
         let problem = FrameProblem {
             a,
             b,
-            weights: vec![1.0; nv],
+            weights,
             exponent: self.settings.activation_exponent,
-            lower: self.lower.clone(),
-            upper: self.upper.clone(),
-            static_contacts: Vec::new(),
-            friction: FrictionModel::Cone,
+            lower,
+            upper,
+            static_contacts,
+            friction: self.settings.friction,
             settings: SolveSettings {
                 tolerance: self.settings.convergence_criterion.min(DEFAULT_TOLERANCE),
                 max_iter: self.settings.max_iterations.max(100),
                 ..SolveSettings::default()
             },
         };
-        (problem, scale, passive_values)
+        (problem, scale, passive_values, states)
+    }
+
+    /// Bodies that receive contact forces, in body order.
+    pub fn contact_bodies(&self) -> Vec<usize> {
+        let mut b: Vec<usize> = self
+            .contacts
+            .iter()
+            .flat_map(|c| [c.point_body, c.plane_body])
+            .collect();
+        b.sort_unstable();
+        b.dedup();
+        b
+    }
+
+    pub fn contact_labels(&self) -> Vec<String> {
+        self.contacts
+            .iter()
+            .flat_map(|c| {
+                CONTACT_COLUMNS
+                    .iter()
+                    .map(move |s| format!("{}_{s}", c.name))
+            })
+            .collect()
+    }
+
+    pub fn contact_body_labels(&self) -> Vec<String> {
+        self.contact_bodies()
+            .iter()
+            .flat_map(|&b| {
+                ["Fx", "Fy", "Fz", "Mx", "My", "Mz"]
+                    .map(|s| format!("{}_{s}", self.model.bodies[b].name))
+            })
+            .collect()
+    }
+
+    /// The ExternalForces of the exported loads: (name, body, identifier prefix).
+    pub fn contact_load_forces(&self) -> Vec<(String, usize, String)> {
+        let mut v = Vec::new();
+        for c in &self.contacts {
+            v.push((
+                format!("{}_on_{}", c.name, self.model.bodies[c.point_body].name),
+                c.point_body,
+                format!("{}_point_", c.name),
+            ));
+            if c.plane_body != 0 {
+                v.push((
+                    format!("{}_on_{}", c.name, self.model.bodies[c.plane_body].name),
+                    c.plane_body,
+                    format!("{}_plane_", c.name),
+                ));
+            }
+        }
+        v
+    }
+
+    fn contact_outputs(&self, states: &[ContactState], lambda: &[f64], data: &Data) -> ContactRows {
+        let mut rows = ContactRows::default();
+        let bodies = self.contact_bodies();
+        let mut sums = vec![[0.0; 6]; bodies.len()];
+        let mut add = |b: usize, f: &nalgebra::Vector3<f64>, p: &nalgebra::Vector3<f64>| {
+            let k = bodies.iter().position(|&x| x == b).unwrap_or(0);
+            let m = (p - data.position[b]).cross(f);
+            for i in 0..3 {
+                sums[k][i] += f[i];
+                sums[k][3 + i] += m[i];
+            }
+        };
+        for (ci, (c, st)) in self.contacts.iter().zip(states).enumerate() {
+            let l = [lambda[3 * ci], lambda[3 * ci + 1], lambda[3 * ci + 2]];
+            let kinetic = st.regime == Regime::Kinetic;
+            let (f_point, p, f_plane) = c.forces(st, l, kinetic);
+            rows.contact.extend(f_point.iter());
+            rows.contact.extend(p.iter());
+            rows.contact.extend([
+                st.distance,
+                st.weight,
+                st.slip_speed,
+                if kinetic { 1.0 } else { 0.0 },
+                l[0],
+                l[1],
+                l[2],
+            ]);
+            add(c.point_body, &f_point, &p);
+            add(c.plane_body, &f_plane, &st.projection_ground);
+            rows.loads.extend(f_point.iter());
+            rows.loads.extend(p.iter());
+            if c.plane_body != 0 {
+                rows.loads.extend(f_plane.iter());
+                rows.loads.extend(st.projection_ground.iter());
+            }
+        }
+        rows.bodies = sums.into_iter().flatten().collect();
+        rows
     }
 
     /// Solve one frame. `data` and `mf` are per-thread workspaces.
@@ -373,7 +622,8 @@ impl SoProblem {
         data: &mut Data,
         mf: &mut MuscleFrame,
     ) -> FrameResult {
-        let (problem, scale, passive_values) = self.frame_problem(t, q, u, udot_target, data, mf);
+        let (problem, scale, passive_values, states) =
+            self.frame_problem(t, q, u, udot_target, data, mf);
         let solution = optimize::solve(&problem);
         let bmax = problem.b.amax();
         let relative_residual = if bmax > 0.0 {
@@ -381,7 +631,18 @@ impl SoProblem {
         } else {
             solution.eq_residual
         };
-        let forces: Vec<f64> = solution.x.iter().zip(&scale).map(|(x, f)| x * f).collect();
+        let nv = self.controls.len();
+        let forces: Vec<f64> = solution.x[..nv]
+            .iter()
+            .zip(&scale)
+            .map(|(x, f)| x * f)
+            .collect();
+        let friction_violation = problem
+            .static_contacts
+            .iter()
+            .map(|c| self.settings.friction.violation(c, &solution.x))
+            .fold(0.0, f64::max);
+        let contacts = self.contact_outputs(&states, &solution.x[nv..], data);
         let mut force_row = forces.clone();
         force_row.extend(passive_values);
         if let Some(l) = &self.loads {
@@ -396,6 +657,8 @@ impl SoProblem {
             forces,
             force_row,
             relative_residual,
+            friction_violation,
+            contacts,
         }
     }
 }
@@ -409,6 +672,16 @@ fn status_code(s: SolveStatus) -> f64 {
     }
 }
 
+/// Format a contact weight for file names: `500`, `0.001`, `1e+06`.
+fn w0_tag(w0: f64) -> String {
+    let t = format!("{w0}");
+    if t.len() <= 8 {
+        t
+    } else {
+        format!("{w0:e}")
+    }
+}
+
 pub fn run(
     setup: &AnalyzeSetup,
     el: &Element,
@@ -416,7 +689,7 @@ pub fn run(
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
-    let (problem, mut warnings) = SoProblem::build(setup, &so)?;
+    let (mut problem, mut warnings) = SoProblem::build(setup, &so)?;
     let states: States = load_states(setup, &problem.model)?;
     if !states.missing.is_empty() {
         warnings.push(format!(
@@ -433,11 +706,142 @@ pub fn run(
         so.common.step_interval,
     );
     let dir = results_dir(setup, opts)?;
-    let prefix = format!("{}_{}_", setup.name, so.common.name);
+    let base = format!("{}_{}_", setup.name, so.common.name);
+    let mut summary = RunSummary {
+        frames: rows.len(),
+        warnings: Vec::new(),
+        ..Default::default()
+    };
+    let weights: Vec<f64> = if problem.contacts.is_empty() {
+        vec![so.contact_weights[0]]
+    } else {
+        so.contact_weights.clone()
+    };
+    let sweep = weights.len() > 1;
+    let mut prefixes = Vec::new();
+    for &w0 in &weights {
+        problem.w0 = w0;
+        let prefix = if sweep {
+            format!("{base}w0_{}_", w0_tag(w0))
+        } else {
+            base.clone()
+        };
+        let s = run_once(&problem, setup, &states, &udot, &rows, &dir, &prefix, opts)?;
+        summary.files.extend(s.files);
+        summary.loop_seconds += s.loop_seconds;
+        summary.warnings.extend(s.warnings.into_iter().map(|w| {
+            if sweep {
+                format!("w0 = {w0}: {w}")
+            } else {
+                w
+            }
+        }));
+        prefixes.push(prefix);
+    }
+    if sweep {
+        let precision = opts.precision.unwrap_or(setup.output_precision);
+        for kind in ["activation", "force", "ContactForces", "ContactBodyForces"] {
+            let files: Vec<std::path::PathBuf> = prefixes
+                .iter()
+                .map(|p| dir.join(format!("{p}{kind}.sto")))
+                .collect();
+            summary.files.extend(write_sweep_statistics(
+                &files,
+                &dir,
+                &format!("{base}w0_"),
+                kind,
+                &weights,
+                precision,
+            )?);
+        }
+    }
+    warnings.extend(summary.warnings);
+    summary.warnings = warnings;
+    Ok(summary)
+}
+
+/// Mean, minimum and maximum over the runs of a sweep, per column and frame
+/// (the paper's uncertainty band, section 3.2).
+fn write_sweep_statistics(
+    files: &[std::path::PathBuf],
+    dir: &std::path::Path,
+    prefix: &str,
+    kind: &str,
+    weights: &[f64],
+    precision: usize,
+) -> Result<Vec<std::path::PathBuf>> {
+    let tables = files
+        .iter()
+        .map(|f| crate::storage::read(f))
+        .collect::<Result<Vec<_>>>()?;
+    let first = &tables[0];
+    let mut out = Vec::new();
+    for stat in ["mean", "min", "max"] {
+        let path = dir.join(format!("{prefix}{stat}_{kind}.sto"));
+        let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
+        let mut w = StoWriter::create(
+            &path,
+            &format!("{kind} {stat}"),
+            &desc,
+            &first.labels,
+            precision,
+            false,
+        )?;
+        for i in 0..first.time.len() {
+            let row: Vec<f64> = (0..first.labels.len())
+                .map(|j| {
+                    let vals = tables.iter().map(|t| t.rows[i][j]);
+                    match stat {
+                        "mean" => vals.sum::<f64>() / tables.len() as f64,
+                        "min" => vals.fold(f64::INFINITY, f64::min),
+                        _ => vals.fold(f64::NEG_INFINITY, f64::max),
+                    }
+                })
+                .collect();
+            w.write_row(first.time[i], &row)?;
+        }
+        w.finish()?;
+        out.push(path);
+    }
+    Ok(out)
+}
+
+/// OpenSim ExternalLoads document naming the exported contact-force data.
+fn external_loads_xml(problem: &SoProblem, datafile: &str) -> String {
+    use quick_xml::escape::escape;
+    let mut forces = String::new();
+    for (name, body, id) in problem.contact_load_forces() {
+        forces.push_str(&format!(
+            "\t\t\t<ExternalForce name=\"{}\">\n\t\t\t\t<appliesForce>true</appliesForce>\n\t\t\t\t<applied_to_body>{}</applied_to_body>\n\t\t\t\t<force_expressed_in_body>ground</force_expressed_in_body>\n\t\t\t\t<point_expressed_in_body>ground</point_expressed_in_body>\n\t\t\t\t<force_identifier>{}force_v</force_identifier>\n\t\t\t\t<point_identifier>{}force_p</point_identifier>\n\t\t\t\t<torque_identifier>Unassigned</torque_identifier>\n\t\t\t</ExternalForce>\n",
+            escape(name.as_str()),
+            escape(problem.model.bodies[body].name.as_str()),
+            escape(id.as_str()),
+            escape(id.as_str())
+        ));
+    }
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Contact forces estimated by statopt, as OpenSim external loads: each contact's force on the point body at p and, for a plane body other than ground, the opposite force on the plane body at the projection p*. -->\n<OpenSimDocument Version=\"40000\">\n\t<ExternalLoads name=\"statopt_contact_forces\">\n\t\t<objects>\n{forces}\t\t</objects>\n\t\t<groups />\n\t\t<datafile>{}</datafile>\n\t</ExternalLoads>\n</OpenSimDocument>\n",
+        escape(datafile)
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_once(
+    problem: &SoProblem,
+    setup: &AnalyzeSetup,
+    states: &States,
+    udot: &[Vec<f64>],
+    rows: &[usize],
+    dir: &std::path::Path,
+    prefix: &str,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
     let precision = opts.precision.unwrap_or(setup.output_precision);
+    let mut warnings = Vec::new();
     let act_path = dir.join(format!("{prefix}activation.sto"));
     let force_path = dir.join(format!("{prefix}force.sto"));
     let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
+    let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
     let mut act_w = StoWriter::create(
         &act_path,
         "Static Optimization",
@@ -460,6 +864,7 @@ pub fn run(
         "objective",
         "equation_residual",
         "relative_residual",
+        "friction_violation",
         "solve_time_ms",
     ]
     .iter()
@@ -468,16 +873,70 @@ pub fn run(
     let mut diag_w = StoWriter::create(
         &diag_path,
         "Static Optimization Diagnostics",
-        "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|.\n",
+        "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n",
         &diag_labels,
         16,
         false,
     )?;
-    // Frames in chunks: solved in parallel, written in order, so memory stays flat.
+    let mut contact_w = None;
+    if !problem.contacts.is_empty() {
+        let cpath = dir.join(format!("{prefix}ContactForces.sto"));
+        let bpath = dir.join(format!("{prefix}ContactBodyForces.sto"));
+        let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
+        let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
+        let desc = format!(
+            "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic), multipliers.\n",
+            problem.w0, problem.settings.friction
+        );
+        let cw = StoWriter::create(
+            &cpath,
+            "Contact Forces",
+            &desc,
+            &problem.contact_labels(),
+            precision,
+            false,
+        )?;
+        let bw = StoWriter::create(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision, false)?;
+        let mut load_labels = Vec::new();
+        for (_, _, id) in problem.contact_load_forces() {
+            load_labels.extend(
+                [
+                    "force_vx", "force_vy", "force_vz", "force_px", "force_py", "force_pz",
+                ]
+                .map(|s| format!("{id}{s}")),
+            );
+        }
+        let lw = StoWriter::create(
+            &lpath,
+            "statopt contact forces",
+            "",
+            &load_labels,
+            precision,
+            false,
+        )?;
+        let datafile = lpath
+            .file_name()
+            .map(|f| f.to_string_lossy().to_string())
+            .unwrap_or_default();
+        std::fs::write(&xpath, external_loads_xml(problem, &datafile))
+            .map_err(|e| Error::io(&xpath, e))?;
+        files.extend([cpath, bpath, lpath, xpath]);
+        contact_w = Some((cw, bw, lw));
+    }
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
-    let failed_any = AtomicBool::new(false);
     let mut failures: Vec<String> = Vec::new();
+    let reserve_vars: Vec<usize> = problem
+        .labels
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve"))
+        .map(|(i, _)| i)
+        .collect();
+    let mut reserve_peak = (0.0f64, String::new());
+    let nv = problem.controls.len();
     let start = Instant::now();
+    // Frames in chunks: solved in parallel, written in order, so the output
+    // holds every finished frame and memory stays bounded by the chunk.
     for chunk in rows.chunks(256) {
         let results: Vec<FrameResult> = chunk
             .par_iter()
@@ -502,13 +961,20 @@ pub fn run(
             .collect();
         for r in results {
             if !r.solution.status.is_ok() {
-                failed_any.store(true, Ordering::Relaxed);
                 failures.push(format!(
                     "t={}: {:?}, equation residual {:.3e}",
                     r.time, r.solution.status, r.solution.eq_residual
                 ));
             }
-            act_w.write_row(r.time, &r.solution.x)?;
+            for &v in &reserve_vars {
+                if r.forces[v].abs() > reserve_peak.0 {
+                    reserve_peak = (
+                        r.forces[v].abs(),
+                        format!("{} at t={}", problem.labels[v], r.time),
+                    );
+                }
+            }
+            act_w.write_row(r.time, &r.solution.x[..nv])?;
             force_w.write_row(r.time, &r.force_row)?;
             diag_w.write_row(
                 r.time,
@@ -518,9 +984,15 @@ pub fn run(
                     r.solution.objective,
                     r.solution.eq_residual,
                     r.relative_residual,
+                    r.friction_violation,
                     r.solution.solve_time.as_secs_f64() * 1e3,
                 ],
             )?;
+            if let Some((cw, bw, lw)) = contact_w.as_mut() {
+                cw.write_row(r.time, &r.contacts.contact)?;
+                bw.write_row(r.time, &r.contacts.bodies)?;
+                lw.write_row(r.time, &r.contacts.loads)?;
+            }
             progress.inc(1);
         }
     }
@@ -528,28 +1000,45 @@ pub fn run(
     act_w.finish()?;
     force_w.finish()?;
     diag_w.finish()?;
+    if let Some((cw, bw, lw)) = contact_w {
+        cw.finish()?;
+        bw.finish()?;
+        lw.finish()?;
+    }
+    let loop_seconds = start.elapsed().as_secs_f64();
     if !failures.is_empty() {
         warnings.push(format!(
-            "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's last iterate, see {}",
+            "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
             failures.len(),
             rows.len(),
             failures[0],
             diag_path.display()
         ));
     }
+    if !reserve_vars.is_empty() {
+        warnings.push(format!(
+            "reserve actuators carried at most {:.6} (N or N m){}",
+            reserve_peak.0,
+            if reserve_peak.1.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", reserve_peak.1)
+            }
+        ));
+    }
     if opts.verbose {
-        let secs = start.elapsed().as_secs_f64();
         warnings.push(format!(
             "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
             rows.len(),
-            secs,
-            rows.len() as f64 / secs.max(1e-12)
+            loop_seconds,
+            rows.len() as f64 / loop_seconds.max(1e-12)
         ));
     }
     Ok(RunSummary {
         frames: rows.len(),
-        files: vec![act_path, force_path, diag_path],
+        files,
         warnings,
+        loop_seconds,
     })
 }
 

@@ -1,0 +1,276 @@
+//! The point-on-plane contact element as read from a ForceSet
+//! (Krüger & Wartzack 2017, §2.1 and §2.3).
+//!
+//! # XML
+//!
+//! The element is `PointOnPlaneContact`; the original OpenSim plugin's name
+//! `ContactPointOnPlane` (statopt-contact, D. Krüger and F. Laufer,
+//! `ContactPointOnPlane.h`) is accepted as a synonym. The property names are
+//! the plugin's, with the plugin's defaults:
+//!
+//! | property | default | meaning |
+//! |---|---|---|
+//! | `point_body` | required | body (or frame path) carrying the point |
+//! | `point_location` | `0 0 0` | point p in that frame |
+//! | `plane_body` | `ground` | body (or frame path) carrying the plane |
+//! | `plane_origin` | `0 0 0` | a point of the plane, in that frame |
+//! | `plane_normal` | `0 1 0` | plane normal in that frame (normalised; zero is an error) |
+//! | `static_friction` | 0.8 | μs |
+//! | `kinetic_friction` | 0.5 | μk |
+//! | `contact_tolerance` | −1 | d_tol; negative: distance has no effect (w = 1) |
+//! | `contact_transition_zone` | 0.01 | d_trans (m) |
+//! | `v_trans` | 0.1 | static/kinetic transition speed (m/s) |
+//! | `optimal_force` | 100 | F0 (N): force per unit multiplier |
+//! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
+//!
+//! The bodies may also be given as OpenSim-4 style sockets
+//! `socket_point_frame` / `socket_plane_frame` (paths such as
+//! `/bodyset/tibia` or an offset frame's path); giving both spellings of one
+//! property is an error. Names are resolved as paths, then as body names
+//! (the plugin meant to accept a path by keeping its last segment).
+//!
+//! Differences from the plugin, all deliberate:
+//! - the plugin's `point_body` defaults to `ground` and then fails to connect
+//!   (it searches only the BodySet); here `point_body` is required, and it
+//!   may be ground when the plane body is not (a fixed point touching a moving
+//!   plane);
+//! - point and plane on the same body is refused (the force pair would cancel);
+//! - μk > μs is accepted (Coulomb's law does not forbid it and the plugin
+//!   does not check); negative coefficients are refused.
+
+use nalgebra::Vector3;
+
+use crate::error::Result;
+use crate::forces::{applies_force, find_frame};
+use crate::model::{Frame, Model};
+use crate::xml::Element;
+
+/// Element names read as a point-on-plane contact.
+pub const CONTACT_TYPE_NAMES: &[&str] = &["PointOnPlaneContact", "ContactPointOnPlane"];
+
+/// A point-on-plane contact (Krüger & Wartzack 2017, §2.1). Body-fixed
+/// quantities are in the frame of the body (an offset frame given in the XML
+/// is already resolved into its base body).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contact {
+    pub name: String,
+    /// Element tag, e.g. `PointOnPlaneContact`.
+    pub type_name: String,
+    /// Body A, carrying the point p.
+    pub point_body: usize,
+    /// p in body A.
+    pub point: Vector3<f64>,
+    /// Body B, carrying the plane.
+    pub plane_body: usize,
+    /// A point of the plane, in body B.
+    pub origin: Vector3<f64>,
+    /// Unit plane normal n, in body B; the distance is positive on this side.
+    pub normal: Vector3<f64>,
+    /// In-plane unit axes e1, e2 in body B, fixed on the body so that the shear
+    /// multipliers keep their meaning as the body moves. Choice: let k be the
+    /// body axis most nearly parallel to n (largest |n_k|, lowest index on
+    /// ties), a the next axis cyclically (x→y→z→x); e1 is a made orthogonal
+    /// to n and normalised, e2 = n × e1. Then (e1, e2, n) is right-handed
+    /// (e1 × e2 = n); for n = +y: e1 = +z, e2 = +x; for n = +z: e1 = +x,
+    /// e2 = +y. (The plugin uses `UnitVec3::perp()` of the ground-frame
+    /// normal, which is not body-fixed.)
+    pub e1: Vector3<f64>,
+    pub e2: Vector3<f64>,
+    /// Static and kinetic friction coefficients μs, μk.
+    pub mu_s: f64,
+    pub mu_k: f64,
+    /// d_tol (m); negative: the distance has no effect (w = 1).
+    pub d_tol: f64,
+    /// d_trans (m), > 0 when d_tol ≥ 0.
+    pub d_trans: f64,
+    /// Transition speed (m/s), > 0: static iff slip speed ≤ v_trans.
+    pub v_trans: f64,
+    /// F0 (N): the force of a unit multiplier at w = 1.
+    pub optimal_force: f64,
+    pub applies_force: bool,
+}
+
+/// In-plane axes (e1, e2) for the unit normal `n`: see [`Contact::e1`].
+pub fn plane_axes(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let mut k = 0;
+    for i in 1..3 {
+        if n[i].abs() > n[k].abs() {
+            k = i;
+        }
+    }
+    let mut a = Vector3::zeros();
+    a[(k + 1) % 3] = 1.0;
+    // |a·n| ≤ sqrt(1 − n_k²) ≤ sqrt(2/3), so the projection is never small.
+    let e1 = (a - n * a.dot(n)).normalize();
+    let e2 = n.cross(&e1);
+    (e1, e2)
+}
+
+impl Contact {
+    /// Read a contact element. `Ok(None)` for elements of other types.
+    pub fn from_xml(el: &Element, model: &Model) -> Result<Option<Contact>> {
+        if !CONTACT_TYPE_NAMES.contains(&el.name.as_str()) {
+            return Ok(None);
+        }
+        let name = el.name_attr().to_string();
+        let point_frame = frame_property(el, model, "point_body", "socket_point_frame", None)?;
+        let plane_frame = frame_property(
+            el,
+            model,
+            "plane_body",
+            "socket_plane_frame",
+            Some("ground"),
+        )?;
+        if point_frame.body == plane_frame.body {
+            return Err(el.error(format!(
+                "{} '{name}': point and plane are on the same body '{}' (the contact force pair would cancel)",
+                el.name, model.bodies[point_frame.body].name
+            )));
+        }
+
+        let point = point_frame
+            .transform
+            .apply(&finite_vec3(el, "point_location", [0.0; 3])?);
+        let origin = plane_frame
+            .transform
+            .apply(&finite_vec3(el, "plane_origin", [0.0; 3])?);
+        let n = finite_vec3(el, "plane_normal", [0.0, 1.0, 0.0])?;
+        let len = n.norm();
+        if len == 0.0 {
+            let at = el.child("plane_normal").unwrap_or(el);
+            return Err(at.error(format!(
+                "{} '{name}': <plane_normal> must be a non-zero vector",
+                el.name
+            )));
+        }
+        let normal = plane_frame.transform.rotation * (n / len);
+        let (e1, e2) = plane_axes(&normal);
+
+        let mu_s = number(el, "static_friction", 0.8)?;
+        let mu_k = number(el, "kinetic_friction", 0.5)?;
+        for (prop, mu) in [("static_friction", mu_s), ("kinetic_friction", mu_k)] {
+            if mu < 0.0 {
+                return Err(at(el, prop).error(format!(
+                    "{} '{name}': <{prop}> must not be negative, found {mu}",
+                    el.name
+                )));
+            }
+        }
+        let d_tol = number(el, "contact_tolerance", -1.0)?;
+        let d_trans = number(el, "contact_transition_zone", 0.01)?;
+        if d_tol >= 0.0 && d_trans <= 0.0 {
+            return Err(at(el, "contact_transition_zone").error(format!(
+                "{} '{name}': <contact_transition_zone> must be positive when <contact_tolerance> ({d_tol}) is not negative, found {d_trans}",
+                el.name
+            )));
+        }
+        let v_trans = el.child_f64_or("v_trans", 0.1)?;
+        // +inf is allowed: the contact then always stays in the static regime.
+        if v_trans.is_nan() || v_trans <= 0.0 {
+            return Err(at(el, "v_trans").error(format!(
+                "{} '{name}': <v_trans> must be positive, found {v_trans}",
+                el.name
+            )));
+        }
+        let optimal_force = number(el, "optimal_force", 100.0)?;
+        if optimal_force <= 0.0 {
+            return Err(at(el, "optimal_force").error(format!(
+                "{} '{name}': <optimal_force> must be positive, found {optimal_force}",
+                el.name
+            )));
+        }
+        Ok(Some(Contact {
+            name,
+            type_name: el.name.clone(),
+            point_body: point_frame.body,
+            point,
+            plane_body: plane_frame.body,
+            origin,
+            normal,
+            e1,
+            e2,
+            mu_s,
+            mu_k,
+            d_tol,
+            d_trans,
+            v_trans,
+            optimal_force,
+            applies_force: applies_force(el)?,
+        }))
+    }
+}
+
+/// The element to blame for a bad property: the property if present.
+fn at<'a>(el: &'a Element, prop: &str) -> &'a Element {
+    el.child(prop).unwrap_or(el)
+}
+
+/// An optional finite number.
+fn number(el: &Element, prop: &str, default: f64) -> Result<f64> {
+    let v = el.child_f64_or(prop, default)?;
+    if !v.is_finite() {
+        return Err(at(el, prop).error(format!(
+            "{} '{}': <{prop}> must be finite, found {v}",
+            el.name,
+            el.name_attr()
+        )));
+    }
+    Ok(v)
+}
+
+fn finite_vec3(el: &Element, prop: &str, default: [f64; 3]) -> Result<Vector3<f64>> {
+    let v = el.child_vec3_or(prop, default)?;
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(at(el, prop).error(format!(
+            "{} '{}': <{prop}> must be finite",
+            el.name,
+            el.name_attr()
+        )));
+    }
+    Ok(v)
+}
+
+/// Resolve the frame named by `prop` or by its socket spelling `socket`.
+fn frame_property<'m>(
+    el: &Element,
+    model: &'m Model,
+    prop: &str,
+    socket: &str,
+    default: Option<&str>,
+) -> Result<&'m Frame> {
+    let given = |p: &str| el.child(p).filter(|c| !c.text().is_empty());
+    let (holder, text) = match (given(prop), given(socket)) {
+        (Some(_), Some(s)) => {
+            return Err(s.error(format!(
+                "{} '{}': give either <{prop}> or <{socket}>, not both",
+                el.name,
+                el.name_attr()
+            )))
+        }
+        (Some(c), None) | (None, Some(c)) => (c, c.text()),
+        (None, None) => match default {
+            Some(d) => (el, d),
+            None => {
+                return Err(el.error(format!(
+                    "{} '{}': missing property <{prop}>",
+                    el.name,
+                    el.name_attr()
+                )))
+            }
+        },
+    };
+    let last = text.rsplit('/').next().unwrap_or(text);
+    find_frame(model, text)
+        .or_else(|| {
+            model
+                .body_index(last)
+                .and_then(|b| model.frame(&model.bodies[b].name))
+        })
+        .ok_or_else(|| {
+            holder.error(format!(
+                "{} '{}': unknown body or frame '{text}'",
+                el.name,
+                el.name_attr()
+            ))
+        })
+}

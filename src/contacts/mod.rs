@@ -1,0 +1,16 @@
+//! Frictional point-on-plane contact of Krüger & Wartzack (2017), §2.1–2.2.4:
+//! a ForceSet element whose three multipliers (λn, λs1, λs2) are unknowns of
+//! the per-frame force-sharing problem, like the controls of actuators.
+//!
+//! - [`element`]: the [`Contact`] element read from XML
+//!   (`PointOnPlaneContact`, or the original plugin's `ContactPointOnPlane`);
+//! - [`kinematics`]: per-frame geometry ([`ContactState`]: distance, weight
+//!   w(d), projection p*, slip velocity, friction regime), the generalized
+//!   force of each multiplier, and the contact forces for output.
+pub mod element;
+pub mod kinematics;
+#[cfg(test)]
+mod tests;
+
+pub use element::{Contact, CONTACT_TYPE_NAMES};
+pub use kinematics::{weight, ContactState, Regime};

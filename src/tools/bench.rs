@@ -1,0 +1,117 @@
+//! `statopt-tool bench SETUP.xml`: run a setup repeatedly with several thread
+//! counts and report frames per second, and the process's peak memory.
+//! `--tile N` repeats the setup's motion N times end to end first, to show how
+//! time and memory grow with trial length.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use crate::error::{Error, Location, Result};
+use crate::parse::setup::{AnalyzeSetup, Setup};
+use crate::storage::{self, Storage};
+use crate::tools::{analyze, RunOptions};
+
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
+    pub threads: Vec<usize>,
+    pub repeat: usize,
+    pub tile: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct BenchRow {
+    pub threads: usize,
+    pub frames: usize,
+    /// Best per-frame loop time over the repeats (solving + writing), seconds.
+    pub loop_seconds: f64,
+    /// Best whole-run time (reading, splining, compiling included), seconds.
+    pub total_seconds: f64,
+}
+
+/// Peak resident memory of this process so far (VmHWM), in MiB, when the OS tells.
+pub fn peak_memory_mib() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// The setup's motion repeated `n` times (time shifted), written to `dir`.
+fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<AnalyzeSetup> {
+    let file = setup.coordinates_file.as_ref().ok_or_else(|| {
+        Error::input(
+            Location::file(&setup.setup_file),
+            "bench --tile needs a <coordinates_file>",
+        )
+    })?;
+    let t = storage::read(file)?;
+    let len = t.time.len();
+    if len < 2 {
+        return Err(Error::input(Location::file(file), "too few rows to tile"));
+    }
+    let dt = t.time[len - 1] - t.time[len - 2];
+    let period = t.time[len - 1] - t.time[0] + dt;
+    let mut out = Storage {
+        time: Vec::with_capacity(len * n),
+        rows: Vec::with_capacity(len * n),
+        ..t.clone()
+    };
+    for k in 0..n {
+        for i in 0..len {
+            out.time.push(t.time[i] + k as f64 * period);
+            out.rows.push(t.rows[i].clone());
+        }
+    }
+    let path = dir.join("tiled_motion.sto");
+    storage::write(&path, &out, 10)?;
+    let mut s = setup.clone();
+    s.coordinates_file = Some(path);
+    s.final_time = *out.time.last().unwrap_or(&setup.final_time);
+    s.initial_time = out.time[0].min(setup.initial_time);
+    Ok(s)
+}
+
+pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<BenchRow>> {
+    let setup = match Setup::read(setup_file)? {
+        Setup::Analyze(s) => s,
+        Setup::InverseDynamics(_) => {
+            return Err(Error::input(
+                Location::file(setup_file),
+                "bench runs AnalyzeTool setups (static optimization)",
+            ))
+        }
+    };
+    let dir: PathBuf = std::env::temp_dir().join(format!("statopt-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let setup = if opts.tile > 1 {
+        tiled(&setup, opts.tile, &dir)?
+    } else {
+        setup
+    };
+    let mut rows = Vec::new();
+    for &threads in &opts.threads {
+        let mut best = BenchRow {
+            threads,
+            frames: 0,
+            loop_seconds: f64::INFINITY,
+            total_seconds: f64::INFINITY,
+        };
+        for _ in 0..opts.repeat.max(1) {
+            let run_opts = RunOptions {
+                results_dir: Some(dir.clone()),
+                threads: Some(threads),
+                verbose: false,
+                ..Default::default()
+            };
+            let start = Instant::now();
+            let s = analyze::run(&setup, &run_opts)?;
+            let total = start.elapsed().as_secs_f64();
+            best.frames = s.frames;
+            best.loop_seconds = best.loop_seconds.min(s.loop_seconds);
+            best.total_seconds = best.total_seconds.min(total);
+        }
+        rows.push(best);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(rows)
+}
