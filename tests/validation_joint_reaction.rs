@@ -30,6 +30,7 @@ fn joint_reactions_match_opensim_on_every_validation_case() {
                 results_dir: Some(out.clone()),
                 precision: Some(12),
                 verbose: false,
+                ..Default::default()
             };
             let summary = analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{case}: {e}"));
             for w in &summary.warnings {
@@ -114,6 +115,7 @@ fn missing_actuator_forces_are_reported() {
             results_dir: Some(out.clone()),
             precision: None,
             verbose: false,
+            ..Default::default()
         };
         let err = analyze::run(&setup, &opts)
             .expect_err("must refuse")
@@ -182,7 +184,7 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
             let r = problem.solve_frame(t, q, u, &udot[i], &mut data, &mut mf);
             let mut o = vec![0.0; 9 * specs.len()];
             static_optimization_reactions(
-                &problem, t, q, u, &r.forces, &mut data, &mut mf, &specs, &mut o,
+                &problem, t, q, u, &r, &mut data, &mut mf, &specs, &mut o,
             )
             .unwrap();
             forces.time.push(t);
@@ -212,6 +214,7 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
             results_dir: Some(out.clone()),
             precision: Some(16),
             verbose: false,
+            ..Default::default()
         };
         let summary = analyze::run(&setup, &opts).unwrap();
         let file = storage::read(&summary.files[0]).unwrap();

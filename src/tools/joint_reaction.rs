@@ -51,7 +51,7 @@ use crate::paths::{coupling, geometry};
 use crate::storage::{self, StoWriter, Storage};
 use crate::tools::analyze::{frame_rows, load_states, results_dir};
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
-use crate::tools::static_optimization::{Control, SoProblem};
+use crate::tools::static_optimization::{Control, FrameResult, SoProblem};
 use crate::tools::{RunOptions, RunSummary};
 use crate::xml::Element;
 
@@ -393,22 +393,24 @@ pub fn apply_forces(
 }
 
 /// Joint reactions of one static-optimization frame, from that frame's
-/// solved actuator forces (`forces`, x_i·f_i in control order, as
-/// [`crate::tools::static_optimization::FrameResult::forces`]). This is what
-/// a JointReaction run on the SO force file computes, without the file.
+/// solution: the actuator forces (`result.forces`, x_i·f_i in control
+/// order) and the contact forces (`result.contacts.loads`: on the point body
+/// at p, on the plane body at p*), as body forces. For the actuators this is
+/// what a JointReaction run on the SO force file computes, without the file.
 #[allow(clippy::too_many_arguments)]
 pub fn static_optimization_reactions(
     problem: &SoProblem,
     t: f64,
     q: &[f64],
     u: &[f64],
-    forces: &[f64],
+    result: &FrameResult,
     data: &mut Data,
     mf: &mut MuscleFrame,
     specs: &[ReactionSpec],
     out: &mut [f64],
 ) -> Result<()> {
     let model = &problem.model;
+    let forces = &result.forces;
     data.q.copy_from_slice(q);
     data.u.copy_from_slice(u);
     assemble(model, t, &mut data.q, &mut data.u);
@@ -423,6 +425,25 @@ pub fn static_optimization_reactions(
         problem.loads.as_ref(),
         t,
     );
+    // Contact forces: per contact, force and point on the point body, then
+    // (plane body not ground) force and point on the plane body.
+    let loads = &result.contacts.loads;
+    let mut k = 0;
+    for c in &problem.contacts {
+        let v = |i: usize| Vector3::new(loads[i], loads[i + 1], loads[i + 2]);
+        if loads.len() < k + 6 {
+            return Err(Error::internal("contact rows shorter than the contacts"));
+        }
+        data.applied[c.point_body].add(&BodyForce::at_point(v(k), v(k + 3)));
+        k += 6;
+        if c.plane_body != 0 {
+            if loads.len() < k + 6 {
+                return Err(Error::internal("contact rows shorter than the contacts"));
+            }
+            data.applied[c.plane_body].add(&BodyForce::at_point(v(k), v(k + 3)));
+            k += 6;
+        }
+    }
     if problem.settings.passive_fiber_forces {
         let mut applied = std::mem::take(&mut data.applied);
         let mut gen = std::mem::take(&mut data.applied_gen);
@@ -690,6 +711,7 @@ pub fn run(
         false,
     )?;
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
+    let start = std::time::Instant::now();
     for chunk in rows.chunks(256) {
         let results: Vec<Result<Vec<f64>>> = chunk
             .par_iter()
@@ -716,6 +738,7 @@ pub fn run(
         frames: rows.len(),
         files: vec![path],
         warnings,
+        loop_seconds: start.elapsed().as_secs_f64(),
     })
 }
 
