@@ -147,6 +147,58 @@ impl Actuator {
         }
     }
 
+    /// Apply actuation `actuation` (N or N·m) as OpenSim does: a CoordinateActuator
+    /// as a generalized (mobility) force on its coordinate (added to `gen`), a
+    /// PointActuator as a point force and a TorqueActuator as body torques
+    /// (added to `applied`: ground frame, moments about the ground origin).
+    /// Positions in `data` must be current. The generalized equivalent is
+    /// `actuation ×` [`Self::add_unit_generalized_force`].
+    pub fn apply(
+        &self,
+        data: &Data,
+        actuation: f64,
+        applied: &mut [crate::dynamics::BodyForce],
+        gen: &mut [f64],
+    ) {
+        use crate::dynamics::BodyForce;
+        match &self.kind {
+            ActuatorKind::Coordinate { coordinate } => gen[*coordinate] += actuation,
+            ActuatorKind::Point {
+                body,
+                point,
+                point_is_global,
+                direction,
+                force_is_global,
+            } => {
+                let f = if *force_is_global {
+                    *direction
+                } else {
+                    data.rotation[*body] * direction
+                };
+                let x = if *point_is_global {
+                    *point
+                } else {
+                    data.station_position(*body, point)
+                };
+                applied[*body].add(&BodyForce::at_point(f * actuation, x));
+            }
+            ActuatorKind::Torque {
+                body_a,
+                body_b,
+                axis,
+                torque_is_global,
+            } => {
+                let t = if *torque_is_global {
+                    *axis
+                } else {
+                    data.rotation[*body_a] * axis
+                } * actuation;
+                applied[*body_a].add(&BodyForce::torque(t));
+                applied[*body_b].add(&BodyForce::torque(-t));
+            }
+        }
+    }
+
     /// The record label OpenSim's ForceReporter writes (§1.5): the name.
     pub fn record_labels(&self) -> Vec<String> {
         vec![self.name.clone()]

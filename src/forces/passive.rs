@@ -186,6 +186,41 @@ impl PassiveForce {
         }
     }
 
+    /// Apply the force at the state in `data` as OpenSim does: coordinate
+    /// forces as generalized (mobility) forces (added to `gen`), a
+    /// PointToPointSpring as point forces on its two bodies (added to
+    /// `applied`: ground frame, moments about the ground origin). Returns the
+    /// same scalar as [`Self::add_generalized_force`].
+    pub fn apply(
+        &self,
+        data: &Data,
+        applied: &mut [crate::dynamics::BodyForce],
+        gen: &mut [f64],
+    ) -> f64 {
+        use crate::dynamics::BodyForce;
+        match self {
+            PassiveForce::PointToPointSpring {
+                body1,
+                point1,
+                body2,
+                point2,
+                ..
+            } => {
+                let (f1, tension) = self.spring_force(data);
+                let p1 = data.station_position(*body1, point1);
+                let p2 = data.station_position(*body2, point2);
+                applied[*body1].add(&BodyForce::at_point(f1, p1));
+                applied[*body2].add(&BodyForce::at_point(-f1, p2));
+                tension
+            }
+            _ => {
+                let (c, tau) = self.coordinate_force(data);
+                gen[c] += tau;
+                tau
+            }
+        }
+    }
+
     /// Coordinate index and generalized force of the coordinate forces.
     fn coordinate_force(&self, data: &Data) -> (usize, f64) {
         match self {

@@ -439,9 +439,17 @@ fn checked_inertia(b: &crate::parse::osim::BodySpec, warnings: &mut Vec<String>)
         && xx + zz + tol >= yy
         && yy + zz + tol >= xx;
     if !valid {
-        let d = (xx * xx + yy * yy + zz * zz).sqrt() / 3f64.sqrt();
-        warnings.push(format!("body '{}' has an invalid inertia {:?}; using a spherical inertia of {d} as OpenSim does", b.name, b.inertia));
-        return Matrix3::identity() * d;
+        // OpenSim's Body::getInertia would replace it by a spherical inertia
+        // only if SimTK::Inertia's constructor threw, but that check
+        // (`Inertia::errChk`) is compiled out of release builds (NDEBUG): the
+        // released OpenSim 4.6 keeps the invalid matrix as given (verified:
+        // `Model('leg6dof9musc.osim').getBodySet().get('toes_r').getInertia()`
+        // returns moments [0, 0, 0.00090462] in the opensim 4.6 Python package,
+        // and its joint reactions match only with that matrix).
+        warnings.push(format!(
+            "body '{}' has a physically invalid inertia {:?} (triangle inequality or sign); used as given, as OpenSim 4.6 release builds do",
+            b.name, b.inertia
+        ));
     }
     m
 }

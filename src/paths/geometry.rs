@@ -341,3 +341,55 @@ pub fn add_unit_tension_force(
         }
     }
 }
+
+/// The forces a tension `tension` along the current path applies, as
+/// OpenSim's `GeometryPath::produceForces` applies them: a point force at
+/// each end of every segment whose points lie on different bodies (added to
+/// `applied`, ground frame, moments about the ground origin), and for moving
+/// path points the generalized force of the point's motion on its coordinate
+/// (added to `gen`, a mobility force). Their generalized-force equivalent is
+/// `tension ×` [`add_unit_tension_force`]. Joint reactions need the body
+/// forces themselves (opensim-semantics.md §7.2).
+pub fn add_tension_forces(
+    path: &GeometryPath,
+    data: &Data,
+    st: &PathState,
+    tension: f64,
+    applied: &mut [crate::dynamics::BodyForce],
+    gen: &mut [f64],
+) {
+    use crate::dynamics::BodyForce;
+    let pts = &st.points;
+    for k in 0..pts.len().saturating_sub(1) {
+        let (a, b) = (&pts[k], &pts[k + 1]);
+        if a.body == b.body {
+            continue;
+        }
+        let d = b.ground - a.ground;
+        let n = d.norm();
+        let e = if n > 0.0 { d / n } else { Vector3::zeros() };
+        let f = e * tension;
+        applied[a.body].add(&BodyForce::at_point(f, a.ground));
+        applied[b.body].add(&BodyForce::at_point(-f, b.ground));
+        for (p, fp) in [(a, f), (b, -f)] {
+            if let Origin::Point(i) = p.origin {
+                let pp = &path.points[i];
+                if let PointKind::Moving {
+                    coordinate,
+                    functions,
+                    ..
+                } = &pp.kind
+                {
+                    let q = data.q[*coordinate];
+                    let dp = Vector3::new(
+                        functions[0].derivative(q, 1),
+                        functions[1].derivative(q, 1),
+                        functions[2].derivative(q, 1),
+                    );
+                    let dp_g = data.rotation[p.body] * (pp.frame.rotation * dp);
+                    gen[*coordinate] += dp_g.dot(&fp);
+                }
+            }
+        }
+    }
+}

@@ -7,7 +7,7 @@ use crate::motion::coordinates::find_index;
 use crate::motion::states::States;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
 use crate::tools::loading::load_coordinates;
-use crate::tools::{muscle_analysis, static_optimization, RunOptions, RunSummary};
+use crate::tools::{joint_reaction, muscle_analysis, static_optimization, RunOptions, RunSummary};
 
 /// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
 /// t <= final_time; a row is recorded when it is the first, the last, or its
@@ -105,9 +105,15 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 summary.files.extend(s.files);
                 summary.warnings.extend(s.warnings);
             }
+            Analysis::Other { element, common } if element.name == "JointReaction" => {
+                let s = joint_reaction::run(setup, element, common, opts)?;
+                summary.frames = summary.frames.max(s.frames);
+                summary.files.extend(s.files);
+                summary.warnings.extend(s.warnings);
+            }
             Analysis::Other { element, .. } => {
                 return Err(element.error(format!(
-                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization",
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction",
                     element.name
                 )));
             }

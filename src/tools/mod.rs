@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod bench;
 pub mod inverse_dynamics;
+pub mod joint_reaction;
 pub mod loading;
 pub mod muscle_analysis;
 pub mod progress;
