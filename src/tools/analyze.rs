@@ -90,6 +90,30 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
             "the setup has no analysis that is on",
         ));
     }
+    // A JointReaction without a forces_file in a setup that also runs
+    // StaticOptimization takes each frame's solution directly.
+    let setup_dir = setup
+        .setup_file
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let has_so = active.iter().any(
+        |a| matches!(a, Analysis::Other { element, .. } if element.name == "StaticOptimization"),
+    );
+    let mut coupled = Vec::new();
+    for a in &active {
+        if let Analysis::Other { element, common } = a {
+            if element.name == "JointReaction" && has_so {
+                let jr = joint_reaction::JointReactionSetup::from_xml(
+                    element,
+                    common.clone(),
+                    setup_dir,
+                )?;
+                if jr.forces_file.is_none() {
+                    coupled.push(jr);
+                }
+            }
+        }
+    }
     for a in active {
         match a {
             Analysis::MuscleAnalysis(m) => {
@@ -99,13 +123,16 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 summary.warnings.extend(s.warnings);
             }
             Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                let s = static_optimization::run(setup, element, common, opts)?;
+                let s = static_optimization::run(setup, element, common, &coupled, opts)?;
                 summary.loop_seconds += s.loop_seconds;
                 summary.frames = summary.frames.max(s.frames);
                 summary.files.extend(s.files);
                 summary.warnings.extend(s.warnings);
             }
             Analysis::Other { element, common } if element.name == "JointReaction" => {
+                if coupled.iter().any(|jr| jr.common.name == common.name) {
+                    continue; // computed inside static optimization
+                }
                 let s = joint_reaction::run(setup, element, common, opts)?;
                 summary.frames = summary.frames.max(s.frames);
                 summary.files.extend(s.files);

@@ -32,6 +32,10 @@ use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
 use crate::storage::StoWriter;
 use crate::tools::analyze::{frame_rows, load_states, results_dir};
+use crate::tools::joint_reaction::{
+    column_labels as jr_column_labels, resolve_reactions, static_optimization_reactions,
+    JointReactionSetup, ReactionSpec, DESCRIPTION as JR_DESCRIPTION,
+};
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
 use crate::tools::{RunOptions, RunSummary};
 use crate::xml::Element;
@@ -695,6 +699,7 @@ pub fn run(
     setup: &AnalyzeSetup,
     el: &Element,
     common: &AnalysisCommon,
+    reactions: &[JointReactionSetup],
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
@@ -727,6 +732,12 @@ pub fn run(
         so.contact_weights.clone()
     };
     let sweep = weights.len() > 1;
+    let mut jr_specs = Vec::new();
+    for jr in reactions {
+        let (specs, w) = resolve_reactions(&problem.model, jr)?;
+        warnings.extend(w);
+        jr_specs.push((jr.common.name.clone(), specs));
+    }
     let mut prefixes = Vec::new();
     for &w0 in &weights {
         problem.w0 = w0;
@@ -735,7 +746,20 @@ pub fn run(
         } else {
             base.clone()
         };
-        let s = run_once(&problem, setup, &states, &udot, &rows, &dir, &prefix, opts)?;
+        let jr_prefix = |name: &str| {
+            if sweep {
+                format!("{}_{name}_w0_{}_", setup.name, w0_tag(w0))
+            } else {
+                format!("{}_{name}_", setup.name)
+            }
+        };
+        let jr: Vec<(String, &[ReactionSpec])> = jr_specs
+            .iter()
+            .map(|(n, s)| (jr_prefix(n), s.as_slice()))
+            .collect();
+        let s = run_once(
+            &problem, setup, &states, &udot, &rows, &dir, &prefix, &jr, opts,
+        )?;
         summary.files.extend(s.files);
         summary.loop_seconds += s.loop_seconds;
         summary.warnings.extend(s.warnings.into_iter().map(|w| {
@@ -759,6 +783,26 @@ pub fn run(
                 &dir,
                 &format!("{base}w0_"),
                 kind,
+                &weights,
+                precision,
+            )?);
+        }
+        for (name, _) in &jr_specs {
+            let files: Vec<std::path::PathBuf> = weights
+                .iter()
+                .map(|w0| {
+                    dir.join(format!(
+                        "{}_{name}_w0_{}_ReactionLoads.sto",
+                        setup.name,
+                        w0_tag(*w0)
+                    ))
+                })
+                .collect();
+            summary.files.extend(write_sweep_statistics(
+                &files,
+                &dir,
+                &format!("{}_{name}_w0_", setup.name),
+                "ReactionLoads",
                 &weights,
                 precision,
             )?);
@@ -843,6 +887,7 @@ fn run_once(
     rows: &[usize],
     dir: &std::path::Path,
     prefix: &str,
+    reactions: &[(String, &[ReactionSpec])],
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let precision = opts.precision.unwrap_or(setup.output_precision);
@@ -932,8 +977,21 @@ fn run_once(
         files.extend([cpath, bpath, lpath, xpath]);
         contact_w = Some((cw, bw, lw));
     }
+    let mut jr_w = Vec::new();
+    for (p, specs) in reactions {
+        let path = dir.join(format!("{p}ReactionLoads.sto"));
+        jr_w.push(StoWriter::create(
+            &path,
+            "Joint Reaction Loads",
+            JR_DESCRIPTION,
+            &jr_column_labels(specs),
+            precision,
+            false,
+        )?);
+        files.push(path);
+    }
     let log_path = dir.join(format!("{prefix}log.mcap"));
-    let mut log = FrameLog::create(problem, &log_path)?;
+    let mut log = FrameLog::create(problem, &log_path, reactions.first().map(|(_, s)| *s))?;
     files.push(log_path);
     let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
     let mut failures: Vec<String> = Vec::new();
@@ -950,7 +1008,7 @@ fn run_once(
     // Frames in chunks: solved in parallel, written in order, so the output
     // holds every finished frame and memory stays bounded by the chunk.
     for chunk in rows.chunks(256) {
-        let results: Vec<FrameResult> = chunk
+        let results: Vec<Result<(FrameResult, Vec<Vec<f64>>)>> = chunk
             .par_iter()
             .map_init(
                 || {
@@ -960,18 +1018,40 @@ fn run_once(
                     )
                 },
                 |(data, mf), &i| {
-                    problem.solve_frame(
+                    let r = problem.solve_frame(
                         states.time[i],
                         &states.q[i],
                         &states.u[i],
                         &udot[i],
                         data,
                         mf,
-                    )
+                    );
+                    let mut rows = Vec::with_capacity(reactions.len());
+                    for (_, specs) in reactions {
+                        let mut out = vec![0.0; 9 * specs.len()];
+                        static_optimization_reactions(
+                            problem,
+                            states.time[i],
+                            &states.q[i],
+                            &states.u[i],
+                            &r,
+                            data,
+                            mf,
+                            specs,
+                            &mut out,
+                        )?;
+                        rows.push(out);
+                    }
+                    Ok((r, rows))
                 },
             )
             .collect();
-        for r in results {
+        for res in results {
+            let (r, jr_rows) = res?;
+            for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
+                w.write_row(r.time, row)?;
+            }
+            log.reactions(r.time, &jr_rows)?;
             if !r.solution.status.is_ok() {
                 failures.push(format!(
                     "t={}: {:?}, equation residual {:.3e}",
@@ -1014,6 +1094,9 @@ fn run_once(
     force_w.finish()?;
     diag_w.finish()?;
     log.finish()?;
+    for w in jr_w {
+        w.finish()?;
+    }
     if let Some((cw, bw, lw)) = contact_w {
         cw.finish()?;
         bw.finish()?;
@@ -1065,10 +1148,19 @@ struct FrameLog {
     log: mcap_log::McapLog,
     coordinates: Vec<String>,
     contacts: Vec<String>,
+    /// Reaction label roots of the first coupled JointReaction, if any.
+    joints: Vec<String>,
 }
 
 impl FrameLog {
-    fn create(problem: &SoProblem, path: &std::path::Path) -> Result<FrameLog> {
+    fn create(
+        problem: &SoProblem,
+        path: &std::path::Path,
+        reactions: Option<&[ReactionSpec]>,
+    ) -> Result<FrameLog> {
+        let joints: Vec<String> = reactions
+            .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
+            .unwrap_or_default();
         let coordinates: Vec<String> = problem
             .model
             .coordinates
@@ -1081,11 +1173,12 @@ impl FrameLog {
             activations: problem.labels.clone(),
             forces: problem.labels.clone(),
             contacts: contacts.clone(),
-            joints: Vec::new(),
+            joints: joints.clone(),
         };
         let log = mcap_log::McapLog::create(path, &channels.specs()?)?;
         Ok(FrameLog {
             log,
+            joints,
             coordinates,
             contacts,
         })
@@ -1151,6 +1244,26 @@ impl FrameLog {
             ),
         )?;
         Ok(())
+    }
+
+    /// Log the first coupled JointReaction's loads (force and moment per reaction).
+    fn reactions(&mut self, t: f64, rows: &[Vec<f64>]) -> Result<()> {
+        let (Some(row), false) = (rows.first(), self.joints.is_empty()) else {
+            return Ok(());
+        };
+        let samples: Vec<mcap_log::JointReactionSample> = row
+            .chunks(9)
+            .map(|c| mcap_log::JointReactionSample {
+                force: [c[0], c[1], c[2]],
+                moment: [c[3], c[4], c[5]],
+            })
+            .collect();
+        let names: Vec<&str> = self.joints.iter().map(String::as_str).collect();
+        self.log.log(
+            mcap_log::JOINT_REACTIONS,
+            t,
+            &mcap_log::joint_reactions_message(&names, &samples)?,
+        )
     }
 
     fn finish(self) -> Result<()> {
