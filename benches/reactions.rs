@@ -28,7 +28,9 @@ fn bench(c: &mut Criterion) {
             .analyses
             .iter()
             .find_map(|a| match a {
-                Analysis::Other { element, common } if element.name == "JointReaction" => Some((element.clone(), common.clone())),
+                Analysis::Other { element, common } if element.name == "JointReaction" => {
+                    Some((element.clone(), common.clone()))
+                }
                 _ => None,
             })
             .unwrap();
@@ -39,13 +41,27 @@ fn bench(c: &mut Criterion) {
         let mut data = Data::new(&problem.model);
         let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
         let mut k = 0;
-        c.bench_function(&format!("joint_reaction_frame/{case} ({} reactions)", problem.specs.len()), |b| {
-            b.iter(|| {
-                let i = rows[k % rows.len()];
-                k += 1;
-                problem.frame(states.time[i], &states.q[i], &states.u[i], &mut data, &mut mf).unwrap()[0]
-            })
-        });
+        c.bench_function(
+            &format!(
+                "joint_reaction_frame/{case} ({} reactions)",
+                problem.specs.len()
+            ),
+            |b| {
+                b.iter(|| {
+                    let i = rows[k % rows.len()];
+                    k += 1;
+                    problem
+                        .frame(
+                            states.time[i],
+                            &states.q[i],
+                            &states.u[i],
+                            &mut data,
+                            &mut mf,
+                        )
+                        .unwrap()[0]
+                })
+            },
+        );
     }
 }
 

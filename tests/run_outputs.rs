@@ -128,6 +128,28 @@ fn reactions_in_one_setup_equal_a_separate_run_on_the_force_file() {
         worst < 1e-6,
         "combined and separate reactions differ by {worst}"
     );
+    // Generalized forces by source add up to what the motion requires.
+    let src = storage::read(&out.join("block_SO_GeneralizedForcesBySource.sto")).unwrap();
+    for c in ["tx", "ty", "tz"] {
+        let col = |s: &str| src.column(src.column_index(&format!("{c}_{s}")).unwrap());
+        let (req, mus, act, con) = (
+            col("required"),
+            col("muscles"),
+            col("actuators"),
+            col("contacts"),
+        );
+        for i in 0..src.time.len() {
+            assert!(
+                (req[i] - mus[i] - act[i] - con[i]).abs() < 1e-6 * req[i].abs().max(1.0),
+                "{c} frame {i}"
+            );
+        }
+    }
+    let ty_contacts = src.column(src.column_index("ty_contacts").unwrap());
+    assert!(
+        ty_contacts.iter().all(|v| *v > 0.5 * 10.0 * G),
+        "at w0 = 1000 the floor should carry most of the weight"
+    );
     // The reaction holds the block's weight minus what the contact and lift carry: check it is not trivially zero.
     let fy = combined.column(
         combined

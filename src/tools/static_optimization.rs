@@ -164,6 +164,11 @@ pub struct FrameResult {
     pub relative_residual: f64,
     /// Largest friction-constraint violation over static contacts (≤ 0 when met).
     pub friction_violation: f64,
+    /// Per free coordinate: required generalized force, and the parts supplied
+    /// by muscles, other actuators and contacts.
+    pub by_source: Vec<f64>,
+    /// Per muscle: mechanical power (W), positive when shortening under tension.
+    pub muscle_power: Vec<f64>,
     /// The frame's assembled coordinates, speeds and accelerations (tree order).
     pub q: Vec<f64>,
     pub u: Vec<f64>,
@@ -541,6 +546,27 @@ impl SoProblem {
         b
     }
 
+    /// Columns of the generalized-forces-by-source table.
+    pub fn by_source_labels(&self) -> Vec<String> {
+        self.rows
+            .iter()
+            .flat_map(|&c| {
+                ["required", "muscles", "actuators", "contacts"]
+                    .map(|s| format!("{}_{s}", self.model.coordinates[c].name))
+            })
+            .collect()
+    }
+
+    pub fn muscle_labels(&self) -> Vec<String> {
+        self.controls
+            .iter()
+            .filter_map(|c| match c {
+                Control::Muscle(m) => Some(self.muscles.muscles[*m].muscle.name.clone()),
+                Control::Actuator(_) => None,
+            })
+            .collect()
+    }
+
     pub fn contact_labels(&self) -> Vec<String> {
         self.contacts
             .iter()
@@ -653,6 +679,38 @@ impl SoProblem {
             .map(|c| self.settings.friction.violation(c, &solution.x))
             .fold(0.0, f64::max);
         let contacts = self.contact_outputs(&states, &solution.x[nv..], data);
+        // Generalized forces by source on each free coordinate (reduced rows):
+        // required, muscles, other actuators, contacts.
+        let mut by_source = Vec::with_capacity(4 * self.rows.len());
+        for r in 0..self.rows.len() {
+            let part = |range: std::ops::Range<usize>| -> f64 {
+                range.map(|v| problem.a[(r, v)] * solution.x[v]).sum()
+            };
+            let muscles: f64 = (0..nv)
+                .filter(|&v| matches!(self.controls[v], Control::Muscle(_)))
+                .map(|v| problem.a[(r, v)] * solution.x[v])
+                .sum();
+            let actuators: f64 = (0..nv)
+                .filter(|&v| matches!(self.controls[v], Control::Actuator(_)))
+                .map(|v| problem.a[(r, v)] * solution.x[v])
+                .sum();
+            by_source.extend([
+                problem.b[r],
+                muscles,
+                actuators,
+                part(nv..problem.a.ncols()),
+            ]);
+        }
+        // Mechanical power of each muscle: tension x shortening speed.
+        let muscle_power: Vec<f64> = self
+            .controls
+            .iter()
+            .zip(&forces)
+            .filter_map(|(c, f)| match c {
+                Control::Muscle(m) => Some(-f * mf.speed[*m]),
+                Control::Actuator(_) => None,
+            })
+            .collect();
         let mut force_row = forces.clone();
         force_row.extend(passive_values);
         if let Some(l) = &self.loads {
@@ -669,6 +727,8 @@ impl SoProblem {
             relative_residual,
             friction_violation,
             contacts,
+            by_source,
+            muscle_power,
             q: data.q.clone(),
             u: data.u.clone(),
             udot: data.udot.clone(),
@@ -773,7 +833,14 @@ pub fn run(
     }
     if sweep {
         let precision = opts.precision.unwrap_or(setup.output_precision);
-        for kind in ["activation", "force", "ContactForces", "ContactBodyForces"] {
+        for kind in [
+            "activation",
+            "force",
+            "ContactForces",
+            "ContactBodyForces",
+            "GeneralizedForcesBySource",
+            "MusclePower",
+        ] {
             let files: Vec<std::path::PathBuf> = prefixes
                 .iter()
                 .map(|p| dir.join(format!("{p}{kind}.sto")))
@@ -977,6 +1044,25 @@ fn run_once(
         files.extend([cpath, bpath, lpath, xpath]);
         contact_w = Some((cw, bw, lw));
     }
+    let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
+    let mut src_w = StoWriter::create(
+        &src_path,
+        "Generalized Forces By Source",
+        "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
+        &problem.by_source_labels(),
+        precision,
+        false,
+    )?;
+    let power_path = dir.join(format!("{prefix}MusclePower.sto"));
+    let mut power_w = StoWriter::create(
+        &power_path,
+        "Muscle Power",
+        "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
+        &problem.muscle_labels(),
+        precision,
+        false,
+    )?;
+    files.extend([src_path, power_path]);
     let mut jr_w = Vec::new();
     for (p, specs) in reactions {
         let path = dir.join(format!("{p}ReactionLoads.sto"));
@@ -1052,6 +1138,8 @@ fn run_once(
                 w.write_row(r.time, row)?;
             }
             log.reactions(r.time, &jr_rows)?;
+            src_w.write_row(r.time, &r.by_source)?;
+            power_w.write_row(r.time, &r.muscle_power)?;
             if !r.solution.status.is_ok() {
                 failures.push(format!(
                     "t={}: {:?}, equation residual {:.3e}",
@@ -1094,6 +1182,8 @@ fn run_once(
     force_w.finish()?;
     diag_w.finish()?;
     log.finish()?;
+    src_w.finish()?;
+    power_w.finish()?;
     for w in jr_w {
         w.finish()?;
     }
