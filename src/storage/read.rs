@@ -207,21 +207,15 @@ fn check_time(path: &Path, st: &Storage, line: usize) -> Result<()> {
     Ok(())
 }
 
-fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> Result<Storage> {
-    let end_line = body.first().map(|l| l.0 - 1).unwrap_or(0);
-    if h.n_rows < 1 && h.n_columns < 1 {
-        return Err(Error::input(
-            Location::file(path),
-            "header gives neither nRows nor nColumns (a legacy storage file needs them)",
-        ));
-    }
-    let mut it = body
-        .iter()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .map(|&(n, l)| (n, l));
-    let (label_line, label_text) = it
-        .next()
-        .ok_or_else(|| Error::input(loc(path, end_line), "no column labels after 'endheader'"))?;
+/// The label line of a legacy file checked against the header, as an empty
+/// table (labels, units, name, metadata), and the number of rows to read.
+fn legacy_table(
+    path: &Path,
+    h: Header,
+    label_line: usize,
+    label_text: &str,
+    is_mot: bool,
+) -> Result<(Storage, usize)> {
     let mut labels: Vec<String> = label_text
         .split([' ', '\t', '\r'])
         .filter(|t| !t.is_empty())
@@ -248,7 +242,6 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
         ));
     }
     labels.remove(0);
-    let nc = labels.len();
     let in_degrees = if h.version < 1 && is_mot {
         true // §1.3: version-0 .mot files are always in degrees
     } else {
@@ -260,7 +253,12 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
             })
             .unwrap_or(false)
     };
-    let mut st = Storage {
+    let limit = if h.n_rows > 0 {
+        h.n_rows as usize
+    } else {
+        usize::MAX
+    };
+    let st = Storage {
         name: h.name.unwrap_or_default(),
         labels,
         time: Vec::new(),
@@ -268,11 +266,38 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
         in_degrees,
         metadata: h.metadata,
     };
-    let limit = if h.n_rows > 0 {
-        h.n_rows as usize
-    } else {
-        usize::MAX
-    };
+    Ok((st, limit))
+}
+
+fn missing_legacy_counts(path: &Path, h: &Header) -> Result<()> {
+    if h.n_rows < 1 && h.n_columns < 1 {
+        return Err(Error::input(
+            Location::file(path),
+            "header gives neither nRows nor nColumns (a legacy storage file needs them)",
+        ));
+    }
+    Ok(())
+}
+
+fn too_few_rows(path: &Path, line: usize, n_rows: usize, got: usize) -> Error {
+    Error::input(
+        loc(path, line),
+        format!("header says nRows={n_rows} but the file ends after {got} data rows"),
+    )
+}
+
+fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> Result<Storage> {
+    let end_line = body.first().map(|l| l.0 - 1).unwrap_or(0);
+    missing_legacy_counts(path, &h)?;
+    let mut it = body
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|&(n, l)| (n, l));
+    let (label_line, label_text) = it
+        .next()
+        .ok_or_else(|| Error::input(loc(path, end_line), "no column labels after 'endheader'"))?;
+    let (mut st, limit) = legacy_table(path, h, label_line, label_text, is_mot)?;
+    let nc = st.labels.len();
     let mut last_line = label_line;
     for (no, text) in it {
         if st.time.len() >= limit {
@@ -282,26 +307,26 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
         let toks: Vec<&str> = text.split_whitespace().collect();
         push_row(path, &mut st, no, &toks, nc)?;
     }
-    if h.n_rows > 0 && st.time.len() < limit {
-        return Err(Error::input(
-            loc(path, last_line),
-            format!(
-                "header says nRows={} but the file ends after {} data rows",
-                h.n_rows,
-                st.time.len()
-            ),
-        ));
+    if limit != usize::MAX && st.time.len() < limit {
+        return Err(too_few_rows(path, last_line, limit, st.time.len()));
     }
     Ok(st)
 }
 
-/// Parse `toks` = time then `nc` values into a new row of `st`.
-fn push_row(path: &Path, st: &mut Storage, no: usize, toks: &[&str], nc: usize) -> Result<()> {
+/// Parse `toks` = time then `labels.len()` values into `row`; returns the time.
+fn parse_row(
+    path: &Path,
+    labels: &[String],
+    no: usize,
+    toks: &[&str],
+    row: &mut Vec<f64>,
+) -> Result<f64> {
+    let nc = labels.len();
     if toks.len() < nc + 1 {
         let missing = if toks.is_empty() {
             "time".to_string()
         } else {
-            st.labels[toks.len() - 1].clone()
+            labels[toks.len() - 1].clone()
         };
         return Err(Error::input(
             Location::file(path)
@@ -327,10 +352,18 @@ fn push_row(path: &Path, st: &mut Storage, no: usize, toks: &[&str], nc: usize) 
         ));
     }
     let t = value(path, no, "time", toks[0])?;
-    let mut row = Vec::with_capacity(nc);
+    row.clear();
     for (j, tok) in toks[1..].iter().enumerate() {
-        row.push(value(path, no, &st.labels[j], tok)?);
+        row.push(value(path, no, &labels[j], tok)?);
     }
+    Ok(t)
+}
+
+/// Parse `toks` = time then `nc` values into a new row of `st`.
+fn push_row(path: &Path, st: &mut Storage, no: usize, toks: &[&str], nc: usize) -> Result<()> {
+    debug_assert_eq!(nc, st.labels.len());
+    let mut row = Vec::with_capacity(nc);
+    let t = parse_row(path, &st.labels, no, toks, &mut row)?;
     st.time.push(t);
     st.rows.push(row);
     check_time(path, st, no)
@@ -441,4 +474,176 @@ fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage>
         check_time(path, &st, no)?;
     }
     Ok(st)
+}
+
+/// Row-by-row reader of an OpenSim table: the header and labels are parsed
+/// (and checked) as [`read`] does, then one data row at a time, so a long
+/// legacy `.sto`/`.mot` file is never held in memory. Files in the
+/// `TimeSeriesTable` format (version ≥ 2) are read whole by [`read`] and then
+/// handed out row by row.
+pub struct RowReader {
+    path: std::path::PathBuf,
+    /// Labels, units, name and metadata of the table; no rows.
+    pub table: Storage,
+    source: RowSource,
+    limit: usize,
+    count: usize,
+    last_time: f64,
+    last_line: usize,
+}
+
+enum RowSource {
+    Legacy {
+        lines: std::io::Lines<std::io::BufReader<std::fs::File>>,
+        line_no: usize,
+    },
+    Whole(Storage),
+}
+
+/// Open `path` for [`RowReader::next_row`].
+pub fn open_rows(path: &Path) -> Result<RowReader> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = std::io::BufReader::new(file).lines();
+    let mut header: Vec<String> = Vec::new();
+    let utf8 = |e: std::io::Error| {
+        if e.kind() == std::io::ErrorKind::InvalidData {
+            Error::input(Location::file(path), "file is not valid UTF-8 text")
+        } else {
+            Error::io(path, e)
+        }
+    };
+    let strip = |mut l: String| {
+        if l.ends_with('\r') {
+            l.pop();
+        }
+        l
+    };
+    // Header lines up to `endheader` (parse_header reports a missing one).
+    loop {
+        let Some(line) = lines.next() else { break };
+        let line = strip(line.map_err(utf8)?);
+        let t = line.trim_matches(|c| c == ' ' || c == '\t');
+        let key = &t[..t.find([' ', '\t', '=']).unwrap_or(t.len())];
+        header.push(line.clone());
+        if key == "endheader" {
+            break;
+        }
+    }
+    let numbered: Vec<(usize, &str)> = header
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.as_str()))
+        .collect();
+    let h = parse_header(path, &numbered)?;
+    if h.version > 1 {
+        let st = read(path)?;
+        let table = Storage {
+            time: Vec::new(),
+            rows: Vec::new(),
+            ..st.clone()
+        };
+        return Ok(RowReader {
+            path: path.to_path_buf(),
+            table,
+            source: RowSource::Whole(st),
+            limit: usize::MAX,
+            count: 0,
+            last_time: f64::NEG_INFINITY,
+            last_line: 0,
+        });
+    }
+    missing_legacy_counts(path, &h)?;
+    let is_mot = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase().contains(".mot"))
+        .unwrap_or(false);
+    let end_line = header.len();
+    let mut line_no = end_line;
+    let (label_line, label_text) = loop {
+        let Some(line) = lines.next() else {
+            return Err(Error::input(
+                loc(path, end_line),
+                "no column labels after 'endheader'",
+            ));
+        };
+        line_no += 1;
+        let line = strip(line.map_err(utf8)?);
+        if !line.trim().is_empty() {
+            break (line_no, line);
+        }
+    };
+    let (table, limit) = legacy_table(path, h, label_line, &label_text, is_mot)?;
+    Ok(RowReader {
+        path: path.to_path_buf(),
+        table,
+        source: RowSource::Legacy { lines, line_no },
+        limit,
+        count: 0,
+        last_time: f64::NEG_INFINITY,
+        last_line: label_line,
+    })
+}
+
+impl RowReader {
+    /// The next row's values (one per label) into `row`; its time, or None
+    /// after the last row.
+    pub fn next_row(&mut self, row: &mut Vec<f64>) -> Result<Option<f64>> {
+        if self.count >= self.limit {
+            return Ok(None); // OpenSim reads exactly nRows rows
+        }
+        let (t, no) = match &mut self.source {
+            RowSource::Whole(st) => {
+                let Some(&t) = st.time.get(self.count) else {
+                    return Ok(None);
+                };
+                row.clear();
+                row.extend_from_slice(&st.rows[self.count]);
+                self.count += 1;
+                return Ok(Some(t));
+            }
+            RowSource::Legacy { lines, line_no } => loop {
+                let Some(line) = lines.next() else {
+                    if self.limit != usize::MAX {
+                        return Err(too_few_rows(
+                            &self.path,
+                            self.last_line,
+                            self.limit,
+                            self.count,
+                        ));
+                    }
+                    return Ok(None);
+                };
+                *line_no += 1;
+                let line = line.map_err(|e| {
+                    if e.kind() == std::io::ErrorKind::InvalidData {
+                        Error::input(loc(&self.path, *line_no), "file is not valid UTF-8 text")
+                    } else {
+                        Error::io(&self.path, e)
+                    }
+                })?;
+                if line.trim().is_empty() {
+                    continue;
+                }
+                let toks: Vec<&str> = line.split_whitespace().collect();
+                let t = parse_row(&self.path, &self.table.labels, *line_no, &toks, row)?;
+                break (t, *line_no);
+            },
+        };
+        if self.count >= 1 && t <= self.last_time {
+            return Err(Error::input(
+                Location::file(&self.path)
+                    .with_line(no)
+                    .with_element("column 'time'"),
+                format!(
+                    "time must increase from row to row, but {} follows {}",
+                    t, self.last_time
+                ),
+            ));
+        }
+        self.count += 1;
+        self.last_time = t;
+        self.last_line = no;
+        Ok(Some(t))
+    }
 }

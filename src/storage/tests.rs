@@ -294,3 +294,86 @@ fn input_errors_name_file_line_and_column() {
     );
     assert!(e.contains("nColumns=4") && e.contains("line 5"), "{e}");
 }
+
+/// The row reader yields exactly what `read` loads, for every table of the
+/// validation cases, and reports the same errors on bad rows.
+#[test]
+fn row_reader_equals_read() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/validation");
+    if !root.is_dir() {
+        println!("SKIP: {} absent", root.display());
+        return;
+    }
+    let mut n = 0;
+    for case in ["arm26", "leg6dof9musc_stance", "gait10dof18musc_walk"] {
+        for dir in [
+            root.join(case).join("inputs"),
+            root.join(case).join("results"),
+        ] {
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for e in entries.flatten() {
+                let p = e.path();
+                let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
+                if ext != "sto" && ext != "mot" {
+                    continue;
+                }
+                let whole = crate::storage::read(&p).unwrap();
+                let mut r = crate::storage::open_rows(&p).unwrap();
+                assert_eq!(r.table.labels, whole.labels, "{}", p.display());
+                assert_eq!(r.table.in_degrees, whole.in_degrees);
+                let mut row = Vec::new();
+                let mut i = 0;
+                while let Some(t) = r.next_row(&mut row).unwrap() {
+                    assert_eq!(t, whole.time[i]);
+                    assert_eq!(row, whole.rows[i]);
+                    i += 1;
+                }
+                assert_eq!(i, whole.len(), "{}", p.display());
+                n += 1;
+            }
+        }
+    }
+    assert!(n >= 6, "{n} files");
+    println!("row reader equals read on {n} files");
+}
+
+#[test]
+fn row_reader_errors_like_read() {
+    let dir = std::env::temp_dir().join(format!("statopt-rowreader-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text) in [
+        (
+            "short.sto",
+            "x\nversion=1\nnRows=3\nnColumns=2\nendheader\ntime a\n0 1\n1 2\n",
+        ),
+        (
+            "back.sto",
+            "x\nversion=1\nnRows=3\nnColumns=2\nendheader\ntime a\n0 1\n1 2\n0.5 3\n",
+        ),
+        (
+            "bad.sto",
+            "x\nversion=1\nnRows=2\nnColumns=2\nendheader\ntime a\n0 1\n1 zz\n",
+        ),
+        (
+            "cols.sto",
+            "x\nversion=1\nnRows=2\nnColumns=2\nendheader\ntime a\n0 1 3\n1 2\n",
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let want = crate::storage::read(&p).unwrap_err().to_string();
+        let mut r = crate::storage::open_rows(&p).unwrap();
+        let mut row = Vec::new();
+        let got = loop {
+            match r.next_row(&mut row) {
+                Ok(Some(_)) => continue,
+                Ok(None) => panic!("{name}: no error"),
+                Err(e) => break e.to_string(),
+            }
+        };
+        assert_eq!(got, want, "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
