@@ -9,7 +9,7 @@ use crate::functions::GcvSpline;
 use crate::storage::Storage;
 
 /// OpenSim's `Storage::MAX_RESAMPLE_SIZE`.
-const MAX_RESAMPLE_SIZE: f64 = 100_000.0;
+pub const MAX_RESAMPLE_SIZE: f64 = 100_000.0;
 
 /// `Signal::Pad` on one signal: prepend and append `pad` points reflected
 /// about each end point and negated, preserving value and slope there.
@@ -63,7 +63,7 @@ pub fn pad(table: &mut Storage, n: usize) {
     table.time = time;
 }
 
-fn min_time_step(time: &[f64]) -> f64 {
+pub fn min_time_step(time: &[f64]) -> f64 {
     time.windows(2)
         .map(|w| w[1] - w[0])
         .fold(f64::INFINITY, f64::min)
@@ -103,14 +103,10 @@ pub fn resample(table: &mut Storage, dt: f64, degree: usize) -> Result<f64> {
     Ok(dt)
 }
 
-/// `Signal::LowpassIIR`: third-order Butterworth (bilinear transform with
-/// pre-warping), applied forward then backward; the first three outputs of
-/// each pass equal its inputs.
-pub fn lowpass_signal(dt: f64, cutoff: f64, sig: &[f64]) -> Vec<f64> {
-    let n = sig.len();
-    if n < 4 || dt == 0.0 {
-        return sig.to_vec();
-    }
+/// Coefficients (a = numerator, b = denominator, b[0] = 1) of
+/// `Signal::LowpassIIR`'s third-order Butterworth filter (bilinear transform
+/// with pre-warping) for sampling step `dt` and cut-off `cutoff`.
+pub fn butterworth(dt: f64, cutoff: f64) -> ([f64; 4], [f64; 4]) {
     let fs = 1.0 / dt;
     let fc = if cutoff >= 0.5 * fs {
         0.49 * fs
@@ -134,20 +130,72 @@ pub fn lowpass_signal(dt: f64, cutoff: f64, sig: &[f64]) -> Vec<f64> {
         (3.0 * wa3 - 2.0 * wa2 - 2.0 * wa + 3.0) / denom,
         (wa - 1.0) * (wa2 - wa + 1.0) / denom,
     ];
-    let pass = |x: &[f64]| -> Vec<f64> {
-        let mut y = vec![0.0; n];
-        y[..4].copy_from_slice(&x[..4]);
-        for i in 3..n {
-            y[i] = a[0] * x[i] + a[1] * x[i - 1] + a[2] * x[i - 2] + a[3] * x[i - 3]
-                - b[1] * y[i - 1]
-                - b[2] * y[i - 2]
-                - b[3] * y[i - 3];
+    (a, b)
+}
+
+/// Largest pole radius of the filter `butterworth` returns: the factor by
+/// which the influence of a sample (or of the initial conditions) on later
+/// outputs shrinks per step. The denominator factors as
+/// ((1+wa) z − (1−wa))·((wa²+wa+1) z² + 2(wa²−1) z + (wa²−wa+1)); the
+/// quadratic's roots are complex (discriminant −12 wa² < 0) with radius
+/// √((wa²−wa+1)/(wa²+wa+1)). Computed from the coefficients b: the real pole
+/// is found by Newton's method on z³ + b₁z² + b₂z + b₃ and the pair's radius
+/// from the product of the roots, −b₃ / real pole.
+pub fn pole_radius(b: &[f64; 4]) -> f64 {
+    let p = |z: f64| ((z + b[1]) * z + b[2]) * z + b[3];
+    let dp = |z: f64| (3.0 * z + 2.0 * b[1]) * z + b[2];
+    // The real root lies in (-1, 1) for a stable filter; start at 1.
+    let mut z = 1.0;
+    for _ in 0..200 {
+        let d = dp(z);
+        if d == 0.0 {
+            break;
         }
-        y
+        let step = p(z) / d;
+        z -= step;
+        if step.abs() < 1e-17 {
+            break;
+        }
+    }
+    let pair = if z != 0.0 {
+        (-b[3] / z).abs().sqrt()
+    } else {
+        0.0
     };
-    let mut fwd = pass(sig);
+    let r = z.abs().max(pair);
+    if r.is_finite() {
+        r
+    } else {
+        1.0
+    }
+}
+
+/// One causal pass of the filter over `x`: the first three outputs equal the
+/// inputs (OpenSim's initial conditions), then the difference equation.
+pub fn iir_pass(a: &[f64; 4], b: &[f64; 4], x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut y = x.to_vec();
+    for i in 3..n {
+        y[i] = a[0] * x[i] + a[1] * x[i - 1] + a[2] * x[i - 2] + a[3] * x[i - 3]
+            - b[1] * y[i - 1]
+            - b[2] * y[i - 2]
+            - b[3] * y[i - 3];
+    }
+    y
+}
+
+/// `Signal::LowpassIIR`: third-order Butterworth (bilinear transform with
+/// pre-warping), applied forward then backward; the first three outputs of
+/// each pass equal its inputs.
+pub fn lowpass_signal(dt: f64, cutoff: f64, sig: &[f64]) -> Vec<f64> {
+    let n = sig.len();
+    if n < 4 || dt == 0.0 {
+        return sig.to_vec();
+    }
+    let (a, b) = butterworth(dt, cutoff);
+    let mut fwd = iir_pass(&a, &b, sig);
     fwd.reverse();
-    let mut back = pass(&fwd);
+    let mut back = iir_pass(&a, &b, &fwd);
     back.reverse();
     back
 }
@@ -251,6 +299,28 @@ mod tests {
         let f = lowpass_signal(dt, 6.0, &fc);
         let peak = f[800..1200].iter().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!((peak - 0.5).abs() < 0.01, "{peak}");
+    }
+
+    #[test]
+    fn pole_radius_closed_form() {
+        for (dt, fc) in [(0.01, 6.0), (0.001, 6.0), (0.0001, 6.0), (0.01, 40.0)] {
+            let (_, b) = butterworth(dt, fc);
+            let fs: f64 = 1.0 / dt;
+            let fc = if fc >= 0.5 * fs { 0.49 * fs } else { fc };
+            let wa = (std::f64::consts::PI * fc * dt).tan();
+            let real = ((1.0 - wa) / (1.0 + wa)).abs();
+            let pair = ((wa * wa - wa + 1.0) / (wa * wa + wa + 1.0)).sqrt();
+            let want = real.max(pair);
+            let got = pole_radius(&b);
+            assert!((got - want).abs() < 1e-9, "dt {dt}: {got} vs {want}");
+            // the impulse response decays at that rate
+            let mut x = vec![0.0; 4000];
+            x[3] = 1.0;
+            let (a, b) = butterworth(dt, fc);
+            let y = iir_pass(&a, &b, &x);
+            let k = 1500;
+            assert!(y[3 + k].abs() <= 10.0 * got.powi(k as i32) + 1e-300);
+        }
     }
 
     #[test]

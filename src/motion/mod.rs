@@ -2,3 +2,4 @@
 pub mod coordinates;
 pub mod filter;
 pub mod states;
+pub mod stream;
