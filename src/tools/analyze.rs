@@ -5,6 +5,7 @@
 use crate::error::{Error, Location, Result};
 use crate::motion::coordinates::find_index;
 use crate::motion::states::States;
+use crate::motion::stream::StateStream;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
 use crate::tools::loading::load_coordinates;
 use crate::tools::{joint_reaction, muscle_analysis, static_optimization, RunOptions, RunSummary};
@@ -20,8 +21,8 @@ pub fn frame_rows(time: &[f64], initial: f64, final_: f64, step_interval: usize)
         .collect()
 }
 
-/// Read the setup's motion into states.
-pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
+/// The setup's coordinates file, refusing states and speeds files.
+fn coordinates_file(setup: &AnalyzeSetup) -> Result<&std::path::Path> {
     if let Some(sf) = &setup.states_file {
         return Err(Error::input(
             Location::file(&setup.setup_file).with_element("<states_file>"),
@@ -40,13 +41,18 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
             ),
         ));
     }
-    let file = setup
+    setup
         .coordinates_file
-        .as_ref()
-        .ok_or_else(|| Error::input(Location::file(&setup.setup_file), "no <coordinates_file>"))?;
-    let table = load_coordinates(file, setup.lowpass_cutoff)?;
-    let states = States::from_coordinates(model, &table, file)?;
-    let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
+        .as_deref()
+        .ok_or_else(|| Error::input(Location::file(&setup.setup_file), "no <coordinates_file>"))
+}
+
+fn check_time_range(
+    setup: &AnalyzeSetup,
+    file: &std::path::Path,
+    first: f64,
+    last: f64,
+) -> Result<()> {
     if setup.initial_time > last || setup.final_time < first {
         return Err(Error::input(
             Location::file(&setup.setup_file).with_element("<initial_time>/<final_time>"),
@@ -58,7 +64,41 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
             ),
         ));
     }
+    Ok(())
+}
+
+/// Read the setup's motion into states.
+pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
+    let file = coordinates_file(setup)?;
+    let table = load_coordinates(file, setup.lowpass_cutoff)?;
+    let states = States::from_coordinates(model, &table, file)?;
+    let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
+    check_time_range(setup, file, first, last)?;
     Ok(states)
+}
+
+/// The setup's motion as a [`StateStream`] over the frames from
+/// `initial_time` to `final_time` (the same states as [`load_states`] and
+/// `States::speed_derivatives`, block by block; see `motion::stream`).
+pub fn open_state_stream<'m>(
+    setup: &AnalyzeSetup,
+    model: &'m crate::model::Model,
+) -> Result<StateStream<'m>> {
+    let file = coordinates_file(setup)?;
+    let stream = StateStream::open(
+        model,
+        file,
+        setup.lowpass_cutoff,
+        setup.initial_time,
+        setup.final_time,
+    )?;
+    check_time_range(setup, file, stream.first_time, stream.last_time)?;
+    Ok(stream)
+}
+
+/// Whether row `i` is a frame: `frame_rows`' rule for rows `i0..=i1`.
+pub fn is_frame(i: usize, i0: usize, i1: usize, step_interval: usize) -> bool {
+    i >= i0 && i <= i1 && (i == i0 || i == i1 || i % step_interval.max(1) == 0)
 }
 
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {

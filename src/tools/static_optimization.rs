@@ -22,7 +22,7 @@ use crate::forces::actuators::{Actuator, ActuatorKind};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
 use crate::model::Model;
-use crate::motion::states::{assemble, States};
+use crate::motion::states::assemble;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::optimize::{
     self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, StaticContact,
@@ -31,7 +31,7 @@ use crate::output::mcap_log;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
 use crate::storage::StoWriter;
-use crate::tools::analyze::{frame_rows, load_states, results_dir};
+use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
 use crate::tools::joint_reaction::{
     column_labels as jr_column_labels, resolve_reactions, static_optimization_reactions,
     JointReactionSetup, ReactionSpec, DESCRIPTION as JR_DESCRIPTION,
@@ -764,25 +764,23 @@ pub fn run(
 ) -> Result<RunSummary> {
     let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
     let (mut problem, mut warnings) = SoProblem::build(setup, &so)?;
-    let states: States = load_states(setup, &problem.model)?;
-    if !states.missing.is_empty() {
+    // The states are streamed block by block (motion::stream): memory stays
+    // flat however long the trial. Opened here for the checks, the missing
+    // coordinates and the frame count; each run below streams them again.
+    let stream = open_state_stream(setup, &problem.model)?;
+    if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            states.missing
+            stream.missing
         ));
     }
-    let coordinates_file = setup.coordinates_file.clone().unwrap_or_default();
-    let udot = states.speed_derivatives(&coordinates_file)?;
-    let rows = frame_rows(
-        &states.time,
-        setup.initial_time,
-        setup.final_time,
-        so.common.step_interval,
-    );
+    let step_interval = so.common.step_interval;
+    let frames = frame_count(stream.first_row, stream.last_row, step_interval);
+    drop(stream);
     let dir = results_dir(setup, opts)?;
     let base = format!("{}_{}_", setup.name, so.common.name);
     let mut summary = RunSummary {
-        frames: rows.len(),
+        frames,
         warnings: Vec::new(),
         ..Default::default()
     };
@@ -817,9 +815,7 @@ pub fn run(
             .iter()
             .map(|(n, s)| (jr_prefix(n), s.as_slice()))
             .collect();
-        let s = run_once(
-            &problem, setup, &states, &udot, &rows, &dir, &prefix, &jr, opts,
-        )?;
+        let s = run_once(&problem, setup, step_interval, &dir, &prefix, &jr, opts)?;
         summary.files.extend(s.files);
         summary.loop_seconds += s.loop_seconds;
         summary.warnings.extend(s.warnings.into_iter().map(|w| {
@@ -946,12 +942,20 @@ fn external_loads_xml(problem: &SoProblem, datafile: &str) -> String {
 }
 
 #[allow(clippy::too_many_arguments)]
+/// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
+fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
+    if i1 < i0 {
+        return 0;
+    }
+    (i0..=i1)
+        .filter(|&i| is_frame(i, i0, i1, step_interval))
+        .count()
+}
+
 fn run_once(
     problem: &SoProblem,
     setup: &AnalyzeSetup,
-    states: &States,
-    udot: &[Vec<f64>],
-    rows: &[usize],
+    step_interval: usize,
     dir: &std::path::Path,
     prefix: &str,
     reactions: &[(String, &[ReactionSpec])],
@@ -1079,7 +1083,10 @@ fn run_once(
     let log_path = dir.join(format!("{prefix}log.mcap"));
     let mut log = FrameLog::create(problem, &log_path, reactions.first().map(|(_, s)| *s))?;
     files.push(log_path);
-    let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
+    let mut stream = open_state_stream(setup, &problem.model)?;
+    let (i0, i1) = (stream.first_row, stream.last_row);
+    let nframes = frame_count(i0, i1, step_interval);
+    let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
     let mut failures: Vec<String> = Vec::new();
     let reserve_vars: Vec<usize> = problem
         .labels
@@ -1091,90 +1098,96 @@ fn run_once(
     let mut reserve_peak = (0.0f64, String::new());
     let nv = problem.controls.len();
     let start = Instant::now();
-    // Frames in chunks: solved in parallel, written in order, so the output
-    // holds every finished frame and memory stays bounded by the chunk.
-    for chunk in rows.chunks(256) {
-        let results: Vec<Result<(FrameResult, Vec<Vec<f64>>)>> = chunk
-            .par_iter()
-            .map_init(
-                || {
-                    (
-                        Data::new(&problem.model),
-                        MuscleFrame::new(&problem.muscles, &problem.model),
-                    )
-                },
-                |(data, mf), &i| {
-                    let r = problem.solve_frame(
-                        states.time[i],
-                        &states.q[i],
-                        &states.u[i],
-                        &udot[i],
-                        data,
-                        mf,
-                    );
-                    let mut rows = Vec::with_capacity(reactions.len());
-                    for (_, specs) in reactions {
-                        let mut out = vec![0.0; 9 * specs.len()];
-                        static_optimization_reactions(
-                            problem,
-                            states.time[i],
-                            &states.q[i],
-                            &states.u[i],
-                            &r,
+    // States block by block; frames in chunks: solved in parallel, written
+    // in order, so the output holds every finished frame and memory stays
+    // bounded by the block.
+    while let Some(block) = stream.next_block()? {
+        let sel: Vec<usize> = (0..block.time.len())
+            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
+            .collect();
+        for chunk in sel.chunks(256) {
+            let results: Vec<Result<(FrameResult, Vec<Vec<f64>>)>> = chunk
+                .par_iter()
+                .map_init(
+                    || {
+                        (
+                            Data::new(&problem.model),
+                            MuscleFrame::new(&problem.muscles, &problem.model),
+                        )
+                    },
+                    |(data, mf), &i| {
+                        let r = problem.solve_frame(
+                            block.time[i],
+                            &block.q[i],
+                            &block.u[i],
+                            &block.udot[i],
                             data,
                             mf,
-                            specs,
-                            &mut out,
-                        )?;
-                        rows.push(out);
-                    }
-                    Ok((r, rows))
-                },
-            )
-            .collect();
-        for res in results {
-            let (r, jr_rows) = res?;
-            for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
-                w.write_row(r.time, row)?;
-            }
-            log.reactions(r.time, &jr_rows)?;
-            src_w.write_row(r.time, &r.by_source)?;
-            power_w.write_row(r.time, &r.muscle_power)?;
-            if !r.solution.status.is_ok() {
-                failures.push(format!(
-                    "t={}: {:?}, equation residual {:.3e}",
-                    r.time, r.solution.status, r.solution.eq_residual
-                ));
-            }
-            for &v in &reserve_vars {
-                if r.forces[v].abs() > reserve_peak.0 {
-                    reserve_peak = (
-                        r.forces[v].abs(),
-                        format!("{} at t={}", problem.labels[v], r.time),
-                    );
+                        );
+                        let mut rows = Vec::with_capacity(reactions.len());
+                        for (_, specs) in reactions {
+                            let mut out = vec![0.0; 9 * specs.len()];
+                            static_optimization_reactions(
+                                problem,
+                                block.time[i],
+                                &block.q[i],
+                                &block.u[i],
+                                &r,
+                                data,
+                                mf,
+                                specs,
+                                &mut out,
+                            )?;
+                            rows.push(out);
+                        }
+                        Ok((r, rows))
+                    },
+                )
+                .collect();
+            for res in results {
+                let (r, jr_rows) = res?;
+                for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
+                    w.write_row(r.time, row)?;
                 }
+                log.reactions(r.time, &jr_rows)?;
+                src_w.write_row(r.time, &r.by_source)?;
+                power_w.write_row(r.time, &r.muscle_power)?;
+                if !r.solution.status.is_ok() {
+                    failures.push(format!(
+                        "t={}: {:?}, equation residual {:.3e}",
+                        r.time, r.solution.status, r.solution.eq_residual
+                    ));
+                }
+                for &v in &reserve_vars {
+                    if r.forces[v].abs() > reserve_peak.0 {
+                        reserve_peak = (
+                            r.forces[v].abs(),
+                            format!("{} at t={}", problem.labels[v], r.time),
+                        );
+                    }
+                }
+                act_w.write_row(r.time, &r.solution.x[..nv])?;
+                force_w.write_row(r.time, &r.force_row)?;
+                diag_w.write_row(
+                    r.time,
+                    &[
+                        status_code(r.solution.status),
+                        r.solution.iterations as f64,
+                        r.solution.objective,
+                        r.solution.eq_residual,
+                        r.relative_residual,
+                        r.friction_violation,
+                        r.solution.solve_time.as_secs_f64() * 1e3,
+                    ],
+                )?;
+                log.frame(problem, &r)?;
+                if let Some((cw, bw, lw)) = contact_w.as_mut() {
+                    cw.write_row(r.time, &r.contacts.contact)?;
+                    bw.write_row(r.time, &r.contacts.bodies)?;
+                    lw.write_row(r.time, &r.contacts.loads)?;
+                }
+                progress.inc(1);
             }
-            act_w.write_row(r.time, &r.solution.x[..nv])?;
-            force_w.write_row(r.time, &r.force_row)?;
-            diag_w.write_row(
-                r.time,
-                &[
-                    status_code(r.solution.status),
-                    r.solution.iterations as f64,
-                    r.solution.objective,
-                    r.solution.eq_residual,
-                    r.relative_residual,
-                    r.friction_violation,
-                    r.solution.solve_time.as_secs_f64() * 1e3,
-                ],
-            )?;
-            log.frame(problem, &r)?;
-            if let Some((cw, bw, lw)) = contact_w.as_mut() {
-                cw.write_row(r.time, &r.contacts.contact)?;
-                bw.write_row(r.time, &r.contacts.bodies)?;
-                lw.write_row(r.time, &r.contacts.loads)?;
-            }
-            progress.inc(1);
         }
     }
     progress.finish_and_clear();
@@ -1197,7 +1210,7 @@ fn run_once(
         warnings.push(format!(
             "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
             failures.len(),
-            rows.len(),
+            nframes,
             failures[0],
             diag_path.display()
         ));
@@ -1216,13 +1229,13 @@ fn run_once(
     if opts.verbose {
         warnings.push(format!(
             "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
-            rows.len(),
+            nframes,
             loop_seconds,
-            rows.len() as f64 / loop_seconds.max(1e-12)
+            nframes as f64 / loop_seconds.max(1e-12)
         ));
     }
     Ok(RunSummary {
-        frames: rows.len(),
+        frames: nframes,
         files,
         warnings,
         loop_seconds,
