@@ -64,6 +64,9 @@ enum Command {
         /// Repeat the motion this many times end to end first (trial length scaling).
         #[arg(long, default_value_t = 1)]
         tile: usize,
+        /// Override the setup's coordinate low-pass cut-off (Hz; -1: no filtering).
+        #[arg(long, allow_hyphen_values = true)]
+        lowpass: Option<f64>,
     },
 }
 
@@ -97,11 +100,13 @@ fn main() -> ExitCode {
             threads,
             repeat,
             tile,
+            lowpass,
         }) => {
             let opts = bench::BenchOptions {
                 threads: threads.clone(),
                 repeat: *repeat,
                 tile: *tile,
+                lowpass: *lowpass,
             };
             match bench::run(setup, &opts) {
                 Ok(rows) => {

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Location, Result};
 use crate::parse::setup::{AnalyzeSetup, Setup};
-use crate::storage::{self, Storage};
+use crate::storage::{self, StoWriter};
 use crate::tools::{analyze, RunOptions};
 
 #[derive(Debug, Clone)]
@@ -16,6 +16,9 @@ pub struct BenchOptions {
     pub threads: Vec<usize>,
     pub repeat: usize,
     pub tile: usize,
+    /// Overrides the setup's `lowpass_cutoff_frequency_for_coordinates`
+    /// (a negative value: no filtering).
+    pub lowpass: Option<f64>,
 }
 
 #[derive(Debug, Clone)]
@@ -36,7 +39,9 @@ pub fn peak_memory_mib() -> Option<f64> {
     Some(kb / 1024.0)
 }
 
-/// The setup's motion repeated `n` times (time shifted), written to `dir`.
+/// The setup's motion repeated `n` times (time shifted), written to `dir`
+/// row by row (the tiled motion is never held in memory, so the peak memory
+/// reported is the run's).
 fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<AnalyzeSetup> {
     let file = setup.coordinates_file.as_ref().ok_or_else(|| {
         Error::input(
@@ -51,23 +56,29 @@ fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<Analyz
     }
     let dt = t.time[len - 1] - t.time[len - 2];
     let period = t.time[len - 1] - t.time[0] + dt;
-    let mut out = Storage {
-        time: Vec::with_capacity(len * n),
-        rows: Vec::with_capacity(len * n),
-        ..t.clone()
-    };
-    for k in 0..n {
-        for i in 0..len {
-            out.time.push(t.time[i] + k as f64 * period);
-            out.rows.push(t.rows[i].clone());
+    let path = dir.join("tiled_motion.sto");
+    let mut description = String::new();
+    for (k, v) in &t.metadata {
+        if k != "header" {
+            description.push_str(&format!("{k}={v}\n"));
         }
     }
-    let path = dir.join("tiled_motion.sto");
-    storage::write(&path, &out, 10)?;
+    if let Some(h) = t.meta("header") {
+        description.push_str(h);
+    }
+    let mut w = StoWriter::create(&path, &t.name, &description, &t.labels, 10, t.in_degrees)?;
+    let mut last = t.time[0];
+    for k in 0..n {
+        for i in 0..len {
+            last = t.time[i] + k as f64 * period;
+            w.write_row(last, &t.rows[i])?;
+        }
+    }
+    w.finish()?;
     let mut s = setup.clone();
     s.coordinates_file = Some(path);
-    s.final_time = *out.time.last().unwrap_or(&setup.final_time);
-    s.initial_time = out.time[0].min(setup.initial_time);
+    s.final_time = last;
+    s.initial_time = t.time[0].min(setup.initial_time);
     Ok(s)
 }
 
@@ -83,11 +94,14 @@ pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<Benc
     };
     let dir: PathBuf = std::env::temp_dir().join(format!("statopt-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let setup = if opts.tile > 1 {
+    let mut setup = if opts.tile > 1 {
         tiled(&setup, opts.tile, &dir)?
     } else {
         setup
     };
+    if let Some(c) = opts.lowpass {
+        setup.lowpass_cutoff = c;
+    }
     let mut rows = Vec::new();
     for &threads in &opts.threads {
         let mut best = BenchRow {
