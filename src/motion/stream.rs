@@ -31,13 +31,13 @@
 //! motion that fits in one window is computed exactly as the in-memory path
 //! computes it, bit for bit.
 //!
-//! The file is read row by row ([`crate::storage::open_rows`]) four times:
-//! once for its length and end times, once for P's smallest step, once to
-//! locate the analysed time range in P, and once to stream the values. Only
-//! the rows within the overlap of the analysed range are kept, plus — for
-//! the reflected padding — the first rows up to the reflection of the first
-//! needed one and the last rows down to the reflection of the last needed one
-//! (a few thousand rows when the analysed range is the data's own range).
+//! The file is read row by row ([`crate::storage::open_rows`]): once for its
+//! length, end rows and a file position every few thousand rows, once for
+//! P's smallest step, once to locate the analysed time range in P, and then
+//! to stream the values — the data rows in order, the reflected padding (rows
+//! in reverse order) a chunk at a time from the recorded positions. Memory is
+//! O(block + overlaps + chunk) rows, whatever the length of the file and
+//! whichever part of it (padding included) is analysed.
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -48,7 +48,7 @@ use crate::model::{Model, MotionType};
 use crate::motion::coordinates::column_for;
 use crate::motion::filter::{butterworth, iir_pass, pole_radius, MAX_RESAMPLE_SIZE};
 use crate::motion::states::assemble;
-use crate::storage::{open_rows, RowReader};
+use crate::storage::{open_rows, RowMark, RowReader};
 
 /// Knots of overlap on each side of a spline window: 0.43¹⁰⁰ ≈ 10⁻³⁷.
 pub const SPLINE_OVERLAP: usize = 100;
@@ -156,19 +156,9 @@ impl<'m> StateStream<'m> {
         let ctx = |e: Error| e.context(format!("filtering {}", file.display()));
 
         // Pass 1: length and end times.
-        let (n, t0, tl) = {
-            let mut r = reader;
-            let mut row = Vec::new();
-            let (mut n, mut t0, mut tl) = (0usize, 0.0, 0.0);
-            while let Some(t) = r.next_row(&mut row)? {
-                if n == 0 {
-                    t0 = t;
-                }
-                tl = t;
-                n += 1;
-            }
-            (n, t0, tl)
-        };
+        drop(reader);
+        let index = index_file(file, &sel)?;
+        let (n, t0, tl) = (index.n, index.first.0, index.last.0);
         let p = if filtering && n >= 1 { n / 2 } else { 0 };
         let m = n + 2 * p;
         let p_time = |k: usize, t: f64, f: &mut dyn FnMut(f64)| {
@@ -329,7 +319,7 @@ impl<'m> StateStream<'m> {
             }
             let js = below.saturating_sub(SPLINE_OVERLAP + 2);
             let je = (upto + SPLINE_OVERLAP + 2).min(m);
-            let src = PSource::new(file, sel.clone(), n, p, js, je);
+            let src = PSource::new(file, sel.clone(), index, p, js, je);
             let g = GSource::Resampled {
                 p: src,
                 knots: VecDeque::new(),
@@ -345,7 +335,7 @@ impl<'m> StateStream<'m> {
             };
             (js, je, g)
         } else {
-            let src = PSource::new(file, sel.clone(), n, p, gs, ge);
+            let src = PSource::new(file, sel.clone(), index, p, gs, ge);
             (gs, ge, GSource::Direct(src))
         };
         let _ = (js, je);
@@ -465,114 +455,158 @@ impl<'m> StateStream<'m> {
     }
 }
 
-/// P's rows `js..je` in order (time, carried columns), read from the file.
-struct PSource {
-    file: PathBuf,
-    sel: Vec<usize>,
+/// Raw rows per chunk of the reflected padding, and between recorded file
+/// positions.
+const CHUNK: usize = if cfg!(test) { 97 } else { 4096 };
+
+/// What the first read of the file records: its length, first and last rows
+/// (carried columns) and a file position every [`CHUNK`] rows.
+struct RawIndex {
     n: usize,
+    first: (f64, Vec<f64>),
+    last: (f64, Vec<f64>),
+    marks: Vec<(usize, RowMark)>,
+}
+
+fn index_file(file: &Path, sel: &[usize]) -> Result<RawIndex> {
+    let mut r = open_rows(file)?;
+    let mut row = Vec::new();
+    let mut idx = RawIndex {
+        n: 0,
+        first: (0.0, Vec::new()),
+        last: (0.0, Vec::new()),
+        marks: Vec::new(),
+    };
+    loop {
+        if idx.n % CHUNK == 0 {
+            if let Some(m) = r.mark() {
+                idx.marks.push((idx.n, m));
+            }
+        }
+        let Some(t) = r.next_row(&mut row)? else {
+            break;
+        };
+        let picked: Vec<f64> = sel.iter().map(|&j| row[j]).collect();
+        if idx.n == 0 {
+            idx.first = (t, picked.clone());
+        }
+        idx.last = (t, picked);
+        idx.n += 1;
+    }
+    Ok(idx)
+}
+
+/// P's rows `js..je` in order (time, carried columns), read from the file:
+/// the data rows sequentially, the reflected padding a chunk of rows at a
+/// time from recorded file positions (so neither is held whole).
+struct PSource {
+    sel: Vec<usize>,
+    idx: RawIndex,
     p: usize,
     j: usize,
     je: usize,
-    /// Raw rows 0..=p-js (reflected into the leading padding), when js < p.
-    front: Vec<(f64, Vec<f64>)>,
-    front_loaded: bool,
-    reader: Option<RowReader>,
-    next_raw: usize,
-    /// The last raw rows read (reflected into the trailing padding).
-    ring: VecDeque<(f64, Vec<f64>)>,
-    ring_cap: usize,
+    /// Reader for the data rows, in order.
+    seq: Option<RowReader>,
+    /// Reader for the chunks of the padding, and the chunk loaded: raw rows
+    /// `chunk_lo..chunk_lo + chunk.len()`.
+    rand: Option<RowReader>,
+    chunk: Vec<(f64, Vec<f64>)>,
+    chunk_lo: usize,
+    file: PathBuf,
     buf: Vec<f64>,
 }
 
 impl PSource {
-    fn new(file: &Path, sel: Vec<usize>, n: usize, p: usize, js: usize, je: usize) -> PSource {
-        let ring_cap = je.saturating_sub(p + n) + 2;
+    fn new(file: &Path, sel: Vec<usize>, idx: RawIndex, p: usize, js: usize, je: usize) -> PSource {
         PSource {
-            file: file.to_path_buf(),
             sel,
-            n,
+            idx,
             p,
             j: js,
             je,
-            front: Vec::new(),
-            front_loaded: false,
-            reader: None,
-            next_raw: 0,
-            ring: VecDeque::new(),
-            ring_cap,
+            seq: None,
+            rand: None,
+            chunk: Vec::new(),
+            chunk_lo: 0,
+            file: file.to_path_buf(),
             buf: Vec::new(),
         }
     }
 
-    fn pick(&self) -> Vec<f64> {
-        self.sel.iter().map(|&j| self.buf[j]).collect()
+    fn read_one(
+        r: &mut RowReader,
+        sel: &[usize],
+        buf: &mut Vec<f64>,
+        file: &Path,
+    ) -> Result<(f64, Vec<f64>)> {
+        let Some(t) = r.next_row(buf)? else {
+            return Err(Error::msg(format!(
+                "{}: the file changed while it was read",
+                file.display()
+            )));
+        };
+        Ok((t, sel.iter().map(|&j| buf[j]).collect()))
     }
 
-    /// Read raw rows until row `k` is the last read.
-    fn read_through(&mut self, k: usize) -> Result<()> {
-        if self.reader.is_none() || self.next_raw > k + 1 {
-            self.reader = Some(open_rows(&self.file)?);
-            self.next_raw = 0;
-            self.ring.clear();
-        }
-        while self.next_raw <= k {
-            let r = self.reader.as_mut().expect("reader opened above");
-            let Some(t) = r.next_row(&mut self.buf)? else {
-                return Err(Error::msg(format!(
-                    "{}: the file changed while it was read (row {k} missing)",
-                    self.file.display()
-                )));
+    /// Raw row `k` (for the padding), through the chunk cache.
+    fn raw(&mut self, k: usize, descending: bool) -> Result<&(f64, Vec<f64>)> {
+        if k < self.chunk_lo || k >= self.chunk_lo + self.chunk.len() {
+            // the padding walks the rows downwards: load the chunk ending at k
+            let lo = if descending {
+                (k + 1).saturating_sub(CHUNK)
+            } else {
+                k
             };
-            let row = (t, self.pick());
-            self.ring.push_back(row);
-            if self.ring.len() > self.ring_cap {
-                self.ring.pop_front();
+            let hi = if descending {
+                k + 1
+            } else {
+                (k + CHUNK).min(self.idx.n)
+            };
+            if self.rand.is_none() {
+                self.rand = Some(open_rows(&self.file)?);
             }
-            self.next_raw += 1;
+            let r = self.rand.as_mut().expect("opened above");
+            r.seek_row(lo, &self.idx.marks)?;
+            self.chunk.clear();
+            for _ in lo..hi {
+                let row = Self::read_one(r, &self.sel, &mut self.buf, &self.file)?;
+                self.chunk.push(row);
+            }
+            self.chunk_lo = lo;
         }
-        Ok(())
-    }
-
-    fn ring_row(&self, k: usize) -> &(f64, Vec<f64>) {
-        let first = self.next_raw - self.ring.len();
-        &self.ring[k - first]
+        Ok(&self.chunk[k - self.chunk_lo])
     }
 
     fn next(&mut self) -> Result<Option<(f64, Vec<f64>)>> {
         if self.j >= self.je {
             return Ok(None);
         }
-        let (p, n, j) = (self.p, self.n, self.j);
+        let (p, n, j) = (self.p, self.idx.n, self.j);
         let out = if j < p {
-            if !self.front_loaded {
-                let mut r = open_rows(&self.file)?;
-                let upto = p - j;
-                while self.front.len() <= upto {
-                    let Some(t) = r.next_row(&mut self.buf)? else {
-                        return Err(Error::msg(format!(
-                            "{}: the file changed while it was read",
-                            self.file.display()
-                        )));
-                    };
-                    let row = (t, self.pick());
-                    self.front.push(row);
-                }
-                self.front_loaded = true;
-            }
-            let (s0, sk) = (&self.front[0], &self.front[p - j]);
+            // Signal::Pad: 2·s[0] − s[pad − j]
+            let k = p - j;
+            let s0 = self.idx.first.clone();
+            let sk = self.raw(k, true)?;
             let v = s0.1.iter().zip(&sk.1).map(|(a, b)| 2.0 * a - b).collect();
             (2.0 * s0.0 - sk.0, v)
         } else if j < p + n {
-            if j + 1 >= p {
-                self.front = Vec::new();
-            }
             let k = j - p;
-            self.read_through(k)?;
-            self.ring_row(k).clone()
+            if self.seq.is_none() {
+                let mut r = open_rows(&self.file)?;
+                r.seek_row(k, &self.idx.marks)?;
+                self.seq = Some(r);
+            }
+            let r = self.seq.as_mut().expect("opened above");
+            let row = Self::read_one(r, &self.sel, &mut self.buf, &self.file)?;
+            if k + 1 == n {
+                self.seq = None;
+            }
+            row
         } else {
-            self.read_through(n - 1)?;
-            let i = j - p - n;
-            let (sl, sk) = (self.ring_row(n - 1), self.ring_row(n - 2 - i));
+            // 2·s[n−1] − s[n − 2 − i]
+            let k = n - 2 - (j - p - n);
+            let sl = self.idx.last.clone();
+            let sk = self.raw(k, true)?;
             let v = sl.1.iter().zip(&sk.1).map(|(a, b)| 2.0 * a - b).collect();
             (2.0 * sl.0 - sk.0, v)
         };

@@ -8,7 +8,7 @@
 mod read;
 mod write;
 
-pub use read::{open_rows, read, RowReader};
+pub use read::{open_rows, read, RowMark, RowReader};
 pub use write::{format_c_fixed, write, StoWriter, DEFAULT_PRECISION};
 
 /// A table of samples over time, as OpenSim's `Storage`.

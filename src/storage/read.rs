@@ -492,19 +492,62 @@ pub struct RowReader {
     last_line: usize,
 }
 
+/// A position between rows, to come back to with [`RowReader::seek`].
+#[derive(Debug, Clone, Copy)]
+pub struct RowMark {
+    offset: u64,
+    line_no: usize,
+    count: usize,
+    last_time: f64,
+    last_line: usize,
+}
+
+/// Lines of a file with their byte offsets (trailing CR removed).
+struct LineSource {
+    reader: std::io::BufReader<std::fs::File>,
+    offset: u64,
+    buf: Vec<u8>,
+}
+
+impl LineSource {
+    /// The next line; Err(true) on invalid UTF-8, Err(false) on an I/O error.
+    fn next_line(&mut self) -> Option<std::result::Result<String, std::io::Error>> {
+        use std::io::BufRead;
+        self.buf.clear();
+        match self.reader.read_until(b'\n', &mut self.buf) {
+            Ok(0) => None,
+            Ok(n) => {
+                self.offset += n as u64;
+                if self.buf.last() == Some(&b'\n') {
+                    self.buf.pop();
+                }
+                if self.buf.last() == Some(&b'\r') {
+                    self.buf.pop();
+                }
+                Some(
+                    String::from_utf8(std::mem::take(&mut self.buf)).map_err(|_| {
+                        std::io::Error::new(std::io::ErrorKind::InvalidData, "invalid UTF-8")
+                    }),
+                )
+            }
+            Err(e) => Some(Err(e)),
+        }
+    }
+}
+
 enum RowSource {
-    Legacy {
-        lines: std::io::Lines<std::io::BufReader<std::fs::File>>,
-        line_no: usize,
-    },
+    Legacy { lines: LineSource, line_no: usize },
     Whole(Storage),
 }
 
 /// Open `path` for [`RowReader::next_row`].
 pub fn open_rows(path: &Path) -> Result<RowReader> {
-    use std::io::BufRead;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut lines = std::io::BufReader::new(file).lines();
+    let mut lines = LineSource {
+        reader: std::io::BufReader::new(file),
+        offset: 0,
+        buf: Vec::new(),
+    };
     let mut header: Vec<String> = Vec::new();
     let utf8 = |e: std::io::Error| {
         if e.kind() == std::io::ErrorKind::InvalidData {
@@ -513,20 +556,14 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
             Error::io(path, e)
         }
     };
-    let strip = |mut l: String| {
-        if l.ends_with('\r') {
-            l.pop();
-        }
-        l
-    };
     // Header lines up to `endheader` (parse_header reports a missing one).
-    loop {
-        let Some(line) = lines.next() else { break };
-        let line = strip(line.map_err(utf8)?);
+    while let Some(line) = lines.next_line() {
+        let line = line.map_err(utf8)?;
         let t = line.trim_matches(|c| c == ' ' || c == '\t');
         let key = &t[..t.find([' ', '\t', '=']).unwrap_or(t.len())];
-        header.push(line.clone());
-        if key == "endheader" {
+        let end = key == "endheader";
+        header.push(line);
+        if end {
             break;
         }
     }
@@ -561,14 +598,14 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
     let end_line = header.len();
     let mut line_no = end_line;
     let (label_line, label_text) = loop {
-        let Some(line) = lines.next() else {
+        let Some(line) = lines.next_line() else {
             return Err(Error::input(
                 loc(path, end_line),
                 "no column labels after 'endheader'",
             ));
         };
         line_no += 1;
-        let line = strip(line.map_err(utf8)?);
+        let line = line.map_err(utf8)?;
         if !line.trim().is_empty() {
             break (line_no, line);
         }
@@ -586,6 +623,80 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
 }
 
 impl RowReader {
+    /// Rows read so far.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The position before the next row (None for whole-read tables).
+    pub fn mark(&self) -> Option<RowMark> {
+        match &self.source {
+            RowSource::Legacy { lines, line_no } => Some(RowMark {
+                offset: lines.offset,
+                line_no: *line_no,
+                count: self.count,
+                last_time: self.last_time,
+                last_line: self.last_line,
+            }),
+            RowSource::Whole(_) => None,
+        }
+    }
+
+    /// Go back (or forward) to a position [`mark`](Self::mark) returned
+    /// while reading this file.
+    pub fn seek(&mut self, m: &RowMark) -> Result<()> {
+        use std::io::Seek;
+        if let RowSource::Legacy { lines, line_no } = &mut self.source {
+            lines
+                .reader
+                .seek(std::io::SeekFrom::Start(m.offset))
+                .map_err(|e| Error::io(&self.path, e))?;
+            lines.offset = m.offset;
+            *line_no = m.line_no;
+            self.count = m.count;
+            self.last_time = m.last_time;
+            self.last_line = m.last_line;
+        }
+        Ok(())
+    }
+
+    /// Skip to row `k` (0-based) of a whole-read table.
+    fn whole_seek(&mut self, k: usize) {
+        if let RowSource::Whole(_) = self.source {
+            self.count = k;
+        }
+    }
+
+    /// Position the reader before row `k`, from the nearest of `marks`
+    /// (row index, mark) at or before it, then by reading forward.
+    pub fn seek_row(&mut self, k: usize, marks: &[(usize, RowMark)]) -> Result<()> {
+        if let RowSource::Whole(_) = self.source {
+            self.whole_seek(k);
+            return Ok(());
+        }
+        let best = marks.iter().rev().find(|(r, _)| *r <= k);
+        if let Some((_, m)) = best {
+            if !(self.count <= k && self.count >= m.count) {
+                self.seek(m)?;
+            }
+        } else if self.count > k {
+            return Err(Error::msg(format!(
+                "{}: no position recorded before row {k}",
+                self.path.display()
+            )));
+        }
+        let mut row = Vec::new();
+        while self.count < k {
+            if self.next_row(&mut row)?.is_none() {
+                return Err(Error::msg(format!(
+                    "{}: the file changed while it was read (row {k} missing)",
+                    self.path.display()
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// The next row's values (one per label) into `row`; its time, or None
     /// after the last row.
     pub fn next_row(&mut self, row: &mut Vec<f64>) -> Result<Option<f64>> {
@@ -603,7 +714,7 @@ impl RowReader {
                 return Ok(Some(t));
             }
             RowSource::Legacy { lines, line_no } => loop {
-                let Some(line) = lines.next() else {
+                let Some(line) = lines.next_line() else {
                     if self.limit != usize::MAX {
                         return Err(too_few_rows(
                             &self.path,
