@@ -222,14 +222,14 @@ impl<'m> StateStream<'m> {
                 if (p_last - p_first) / dt > MAX_RESAMPLE_SIZE {
                     dt = (p_last - p_first) / MAX_RESAMPLE_SIZE;
                 }
-                resample = Some(dt);
+                resample = Some((dt, min_step));
             }
             dt_filter = dt;
         }
 
         // The table's rows: the resampling grid, or P itself.
         let (rows, first_time, last_time, first_row, last_row, grid_lo_hi);
-        if let Some(dt) = resample {
+        if let Some((dt, _)) = resample {
             let (mut count, mut c_init, mut c_final) = (0usize, 0usize, 0usize);
             let mut x = p_first;
             let mut last = p_first;
@@ -293,7 +293,7 @@ impl<'m> StateStream<'m> {
         let gs = first_row.saturating_sub(margin);
         let ge = (last_row + 1 + margin).min(rows);
         let (js, je, g) = if grid_lo_hi {
-            let dt = resample.unwrap_or(0.0);
+            let (dt, min_step) = resample.unwrap_or((0.0, 0.0));
             // grid times at gs and ge-1, by the same repeated addition
             let mut x = p_first;
             let (mut t_lo, mut t_hi) = (p_first, p_first);
@@ -331,7 +331,9 @@ impl<'m> StateStream<'m> {
                 end: ge,
                 labels: labels.clone(),
                 pending: VecDeque::new(),
-                block,
+                // grid rows per spline window: about `block` knots even
+                // when the step is capped (several knots per grid step)
+                block: ((block as f64 * min_step / dt) as usize).clamp(16, block.max(16)),
             };
             (js, je, g)
         } else {
@@ -681,9 +683,8 @@ impl GSource {
                         None => break,
                     }
                 }
-                while knots.iter().take_while(|k| k.0 < t_first).count() > s {
-                    knots.pop_front();
-                }
+                let before = knots.iter().take_while(|k| k.0 < t_first).count();
+                knots.drain(..before.saturating_sub(s));
                 let kt: Vec<f64> = knots.iter().map(|k| k.0).collect();
                 let mut vals = vec![Vec::with_capacity(labels.len()); times.len()];
                 for (j, label) in labels.iter().enumerate() {
