@@ -49,7 +49,7 @@ use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::parse::setup::{resolve, AnalysisCommon, AnalyzeSetup};
 use crate::paths::{coupling, geometry};
 use crate::storage::{self, StoWriter, Storage};
-use crate::tools::analyze::{frame_rows, load_states, results_dir};
+use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
 use crate::tools::static_optimization::{Control, FrameResult, SoProblem};
 use crate::tools::{RunOptions, RunSummary};
@@ -683,19 +683,20 @@ pub fn run(
         .unwrap_or(std::path::Path::new("."));
     let jr = JointReactionSetup::from_xml(el, common.clone(), setup_dir)?;
     let (problem, mut warnings) = JointReactionProblem::build(setup, &jr)?;
-    let states = load_states(setup, &problem.model)?;
-    if !states.missing.is_empty() {
+    // States streamed block by block (motion::stream): flat memory.
+    let mut stream = open_state_stream(setup, &problem.model)?;
+    if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            states.missing
+            stream.missing
         ));
     }
-    let rows = frame_rows(
-        &states.time,
-        setup.initial_time,
-        setup.final_time,
-        jr.common.step_interval,
-    );
+    let (i0, i1, step) = (stream.first_row, stream.last_row, jr.common.step_interval);
+    let nframes = if i1 < i0 {
+        0
+    } else {
+        (i0..=i1).filter(|&i| is_frame(i, i0, i1, step)).count()
+    };
     let dir = results_dir(setup, opts)?;
     let path = dir.join(format!(
         "{}_{}_ReactionLoads.sto",
@@ -710,32 +711,37 @@ pub fn run(
         precision,
         false,
     )?;
-    let progress = crate::tools::progress::bar(rows.len() as u64, opts.verbose);
+    let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
     let start = std::time::Instant::now();
-    for chunk in rows.chunks(256) {
-        let results: Vec<Result<Vec<f64>>> = chunk
-            .par_iter()
-            .map_init(
-                || {
-                    (
-                        Data::new(&problem.model),
-                        MuscleFrame::new(&problem.muscles, &problem.model),
-                    )
-                },
-                |(data, mf), &i| {
-                    problem.frame(states.time[i], &states.q[i], &states.u[i], data, mf)
-                },
-            )
+    while let Some(block) = stream.next_block()? {
+        let sel: Vec<usize> = (0..block.time.len())
+            .filter(|&b| is_frame(block.first + b, i0, i1, step))
             .collect();
-        for (r, &i) in results.into_iter().zip(chunk) {
-            w.write_row(states.time[i], &r?)?;
-            progress.inc(1);
+        for chunk in sel.chunks(256) {
+            let results: Vec<Result<Vec<f64>>> = chunk
+                .par_iter()
+                .map_init(
+                    || {
+                        (
+                            Data::new(&problem.model),
+                            MuscleFrame::new(&problem.muscles, &problem.model),
+                        )
+                    },
+                    |(data, mf), &i| {
+                        problem.frame(block.time[i], &block.q[i], &block.u[i], data, mf)
+                    },
+                )
+                .collect();
+            for (r, &i) in results.into_iter().zip(chunk) {
+                w.write_row(block.time[i], &r?)?;
+                progress.inc(1);
+            }
         }
     }
     progress.finish_and_clear();
     w.finish()?;
     Ok(RunSummary {
-        frames: rows.len(),
+        frames: nframes,
         files: vec![path],
         warnings,
         loop_seconds: start.elapsed().as_secs_f64(),

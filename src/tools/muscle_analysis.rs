@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
-use crate::tools::analyze::{frame_rows, load_states, results_dir};
+use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 
@@ -35,11 +35,12 @@ pub fn run(
         mut warnings,
     } = load_analysis_model(setup)?;
     let set = MuscleSet::compile(&spec, &forces, &model)?;
-    let states = load_states(setup, &model)?;
-    if !states.missing.is_empty() {
+    // States streamed block by block (motion::stream): flat memory.
+    let mut stream = open_state_stream(setup, &model)?;
+    if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            states.missing
+            stream.missing
         ));
     }
     // Muscles and coordinates to report.
@@ -114,41 +115,43 @@ pub fn run(
             &format!("Moment arm about coordinate {n} [m] (generalized force per unit tension)."),
         )?);
     }
-    let rows = frame_rows(
-        &states.time,
-        setup.initial_time,
-        setup.final_time,
-        ma.common.step_interval,
-    );
+    let (i0, i1, step) = (stream.first_row, stream.last_row, ma.common.step_interval);
     let mut data = Data::new(&model);
     let mut frame = MuscleFrame::new(&set, &model);
     let mut row = vec![0.0; muscles.len()];
-    for &i in &rows {
-        data.q.copy_from_slice(&states.q[i]);
-        data.u.copy_from_slice(&states.u[i]);
-        data.udot.iter_mut().for_each(|x| *x = 0.0);
-        kinematics::full(&model, &mut data);
-        frame.evaluate(&set, &model, &data);
-        let t = states.time[i];
-        for (w, values) in [
-            &frame.length,
-            &frame.speed,
-            &frame.max_active_force,
-            &frame.passive_force,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            for (k, &m) in muscles.iter().enumerate() {
-                row[k] = values[m];
+    let mut nframes = 0;
+    while let Some(block) = stream.next_block()? {
+        for b in 0..block.time.len() {
+            if !is_frame(block.first + b, i0, i1, step) {
+                continue;
             }
-            writers[w].0.write_row(t, &row)?;
-        }
-        for (j, &c) in coords.iter().enumerate() {
-            for (k, &m) in muscles.iter().enumerate() {
-                row[k] = frame.moment_arm(&model, &data.q, m, c);
+            nframes += 1;
+            data.q.copy_from_slice(&block.q[b]);
+            data.u.copy_from_slice(&block.u[b]);
+            data.udot.iter_mut().for_each(|x| *x = 0.0);
+            kinematics::full(&model, &mut data);
+            frame.evaluate(&set, &model, &data);
+            let t = block.time[b];
+            for (w, values) in [
+                &frame.length,
+                &frame.speed,
+                &frame.max_active_force,
+                &frame.passive_force,
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                for (k, &m) in muscles.iter().enumerate() {
+                    row[k] = values[m];
+                }
+                writers[w].0.write_row(t, &row)?;
             }
-            writers[4 + j].0.write_row(t, &row)?;
+            for (j, &c) in coords.iter().enumerate() {
+                for (k, &m) in muscles.iter().enumerate() {
+                    row[k] = frame.moment_arm(&model, &data.q, m, c);
+                }
+                writers[4 + j].0.write_row(t, &row)?;
+            }
         }
     }
     let mut files = Vec::new();
@@ -157,7 +160,7 @@ pub fn run(
         files.push(p);
     }
     Ok(RunSummary {
-        frames: rows.len(),
+        frames: nframes,
         files,
         warnings,
         ..Default::default()
