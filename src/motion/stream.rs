@@ -722,6 +722,19 @@ mod tests {
         w
     }
 
+    /// q to 1e-12; u and u̇ to 1e-12 or 10× the in-memory path's own
+    /// rounding noise (u̇ is a second derivative: its noise reaches ~1e-11 of
+    /// its range near the ends; the windows change the rounding of the
+    /// filter and of the spline solves). That the differences are rounding,
+    /// not truncation: on the uniform 12,000-row motion, filter overlaps for
+    /// 1e-18, 1e-24, 1e-30 and 1e-40 gave worst u̇ differences of 2.5e-11,
+    /// 4.5e-11, 9.1e-12 and 4.3e-11 (not decreasing), q's stayed 4–5e-14.
+    fn within(w: &[f64; 3], floor: &[f64; 2]) -> bool {
+        w[0] <= 1e-12
+            && w[1] <= 1e-12f64.max(10.0 * floor[0])
+            && w[2] <= 1e-12f64.max(10.0 * floor[1])
+    }
+
     /// Stream everything and compare with the in-memory path; returns the
     /// worst relative differences (q, u, u̇) and whether all were bitwise equal.
     fn compare(
@@ -730,7 +743,7 @@ mod tests {
         cutoff: f64,
         range: (f64, f64),
         block: usize,
-        noise: &mut f64,
+        noise: &mut [f64; 2],
     ) -> ([f64; 3], bool, usize) {
         let table = crate::tools::loading::load_coordinates(file, cutoff).unwrap();
         let states = States::from_coordinates(model, &table, file).unwrap();
@@ -762,18 +775,33 @@ mod tests {
         let bitwise = q == wq && u == wu && ud == wd;
         // The in-memory path's own rounding noise: its u̇ after a 1-ulp
         // relative perturbation of the filtered coordinates.
-        let floor = if q.len() > 2000 {
-            let mut t2 = table.clone();
-            for (i, r) in t2.rows.iter_mut().enumerate() {
+        // The in-memory path's own rounding noise: its results for the
+        // coordinates scaled by 1.1 before filtering, scaled back (the chain
+        // is linear, so only the rounding differs).
+        let floor = {
+            let mut t2 = crate::storage::read(file).unwrap();
+            for r in t2.rows.iter_mut() {
                 for v in r.iter_mut() {
-                    *v *= 1.0 + f64::EPSILON * ((i % 3) as f64 - 1.0);
+                    *v *= 1.1;
                 }
+            }
+            if cutoff >= 0.0 {
+                let n = t2.time.len() / 2;
+                crate::motion::filter::pad(&mut t2, n);
+                crate::motion::filter::lowpass_iir(&mut t2, cutoff).unwrap();
             }
             let s2 = States::from_coordinates(model, &t2, file).unwrap();
             let ud2 = s2.speed_derivatives(file).unwrap();
-            worst(&ud2[rows[0]..=*rows.last().unwrap()], wd)
-        } else {
-            0.0
+            let r = rows[0]..=*rows.last().unwrap();
+            let back = |m: &[Vec<f64>]| -> Vec<Vec<f64>> {
+                m.iter()
+                    .map(|row| row.iter().map(|v| v / 1.1).collect())
+                    .collect()
+            };
+            [
+                worst(&back(&s2.u[r.clone()]), wu),
+                worst(&back(&ud2[r]), wd),
+            ]
         };
         *noise = floor;
         (
@@ -807,13 +835,14 @@ mod tests {
                     (setup.initial_time, setup.final_time),
                 ] {
                     let (w, bitwise, n) =
-                        compare(&model, &file, cutoff, range, DEFAULT_BLOCK, &mut 0.0);
+                        compare(&model, &file, cutoff, range, DEFAULT_BLOCK, &mut [0.0; 2]);
                     assert!(
                         bitwise,
                         "{case} cutoff {cutoff}: one block not bitwise {w:?}"
                     );
                     for block in [5, 37] {
-                        let (w, _, n2) = compare(&model, &file, cutoff, range, block, &mut 0.0);
+                        let (w, _, n2) =
+                            compare(&model, &file, cutoff, range, block, &mut [0.0; 2]);
                         assert_eq!(n, n2);
                         assert!(
                             w.iter().all(|&x| x <= 1e-12),
@@ -868,33 +897,72 @@ mod tests {
             }),
         ] {
             let file = dir.join(format!("{name}.mot"));
+            let (t0, tl) = (table.time[0], table.time[n - 1]);
+            let span = tl - t0;
             crate::storage::write(&file, &table, 10).unwrap();
             for (cutoff, range) in [
                 (6.0, (f64::NEG_INFINITY, f64::INFINITY)),
                 (6.0, (20.0, 40.0)),
+                // frames deep in the leading and trailing padding
+                (6.0, (t0 - 0.4 * span, t0 - 0.1 * span)),
+                (6.0, (tl + 0.1 * span, tl + 0.4 * span)),
                 (-1.0, (f64::NEG_INFINITY, f64::INFINITY)),
+                (-1.0, (20.0, 40.0)),
             ] {
-                let mut floor = 0.0;
+                let mut floor = [0.0; 2];
                 let (w, _, rows) = compare(&model, &file, cutoff, range, 1000, &mut floor);
                 println!(
-                    "{name} {n} rows, cutoff {cutoff}, range {range:?}: {rows} states rows, worst relative q {:.1e} u {:.1e} udot {:.1e} (in-memory path's own udot change under a 1-ulp perturbation: {floor:.1e})",
-                    w[0], w[1], w[2]
-                );
-                // q and u to 1e-12. u̇ is a second derivative: a 1-ulp change
-                // of q moves the in-memory path's own u̇ by ~1e-11 of its
-                // range near the ends, and the windows change the rounding
-                // of the filter and the spline solves (a larger filter
-                // overlap leaves q's ~5e-14 difference unchanged: it is
-                // rounding, not truncation), so u̇ is held to 10× that noise.
-                assert!(
-                    w[0] <= 1e-12 && w[1] <= 1e-12,
-                    "{name} {cutoff} {range:?}: {w:?}"
+                    "{name} {n} rows, cutoff {cutoff}, range {range:?}: {rows} states rows, worst relative q {:.1e} u {:.1e} udot {:.1e} (in-memory path's own rounding noise: u {:.1e}, udot {:.1e})",
+                    w[0], w[1], w[2], floor[0], floor[1]
                 );
                 assert!(
-                    w[2] <= 1e-12f64.max(10.0 * floor),
-                    "{name} {cutoff} {range:?}: {w:?}, noise {floor:e}"
+                    within(&w, &floor),
+                    "{name} {cutoff} {range:?}: {w:?}, noise {floor:?}"
                 );
             }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A TimeSeriesTable (version 3) coordinates file is read whole and
+    /// streamed from memory: same states.
+    #[test]
+    fn time_series_table_input() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/validation");
+        if !root.is_dir() {
+            println!("SKIP: {} absent", root.display());
+            return;
+        }
+        let (_, model) =
+            crate::tools::loading::load_model(&root.join("arm26/inputs/arm26.osim")).unwrap();
+        let dir = std::env::temp_dir().join(format!("statopt-stream-v3-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut text = String::from("version=3\nOpenSimVersion=4.6\ninDegrees=yes\nDataType=double\nendheader\ntime\tr_shoulder_elev\tr_elbow_flex\n");
+        for i in 0..700 {
+            let t = 0.01 * i as f64 + if i % 3 == 0 { 0.002 } else { 0.0 };
+            text.push_str(&format!(
+                "{t}\t{}\t{}\n",
+                20.0 * (2.0 * t).sin(),
+                50.0 + 30.0 * t.cos()
+            ));
+        }
+        let file = dir.join("v3.sto");
+        std::fs::write(&file, text).unwrap();
+        for cutoff in [6.0, -1.0] {
+            let mut floor = [0.0; 2];
+            let (w, _, _) = compare(
+                &model,
+                &file,
+                cutoff,
+                (f64::NEG_INFINITY, f64::INFINITY),
+                100,
+                &mut floor,
+            );
+            println!("v3 cutoff {cutoff}: worst relative q {:.1e} u {:.1e} udot {:.1e} (noise u {:.1e}, udot {:.1e})", w[0], w[1], w[2], floor[0], floor[1]);
+            assert!(
+                within(&w, &floor),
+                "cutoff {cutoff}: {w:?}, noise {floor:?}"
+            );
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
