@@ -354,8 +354,9 @@ fn minimum_jerk_motion_file() {
         duration: t_end,
         rate,
         links: vec![parse_link("lever_angle=1*knee_angle+12.5").unwrap()],
+        touch: vec![],
     };
-    let (table, warnings) = generate(&model, &m).unwrap();
+    let (table, warnings) = generate(&model, &m, &[]).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     let path = dir.join("legext.mot");
     storage::write(&path, &table, 10).unwrap();
@@ -415,12 +416,44 @@ fn minimum_jerk_motion_file() {
     splines.eval(t_end / 2.0, &mut qq, &mut u, &mut udot);
     assert!((u[ik] - peak_v.to_radians()).abs() < 1e-6, "{}", u[ik]);
 
+    // --touch: the lever follows the shin so that the pad stays on it. Here
+    // d = 0.35 sin(lever − knee) (both pins about z through the origin's z
+    // axis), so the solution near the start lever = knee + 12.5° is lever = knee.
+    let contacts = statopt::forces::force_set_members(
+        &statopt::xml::parse_str(CONTACTS, Path::new("contacts.xml")).unwrap(),
+    )
+    .unwrap();
+    let touching = MinJerkMotion {
+        touch: vec![statopt::tools::motion_gen::parse_touch("shin_pad=lever_angle").unwrap()],
+        links: vec![],
+        rate: 20.0,
+        ..m.clone()
+    };
+    let e = generate(&model, &touching, &[]).unwrap_err().to_string();
+    assert!(e.contains("shin_pad"), "{e}");
+    let linked_start = MinJerkMotion {
+        links: m.links.clone(),
+        ..touching.clone()
+    };
+    for motion in [&touching, &linked_start] {
+        let (tt, _) = generate(&model, motion, &contacts).unwrap();
+        for (k, l) in col(&tt, "knee_angle").iter().zip(col(&tt, "lever_angle")) {
+            assert!((l - k).abs() < 1e-8, "lever {l} vs knee {k}");
+        }
+    }
+    let twice = MinJerkMotion {
+        also: vec!["lever_angle".into()],
+        ..touching.clone()
+    };
+    let e = generate(&model, &twice, &contacts).unwrap_err().to_string();
+    assert!(e.contains("already"), "{e}");
+
     // Other coordinates at their defaults (degrees in the file).
     let m2 = MinJerkMotion {
         links: vec![],
         ..m.clone()
     };
-    let (t2, _) = generate(&model, &m2).unwrap();
+    let (t2, _) = generate(&model, &m2, &[]).unwrap();
     for v in col(&t2, "lever_angle") {
         assert!((v - (-0.2f64).to_degrees()).abs() < 1e-12);
     }
@@ -429,16 +462,16 @@ fn minimum_jerk_motion_file() {
         coordinate: "nope".into(),
         ..m.clone()
     };
-    let e = generate(&model, &bad).unwrap_err().to_string();
+    let e = generate(&model, &bad, &[]).unwrap_err().to_string();
     assert!(e.contains("nope") && e.contains("knee_angle"), "{e}");
     let bad = MinJerkMotion {
         duration: 0.0,
         ..m.clone()
     };
-    assert!(generate(&model, &bad).is_err());
+    assert!(generate(&model, &bad, &[]).is_err());
     // Leaving the range is reported.
     let wide = MinJerkMotion { from: -200.0, ..m };
-    let (_, w) = generate(&model, &wide).unwrap();
+    let (_, w) = generate(&model, &wide, &[]).unwrap();
     assert!(
         w.iter()
             .any(|w| w.contains("knee_angle") && w.contains("range")),

@@ -116,6 +116,14 @@ enum Command {
         /// lever_angle=1*knee_angle_r+0 (repeatable, applied in order).
         #[arg(long, value_name = "TARGET=A*SOURCE+B", allow_hyphen_values = true)]
         link: Vec<String>,
+        /// Set COORDINATE on every row so that CONTACT's point lies on its plane (Newton from its
+        /// --link value if it has one, else from the previous row). Repeatable.
+        #[arg(long, value_name = "CONTACT=COORDINATE")]
+        touch: Vec<String>,
+        /// A force-set file holding contacts for --touch (repeatable; with --setup its
+        /// force_set_files are used too).
+        #[arg(long = "force-set", value_name = "FILE")]
+        force_sets: Vec<PathBuf>,
         /// Digits after the decimal point.
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=20))]
         precision: u8,
@@ -146,12 +154,16 @@ fn run_scene(setup: &std::path::Path, output: &std::path::Path) -> statopt::Resu
             scene.omitted_contacts.join(", ")
         );
     }
+    let forces = scene
+        .document
+        .path(&["Model", "ForceSet", "objects"])
+        .map_or(0, |o| o.children.len());
     eprintln!(
-        "wrote {} ({} bodies, {} joints, {} forces in the composed model)",
+        "wrote {} ({} bodies, {} joints, {} forces)",
         output.display(),
         scene.spec.bodies.len(),
         scene.spec.joints.len(),
-        scene.spec.forces.len()
+        forces
     );
     Ok(())
 }
@@ -168,6 +180,8 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
         rate,
         also,
         link,
+        touch,
+        force_sets,
         precision,
         output,
     } = cmd
@@ -176,16 +190,24 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
             "run_motion called for another command",
         ));
     };
+    let mut force_set_files = force_sets.clone();
     let (model_file, artifact_files) = match (model, setup) {
         (Some(m), _) => (m.clone(), artifacts.clone()),
         (None, Some(s)) => match Setup::read(s)? {
-            Setup::Analyze(s) => (s.model_file, s.artifact_files),
+            Setup::Analyze(s) => {
+                force_set_files.extend(s.force_set_files);
+                (s.model_file, s.artifact_files)
+            }
             Setup::InverseDynamics(s) => (s.model_file, s.artifact_files),
         },
         (None, None) => return Err(statopt::Error::msg("give --model or --setup")),
     };
-    let (_, compiled) = tools::loading::load_composed_model(&model_file, &artifact_files)?;
-    let spec = tools::motion_gen::MinJerkMotion {
+    let (spec, compiled) = tools::loading::load_composed_model(&model_file, &artifact_files)?;
+    let mut forces = spec.forces.clone();
+    for f in &force_set_files {
+        forces.extend(statopt::forces::read_force_set_file(f)?);
+    }
+    let motion = tools::motion_gen::MinJerkMotion {
         coordinate: coordinate.clone(),
         also: also.clone(),
         from: *from,
@@ -196,8 +218,12 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
             .iter()
             .map(|l| tools::motion_gen::parse_link(l))
             .collect::<statopt::Result<_>>()?,
+        touch: touch
+            .iter()
+            .map(|t| tools::motion_gen::parse_touch(t))
+            .collect::<statopt::Result<_>>()?,
     };
-    let (table, warnings) = tools::motion_gen::generate(&compiled, &spec)?;
+    let (table, warnings) = tools::motion_gen::generate(&compiled, &motion, &forces)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }

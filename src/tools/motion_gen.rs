@@ -10,9 +10,12 @@
 //! their model units, as OpenSim converts only rotational columns
 //! (opensim-semantics.md §1.3).
 
+use crate::contacts::Contact;
+use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Result};
 use crate::model::{Model, MotionType};
 use crate::storage::Storage;
+use crate::xml::Element;
 
 /// `target = scale * source + offset`, in file units.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,6 +42,73 @@ pub struct MinJerkMotion {
     pub rate: f64,
     /// Applied in order, after the driven coordinates.
     pub links: Vec<Link>,
+    /// `(contact, coordinate)`: on every row, set the coordinate so that the
+    /// contact's point lies on its plane (distance 0) by Newton's method,
+    /// starting from the coordinate's `--link` value on every row when it has
+    /// one, else from the previous row's solution (first row: the default), so
+    /// the solution followed is the one nearest that start.
+    pub touch: Vec<(String, String)>,
+}
+
+/// Parse `CONTACT=COORDINATE` for `--touch`.
+pub fn parse_touch(s: &str) -> Result<(String, String)> {
+    match s.split_once('=') {
+        Some((c, q)) if !c.trim().is_empty() && !q.trim().is_empty() => {
+            Ok((c.trim().to_string(), q.trim().to_string()))
+        }
+        _ => Err(Error::msg(format!(
+            "--touch '{s}': expected CONTACT=COORDINATE"
+        ))),
+    }
+}
+
+/// Signed distance of a contact's point from its plane at coordinates `q`
+/// (model units).
+fn contact_distance(model: &Model, data: &mut Data, c: &Contact, q: &[f64]) -> f64 {
+    data.q.copy_from_slice(q);
+    kinematics::positions(model, data);
+    let p = data.station_position(c.point_body, &c.point);
+    let o = data.station_position(c.plane_body, &c.origin);
+    (p - o).dot(&(data.rotation[c.plane_body] * c.normal))
+}
+
+/// Newton's method on the distance as a function of coordinate `i`
+/// (central-difference slope), from the value in `q`.
+fn solve_touch(
+    model: &Model,
+    data: &mut Data,
+    c: &Contact,
+    i: usize,
+    q: &mut [f64],
+    t: f64,
+) -> Result<()> {
+    let name = &model.coordinates[i].name;
+    let h = 1e-7;
+    for _ in 0..60 {
+        let d = contact_distance(model, data, c, q);
+        if d.abs() < 1e-12 {
+            return Ok(());
+        }
+        let x = q[i];
+        q[i] = x + h;
+        let dp = contact_distance(model, data, c, q);
+        q[i] = x - h;
+        let dm = contact_distance(model, data, c, q);
+        let slope = (dp - dm) / (2.0 * h);
+        if !(slope.abs() > 1e-9) {
+            q[i] = x;
+            return Err(Error::msg(format!(
+                "--touch: at t = {t}, coordinate '{name}' does not move contact '{}' towards its plane (distance {d} m)",
+                c.name
+            )));
+        }
+        // Limit a step to 0.2 rad (or m) so Newton stays on its branch.
+        q[i] = x - (d / slope).clamp(-0.2, 0.2);
+    }
+    Err(Error::msg(format!(
+        "--touch: at t = {t}, no value of '{name}' brings contact '{}' onto its plane",
+        c.name
+    )))
 }
 
 /// The normalised minimum-jerk position `10 s³ − 15 s⁴ + 6 s⁵` for s in [0, 1].
@@ -143,7 +213,13 @@ fn find(model: &Model, name: &str, what: &str) -> Result<usize> {
 
 /// Generate the motion: a table with one column per model coordinate (tree
 /// order) in file units, and warnings (ranges left, locked coordinates driven).
-pub fn generate(model: &Model, m: &MinJerkMotion) -> Result<(Storage, Vec<String>)> {
+/// `forces` are the force elements `--touch` may name (the composed model's
+/// and force-set files').
+pub fn generate(
+    model: &Model,
+    m: &MinJerkMotion,
+    forces: &[Element],
+) -> Result<(Storage, Vec<String>)> {
     if !(m.duration.is_finite() && m.duration > 0.0) {
         return Err(Error::msg(format!(
             "--duration must be a positive number of seconds, found {}",
@@ -208,6 +284,31 @@ pub fn generate(model: &Model, m: &MinJerkMotion) -> Result<(Storage, Vec<String
         explicit[t] = true;
         links.push((t, s, l));
     }
+    let mut touches = Vec::new();
+    for (cname, qname) in &m.touch {
+        let el = forces
+            .iter()
+            .find(|f| f.name_attr() == cname.as_str())
+            .ok_or_else(|| {
+                Error::msg(format!(
+                    "--touch: no force element named '{cname}' in the model, its artifacts or the force-set files"
+                ))
+            })?;
+        let contact = Contact::from_xml(el, model)?
+            .ok_or_else(|| el.error(format!("--touch: '{cname}' is not a contact element")))?;
+        let i = find(model, qname, "--touch coordinate")?;
+        // A --link on the same coordinate gives the starting value.
+        let linked = links.iter().any(|(t, _, _)| *t == i);
+        if (explicit[i] && !linked) || touches.iter().any(|(_, k)| *k == i) {
+            return Err(Error::msg(format!(
+                "--touch: coordinate '{qname}' is already driven or touched"
+            )));
+        }
+        explicit[i] = true;
+        touches.push((contact, i));
+    }
+    let mut data = Data::new(model);
+    let mut touch_start: Vec<Option<f64>> = vec![None; touches.len()];
     let mut warnings = Vec::new();
     for (i, c) in model.coordinates.iter().enumerate() {
         if explicit[i] && c.is_constrained() {
@@ -245,12 +346,29 @@ pub fn generate(model: &Model, m: &MinJerkMotion) -> Result<(Storage, Vec<String
         for &(t_i, s_i, l) in &links {
             row[t_i] = l.scale * row[s_i] + l.offset;
         }
-        for c in &model.couplers {
-            if explicit[c.dependent] || c.independent.len() != 1 {
-                continue;
+        let couple = |row: &mut Vec<f64>| {
+            for c in &model.couplers {
+                if explicit[c.dependent] || c.independent.len() != 1 {
+                    continue;
+                }
+                let x = to_model(c.independent[0], row[c.independent[0]]);
+                row[c.dependent] = to_file(c.dependent, c.scale * c.function.value(x));
             }
-            let x = to_model(c.independent[0], row[c.independent[0]]);
-            row[c.dependent] = to_file(c.dependent, c.scale * c.function.value(x));
+        };
+        couple(&mut row);
+        if !touches.is_empty() {
+            let mut q: Vec<f64> = (0..nq).map(|i| to_model(i, row[i])).collect();
+            for (k, (contact, i)) in touches.iter().enumerate() {
+                // Start from the previous row's solution unless a --link
+                // gives the start.
+                if let (Some(x), false) = (touch_start[k], links.iter().any(|(t, _, _)| t == i)) {
+                    q[*i] = x;
+                }
+                solve_touch(model, &mut data, contact, *i, &mut q, t)?;
+                touch_start[k] = Some(q[*i]);
+                row[*i] = to_file(*i, q[*i]);
+            }
+            couple(&mut row);
         }
         table.time.push(t);
         table.rows.push(row);
