@@ -95,7 +95,7 @@ fn solve_touch(
         q[i] = x - h;
         let dm = contact_distance(model, data, c, q);
         let slope = (dp - dm) / (2.0 * h);
-        if !(slope.abs() > 1e-9) {
+        if slope.is_nan() || slope.abs() <= 1e-9 {
             q[i] = x;
             return Err(Error::msg(format!(
                 "--touch: at t = {t}, coordinate '{name}' does not move contact '{}' towards its plane (distance {d} m)",
