@@ -283,7 +283,7 @@ PUBLICATIONS = (
     "Transactions on Biomedical Engineering 54:1940-1950, 2007. "
     "Krueger D., Wartzack S.: A contact model to simulate human-artifact interaction based on force "
     "optimization: implementation and application to the analysis of a training machine. Computer "
-    "Methods in Biomechanics and Biomedical Engineering 20(15):1589-1598, 2017."
+    "Methods in Biomechanics and Biomedical Engineering, 2017, doi:10.1080/10255842.2017.1393804."
 )
 
 
@@ -458,7 +458,7 @@ def make_machine(geo, name, cam, offset):
     )
     model = sub_el(doc, "Model", name=name)
     sub_el(model, "credits", "statopt; leg extension machine after Krueger and Wartzack (2017), Figure 7. Dimensions fitted to human_seated.osim (gait2392, Delp et al. 1990).")
-    sub_el(model, "publications", "Krueger D., Wartzack S.: A contact model to simulate human-artifact interaction based on force optimization: implementation and application to the analysis of a training machine. Computer Methods in Biomechanics and Biomedical Engineering 20(15):1589-1598, 2017.")
+    sub_el(model, "publications", "Krueger D., Wartzack S.: A contact model to simulate human-artifact interaction based on force optimization: implementation and application to the analysis of a training machine. Computer Methods in Biomechanics and Biomedical Engineering, 2017, doi:10.1080/10255842.2017.1393804.")
     sub_el(model, "gravity", "0 -9.8066499999999994 0")
     bodies = sub_el(model, "BodySet", name="bodyset")
     objs = sub_el(bodies, "objects")

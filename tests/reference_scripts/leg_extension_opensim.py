@@ -20,6 +20,8 @@ import xml.etree.ElementTree as ET
 
 import opensim as osim
 
+osim.Logger.removeFileSink()  # no opensim.log beside the models
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 DIR = os.path.join(REPO, "models", "leg_extension")
 
