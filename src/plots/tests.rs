@@ -381,6 +381,25 @@ fn panels_split_the_figure() {
     assert!(left > 300 && right > 300, "left {left}, right {right}");
     let svg = Svg::read(&paths[1]);
     assert!(svg.has_text("Shear") && svg.has_text("Compression"));
+
+    // A 2×2 grid with one empty cell.
+    let grid = Layout {
+        rows: 2,
+        cols: 2,
+        size: (1600, 1000),
+    };
+    let charts = [knee_chart(), knee_chart(), knee_chart()];
+    let paths = write_panels(&charts, &d.join("grid"), grid).unwrap();
+    let (w, h, px) = read_png(&paths[0]);
+    assert_eq!((w, h), (1600, 1000));
+    // Bottom-right cell is blank.
+    let blank = px
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (*i as u32 % w) >= 800 && (*i as u32 / w) >= 500)
+        .all(|(_, p)| *p == [255, 255, 255]);
+    assert!(blank);
+    assert!(Svg::read(&paths[1]).count_with("text", "font-family", FONT) > 0);
 }
 
 fn solver_scatter() -> Scatter {
