@@ -248,6 +248,9 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         .setup
         .as_ref()
         .ok_or_else(|| statopt::Error::msg("no setup file given"))?;
+    if tools::study::is_study(setup) {
+        return tools::study::run(setup, &opts);
+    }
     match Setup::read(setup)? {
         Setup::InverseDynamics(s) => tools::inverse_dynamics::run(&s, &opts),
         Setup::Analyze(s) => tools::analyze::run(&s, &opts),

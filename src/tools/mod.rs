@@ -9,6 +9,7 @@ pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod progress;
 pub mod static_optimization;
+pub mod study;
 
 use std::path::PathBuf;
 

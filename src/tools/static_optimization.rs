@@ -1090,6 +1090,8 @@ fn run_once(
         .collect();
     let mut reserve_peak = (0.0f64, String::new());
     let nv = problem.controls.len();
+    // Actuators saturated at a finite upper bound: reported, never silent.
+    let mut at_bound: Vec<(String, usize, f64)> = Vec::new();
     let start = Instant::now();
     // Frames in chunks: solved in parallel, written in order, so the output
     // holds every finished frame and memory stays bounded by the chunk.
@@ -1146,6 +1148,18 @@ fn run_once(
                     r.time, r.solution.status, r.solution.eq_residual
                 ));
             }
+            for v in 0..nv {
+                let up = problem.upper[v];
+                if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+                    match at_bound
+                        .iter_mut()
+                        .find(|(n, _, _)| *n == problem.labels[v])
+                    {
+                        Some(e) => e.1 += 1,
+                        None => at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                    }
+                }
+            }
             for &v in &reserve_vars {
                 if r.forces[v].abs() > reserve_peak.0 {
                     reserve_peak = (
@@ -1200,6 +1214,16 @@ fn run_once(
             rows.len(),
             failures[0],
             diag_path.display()
+        ));
+    }
+    if !at_bound.is_empty() {
+        let list: Vec<String> = at_bound
+            .iter()
+            .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
+            .collect();
+        warnings.push(format!(
+            "activations at their upper bound: {}",
+            list.join(", ")
         ));
     }
     if !reserve_vars.is_empty() {
