@@ -35,6 +35,13 @@ pub struct AnalyzeSetup {
     pub coordinates_file: Option<PathBuf>,
     pub speeds_file: Option<PathBuf>,
     pub lowpass_cutoff: f64,
+    /// statopt: `CONTACT=COORDINATE` pairs; the coordinate is solved on every
+    /// row of the motion so that the contact stays closed (e.g. a machine's
+    /// lever angle from its pad on the shin), before speeds are splined.
+    pub close_contacts: Vec<(String, String)>,
+    /// statopt: `<Figure>` and `<Metric>` elements (see `tools::study`),
+    /// drawn from the run's tables after the analyses.
+    pub figures: Vec<Element>,
     pub analyses: Vec<Analysis>,
 }
 
@@ -284,6 +291,27 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
         coordinates_file,
         speeds_file: opt_text(tool, "speeds_file").map(|p| resolve(dir, &p)),
         lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
+        close_contacts: match tool.child("close_contacts") {
+            Some(c) => c
+                .words()
+                .iter()
+                .map(|w| match w.split_once('=') {
+                    Some((a, b)) if !a.is_empty() && !b.is_empty() => {
+                        Ok((a.to_string(), b.to_string()))
+                    }
+                    _ => Err(c.error(format!(
+                        "close_contacts entry '{w}' must be CONTACT=COORDINATE"
+                    ))),
+                })
+                .collect::<Result<Vec<_>>>()?,
+            None => Vec::new(),
+        },
+        figures: tool
+            .children
+            .iter()
+            .filter(|c| c.name == "Figure" || c.name == "Metric")
+            .cloned()
+            .collect(),
         analyses,
     })
 }

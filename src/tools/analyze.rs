@@ -44,7 +44,10 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
         .coordinates_file
         .as_ref()
         .ok_or_else(|| Error::input(Location::file(&setup.setup_file), "no <coordinates_file>"))?;
-    let table = load_coordinates(file, setup.lowpass_cutoff)?;
+    let mut table = load_coordinates(file, setup.lowpass_cutoff)?;
+    if !setup.close_contacts.is_empty() {
+        close_setup_contacts(setup, model, &mut table)?;
+    }
     let states = States::from_coordinates(model, &table, file)?;
     let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
     if setup.initial_time > last || setup.final_time < first {
@@ -72,6 +75,19 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
         }
         None => run_analyses(setup, opts),
     }
+    .and_then(|mut summary| {
+        if !setup.figures.is_empty() {
+            // Figures read the run's tables: their paths are relative to the results directory.
+            let out = results_dir(setup, opts)?;
+            summary.files.extend(crate::tools::study::draw(
+                &setup.figures,
+                &out,
+                &out,
+                &setup.name,
+            )?);
+        }
+        Ok(summary)
+    })
 }
 
 fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
@@ -157,4 +173,40 @@ pub fn results_dir(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<std::path:
         .unwrap_or_else(|| setup.results_directory.clone());
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     Ok(dir)
+}
+
+/// Apply the setup's `<close_contacts>`: the contacts come from the model's
+/// and the force-set files' force elements.
+fn close_setup_contacts(
+    setup: &AnalyzeSetup,
+    model: &crate::model::Model,
+    table: &mut crate::storage::Storage,
+) -> Result<()> {
+    let am = crate::tools::loading::load_analysis_model(setup)?;
+    let at = || Location::file(&setup.setup_file).with_element("<close_contacts>");
+    let mut closures = Vec::new();
+    for (contact, coordinate) in &setup.close_contacts {
+        let el = am
+            .forces
+            .iter()
+            .find(|f| {
+                f.attr("name") == Some(contact.as_str())
+                    && crate::tools::loading::force_kind(f)
+                        == crate::tools::loading::ForceKind::Contact
+            })
+            .ok_or_else(|| {
+                Error::input(
+                    at(),
+                    format!("no contact named '{contact}' in the model or its force-set files"),
+                )
+            })?;
+        let c = crate::contacts::Contact::from_xml(el, model)?
+            .ok_or_else(|| Error::input(at(), format!("'{contact}' is not a contact")))?;
+        let k = model
+            .coordinate_index(coordinate)
+            .ok_or_else(|| Error::input(at(), format!("no coordinate named '{coordinate}'")))?;
+        closures.push((c, k));
+    }
+    crate::motion::closure::close_contacts(model, table, &closures)
+        .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
 }

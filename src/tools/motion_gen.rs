@@ -11,7 +11,7 @@
 //! (opensim-semantics.md §1.3).
 
 use crate::contacts::Contact;
-use crate::dynamics::{kinematics, Data};
+use crate::dynamics::Data;
 use crate::error::{Error, Result};
 use crate::model::{Model, MotionType};
 use crate::storage::Storage;
@@ -60,55 +60,6 @@ pub fn parse_touch(s: &str) -> Result<(String, String)> {
             "--touch '{s}': expected CONTACT=COORDINATE"
         ))),
     }
-}
-
-/// Signed distance of a contact's point from its plane at coordinates `q`
-/// (model units).
-fn contact_distance(model: &Model, data: &mut Data, c: &Contact, q: &[f64]) -> f64 {
-    data.q.copy_from_slice(q);
-    kinematics::positions(model, data);
-    let p = data.station_position(c.point_body, &c.point);
-    let o = data.station_position(c.plane_body, &c.origin);
-    (p - o).dot(&(data.rotation[c.plane_body] * c.normal))
-}
-
-/// Newton's method on the distance as a function of coordinate `i`
-/// (central-difference slope), from the value in `q`.
-fn solve_touch(
-    model: &Model,
-    data: &mut Data,
-    c: &Contact,
-    i: usize,
-    q: &mut [f64],
-    t: f64,
-) -> Result<()> {
-    let name = &model.coordinates[i].name;
-    let h = 1e-7;
-    for _ in 0..60 {
-        let d = contact_distance(model, data, c, q);
-        if d.abs() < 1e-12 {
-            return Ok(());
-        }
-        let x = q[i];
-        q[i] = x + h;
-        let dp = contact_distance(model, data, c, q);
-        q[i] = x - h;
-        let dm = contact_distance(model, data, c, q);
-        let slope = (dp - dm) / (2.0 * h);
-        if slope.is_nan() || slope.abs() <= 1e-9 {
-            q[i] = x;
-            return Err(Error::msg(format!(
-                "--touch: at t = {t}, coordinate '{name}' does not move contact '{}' towards its plane (distance {d} m)",
-                c.name
-            )));
-        }
-        // Limit a step to 0.2 rad (or m) so Newton stays on its branch.
-        q[i] = x - (d / slope).clamp(-0.2, 0.2);
-    }
-    Err(Error::msg(format!(
-        "--touch: at t = {t}, no value of '{name}' brings contact '{}' onto its plane",
-        c.name
-    )))
 }
 
 /// The normalised minimum-jerk position `10 s³ − 15 s⁴ + 6 s⁵` for s in [0, 1].
@@ -364,7 +315,7 @@ pub fn generate(
                 if let (Some(x), false) = (touch_start[k], links.iter().any(|(t, _, _)| t == i)) {
                     q[*i] = x;
                 }
-                solve_touch(model, &mut data, contact, *i, &mut q, t)?;
+                crate::motion::closure::close_contact(model, &mut data, contact, *i, &mut q, t)?;
                 touch_start[k] = Some(q[*i]);
                 row[*i] = to_file(*i, q[*i]);
             }

@@ -225,16 +225,35 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
         .results_dir
         .clone()
         .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
-    for f in study.children_named("Figure") {
-        summary.files.extend(figure(f, &dir, &out)?);
+    let elements: Vec<Element> = study
+        .children
+        .iter()
+        .filter(|c| c.name == "Figure" || c.name == "Metric")
+        .cloned()
+        .collect();
+    summary.files.extend(draw(
+        &elements,
+        &dir,
+        &out,
+        study.attr("name").unwrap_or("study"),
+    )?);
+    Ok(summary)
+}
+
+/// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`)
+/// into `out`; metrics go to `<name>_metrics.csv`.
+pub fn draw(elements: &[Element], dir: &Path, out: &Path, name: &str) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    for f in elements.iter().filter(|e| e.name == "Figure") {
+        files.extend(figure(f, dir, out)?);
     }
-    let metrics: Vec<(String, f64)> = study
-        .children_named("Metric")
-        .map(|m| metric(m, &dir))
+    let metrics: Vec<(String, f64)> = elements
+        .iter()
+        .filter(|e| e.name == "Metric")
+        .map(|m| metric(m, dir))
         .collect::<Result<_>>()?;
     if !metrics.is_empty() {
-        let name = study.attr("name").unwrap_or("study");
         let p = out.join(format!("{name}_metrics.csv"));
         let mut w = csv::Writer::from_path(&p)
             .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
@@ -245,7 +264,7 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
                 .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
         }
         w.flush().map_err(|e| Error::io(&p, e))?;
-        summary.files.push(p);
+        files.push(p);
     }
-    Ok(summary)
+    Ok(files)
 }
