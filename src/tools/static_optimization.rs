@@ -129,6 +129,20 @@ pub enum Control {
     Actuator(Actuator),
 }
 
+/// An unbounded CoordinateActuator, as OpenSim creates for
+/// `use_model_force_set = false` (and statopt for reserves).
+fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -> Actuator {
+    Actuator {
+        name: name.to_string(),
+        kind: ActuatorKind::Coordinate { coordinate },
+        optimal_force,
+        min_control: f64::NEG_INFINITY,
+        max_control: f64::INFINITY,
+        applies_force: true,
+        type_name: "CoordinateActuator".into(),
+    }
+}
+
 /// Everything a frame needs, compiled once.
 pub struct SoProblem {
     pub model: Model,
@@ -237,15 +251,7 @@ impl SoProblem {
             // per unconstrained coordinate, then the non-muscle forces.
             for &c in &rows {
                 let name = format!("{}_actuator", model.coordinates[c].name);
-                controls.push(Control::Actuator(Actuator {
-                    name: name.clone(),
-                    kind: ActuatorKind::Coordinate { coordinate: c },
-                    optimal_force: 1.0,
-                    min_control: f64::NEG_INFINITY,
-                    max_control: f64::INFINITY,
-                    applies_force: true,
-                    type_name: "CoordinateActuator".into(),
-                }));
+                controls.push(Control::Actuator(free_coordinate_actuator(&name, c, 1.0)));
                 labels.push(name.clone());
                 force_labels.push(name);
                 lower.push(f64::NEG_INFINITY);
@@ -308,15 +314,7 @@ impl SoProblem {
                         format!("reserve_actuators: the model already has a force named '{name}'"),
                     ));
                 }
-                controls.push(Control::Actuator(Actuator {
-                    name: name.clone(),
-                    kind: ActuatorKind::Coordinate { coordinate: c },
-                    optimal_force: opt,
-                    min_control: f64::NEG_INFINITY,
-                    max_control: f64::INFINITY,
-                    applies_force: true,
-                    type_name: "CoordinateActuator".into(),
-                }));
+                controls.push(Control::Actuator(free_coordinate_actuator(&name, c, opt)));
                 // Reserve columns follow the ForceSet's actuators in both files.
                 let at = labels.len();
                 labels.insert(at, name.clone());
