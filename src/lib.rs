@@ -19,6 +19,7 @@ pub mod optimize;
 pub mod output;
 pub mod parse;
 pub mod paths;
+pub mod plots;
 pub mod storage;
 pub mod tools;
 pub mod wrapping;

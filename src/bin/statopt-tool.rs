@@ -1,5 +1,8 @@
 //! `statopt-tool SETUP.xml`: run the tool an OpenSim-style setup file describes.
 //! `statopt-tool bench SETUP.xml`: measure frames per second.
+//! `statopt-tool scene SETUP.xml -o scene.osim`: write the composed model.
+//! `statopt-tool motion --model M.osim --coordinate q --from A --to B --duration T -o out.mot`:
+//! write a minimum-jerk motion.
 //!
 //! Exit status: 0 success, 2 bad input (a file, element or option is wrong),
 //! 1 internal failure.
@@ -68,6 +71,173 @@ enum Command {
         #[arg(long, allow_hyphen_values = true)]
         lowpass: Option<f64>,
     },
+    /// Write the model a setup composes (model_file + artifact_files + force_set_files, contact
+    /// elements left out) as one OpenSim 4.x document.
+    Scene {
+        /// The setup file (AnalyzeTool or InverseDynamicsTool).
+        setup: PathBuf,
+        /// The .osim file to write.
+        #[arg(short = 'o', long = "output", value_name = "FILE")]
+        output: PathBuf,
+    },
+    /// Write a .mot in which a coordinate moves from --from to --to along a minimum-jerk
+    /// (bell-shaped velocity) profile; every other coordinate stays at its default value.
+    Motion {
+        /// The model (give --model or --setup).
+        #[arg(
+            long,
+            value_name = "FILE",
+            required_unless_present = "setup",
+            conflicts_with = "setup"
+        )]
+        model: Option<PathBuf>,
+        /// Artifact models merged into --model (repeatable).
+        #[arg(long = "artifact", value_name = "FILE", requires = "model")]
+        artifacts: Vec<PathBuf>,
+        /// Take the model and artifact_files from this setup instead.
+        #[arg(long, value_name = "FILE")]
+        setup: Option<PathBuf>,
+        /// The driven coordinate.
+        #[arg(long, value_name = "NAME")]
+        coordinate: String,
+        /// Start value (degrees for rotational coordinates, model units otherwise).
+        #[arg(long, allow_negative_numbers = true)]
+        from: f64,
+        /// End value (same units).
+        #[arg(long, allow_negative_numbers = true)]
+        to: f64,
+        /// Duration of the movement, s.
+        #[arg(long)]
+        duration: f64,
+        /// Rows per second.
+        #[arg(long, default_value_t = 100.0)]
+        rate: f64,
+        /// Another coordinate following the same profile (repeatable).
+        #[arg(long, value_name = "NAME")]
+        also: Vec<String>,
+        /// A coordinate following a linear relation in file units, e.g.
+        /// lever_angle=1*knee_angle_r+0 (repeatable, applied in order).
+        #[arg(long, value_name = "TARGET=A*SOURCE+B", allow_hyphen_values = true)]
+        link: Vec<String>,
+        /// Set COORDINATE on every row so that CONTACT's point lies on its plane (Newton from its
+        /// --link value if it has one, else from the previous row). Repeatable.
+        #[arg(long, value_name = "CONTACT=COORDINATE")]
+        touch: Vec<String>,
+        /// A force-set file holding contacts for --touch (repeatable; with --setup its
+        /// force_set_files are used too).
+        #[arg(long = "force-set", value_name = "FILE")]
+        force_sets: Vec<PathBuf>,
+        /// Digits after the decimal point.
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=20))]
+        precision: u8,
+        /// The .mot file to write.
+        #[arg(short = 'o', long = "output", value_name = "FILE")]
+        output: PathBuf,
+    },
+}
+
+fn run_scene(setup: &std::path::Path, output: &std::path::Path) -> statopt::Result<()> {
+    let (model, artifacts, force_sets, replace) = match Setup::read(setup)? {
+        Setup::Analyze(s) => (
+            s.model_file,
+            s.artifact_files,
+            s.force_set_files,
+            s.replace_force_set,
+        ),
+        Setup::InverseDynamics(s) => (s.model_file, s.artifact_files, Vec::new(), false),
+    };
+    let scene = statopt::parse::scene::compose_scene(&model, &artifacts, &force_sets, replace)?;
+    statopt::parse::scene::write_document(&scene.document, output)?;
+    for w in &scene.spec.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !scene.omitted_contacts.is_empty() {
+        eprintln!(
+            "note: contact elements left out (OpenSim does not know them): {}",
+            scene.omitted_contacts.join(", ")
+        );
+    }
+    let forces = scene
+        .document
+        .path(&["Model", "ForceSet", "objects"])
+        .map_or(0, |o| o.children.len());
+    eprintln!(
+        "wrote {} ({} bodies, {} joints, {} forces)",
+        output.display(),
+        scene.spec.bodies.len(),
+        scene.spec.joints.len(),
+        forces
+    );
+    Ok(())
+}
+
+fn run_motion(cmd: &Command) -> statopt::Result<()> {
+    let Command::Motion {
+        model,
+        artifacts,
+        setup,
+        coordinate,
+        from,
+        to,
+        duration,
+        rate,
+        also,
+        link,
+        touch,
+        force_sets,
+        precision,
+        output,
+    } = cmd
+    else {
+        return Err(statopt::Error::internal(
+            "run_motion called for another command",
+        ));
+    };
+    let mut force_set_files = force_sets.clone();
+    let (model_file, artifact_files) = match (model, setup) {
+        (Some(m), _) => (m.clone(), artifacts.clone()),
+        (None, Some(s)) => match Setup::read(s)? {
+            Setup::Analyze(s) => {
+                force_set_files.extend(s.force_set_files);
+                (s.model_file, s.artifact_files)
+            }
+            Setup::InverseDynamics(s) => (s.model_file, s.artifact_files),
+        },
+        (None, None) => return Err(statopt::Error::msg("give --model or --setup")),
+    };
+    let (spec, compiled) = tools::loading::load_composed_model(&model_file, &artifact_files)?;
+    let mut forces = spec.forces.clone();
+    for f in &force_set_files {
+        forces.extend(statopt::forces::read_force_set_file(f)?);
+    }
+    let motion = tools::motion_gen::MinJerkMotion {
+        coordinate: coordinate.clone(),
+        also: also.clone(),
+        from: *from,
+        to: *to,
+        duration: *duration,
+        rate: *rate,
+        links: link
+            .iter()
+            .map(|l| tools::motion_gen::parse_link(l))
+            .collect::<statopt::Result<_>>()?,
+        touch: touch
+            .iter()
+            .map(|t| tools::motion_gen::parse_touch(t))
+            .collect::<statopt::Result<_>>()?,
+    };
+    let (table, warnings) = tools::motion_gen::generate(&compiled, &motion, &forces)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    statopt::storage::write(output, &table, usize::from(*precision))?;
+    eprintln!(
+        "wrote {} ({} rows, {} coordinates)",
+        output.display(),
+        table.len(),
+        table.labels.len()
+    );
+    Ok(())
 }
 
 fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
@@ -81,6 +251,9 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         .setup
         .as_ref()
         .ok_or_else(|| statopt::Error::msg("no setup file given"))?;
+    if tools::study::is_study(setup) {
+        return tools::study::run(setup, &opts);
+    }
     match Setup::read(setup)? {
         Setup::InverseDynamics(s) => tools::inverse_dynamics::run(&s, &opts),
         Setup::Analyze(s) => tools::analyze::run(&s, &opts),
@@ -132,6 +305,14 @@ fn main() -> ExitCode {
                 Err(e) => fail(e),
             }
         }
+        Some(Command::Scene { setup, output }) => match run_scene(setup, output) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => fail(e),
+        },
+        Some(cmd @ Command::Motion { .. }) => match run_motion(cmd) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => fail(e),
+        },
         None => match run_setup(&cli.run) {
             Ok(summary) => {
                 if !cli.run.quiet {

@@ -95,6 +95,8 @@ pub struct StateStream<'m> {
     g_end: usize,
     next_out: usize,
     block: usize,
+    /// Rows computed in memory, handed out as one block ([`Self::in_memory`]).
+    memory: Option<StateBlock>,
 }
 
 impl<'m> StateStream<'m> {
@@ -360,11 +362,67 @@ impl<'m> StateStream<'m> {
             g_end: ge,
             next_out: first_row,
             block,
+            memory: None,
         })
+    }
+
+    /// States computed in memory (`States::from_coordinates`,
+    /// `States::speed_derivatives`) behind the same interface: the rows
+    /// `findIndex(initial)..=findIndex(final)` as one block.
+    pub fn in_memory(
+        model: &'m Model,
+        states: crate::motion::states::States,
+        udot: Vec<Vec<f64>>,
+        initial: f64,
+        final_: f64,
+    ) -> StateStream<'m> {
+        use crate::motion::coordinates::find_index;
+        let rows = states.time.len();
+        let first_row = find_index(&states.time, initial);
+        let last_row = find_index(&states.time, final_);
+        let (first_time, last_time) = (
+            states.time.first().copied().unwrap_or(0.0),
+            states.time.last().copied().unwrap_or(0.0),
+        );
+        let memory = (rows > 0 && last_row >= first_row).then(|| {
+            let r = first_row..last_row + 1;
+            StateBlock {
+                first: first_row,
+                time: states.time[r.clone()].to_vec(),
+                q: states.q[r.clone()].to_vec(),
+                u: states.u[r.clone()].to_vec(),
+                udot: udot[r].to_vec(),
+            }
+        });
+        StateStream {
+            model,
+            file: PathBuf::new(),
+            coord_cols: Vec::new(),
+            labels: Vec::new(),
+            missing: states.missing,
+            rows,
+            first_time,
+            last_time,
+            first_row,
+            last_row,
+            filter: None,
+            k: 0,
+            g: GSource::Empty,
+            gbuf: VecDeque::new(),
+            gbuf_start: 0,
+            g_end: 0,
+            next_out: first_row,
+            block: rows.max(1),
+            memory,
+        }
     }
 
     /// The next block of rows, in order; None after `last_row`.
     pub fn next_block(&mut self) -> Result<Option<StateBlock>> {
+        if let GSource::Empty = self.g {
+            self.next_out = self.last_row + 1;
+            return Ok(self.memory.take());
+        }
         if self.next_out > self.last_row || self.next_out >= self.rows {
             return Ok(None);
         }
@@ -619,6 +677,8 @@ impl PSource {
 
 /// G's rows `start..end` in order.
 enum GSource {
+    /// No source: the states were computed in memory.
+    Empty,
     Direct(PSource),
     Resampled {
         p: PSource,
@@ -640,6 +700,7 @@ enum GSource {
 impl GSource {
     fn next(&mut self) -> Result<Option<(f64, Vec<f64>)>> {
         match self {
+            GSource::Empty => Ok(None),
             GSource::Direct(p) => p.next(),
             GSource::Resampled {
                 p,

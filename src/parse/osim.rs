@@ -29,6 +29,8 @@ pub struct ModelSpec {
     pub file: std::path::PathBuf,
     pub version: u32,
     pub gravity: Vector3<f64>,
+    /// Where gravity was given (None: OpenSim's default was used).
+    pub gravity_loc: Option<Location>,
     pub ground_name: String,
     pub bodies: Vec<BodySpec>,
     pub joints: Vec<JointSpec>,
@@ -166,6 +168,7 @@ impl ModelSpec {
             file: path.to_path_buf(),
             version,
             gravity: model.child_vec3_or("gravity", [0.0, -9.80665, 0.0])?,
+            gravity_loc: model.child("gravity").map(Element::loc),
             ground_name: "ground".into(),
             bodies: Vec::new(),
             joints: Vec::new(),

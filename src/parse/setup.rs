@@ -21,6 +21,9 @@ pub struct AnalyzeSetup {
     pub name: String,
     pub setup_file: PathBuf,
     pub model_file: PathBuf,
+    /// Artifact (machine, device) models merged into the model before it is
+    /// compiled (`<artifact_files>`, statopt's extension; docs/composition.md).
+    pub artifact_files: Vec<PathBuf>,
     pub replace_force_set: bool,
     pub force_set_files: Vec<PathBuf>,
     pub results_directory: PathBuf,
@@ -32,6 +35,13 @@ pub struct AnalyzeSetup {
     pub coordinates_file: Option<PathBuf>,
     pub speeds_file: Option<PathBuf>,
     pub lowpass_cutoff: f64,
+    /// statopt: `CONTACT=COORDINATE` pairs; the coordinate is solved on every
+    /// row of the motion so that the contact stays closed (e.g. a machine's
+    /// lever angle from its pad on the shin), before speeds are splined.
+    pub close_contacts: Vec<(String, String)>,
+    /// statopt: `<Figure>` and `<Metric>` elements (see `tools::study`),
+    /// drawn from the run's tables after the analyses.
+    pub figures: Vec<Element>,
     pub analyses: Vec<Analysis>,
 }
 
@@ -70,6 +80,8 @@ pub struct InverseDynamicsSetup {
     pub name: String,
     pub setup_file: PathBuf,
     pub model_file: PathBuf,
+    /// Artifact models merged into the model (`<artifact_files>`, statopt's extension).
+    pub artifact_files: Vec<PathBuf>,
     pub coordinates_file: PathBuf,
     /// Negative: no filtering.
     pub lowpass_cutoff: f64,
@@ -90,6 +102,17 @@ pub fn resolve(setup_dir: &Path, p: &str) -> PathBuf {
     } else {
         setup_dir.join(p)
     }
+}
+
+/// A whitespace-separated list of file names, resolved against the setup's folder.
+fn path_list(tool: &Element, name: &str, dir: &Path) -> Vec<PathBuf> {
+    tool.child(name)
+        .map(|e| e.words())
+        .unwrap_or_default()
+        .iter()
+        .filter(|w| w.as_str() != "Unassigned")
+        .map(|p| resolve(dir, p))
+        .collect()
 }
 
 fn opt_text(el: &Element, name: &str) -> Option<String> {
@@ -150,6 +173,7 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
         name: tool.attr("name").unwrap_or("").to_string(),
         setup_file: path.to_path_buf(),
         model_file: req_path("model_file")?,
+        artifact_files: path_list(tool, "artifact_files", dir),
         coordinates_file: req_path("coordinates_file")?,
         lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
         time_range,
@@ -246,6 +270,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
         name: tool.attr("name").unwrap_or("").to_string(),
         setup_file: path.to_path_buf(),
         model_file: resolve(dir, &model_file),
+        artifact_files: path_list(tool, "artifact_files", dir),
         replace_force_set: tool.child_bool_or("replace_force_set", false)?,
         force_set_files: tool
             .child("force_set_files")
@@ -266,6 +291,27 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
         coordinates_file,
         speeds_file: opt_text(tool, "speeds_file").map(|p| resolve(dir, &p)),
         lowpass_cutoff: tool.child_f64_or("lowpass_cutoff_frequency_for_coordinates", -1.0)?,
+        close_contacts: match tool.child("close_contacts") {
+            Some(c) => c
+                .words()
+                .iter()
+                .map(|w| match w.split_once('=') {
+                    Some((a, b)) if !a.is_empty() && !b.is_empty() => {
+                        Ok((a.to_string(), b.to_string()))
+                    }
+                    _ => Err(c.error(format!(
+                        "close_contacts entry '{w}' must be CONTACT=COORDINATE"
+                    ))),
+                })
+                .collect::<Result<Vec<_>>>()?,
+            None => Vec::new(),
+        },
+        figures: tool
+            .children
+            .iter()
+            .filter(|c| c.name == "Figure" || c.name == "Metric")
+            .cloned()
+            .collect(),
         analyses,
     })
 }

@@ -259,24 +259,53 @@ fn apply_wrap_objects(
 /// Ground velocity of a current-path point.
 fn point_velocity(path: &GeometryPath, data: &Data, p: &CurrentPoint) -> Vector3<f64> {
     let mut v = data.station_velocity(p.body, &p.local);
-    if let Origin::Point(i) = p.origin {
-        let pp = &path.points[i];
-        if let PointKind::Moving {
-            coordinate,
-            functions,
-            ..
-        } = &pp.kind
-        {
-            let q = data.q[*coordinate];
-            let d = Vector3::new(
-                functions[0].derivative(q, 1),
-                functions[1].derivative(q, 1),
-                functions[2].derivative(q, 1),
-            );
-            v += data.rotation[p.body] * (pp.frame.rotation * d) * data.u[*coordinate];
-        }
+    if let Some((c, dp)) = moving_point_rate(path, data, p) {
+        v += dp * data.u[c];
     }
     v
+}
+
+/// For a moving path point: its coordinate and ∂p/∂q (ground frame), the
+/// derivative taken at the unclamped coordinate value as OpenSim does.
+fn moving_point_rate(
+    path: &GeometryPath,
+    data: &Data,
+    p: &CurrentPoint,
+) -> Option<(usize, Vector3<f64>)> {
+    let Origin::Point(i) = p.origin else {
+        return None;
+    };
+    let pp = &path.points[i];
+    let PointKind::Moving {
+        coordinate,
+        functions,
+        ..
+    } = &pp.kind
+    else {
+        return None;
+    };
+    let q = data.q[*coordinate];
+    let d = Vector3::new(
+        functions[0].derivative(q, 1),
+        functions[1].derivative(q, 1),
+        functions[2].derivative(q, 1),
+    );
+    Some((*coordinate, data.rotation[p.body] * (pp.frame.rotation * d)))
+}
+
+/// The pull of a unit tension on the path's points: at each end of every
+/// segment whose points lie on different bodies, the unit vector towards the
+/// other end (zero for coincident points, where OpenSim gives NaN).
+fn unit_pulls(st: &PathState) -> impl Iterator<Item = (&CurrentPoint, Vector3<f64>)> {
+    st.points
+        .windows(2)
+        .filter(|w| w[0].body != w[1].body)
+        .flat_map(|w| {
+            let d = w[1].ground - w[0].ground;
+            let n = d.norm();
+            let e = if n > 0.0 { d / n } else { Vector3::zeros() };
+            [(&w[0], e), (&w[1], -e)]
+        })
 }
 
 /// Lengthening speed (positions and velocities in `data` must be current).
@@ -306,38 +335,10 @@ pub fn add_unit_tension_force(
     st: &PathState,
     gen: &mut [f64],
 ) {
-    let pts = &st.points;
-    for k in 0..pts.len().saturating_sub(1) {
-        let (a, b) = (&pts[k], &pts[k + 1]);
-        if a.body == b.body {
-            continue;
-        }
-        let d = b.ground - a.ground;
-        let n = d.norm();
-        // OpenSim gives NaN for coincident points on different bodies; a zero
-        // direction keeps the outputs defined.
-        let e = if n > 0.0 { d / n } else { Vector3::zeros() };
-        jacobian::add_point_force(model, data, a.body, &a.ground, &e, gen);
-        jacobian::add_point_force(model, data, b.body, &b.ground, &(-e), gen);
-        for (p, f) in [(a, e), (b, -e)] {
-            if let Origin::Point(i) = p.origin {
-                let pp = &path.points[i];
-                if let PointKind::Moving {
-                    coordinate,
-                    functions,
-                    ..
-                } = &pp.kind
-                {
-                    let q = data.q[*coordinate];
-                    let dp = Vector3::new(
-                        functions[0].derivative(q, 1),
-                        functions[1].derivative(q, 1),
-                        functions[2].derivative(q, 1),
-                    );
-                    let dp_g = data.rotation[p.body] * (pp.frame.rotation * dp);
-                    gen[*coordinate] += dp_g.dot(&f);
-                }
-            }
+    for (p, e) in unit_pulls(st) {
+        jacobian::add_point_force(model, data, p.body, &p.ground, &e, gen);
+        if let Some((c, dp)) = moving_point_rate(path, data, p) {
+            gen[c] += dp.dot(&e);
         }
     }
 }
@@ -358,38 +359,11 @@ pub fn add_tension_forces(
     applied: &mut [crate::dynamics::BodyForce],
     gen: &mut [f64],
 ) {
-    use crate::dynamics::BodyForce;
-    let pts = &st.points;
-    for k in 0..pts.len().saturating_sub(1) {
-        let (a, b) = (&pts[k], &pts[k + 1]);
-        if a.body == b.body {
-            continue;
-        }
-        let d = b.ground - a.ground;
-        let n = d.norm();
-        let e = if n > 0.0 { d / n } else { Vector3::zeros() };
+    for (p, e) in unit_pulls(st) {
         let f = e * tension;
-        applied[a.body].add(&BodyForce::at_point(f, a.ground));
-        applied[b.body].add(&BodyForce::at_point(-f, b.ground));
-        for (p, fp) in [(a, f), (b, -f)] {
-            if let Origin::Point(i) = p.origin {
-                let pp = &path.points[i];
-                if let PointKind::Moving {
-                    coordinate,
-                    functions,
-                    ..
-                } = &pp.kind
-                {
-                    let q = data.q[*coordinate];
-                    let dp = Vector3::new(
-                        functions[0].derivative(q, 1),
-                        functions[1].derivative(q, 1),
-                        functions[2].derivative(q, 1),
-                    );
-                    let dp_g = data.rotation[p.body] * (pp.frame.rotation * dp);
-                    gen[*coordinate] += dp_g.dot(&fp);
-                }
-            }
+        applied[p.body].add(&crate::dynamics::BodyForce::at_point(f, p.ground));
+        if let Some((c, dp)) = moving_point_rate(path, data, p) {
+            gen[c] += dp.dot(&f);
         }
     }
 }

@@ -70,7 +70,10 @@ fn check_time_range(
 /// Read the setup's motion into states.
 pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
     let file = coordinates_file(setup)?;
-    let table = load_coordinates(file, setup.lowpass_cutoff)?;
+    let mut table = load_coordinates(file, setup.lowpass_cutoff)?;
+    if !setup.close_contacts.is_empty() {
+        close_setup_contacts(setup, model, &mut table)?;
+    }
     let states = States::from_coordinates(model, &table, file)?;
     let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
     check_time_range(setup, file, first, last)?;
@@ -80,11 +83,25 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
 /// The setup's motion as a [`StateStream`] over the frames from
 /// `initial_time` to `final_time` (the same states as [`load_states`] and
 /// `States::speed_derivatives`, block by block; see `motion::stream`).
+/// With `<close_contacts>` the states are computed in memory
+/// ([`load_states`]) and handed out as one block: the closure is not
+/// streamed yet.
 pub fn open_state_stream<'m>(
     setup: &AnalyzeSetup,
     model: &'m crate::model::Model,
 ) -> Result<StateStream<'m>> {
     let file = coordinates_file(setup)?;
+    if !setup.close_contacts.is_empty() {
+        let states = load_states(setup, model)?;
+        let udot = states.speed_derivatives(file)?;
+        return Ok(StateStream::in_memory(
+            model,
+            states,
+            udot,
+            setup.initial_time,
+            setup.final_time,
+        ));
+    }
     let stream = StateStream::open(
         model,
         file,
@@ -112,6 +129,19 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
         }
         None => run_analyses(setup, opts),
     }
+    .and_then(|mut summary| {
+        if !setup.figures.is_empty() {
+            // Figures read the run's tables: their paths are relative to the results directory.
+            let out = results_dir(setup, opts)?;
+            summary.files.extend(crate::tools::study::draw(
+                &setup.figures,
+                &out,
+                &out,
+                &setup.name,
+            )?);
+        }
+        Ok(summary)
+    })
 }
 
 fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
@@ -197,4 +227,40 @@ pub fn results_dir(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<std::path:
         .unwrap_or_else(|| setup.results_directory.clone());
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     Ok(dir)
+}
+
+/// Apply the setup's `<close_contacts>`: the contacts come from the model's
+/// and the force-set files' force elements.
+fn close_setup_contacts(
+    setup: &AnalyzeSetup,
+    model: &crate::model::Model,
+    table: &mut crate::storage::Storage,
+) -> Result<()> {
+    let am = crate::tools::loading::load_analysis_model(setup)?;
+    let at = || Location::file(&setup.setup_file).with_element("<close_contacts>");
+    let mut closures = Vec::new();
+    for (contact, coordinate) in &setup.close_contacts {
+        let el = am
+            .forces
+            .iter()
+            .find(|f| {
+                f.attr("name") == Some(contact.as_str())
+                    && crate::tools::loading::force_kind(f)
+                        == crate::tools::loading::ForceKind::Contact
+            })
+            .ok_or_else(|| {
+                Error::input(
+                    at(),
+                    format!("no contact named '{contact}' in the model or its force-set files"),
+                )
+            })?;
+        let c = crate::contacts::Contact::from_xml(el, model)?
+            .ok_or_else(|| Error::input(at(), format!("'{contact}' is not a contact")))?;
+        let k = model
+            .coordinate_index(coordinate)
+            .ok_or_else(|| Error::input(at(), format!("no coordinate named '{coordinate}'")))?;
+        closures.push((c, k));
+    }
+    crate::motion::closure::close_contacts(model, table, &closures)
+        .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
 }

@@ -11,7 +11,9 @@ use crate::motion::coordinates::{find_index, CoordinateSplines, MissingCoordinat
 use crate::parse::osim::ModelSpec;
 use crate::parse::setup::InverseDynamicsSetup;
 use crate::storage::StoWriter;
-use crate::tools::loading::{applies_force, force_kind, load_coordinates, load_model, ForceKind};
+use crate::tools::loading::{
+    applies_force, force_kind, load_composed_model, load_coordinates, ForceKind,
+};
 use crate::tools::{RunOptions, RunSummary};
 
 /// Output column labels, tree order.
@@ -72,7 +74,7 @@ fn check_forces(spec: &ModelSpec, exclude: &[String]) -> Result<bool> {
 }
 
 pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary> {
-    let (spec, model) = load_model(&setup.model_file)?;
+    let (spec, model) = load_composed_model(&setup.model_file, &setup.artifact_files)?;
     let mut warnings: Vec<String> = model.warnings.clone();
     for (what, loc) in &spec.unsupported {
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));

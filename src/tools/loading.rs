@@ -1,7 +1,7 @@
 //! Shared input loading for the tools: model, coordinates (filtered as
 //! OpenSim filters them), force classification.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::Result;
 use crate::model::{compile, Model};
@@ -13,6 +13,15 @@ use crate::xml::Element;
 /// Read and compile a model file.
 pub fn load_model(path: &Path) -> Result<(ModelSpec, Model)> {
     let spec = ModelSpec::read(path)?;
+    let model = compile(&spec)?;
+    Ok((spec, model))
+}
+
+/// Read a model file, merge the artifact models into it (in order, before
+/// compilation, so that force elements of the model, of the artifacts and of
+/// force-set files can all name bodies of either) and compile the result.
+pub fn load_composed_model(path: &Path, artifact_files: &[PathBuf]) -> Result<(ModelSpec, Model)> {
+    let spec = crate::parse::compose::read_composed(path, artifact_files)?;
     let model = compile(&spec)?;
     Ok((spec, model))
 }
@@ -74,14 +83,18 @@ pub fn applies_force(el: &Element) -> Result<bool> {
 pub struct AnalysisModel {
     pub model: Model,
     pub spec: ModelSpec,
-    /// ForceSet elements: the model's own (unless replace_force_set), then
+    /// ForceSet elements: the composed model's own (those of the model and its
+    /// artifacts, unless replace_force_set), then
     /// each force_set_files set, in order.
     pub forces: Vec<Element>,
     pub warnings: Vec<String>,
 }
 
 pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<AnalysisModel> {
-    let (spec, model) = load_model(&setup.model_file)?;
+    // Artifacts are merged before compilation and force-set files are read
+    // after it: contacts in a force-set file resolve their bodies against the
+    // composed model.
+    let (spec, model) = load_composed_model(&setup.model_file, &setup.artifact_files)?;
     let mut forces = if setup.replace_force_set {
         Vec::new()
     } else {

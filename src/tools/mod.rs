@@ -5,9 +5,11 @@ pub mod bench;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod loading;
+pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod progress;
 pub mod static_optimization;
+pub mod study;
 
 use std::path::PathBuf;
 

@@ -129,6 +129,20 @@ pub enum Control {
     Actuator(Actuator),
 }
 
+/// An unbounded CoordinateActuator, as OpenSim creates for
+/// `use_model_force_set = false` (and statopt for reserves).
+fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -> Actuator {
+    Actuator {
+        name: name.to_string(),
+        kind: ActuatorKind::Coordinate { coordinate },
+        optimal_force,
+        min_control: f64::NEG_INFINITY,
+        max_control: f64::INFINITY,
+        applies_force: true,
+        type_name: "CoordinateActuator".into(),
+    }
+}
+
 /// Everything a frame needs, compiled once.
 pub struct SoProblem {
     pub model: Model,
@@ -237,15 +251,7 @@ impl SoProblem {
             // per unconstrained coordinate, then the non-muscle forces.
             for &c in &rows {
                 let name = format!("{}_actuator", model.coordinates[c].name);
-                controls.push(Control::Actuator(Actuator {
-                    name: name.clone(),
-                    kind: ActuatorKind::Coordinate { coordinate: c },
-                    optimal_force: 1.0,
-                    min_control: f64::NEG_INFINITY,
-                    max_control: f64::INFINITY,
-                    applies_force: true,
-                    type_name: "CoordinateActuator".into(),
-                }));
+                controls.push(Control::Actuator(free_coordinate_actuator(&name, c, 1.0)));
                 labels.push(name.clone());
                 force_labels.push(name);
                 lower.push(f64::NEG_INFINITY);
@@ -308,15 +314,7 @@ impl SoProblem {
                         format!("reserve_actuators: the model already has a force named '{name}'"),
                     ));
                 }
-                controls.push(Control::Actuator(Actuator {
-                    name: name.clone(),
-                    kind: ActuatorKind::Coordinate { coordinate: c },
-                    optimal_force: opt,
-                    min_control: f64::NEG_INFINITY,
-                    max_control: f64::INFINITY,
-                    applies_force: true,
-                    type_name: "CoordinateActuator".into(),
-                }));
+                controls.push(Control::Actuator(free_coordinate_actuator(&name, c, opt)));
                 // Reserve columns follow the ForceSet's actuators in both files.
                 let at = labels.len();
                 labels.insert(at, name.clone());
@@ -1081,7 +1079,8 @@ fn run_once(
         files.push(path);
     }
     let log_path = dir.join(format!("{prefix}log.mcap"));
-    let mut log = FrameLog::create(problem, &log_path, reactions.first().map(|(_, s)| *s))?;
+    let log_names = LogNames::new(problem, reactions.first().map(|(_, s)| *s));
+    let mut log = FrameLog::create(&log_path, &log_names)?;
     files.push(log_path);
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
@@ -1097,6 +1096,8 @@ fn run_once(
         .collect();
     let mut reserve_peak = (0.0f64, String::new());
     let nv = problem.controls.len();
+    // Actuators saturated at a finite upper bound: reported, never silent.
+    let mut at_bound: Vec<(String, usize, f64)> = Vec::new();
     let start = Instant::now();
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
@@ -1106,7 +1107,7 @@ fn run_once(
             .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
             .collect();
         for chunk in sel.chunks(256) {
-            let results: Vec<Result<(FrameResult, Vec<Vec<f64>>)>> = chunk
+            let results: Vec<Result<(FrameResult, Vec<Vec<f64>>, FrameMessages)>> = chunk
                 .par_iter()
                 .map_init(
                     || {
@@ -1140,16 +1141,17 @@ fn run_once(
                             )?;
                             rows.push(out);
                         }
-                        Ok((r, rows))
+                        let messages = log_names.encode(problem, &r, &rows)?;
+                        Ok((r, rows, messages))
                     },
                 )
                 .collect();
             for res in results {
-                let (r, jr_rows) = res?;
+                let (r, jr_rows, messages) = res?;
                 for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
                     w.write_row(r.time, row)?;
                 }
-                log.reactions(r.time, &jr_rows)?;
+                log.write(r.time, &messages)?;
                 src_w.write_row(r.time, &r.by_source)?;
                 power_w.write_row(r.time, &r.muscle_power)?;
                 if !r.solution.status.is_ok() {
@@ -1157,6 +1159,18 @@ fn run_once(
                         "t={}: {:?}, equation residual {:.3e}",
                         r.time, r.solution.status, r.solution.eq_residual
                     ));
+                }
+                for v in 0..nv {
+                    let up = problem.upper[v];
+                    if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+                        match at_bound
+                            .iter_mut()
+                            .find(|(n, _, _)| *n == problem.labels[v])
+                        {
+                            Some(e) => e.1 += 1,
+                            None => at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                        }
+                    }
                 }
                 for &v in &reserve_vars {
                     if r.forces[v].abs() > reserve_peak.0 {
@@ -1180,7 +1194,6 @@ fn run_once(
                         r.solution.solve_time.as_secs_f64() * 1e3,
                     ],
                 )?;
-                log.frame(problem, &r)?;
                 if let Some((cw, bw, lw)) = contact_w.as_mut() {
                     cw.write_row(r.time, &r.contacts.contact)?;
                     bw.write_row(r.time, &r.contacts.bodies)?;
@@ -1215,6 +1228,16 @@ fn run_once(
             diag_path.display()
         ));
     }
+    if !at_bound.is_empty() {
+        let list: Vec<String> = at_bound
+            .iter()
+            .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
+            .collect();
+        warnings.push(format!(
+            "activations at their upper bound: {}",
+            list.join(", ")
+        ));
+    }
     if !reserve_vars.is_empty() {
         warnings.push(format!(
             "reserve actuators carried at most {:.6} (N or N m){}",
@@ -1246,75 +1269,76 @@ fn run_once(
 pub const FORCE_DESCRIPTION: &str = "\nThis file contains the forces exerted on a model during a simulation.\n\nA force is a generalized force, meaning that it can be either a force (N) or a torque (Nm).\n\nUnits are S.I. units (second, meters, Newtons, ...)\nIf the header above contains a line with 'inDegrees', this indicates whether rotational values are in degrees (yes) or radians (no).\n\n";
 
 /// The run's MCAP log: one message per frame on each channel (see
-/// `output::mcap_log` for the channels and message layout).
+/// `output::mcap_log` for the channels and message layout). Messages are
+/// built and encoded by the frame workers ([`LogNames::encode`]); the log
+/// only writes them in order.
 struct FrameLog {
     log: mcap_log::McapLog,
+}
+
+/// Channel member names of a run's log (shared by the frame workers).
+struct LogNames {
     coordinates: Vec<String>,
+    labels: Vec<String>,
     contacts: Vec<String>,
     /// Reaction label roots of the first coupled JointReaction, if any.
     joints: Vec<String>,
 }
 
-impl FrameLog {
-    fn create(
-        problem: &SoProblem,
-        path: &std::path::Path,
-        reactions: Option<&[ReactionSpec]>,
-    ) -> Result<FrameLog> {
-        let joints: Vec<String> = reactions
-            .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
-            .unwrap_or_default();
-        let coordinates: Vec<String> = problem
-            .model
-            .coordinates
-            .iter()
-            .map(|c| c.name.clone())
-            .collect();
-        let contacts: Vec<String> = problem.contacts.iter().map(|c| c.name.clone()).collect();
-        let channels = mcap_log::StatoptChannels {
-            coordinates: coordinates.clone(),
-            activations: problem.labels.clone(),
-            forces: problem.labels.clone(),
-            contacts: contacts.clone(),
-            joints: joints.clone(),
-        };
-        let log = mcap_log::McapLog::create(path, &channels.specs()?)?;
-        Ok(FrameLog {
-            log,
-            joints,
-            coordinates,
-            contacts,
-        })
+/// Encoded messages of one frame: (channel index, JSON bytes).
+type FrameMessages = Vec<(usize, Vec<u8>)>;
+
+impl LogNames {
+    fn new(problem: &SoProblem, reactions: Option<&[ReactionSpec]>) -> LogNames {
+        LogNames {
+            coordinates: problem
+                .model
+                .coordinates
+                .iter()
+                .map(|c| c.name.clone())
+                .collect(),
+            labels: problem.labels.clone(),
+            contacts: problem.contacts.iter().map(|c| c.name.clone()).collect(),
+            joints: reactions
+                .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
+                .unwrap_or_default(),
+        }
     }
 
-    fn frame(&mut self, problem: &SoProblem, r: &FrameResult) -> Result<()> {
+    fn encode(
+        &self,
+        problem: &SoProblem,
+        r: &FrameResult,
+        jr_rows: &[Vec<f64>],
+    ) -> Result<FrameMessages> {
         fn names(v: &[String]) -> Vec<&str> {
             v.iter().map(String::as_str).collect()
         }
-        let coords = names(&self.coordinates);
-        let labels = names(&problem.labels);
+        let t = r.time;
         let nv = problem.controls.len();
-        self.log.log(
+        let labels = names(&self.labels);
+        let mut out = Vec::with_capacity(6);
+        let mut push = |idx: usize, v: serde_json::Value| -> Result<()> {
+            out.push((idx, mcap_log::serialize_message(t, &v)?));
+            Ok(())
+        };
+        push(
             mcap_log::KINEMATICS,
-            r.time,
-            &mcap_log::kinematics_message(&coords, &r.q, &r.u, &r.udot)?,
+            mcap_log::kinematics_message(&names(&self.coordinates), &r.q, &r.u, &r.udot)?,
         )?;
-        self.log.log(
+        push(
             mcap_log::ACTIVATIONS,
-            r.time,
-            &mcap_log::named_values_message(&labels, &r.solution.x[..nv])?,
+            mcap_log::named_values_message(&labels, &r.solution.x[..nv])?,
         )?;
-        self.log.log(
+        push(
             mcap_log::MUSCLE_FORCES,
-            r.time,
-            &mcap_log::named_values_message(&labels, &r.forces)?,
+            mcap_log::named_values_message(&labels, &r.forces)?,
         )?;
         if !self.contacts.is_empty() {
-            let k = CONTACT_COLUMNS.len();
             let samples: Vec<mcap_log::ContactSample> = r
                 .contacts
                 .contact
-                .chunks(k)
+                .chunks(CONTACT_COLUMNS.len())
                 .map(|c| mcap_log::ContactSample {
                     force: [c[0], c[1], c[2]],
                     point: [c[3], c[4], c[5]],
@@ -1328,17 +1352,28 @@ impl FrameLog {
                     },
                 })
                 .collect();
-            self.log.log(
+            push(
                 mcap_log::CONTACTS,
-                r.time,
-                &mcap_log::contacts_message(&names(&self.contacts), &samples)?,
+                mcap_log::contacts_message(&names(&self.contacts), &samples)?,
+            )?;
+        }
+        if let (Some(row), false) = (jr_rows.first(), self.joints.is_empty()) {
+            let samples: Vec<mcap_log::JointReactionSample> = row
+                .chunks(9)
+                .map(|c| mcap_log::JointReactionSample {
+                    force: [c[0], c[1], c[2]],
+                    moment: [c[3], c[4], c[5]],
+                })
+                .collect();
+            push(
+                mcap_log::JOINT_REACTIONS,
+                mcap_log::joint_reactions_message(&names(&self.joints), &samples)?,
             )?;
         }
         let status = format!("{:?}", r.solution.status);
-        self.log.log(
+        push(
             mcap_log::SOLVER,
-            r.time,
-            &mcap_log::solver_message(
+            mcap_log::solver_message(
                 &status,
                 r.solution.iterations,
                 r.solution.objective,
@@ -1346,27 +1381,29 @@ impl FrameLog {
                 r.solution.solve_time,
             ),
         )?;
-        Ok(())
+        Ok(out)
+    }
+}
+
+impl FrameLog {
+    fn create(path: &std::path::Path, names: &LogNames) -> Result<FrameLog> {
+        let channels = mcap_log::StatoptChannels {
+            coordinates: names.coordinates.clone(),
+            activations: names.labels.clone(),
+            forces: names.labels.clone(),
+            contacts: names.contacts.clone(),
+            joints: names.joints.clone(),
+        };
+        Ok(FrameLog {
+            log: mcap_log::McapLog::create(path, &channels.specs()?)?,
+        })
     }
 
-    /// Log the first coupled JointReaction's loads (force and moment per reaction).
-    fn reactions(&mut self, t: f64, rows: &[Vec<f64>]) -> Result<()> {
-        let (Some(row), false) = (rows.first(), self.joints.is_empty()) else {
-            return Ok(());
-        };
-        let samples: Vec<mcap_log::JointReactionSample> = row
-            .chunks(9)
-            .map(|c| mcap_log::JointReactionSample {
-                force: [c[0], c[1], c[2]],
-                moment: [c[3], c[4], c[5]],
-            })
-            .collect();
-        let names: Vec<&str> = self.joints.iter().map(String::as_str).collect();
-        self.log.log(
-            mcap_log::JOINT_REACTIONS,
-            t,
-            &mcap_log::joint_reactions_message(&names, &samples)?,
-        )
+    fn write(&mut self, t: f64, messages: &FrameMessages) -> Result<()> {
+        for (idx, data) in messages {
+            self.log.log_serialized(*idx, t, data)?;
+        }
+        Ok(())
     }
 
     fn finish(self) -> Result<()> {

@@ -261,6 +261,15 @@ impl McapLog {
     /// has one, it must equal `t`). The stamp is
     /// `round((t − t0) · 1e9)` ns (module documentation).
     pub fn log(&mut self, idx: usize, t: f64, msg: &Value) -> Result<()> {
+        let topic = self.topics.get(idx).cloned().unwrap_or_default();
+        let data = serialize_message(t, msg)
+            .map_err(|e| e.context(format!("{}: MCAP topic '{topic}'", self.path.display())))?;
+        self.log_serialized(idx, t, &data)
+    }
+
+    /// Log a message already serialized by [`serialize_message`] (so that
+    /// callers can build and encode messages in parallel and only write here).
+    pub fn log_serialized(&mut self, idx: usize, t: f64, data: &[u8]) -> Result<()> {
         let Some(&channel_id) = self.channel_ids.get(idx) else {
             return Err(Error::internal(format!(
                 "{}: MCAP channel index {idx} out of range ({} channels)",
@@ -268,37 +277,12 @@ impl McapLog {
                 self.channel_ids.len()
             )));
         };
-        let topic = &self.topics[idx];
-        let Some(obj) = msg.as_object() else {
-            return Err(Error::internal(format!(
-                "{}: message on MCAP topic '{topic}' is not a JSON object",
-                self.path.display()
-            )));
-        };
         if !t.is_finite() {
             return Err(Error::input(
-                Location::file(&self.path).with_element(topic.clone()),
+                Location::file(&self.path).with_element(self.topics[idx].clone()),
                 format!("message time {t} is not finite"),
             ));
         }
-        let data = match obj.get("time") {
-            Some(v) if v.as_f64() == Some(t) => serde_json::to_vec(msg),
-            Some(v) => {
-                return Err(Error::internal(format!(
-                    "{}: message on MCAP topic '{topic}' has time {v} but is logged at {t}",
-                    self.path.display()
-                )))
-            }
-            None => {
-                // `time` first, then the message's own fields.
-                let mut with_time = Map::with_capacity(obj.len() + 1);
-                with_time.insert("time".to_string(), json!(t));
-                with_time.extend(obj.iter().map(|(k, v)| (k.clone(), v.clone())));
-                serde_json::to_vec(&Value::Object(with_time))
-            }
-        }
-        .map_err(|e| Error::internal(format!("message on MCAP topic '{topic}': {e}")))?;
-
         if self.t0.is_none() {
             self.set_time_origin(t)?;
         }
@@ -326,7 +310,7 @@ impl McapLog {
             publish_time: stamp,
         };
         self.writer
-            .write_to_known_channel(&header, &data)
+            .write_to_known_channel(&header, data)
             .map_err(|e| mcap_error(&self.path, Some(&self.topics[idx]), e))
     }
 
@@ -388,6 +372,29 @@ fn vec3_schema(description: &str) -> Value {
         "properties": {"x": number(), "y": number(), "z": number()},
         "additionalProperties": false
     })
+}
+
+/// Encode a message for [`McapLog::log_serialized`]: a JSON object with
+/// `time` first (added when absent; an existing `time` must equal `t`).
+pub fn serialize_message(t: f64, msg: &Value) -> Result<Vec<u8>> {
+    let Some(obj) = msg.as_object() else {
+        return Err(Error::internal("an MCAP message must be a JSON object"));
+    };
+    match obj.get("time") {
+        Some(v) if v.as_f64() == Some(t) => serde_json::to_vec(msg),
+        Some(v) => {
+            return Err(Error::internal(format!(
+                "message has time {v} but is logged at {t}"
+            )))
+        }
+        None => {
+            let mut with_time = Map::with_capacity(obj.len() + 1);
+            with_time.insert("time".to_string(), json!(t));
+            with_time.extend(obj.iter().map(|(k, v)| (k.clone(), v.clone())));
+            serde_json::to_vec(&Value::Object(with_time))
+        }
+    }
+    .map_err(|e| Error::internal(format!("encoding an MCAP message: {e}")))
 }
 
 /// JSON Schema of an object with a number field `time`, the given number

@@ -1,0 +1,749 @@
+//! Drawing of charts onto any plotters backend (bitmap or SVG).
+
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::{plot_err, Chart, Layout, RefLine, Scatter, Series, Style, FONT};
+use crate::error::{Error, Result};
+
+/// Okabe–Ito colour-blind-safe palette (yellow replaced by grey, which
+/// reads better on white).
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),   // blue
+    RGBColor(213, 94, 0),    // vermillion
+    RGBColor(0, 158, 115),   // bluish green
+    RGBColor(204, 121, 167), // reddish purple
+    RGBColor(230, 159, 0),   // orange
+    RGBColor(86, 180, 233),  // sky blue
+    RGBColor(0, 0, 0),       // black
+    RGBColor(120, 120, 120), // grey
+];
+
+fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+const LINE_WIDTH: u32 = 2;
+
+/// Font sizes and margins scaled to the drawing area (1.0 at 1000×650).
+struct Metrics {
+    title: f64,
+    desc: f64,
+    tick: f64,
+    legend: f64,
+    point_label: f64,
+    margin: u32,
+    x_area: u32,
+    y_area: u32,
+}
+
+fn metrics<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> Metrics {
+    let (w, h) = area.dim_in_pixel();
+    let s = (w as f64 / 1000.0).min(h as f64 / 650.0).clamp(0.5, 3.0);
+    Metrics {
+        title: 30.0 * s,
+        desc: 22.0 * s,
+        tick: 18.0 * s,
+        legend: 19.0 * s,
+        point_label: 17.0 * s,
+        margin: (18.0 * s) as u32,
+        x_area: (60.0 * s) as u32,
+        y_area: (95.0 * s) as u32,
+    }
+}
+
+/// Check lengths and indices before anything is drawn.
+pub(super) fn validate_chart(c: &Chart) -> Result<()> {
+    for (i, s) in c.series.iter().enumerate() {
+        let name = || format!("chart '{}', series {} ('{}')", c.title, i, s.label);
+        if s.x.len() != s.y.len() {
+            return Err(Error::msg(format!(
+                "{}: x has {} values but y has {}",
+                name(),
+                s.x.len(),
+                s.y.len()
+            )));
+        }
+        if let Some((lo, hi)) = &s.band {
+            if lo.len() != s.x.len() || hi.len() != s.x.len() {
+                return Err(Error::msg(format!(
+                    "{}: the band has {} lower and {} upper values for {} x values",
+                    name(),
+                    lo.len(),
+                    hi.len(),
+                    s.x.len()
+                )));
+            }
+        }
+    }
+    if let Some((a, b)) = c.fill_between {
+        let n = c.series.len();
+        if a >= n || b >= n {
+            return Err(Error::msg(format!(
+                "chart '{}': fill_between ({a}, {b}) names a series that does not exist ({n} series)",
+                c.title
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Maximal runs of consecutive points whose coordinates are all finite.
+fn finite_runs(x: &[f64], ys: &[&[f64]]) -> Vec<Vec<usize>> {
+    let mut runs = Vec::new();
+    let mut cur = Vec::new();
+    for i in 0..x.len() {
+        if x[i].is_finite() && ys.iter().all(|y| y[i].is_finite()) {
+            cur.push(i);
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        runs.push(cur);
+    }
+    runs
+}
+
+/// Axis limits covering `v` (finite values; positive ones on a log axis),
+/// widened by `pad` of the span (of the decades on a log axis) each side.
+fn axis_range(v: &[f64], log: bool, pad: f64) -> (f64, f64) {
+    let usable = v
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite() && (!log || *x > 0.0));
+    let (lo, hi) = usable.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+        (lo.min(x), hi.max(x))
+    });
+    if lo > hi {
+        return if log { (1.0, 10.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        let (mut l, mut h) = (lo.log10(), hi.log10());
+        if h - l < 1e-9 {
+            l -= 0.5;
+            h += 0.5;
+        }
+        let p = (h - l) * pad;
+        (10f64.powf(l - p), 10f64.powf(h + p))
+    } else {
+        let span = hi - lo;
+        if span <= 1e-12 * lo.abs().max(hi.abs()) {
+            let d = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+            (lo - d, hi + d)
+        } else if !span.is_finite() {
+            (lo, hi)
+        } else {
+            (lo - pad * span, hi + pad * span)
+        }
+    }
+}
+
+/// Tick labels for logarithmic axes: at most 4 significant digits,
+/// scientific notation outside 1e-3..1e5.
+pub(super) fn log_tick(v: &f64) -> String {
+    let v = *v;
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.3e}");
+        // 1.000e-5 -> 1e-5
+        match s.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => s,
+        }
+    } else {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    }
+}
+
+fn line_style(style: Style) -> ShapeStyle {
+    color(style.color).stroke_width(LINE_WIDTH)
+}
+
+/// Pixels already used by the drawing (lines sampled every few pixels,
+/// boxes as grids), to place the legend where it hides least.
+#[derive(Default)]
+struct Occupancy {
+    pts: Vec<(i32, i32)>,
+}
+
+impl Occupancy {
+    fn polyline(&mut self, p: &[(i32, i32)]) {
+        for w in p.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()) / 4).clamp(1, 2000);
+            for k in 0..n {
+                let t = k as f64 / n as f64;
+                self.pts.push((
+                    a.0 + ((b.0 - a.0) as f64 * t) as i32,
+                    a.1 + ((b.1 - a.1) as f64 * t) as i32,
+                ));
+            }
+        }
+        self.pts.extend(p.last());
+    }
+    fn rect(&mut self, (x0, y0): (i32, i32), (x1, y1): (i32, i32)) {
+        for x in (x0.min(x1)..=x0.max(x1)).step_by(4) {
+            for y in (y0.min(y1)..=y0.max(y1)).step_by(4) {
+                self.pts.push((x, y));
+            }
+        }
+    }
+}
+
+/// Inner padding of the legend box.
+fn legend_pad(m: &Metrics) -> u32 {
+    m.margin / 2
+}
+
+const LEGEND_ICON: u32 = 34;
+
+/// The corner of the plotting area (position relative to it) where a legend
+/// with these labels covers the fewest occupied pixels; upper right on ties.
+fn legend_position<DB: DrawingBackend, CT: CoordTranslate>(
+    plot: &DrawingArea<DB, CT>,
+    occ: &Occupancy,
+    labels: &[&str],
+    m: &Metrics,
+) -> SeriesLabelPosition {
+    let font = TextStyle::from((FONT, m.legend).into_font());
+    let text_w = labels
+        .iter()
+        .map(|l| plot.estimate_text_size(l, &font).map_or(0, |s| s.0 as i32))
+        .max()
+        .unwrap_or(0);
+    let pad = legend_pad(m) as i32;
+    let w = text_w + LEGEND_ICON as i32 + 2 * pad;
+    let h = (labels.len() as f64 * 1.25 * m.legend) as i32 + 2 * pad;
+    let (xr, yr) = plot.get_pixel_range();
+    let (pw, ph) = (xr.end - xr.start, yr.end - yr.start);
+    let gap = 8;
+    let candidates = [
+        (pw - w - gap, gap),
+        (gap, gap),
+        (gap, ph - h - gap),
+        (pw - w - gap, ph - h - gap),
+        ((pw - w) / 2, gap),
+    ];
+    let covered = |&(x, y): &(i32, i32)| {
+        occ.pts
+            .iter()
+            .filter(|&&(px, py)| {
+                let (px, py) = (px - xr.start, py - yr.start);
+                px >= x - 3 && px <= x + w + 3 && py >= y - 3 && py <= y + h + 3
+            })
+            .count()
+    };
+    let mut best = candidates[0];
+    let mut best_n = covered(&best);
+    for c in &candidates[1..] {
+        let n = covered(c);
+        if n < best_n {
+            best = *c;
+            best_n = n;
+        }
+    }
+    SeriesLabelPosition::Coordinate(best.0.max(0), best.1.max(0))
+}
+
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    ch: &mut ChartContext<'a, DB, CT>,
+    pos: SeriesLabelPosition,
+    m: &Metrics,
+) -> Result<()> {
+    ch.configure_series_labels()
+        .position(pos)
+        .margin(legend_pad(m))
+        .legend_area_size(LEGEND_ICON)
+        .label_font((FONT, m.legend))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.5))
+        .draw()
+        .map_err(plot_err)
+}
+
+/// Draw one line chart filling `area`.
+pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart) -> Result<()> {
+    area.fill(&WHITE).map_err(plot_err)?;
+    let m = metrics(area);
+
+    let mut xs = Vec::new();
+    let mut ys = Vec::new();
+    for s in &c.series {
+        for i in 0..s.x.len() {
+            let mut vals = vec![s.y[i]];
+            if let Some((lo, hi)) = &s.band {
+                vals.extend([lo[i], hi[i]]);
+            }
+            let finite: Vec<f64> = vals.into_iter().filter(|v| v.is_finite()).collect();
+            if s.x[i].is_finite() && !finite.is_empty() {
+                xs.push(s.x[i]);
+                ys.extend(finite);
+            }
+        }
+    }
+    let (x0, x1) = axis_range(&xs, false, 0.0);
+    let (y0, y1) = axis_range(&ys, false, 0.05);
+
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(m.margin)
+        .x_label_area_size(m.x_area)
+        .y_label_area_size(m.y_area);
+    if !c.title.is_empty() {
+        builder.caption(&c.title, (FONT, m.title));
+    }
+    let mut ch = builder
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(plot_err)?;
+    ch.configure_mesh()
+        .x_desc(&c.x_label)
+        .y_desc(&c.y_label)
+        .label_style((FONT, m.tick))
+        .axis_desc_style((FONT, m.desc))
+        .bold_line_style(BLACK.mix(0.12))
+        .light_line_style(TRANSPARENT)
+        .draw()
+        .map_err(plot_err)?;
+
+    let mut labels: Vec<&str> = Vec::new();
+    let mut occ = Occupancy::default();
+
+    // Shaded area between two series: forward along one, back along the other.
+    if let Some((a, b)) = c.fill_between {
+        let (sa, sb) = (&c.series[a], &c.series[b]);
+        let fwd =
+            sa.x.iter()
+                .zip(&sa.y)
+                .filter(|(x, y)| x.is_finite() && y.is_finite());
+        let back =
+            sb.x.iter()
+                .zip(&sb.y)
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+                .rev();
+        let poly: Vec<(f64, f64)> = fwd.chain(back).map(|(x, y)| (*x, *y)).collect();
+        let fill = BLACK.mix(0.16).filled();
+        let anno = ch
+            .draw_series(std::iter::once(Polygon::new(poly, fill)))
+            .map_err(plot_err)?;
+        if !c.fill_label.is_empty() {
+            labels.push(&c.fill_label);
+            anno.label(&c.fill_label).legend(move |(x, y)| {
+                Rectangle::new([(x, y - 7), (x + 26, y + 7)], BLACK.mix(0.16).filled())
+            });
+        }
+    }
+
+    // Bands behind all lines.
+    for s in &c.series {
+        if let Some((lo, hi)) = &s.band {
+            let fill = color(s.style.color).mix(0.22).filled();
+            for run in finite_runs(&s.x, &[lo, hi]) {
+                let poly: Vec<(f64, f64)> = run
+                    .iter()
+                    .map(|&i| (s.x[i], lo[i]))
+                    .chain(run.iter().rev().map(|&i| (s.x[i], hi[i])))
+                    .collect();
+                let px: Vec<(i32, i32)> = poly.iter().map(|p| ch.backend_coord(p)).collect();
+                occ.polyline(&px);
+                for (k, &i) in run.iter().enumerate() {
+                    occ.polyline(&[px[k], ch.backend_coord(&(s.x[i], hi[i]))]);
+                }
+                ch.draw_series(std::iter::once(Polygon::new(poly, fill)))
+                    .map_err(plot_err)?;
+            }
+        }
+    }
+
+    for s in &c.series {
+        draw_line(&mut ch, s, &mut occ)?;
+        if !s.label.is_empty() {
+            labels.push(&s.label);
+            let (style, band) = (s.style, s.band.is_some());
+            ch.draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                .map_err(plot_err)?
+                .label(&s.label)
+                .legend(move |(x, y)| {
+                    // Line icon over a band swatch if the series has a band;
+                    // a dashed line is drawn as two dashes.
+                    let swatch = if band {
+                        color(style.color).mix(0.22).filled()
+                    } else {
+                        TRANSPARENT.filled()
+                    };
+                    let (a, b) = if style.dashed { (9, 16) } else { (13, 13) };
+                    EmptyElement::at((x, y))
+                        + Rectangle::new([(0, -7), (26, 7)], swatch)
+                        + PathElement::new(vec![(0, 0), (a, 0)], line_style(style))
+                        + PathElement::new(vec![(b, 0), (26, 0)], line_style(style))
+                });
+        }
+    }
+
+    if !labels.is_empty() {
+        let pos = legend_position(ch.plotting_area(), &occ, &labels, &m);
+        draw_legend(&mut ch, pos, &m)?;
+    }
+    Ok(())
+}
+
+fn draw_line<DB: DrawingBackend>(
+    ch: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    s: &Series,
+    occ: &mut Occupancy,
+) -> Result<()> {
+    for run in finite_runs(&s.x, &[&s.y]) {
+        let pts: Vec<(f64, f64)> = run.iter().map(|&i| (s.x[i], s.y[i])).collect();
+        occ.polyline(&pts.iter().map(|p| ch.backend_coord(p)).collect::<Vec<_>>());
+        if pts.len() == 1 {
+            // A lone point between gaps would be invisible as a line.
+            ch.draw_series(std::iter::once(Circle::new(
+                pts[0],
+                LINE_WIDTH + 1,
+                color(s.style.color).filled(),
+            )))
+            .map_err(plot_err)?;
+        } else if s.style.dashed {
+            ch.draw_series(DashedLineSeries::new(pts, 10, 7, line_style(s.style)))
+                .map_err(plot_err)?;
+        } else {
+            ch.draw_series(LineSeries::new(pts, line_style(s.style)))
+                .map_err(plot_err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Charts in a grid of panels, row by row.
+pub(super) fn panels<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    charts: &[Chart],
+    layout: Layout,
+) -> Result<()> {
+    area.fill(&WHITE).map_err(plot_err)?;
+    let cells = area.split_evenly((layout.rows, layout.cols));
+    for (c, cell) in charts.iter().zip(cells.iter()) {
+        chart(cell, c)?;
+    }
+    Ok(())
+}
+
+/// Draw a scatter chart filling `area`.
+pub(super) fn scatter<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    s: &Scatter,
+) -> Result<()> {
+    area.fill(&WHITE).map_err(plot_err)?;
+    let usable = |v: f64, log: bool| v.is_finite() && (!log || v > 0.0);
+    let drawable: Vec<usize> = (0..s.points.len())
+        .filter(|&i| usable(s.points[i].x, s.log_x) && usable(s.points[i].y, s.log_y))
+        .collect();
+    let mut xs: Vec<f64> = drawable.iter().map(|&i| s.points[i].x).collect();
+    let mut ys: Vec<f64> = drawable.iter().map(|&i| s.points[i].y).collect();
+    for r in &s.reference {
+        match r {
+            RefLine::Horizontal { value, .. } => ys.push(*value),
+            RefLine::Vertical { value, .. } => xs.push(*value),
+        }
+    }
+    // Logarithmic axes are drawn as linear axes over log10 of the values,
+    // with our own ticks (plotters' LogCoord leaves the part below the
+    // first full decade unlabelled).
+    let (x0, x1) = axis_range(&xs, s.log_x, 0.08);
+    let (y0, y1) = axis_range(&ys, s.log_y, 0.08);
+    let (tx0, tx1) = if s.log_x {
+        (x0.log10(), x1.log10())
+    } else {
+        (x0, x1)
+    };
+    let (ty0, ty1) = if s.log_y {
+        (y0.log10(), y1.log10())
+    } else {
+        (y0, y1)
+    };
+    let xa = Axis::new(x0, x1, s.log_x);
+    let ya = Axis::new(y0, y1, s.log_y);
+    scatter_body(area, s, &drawable, (tx0, tx1, ty0, ty1), xa, ya)
+}
+
+/// A chart axis over f64: linear (plotters' own ticks and labels) or
+/// logarithmic, drawn linearly over log10 of the values with ticks from
+/// [`log_ticks`] labelled with the values themselves.
+struct Axis {
+    inner: RangedCoordf64,
+    log_ticks: Option<Vec<f64>>,
+}
+
+impl Axis {
+    /// Axis over `lo..hi` in data units (both > 0 if `log`).
+    fn new(lo: f64, hi: f64, log: bool) -> Self {
+        if log {
+            Axis {
+                inner: (lo.log10()..hi.log10()).into(),
+                log_ticks: Some(log_ticks(lo, hi)),
+            }
+        } else {
+            Axis {
+                inner: (lo..hi).into(),
+                log_ticks: None,
+            }
+        }
+    }
+}
+
+impl Ranged for Axis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        match &self.log_ticks {
+            None => self.inner.key_points(hint),
+            Some(_) if hint.weight().allow_light_points() => Vec::new(),
+            Some(t) => t.clone(),
+        }
+    }
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+}
+
+impl ValueFormatter<f64> for Axis {
+    fn format_ext(&self, value: &f64) -> String {
+        match self.log_ticks {
+            None => RangedCoordf64::format(value),
+            Some(_) => log_tick(&10f64.powf(*value)),
+        }
+    }
+}
+
+/// Tick positions (log10 of the values) of a logarithmic axis over
+/// `lo..hi`: 1, 2, 5 × 10^k; only 10^k over more than three decades (every
+/// other decade over more than eight); 1..9 × 10^k within one decade; five
+/// evenly spaced ticks if that still gives fewer than two.
+pub(super) fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let (l, h) = (lo.log10(), hi.log10());
+    let decades = h - l;
+    let (mantissas, step): (&[f64], i32) = if decades > 8.0 {
+        (&[1.0], 2)
+    } else if decades > 3.0 {
+        (&[1.0], 1)
+    } else if decades >= 1.0 {
+        (&[1.0, 2.0, 5.0], 1)
+    } else {
+        (&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0], 1)
+    };
+    let mut ticks = Vec::new();
+    let mut k = l.floor() as i32;
+    while k as f64 <= h.ceil() {
+        for m in mantissas {
+            let t = m.log10() + k as f64;
+            if t >= l - 1e-9 && t <= h + 1e-9 {
+                ticks.push(t);
+            }
+        }
+        k += step;
+    }
+    if ticks.len() < 2 && decades.is_finite() {
+        ticks = (0..5).map(|i| l + decades * i as f64 / 4.0).collect();
+    }
+    ticks
+}
+
+/// `(x0, x1, y0, y1)`: the axis limits in chart coordinates (log10 of the
+/// values on logarithmic axes).
+fn scatter_body<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    s: &Scatter,
+    drawable: &[usize],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    x_spec: Axis,
+    y_spec: Axis,
+) -> Result<()> {
+    let m = metrics(area);
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(m.margin)
+        .x_label_area_size(m.x_area)
+        .y_label_area_size(m.y_area);
+    if !s.title.is_empty() {
+        builder.caption(&s.title, (FONT, m.title));
+    }
+    let mut ch = builder
+        .build_cartesian_2d(x_spec, y_spec)
+        .map_err(plot_err)?;
+    // Data to chart coordinates (log10 on logarithmic axes).
+    let tx = |v: f64| if s.log_x { v.log10() } else { v };
+    let ty = |v: f64| if s.log_y { v.log10() } else { v };
+    ch.configure_mesh()
+        .x_desc(&s.x_label)
+        .y_desc(&s.y_label)
+        .label_style((FONT, m.tick))
+        .axis_desc_style((FONT, m.desc))
+        .bold_line_style(BLACK.mix(0.12))
+        .light_line_style(TRANSPARENT)
+        .draw()
+        .map_err(plot_err)?;
+
+    let plot_px = ch.plotting_area().get_pixel_range();
+    let text_size = |text: &str, font: &TextStyle| {
+        area.estimate_text_size(text, font)
+            .map_or((0, 0), |(w, h)| (w as i32, h as i32))
+    };
+    let mut occ = Occupancy::default();
+
+    // Reference lines; a vertical one labelled at its top, a horizontal one
+    // at its right end.
+    let ref_color = RGBColor(90, 90, 90);
+    let ref_font = TextStyle::from((FONT, m.point_label).into_font()).color(&ref_color);
+    for r in &s.reference {
+        let (pts, label, at, right) = match r {
+            RefLine::Horizontal { value, label } => {
+                let v = ty(*value);
+                (vec![(x0, v), (x1, v)], label, (x1, v), false)
+            }
+            RefLine::Vertical { value, label } => {
+                let v = tx(*value);
+                (vec![(v, y1), (v, y0)], label, (v, y1), true)
+            }
+        };
+        if !(pts[0].0.is_finite() && pts[0].1.is_finite()) {
+            continue;
+        }
+        let px: Vec<(i32, i32)> = pts.iter().map(|p| ch.backend_coord(p)).collect();
+        occ.polyline(&px);
+        ch.draw_series(DashedLineSeries::new(
+            pts,
+            8,
+            6,
+            ref_color.stroke_width(LINE_WIDTH),
+        ))
+        .map_err(plot_err)?;
+        if !label.is_empty() {
+            let at_px = ch.backend_coord(&at);
+            let above = matches!(r, RefLine::Horizontal { .. });
+            let size = text_size(label, &ref_font);
+            let (pos, offset, bx) = place_label(at_px, size, &plot_px, right, above, (6, 4));
+            occ.rect(bx.0, bx.1);
+            ch.draw_series(std::iter::once(
+                EmptyElement::at(at) + Text::new(label.clone(), offset, ref_font.pos(pos)),
+            ))
+            .map_err(plot_err)?;
+        }
+    }
+
+    // Pareto front among the drawable points.
+    let mut on_front = vec![false; s.points.len()];
+    if s.pareto {
+        let sub: Vec<(f64, f64)> = drawable
+            .iter()
+            .map(|&i| (s.points[i].x, s.points[i].y))
+            .collect();
+        let front: Vec<usize> = super::pareto_front(&sub)
+            .into_iter()
+            .map(|k| drawable[k])
+            .collect();
+        for &i in &front {
+            on_front[i] = true;
+        }
+        let pts: Vec<(f64, f64)> = front
+            .iter()
+            .map(|&i| (tx(s.points[i].x), ty(s.points[i].y)))
+            .collect();
+        occ.polyline(&pts.iter().map(|p| ch.backend_coord(p)).collect::<Vec<_>>());
+        let front_style = BLACK.mix(0.55).stroke_width(LINE_WIDTH);
+        ch.draw_series(LineSeries::new(pts, front_style))
+            .map_err(plot_err)?
+            .label("Pareto front")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 26, y)], front_style));
+    }
+
+    // Markers (filled on the front, hollow otherwise) with their labels,
+    // right of and above the point unless that leaves the plot.
+    let label_font = TextStyle::from((FONT, m.point_label).into_font());
+    for &i in drawable {
+        let p = &s.points[i];
+        let c = color(p.color);
+        let marker = if on_front[i] {
+            c.filled()
+        } else {
+            c.stroke_width(LINE_WIDTH)
+        };
+        let at = (tx(p.x), ty(p.y));
+        let at_px = ch.backend_coord(&at);
+        occ.rect((at_px.0 - 6, at_px.1 - 6), (at_px.0 + 6, at_px.1 + 6));
+        let size = text_size(&p.label, &label_font);
+        let (pos, offset, bx) = place_label(at_px, size, &plot_px, true, true, (9, 4));
+        if !p.label.is_empty() {
+            occ.rect(bx.0, bx.1);
+        }
+        ch.draw_series(std::iter::once(
+            EmptyElement::at(at)
+                + Circle::new((0, 0), 6, marker)
+                + Text::new(p.label.clone(), offset, label_font.pos(pos)),
+        ))
+        .map_err(plot_err)?;
+    }
+
+    if s.pareto {
+        let pos = legend_position(ch.plotting_area(), &occ, &["Pareto front"], &m);
+        draw_legend(&mut ch, pos, &m)?;
+    }
+    Ok(())
+}
+
+type PixelBox = ((i32, i32), (i32, i32));
+
+/// Anchor, offset and pixel box of a text of `size` next to pixel `at`:
+/// right (or left) of it and above (or below) it by `gap`, as preferred,
+/// flipped to the other side where it would leave the plot `(xr, yr)`.
+fn place_label(
+    at: (i32, i32),
+    (w, h): (i32, i32),
+    (xr, yr): &(std::ops::Range<i32>, std::ops::Range<i32>),
+    prefer_right: bool,
+    prefer_above: bool,
+    (dx, dy): (i32, i32),
+) -> (Pos, (i32, i32), PixelBox) {
+    let fits_right = at.0 + dx + w <= xr.end;
+    let fits_left = at.0 - dx - w >= xr.start;
+    let right = if prefer_right {
+        fits_right || !fits_left
+    } else {
+        !fits_left && fits_right
+    };
+    let fits_above = at.1 - dy - h >= yr.start;
+    let fits_below = at.1 + dy + h <= yr.end;
+    let above = if prefer_above {
+        fits_above || !fits_below
+    } else {
+        !fits_below && fits_above
+    };
+    let (hpos, ox, bx) = if right {
+        (HPos::Left, dx, (at.0 + dx, at.0 + dx + w))
+    } else {
+        (HPos::Right, -dx, (at.0 - dx - w, at.0 - dx))
+    };
+    let (vpos, oy, by) = if above {
+        (VPos::Bottom, -dy, (at.1 - dy - h, at.1 - dy))
+    } else {
+        (VPos::Top, dy, (at.1 + dy, at.1 + dy + h))
+    };
+    (Pos::new(hpos, vpos), (ox, oy), ((bx.0, by.0), (bx.1, by.1)))
+}

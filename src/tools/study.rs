@@ -1,0 +1,270 @@
+//! A study: several setups run one after the other, then figures and summary
+//! metrics drawn from their output tables — e.g. two machine designs
+//! compared (the leg-extension study of Krüger & Wartzack 2017, section 3).
+//!
+//! ```xml
+//! <OpenSimDocument Version="40000">
+//!   <StatoptStudy name="leg_extension">
+//!     <setups>leg_extension_cam1.xml leg_extension_cam2.xml</setups>
+//!     <results_directory>../output/leg_extension</results_directory>
+//!     <Figure name="fig09_hip_flexion" title="..." x_label="time (s)" y_label="moment (N m)">
+//!       <Series file="../output/leg_extension_cam1/x_SO_w0_1_GeneralizedForcesBySource.sto"
+//!               column="hip_flexion_r_muscles" label="muscles, w0 = 1" scale="1"/>
+//!       <Band mean="..._w0_mean_ReactionLoads.sto" min="..._w0_min_..." max="..._w0_max_..."
+//!             column="knee_r_on_tibia_r_in_tibia_r_fx" label="cam 1" scale="-1"/>
+//!       <fill_between>0 1</fill_between>   (shade between series 0 and 1)
+//!       <panel/>                            (start a new panel to the right)
+//!     </Figure>
+//!     <Metric name="quadriceps_work_cam1" file="..." columns="rect_fem_r vas_med_r" op="integral"/>
+//!   </StatoptStudy>
+//! </OpenSimDocument>
+//! ```
+//! File paths are relative to the study file. Metrics (`max`, `min`,
+//! `absmax`, `integral` of the sum of the columns over time, `mean`) are
+//! written to `<name>_metrics.csv`; figures as PNG and SVG.
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Location, Result};
+use crate::parse::setup::{resolve, Setup};
+use crate::plots::{self, Chart, Layout, Series, Style};
+use crate::storage::{self, Storage};
+use crate::tools::{analyze, inverse_dynamics, RunOptions, RunSummary};
+use crate::xml::{self, Element};
+
+/// Whether an XML file is a study document.
+pub fn is_study(path: &Path) -> bool {
+    xml::parse_file(path)
+        .map(|r| r.name == "StatoptStudy" || r.child("StatoptStudy").is_some())
+        .unwrap_or(false)
+}
+
+/// The time column and one data column (or the sum of the space-separated
+/// `columns`), scaled by the `scale` attribute, of the table named by the
+/// attribute `file_attr`.
+fn table_column(
+    el: &Element,
+    dir: &Path,
+    file_attr: &str,
+    column: &str,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let file = el
+        .attr(file_attr)
+        .ok_or_else(|| el.error(format!("missing attribute {file_attr}")))?;
+    let path = resolve(dir, file);
+    let t: Storage =
+        storage::read(&path).map_err(|e| e.context(format!("{} ({})", el.describe(), file)))?;
+    let mut y = vec![0.0; t.time.len()];
+    for c in column.split_whitespace() {
+        let j = t
+            .column_index(c)
+            .ok_or_else(|| el.error(format!("{} has no column '{c}'", path.display())))?;
+        for (v, r) in y.iter_mut().zip(&t.rows) {
+            *v += r[j];
+        }
+    }
+    let scale: f64 = el
+        .attr("scale")
+        .map(|s| {
+            s.trim()
+                .parse()
+                .map_err(|_| el.error(format!("scale '{s}' is not a number")))
+        })
+        .transpose()?
+        .unwrap_or(1.0);
+    Ok((t.time.clone(), y.into_iter().map(|v| v * scale).collect()))
+}
+
+fn figure(el: &Element, dir: &Path, out: &Path) -> Result<Vec<PathBuf>> {
+    let name = el
+        .attr("name")
+        .ok_or_else(|| el.error("a Figure needs a name attribute"))?;
+    let mut panels: Vec<Chart> = Vec::new();
+    let new_chart = |el: &Element| Chart {
+        title: el.attr("title").unwrap_or("").to_string(),
+        x_label: el.attr("x_label").unwrap_or("time (s)").to_string(),
+        y_label: el.attr("y_label").unwrap_or("").to_string(),
+        fill_label: el.attr("fill_label").unwrap_or("").to_string(),
+        ..Chart::default()
+    };
+    let style = |c: &Element| -> Result<Style> {
+        let color = match c.attr("color") {
+            Some(v) => v
+                .trim()
+                .parse::<usize>()
+                .map_err(|_| c.error(format!("color '{v}' is not a palette index")))?,
+            None => 0,
+        };
+        Ok(if c.attr("dashed") == Some("true") {
+            Style::dashed(color)
+        } else {
+            Style::color(color)
+        })
+    };
+    let mut chart = new_chart(el);
+    for c in &el.children {
+        match c.name.as_str() {
+            "Series" => {
+                let column = c
+                    .attr("column")
+                    .ok_or_else(|| c.error("missing attribute column"))?;
+                let (x, y) = table_column(c, dir, "file", column)?;
+                chart.series.push(Series::new(
+                    c.attr("label").unwrap_or(column),
+                    x,
+                    y,
+                    style(c)?,
+                ));
+            }
+            "Band" => {
+                let column = c
+                    .attr("column")
+                    .ok_or_else(|| c.error("missing attribute column"))?;
+                let (x, mean) = table_column(c, dir, "mean", column)?;
+                let (_, lo) = table_column(c, dir, "min", column)?;
+                let (_, hi) = table_column(c, dir, "max", column)?;
+                let mut series = Series::new(c.attr("label").unwrap_or(column), x, mean, style(c)?);
+                series.band = Some((lo, hi));
+                chart.series.push(series);
+            }
+            "fill_between" => {
+                let v = c.numbers_n(2)?;
+                chart.fill_between = Some((v[0] as usize, v[1] as usize));
+                if let Some(l) = c.attr("label") {
+                    chart.fill_label = l.to_string();
+                }
+            }
+            "panel" => {
+                let next = new_chart(c);
+                panels.push(std::mem::replace(&mut chart, next));
+            }
+            other => {
+                return Err(c.error(format!(
+                    "unknown element <{other}> in a Figure (Series, Band, fill_between, panel)"
+                )))
+            }
+        }
+    }
+    panels.push(chart);
+    let stem = out.join(name);
+    if panels.len() == 1 {
+        plots::write(&panels[0], &stem)
+    } else {
+        let n = panels.len();
+        plots::write_panels(&panels, &stem, Layout::row(n))
+    }
+}
+
+fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
+    let name = el
+        .attr("name")
+        .ok_or_else(|| el.error("a Metric needs a name attribute"))?
+        .to_string();
+    let columns = el
+        .attr("columns")
+        .ok_or_else(|| el.error("missing attribute columns"))?;
+    let (t, y) = table_column(el, dir, "file", columns)?;
+    let v = match el.attr("op").unwrap_or("max") {
+        "max" => y.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        "min" => y.iter().cloned().fold(f64::INFINITY, f64::min),
+        "absmax" => y.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+        "mean" => y.iter().sum::<f64>() / y.len().max(1) as f64,
+        "integral" => t
+            .windows(2)
+            .zip(y.windows(2))
+            .map(|(t, y)| 0.5 * (y[0] + y[1]) * (t[1] - t[0]))
+            .sum(),
+        other => {
+            return Err(el.error(format!(
+                "unknown op '{other}' (max, min, absmax, mean, integral)"
+            )))
+        }
+    };
+    Ok((name, v))
+}
+
+/// Run a study document.
+pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
+    let root = xml::parse_file(path)?;
+    let study = if root.name == "StatoptStudy" {
+        &root
+    } else {
+        root.child("StatoptStudy")
+            .ok_or_else(|| root.error("no <StatoptStudy>"))?
+    };
+    let dir = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let dir = if dir.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        dir
+    };
+    let mut summary = RunSummary::default();
+    let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
+    for s in &setups {
+        let p = resolve(&dir, s);
+        // The study's own results directory option does not apply to its setups.
+        let run_opts = RunOptions {
+            results_dir: None,
+            ..opts.clone()
+        };
+        let r = match Setup::read(&p)? {
+            Setup::Analyze(a) => analyze::run(&a, &run_opts)?,
+            Setup::InverseDynamics(i) => inverse_dynamics::run(&i, &run_opts)?,
+        };
+        summary.frames = summary.frames.max(r.frames);
+        summary.loop_seconds += r.loop_seconds;
+        summary.files.extend(r.files);
+        summary
+            .warnings
+            .extend(r.warnings.into_iter().map(|w| format!("{s}: {w}")));
+    }
+    let out = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
+    let elements: Vec<Element> = study
+        .children
+        .iter()
+        .filter(|c| c.name == "Figure" || c.name == "Metric")
+        .cloned()
+        .collect();
+    summary.files.extend(draw(
+        &elements,
+        &dir,
+        &out,
+        study.attr("name").unwrap_or("study"),
+    )?);
+    Ok(summary)
+}
+
+/// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`)
+/// into `out`; metrics go to `<name>_metrics.csv`.
+pub fn draw(elements: &[Element], dir: &Path, out: &Path, name: &str) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    for f in elements.iter().filter(|e| e.name == "Figure") {
+        files.extend(figure(f, dir, out)?);
+    }
+    let metrics: Vec<(String, f64)> = elements
+        .iter()
+        .filter(|e| e.name == "Metric")
+        .map(|m| metric(m, dir))
+        .collect::<Result<_>>()?;
+    if !metrics.is_empty() {
+        let p = out.join(format!("{name}_metrics.csv"));
+        let mut w = csv::Writer::from_path(&p)
+            .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
+        w.write_record(["metric", "value"])
+            .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
+        for (n, v) in &metrics {
+            w.write_record([n.as_str(), &format!("{v:.6}")])
+                .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
+        }
+        w.flush().map_err(|e| Error::io(&p, e))?;
+        files.push(p);
+    }
+    Ok(files)
+}
