@@ -105,44 +105,63 @@ impl Actuator {
         }))
     }
 
-    /// Generalized force produced by actuation = 1 (control × optimal_force
-    /// = 1 N or N·m), added to `gen` (length nq). Positions in `data` must be
-    /// current ([`crate::dynamics::kinematics::positions`]).
-    pub fn add_unit_generalized_force(&self, model: &Model, data: &Data, gen: &mut [f64]) {
+    /// What an actuation of 1 applies at the current pose (ground frame).
+    fn unit_load(&self, data: &Data) -> UnitLoad {
         match &self.kind {
-            ActuatorKind::Coordinate { coordinate } => gen[*coordinate] += 1.0,
+            ActuatorKind::Coordinate { coordinate } => UnitLoad::Mobility(*coordinate),
             ActuatorKind::Point {
                 body,
                 point,
                 point_is_global,
                 direction,
                 force_is_global,
-            } => {
-                let f = if *force_is_global {
-                    *direction
-                } else {
-                    data.rotation[*body] * direction
-                };
-                let x = if *point_is_global {
+            } => UnitLoad::Point {
+                body: *body,
+                at: if *point_is_global {
                     *point
                 } else {
                     data.station_position(*body, point)
-                };
-                add_point_force(model, data, *body, &x, &f, gen);
-            }
+                },
+                force: if *force_is_global {
+                    *direction
+                } else {
+                    data.rotation[*body] * direction
+                },
+            },
             ActuatorKind::Torque {
                 body_a,
                 body_b,
                 axis,
                 torque_is_global,
-            } => {
-                let t = if *torque_is_global {
+            } => UnitLoad::Torque {
+                body_a: *body_a,
+                body_b: *body_b,
+                torque: if *torque_is_global {
                     *axis
                 } else {
                     data.rotation[*body_a] * axis
-                };
-                add_body_torque(model, data, *body_a, &t, gen);
-                add_body_torque(model, data, *body_b, &(-t), gen);
+                },
+            },
+        }
+    }
+
+    /// Generalized force produced by actuation = 1 (control × optimal_force
+    /// = 1 N or N·m), added to `gen` (length nq). Positions in `data` must be
+    /// current ([`crate::dynamics::kinematics::positions`]). A TorqueActuator
+    /// applies +axis on body A and −axis on body B, as OpenSim does.
+    pub fn add_unit_generalized_force(&self, model: &Model, data: &Data, gen: &mut [f64]) {
+        match self.unit_load(data) {
+            UnitLoad::Mobility(c) => gen[c] += 1.0,
+            UnitLoad::Point { body, at, force } => {
+                add_point_force(model, data, body, &at, &force, gen)
+            }
+            UnitLoad::Torque {
+                body_a,
+                body_b,
+                torque,
+            } => {
+                add_body_torque(model, data, body_a, &torque, gen);
+                add_body_torque(model, data, body_b, &(-torque), gen);
             }
         }
     }
@@ -161,40 +180,18 @@ impl Actuator {
         gen: &mut [f64],
     ) {
         use crate::dynamics::BodyForce;
-        match &self.kind {
-            ActuatorKind::Coordinate { coordinate } => gen[*coordinate] += actuation,
-            ActuatorKind::Point {
-                body,
-                point,
-                point_is_global,
-                direction,
-                force_is_global,
-            } => {
-                let f = if *force_is_global {
-                    *direction
-                } else {
-                    data.rotation[*body] * direction
-                };
-                let x = if *point_is_global {
-                    *point
-                } else {
-                    data.station_position(*body, point)
-                };
-                applied[*body].add(&BodyForce::at_point(f * actuation, x));
+        match self.unit_load(data) {
+            UnitLoad::Mobility(c) => gen[c] += actuation,
+            UnitLoad::Point { body, at, force } => {
+                applied[body].add(&BodyForce::at_point(force * actuation, at))
             }
-            ActuatorKind::Torque {
+            UnitLoad::Torque {
                 body_a,
                 body_b,
-                axis,
-                torque_is_global,
+                torque,
             } => {
-                let t = if *torque_is_global {
-                    *axis
-                } else {
-                    data.rotation[*body_a] * axis
-                } * actuation;
-                applied[*body_a].add(&BodyForce::torque(t));
-                applied[*body_b].add(&BodyForce::torque(-t));
+                applied[body_a].add(&BodyForce::torque(torque * actuation));
+                applied[body_b].add(&BodyForce::torque(-torque * actuation));
             }
         }
     }
@@ -203,6 +200,21 @@ impl Actuator {
     pub fn record_labels(&self) -> Vec<String> {
         vec![self.name.clone()]
     }
+}
+
+/// The load of a unit actuation, in ground.
+enum UnitLoad {
+    Mobility(usize),
+    Point {
+        body: usize,
+        at: Vector3<f64>,
+        force: Vector3<f64>,
+    },
+    Torque {
+        body_a: usize,
+        body_b: usize,
+        torque: Vector3<f64>,
+    },
 }
 
 fn unit(el: &Element, prop: &str, default: [f64; 3]) -> Result<Vector3<f64>> {
