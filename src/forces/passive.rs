@@ -76,6 +76,20 @@ const UNSUPPORTED_FORCES: &[&str] = &[
 
 /// Simbody's `Function::Step`: y0 for x at or before x0, y1 at or beyond x1,
 /// y0 + (y1 − y0)·t³(10 − 15t + 6t²) between, t = (x − x0)/(x1 − x0).
+/// What a passive force applies at one state (ground frame).
+enum PassiveLoad {
+    /// A generalized force on a coordinate.
+    Mobility(usize, f64),
+    /// `force` on body1 at p1 and its opposite on body2 at p2.
+    Pair {
+        body1: usize,
+        p1: Vector3<f64>,
+        body2: usize,
+        p2: Vector3<f64>,
+        force: Vector3<f64>,
+    },
+}
+
 pub fn smooth_step(x: f64, y0: f64, y1: f64, x0: f64, x1: f64) -> f64 {
     let t = (x - x0) / (x1 - x0);
     if t <= 0.0 {
@@ -151,6 +165,33 @@ impl PassiveForce {
         }
     }
 
+    /// What the force applies at the state in `data`, and its scalar value.
+    fn load(&self, data: &Data) -> (PassiveLoad, f64) {
+        match self {
+            PassiveForce::PointToPointSpring {
+                body1,
+                point1,
+                body2,
+                point2,
+                ..
+            } => {
+                let (force, tension) = self.spring_force(data);
+                let load = PassiveLoad::Pair {
+                    body1: *body1,
+                    p1: data.station_position(*body1, point1),
+                    body2: *body2,
+                    p2: data.station_position(*body2, point2),
+                    force,
+                };
+                (load, tension)
+            }
+            _ => {
+                let (c, tau) = self.coordinate_force(data);
+                (PassiveLoad::Mobility(c, tau), tau)
+            }
+        }
+    }
+
     /// Add the generalized forces at the state in `data` (q, u; positions
     /// current) and time `t` to `gen`. Returns the force's scalar value: the
     /// generalized force for the coordinate forces (what the ForceReporter
@@ -163,27 +204,21 @@ impl PassiveForce {
         _t: f64,
         gen: &mut [f64],
     ) -> f64 {
-        match self {
-            PassiveForce::PointToPointSpring {
+        let (load, value) = self.load(data);
+        match load {
+            PassiveLoad::Mobility(c, tau) => gen[c] += tau,
+            PassiveLoad::Pair {
                 body1,
-                point1,
+                p1,
                 body2,
-                point2,
-                ..
+                p2,
+                force,
             } => {
-                let (f1, tension) = self.spring_force(data);
-                let p1 = data.station_position(*body1, point1);
-                let p2 = data.station_position(*body2, point2);
-                add_point_force(model, data, *body1, &p1, &f1, gen);
-                add_point_force(model, data, *body2, &p2, &(-f1), gen);
-                tension
-            }
-            _ => {
-                let (c, tau) = self.coordinate_force(data);
-                gen[c] += tau;
-                tau
+                add_point_force(model, data, body1, &p1, &force, gen);
+                add_point_force(model, data, body2, &p2, &(-force), gen);
             }
         }
+        value
     }
 
     /// Apply the force at the state in `data` as OpenSim does: coordinate
@@ -198,27 +233,21 @@ impl PassiveForce {
         gen: &mut [f64],
     ) -> f64 {
         use crate::dynamics::BodyForce;
-        match self {
-            PassiveForce::PointToPointSpring {
+        let (load, value) = self.load(data);
+        match load {
+            PassiveLoad::Mobility(c, tau) => gen[c] += tau,
+            PassiveLoad::Pair {
                 body1,
-                point1,
+                p1,
                 body2,
-                point2,
-                ..
+                p2,
+                force,
             } => {
-                let (f1, tension) = self.spring_force(data);
-                let p1 = data.station_position(*body1, point1);
-                let p2 = data.station_position(*body2, point2);
-                applied[*body1].add(&BodyForce::at_point(f1, p1));
-                applied[*body2].add(&BodyForce::at_point(-f1, p2));
-                tension
-            }
-            _ => {
-                let (c, tau) = self.coordinate_force(data);
-                gen[c] += tau;
-                tau
+                applied[body1].add(&BodyForce::at_point(force, p1));
+                applied[body2].add(&BodyForce::at_point(-force, p2));
             }
         }
+        value
     }
 
     /// Coordinate index and generalized force of the coordinate forces.

@@ -127,6 +127,22 @@ impl Muscle {
 
 /// `Version` attribute of the `<OpenSimDocument>` root of an XML file, read
 /// from the file's first 64 KiB; None if the file cannot be read or has none.
+/// Defaults for `maximum_pennation_angle` and `minimum_activation` from the
+/// muscle's optional sub-model elements (older files keep them in
+/// `MuscleFixedWidthPennationModel` / `MuscleFirstOrderActivationDynamicModel`);
+/// acos(0.1) and 0.01 when absent.
+pub(crate) fn submodel_defaults(el: &Element) -> Result<(f64, f64)> {
+    let max_pen = match el.child("MuscleFixedWidthPennationModel") {
+        Some(p) => p.child_f64_or("maximum_pennation_angle", 0.1f64.acos())?,
+        None => 0.1f64.acos(),
+    };
+    let min_act = match el.child("MuscleFirstOrderActivationDynamicModel") {
+        Some(a) => a.child_f64_or("minimum_activation", 0.01)?,
+        None => 0.01,
+    };
+    Ok((max_pen, min_act))
+}
+
 pub fn document_version(file: &std::path::Path) -> Option<i64> {
     use std::io::Read;
     let mut buf = Vec::new();

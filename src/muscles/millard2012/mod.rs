@@ -46,16 +46,7 @@ impl Millard2012 {
     /// Read the Millard-specific properties of `el` (common properties are
     /// already in `params`) and finalize as OpenSim does.
     pub(crate) fn from_xml(el: &Element, params: &MuscleParams) -> Result<Millard2012> {
-        let sub_act = el.child("MuscleFirstOrderActivationDynamicModel");
-        let sub_pen = el.child("MuscleFixedWidthPennationModel");
-        let max_pen_default = match sub_pen {
-            Some(p) => p.child_f64_or("maximum_pennation_angle", 0.1f64.acos())?,
-            None => 0.1f64.acos(),
-        };
-        let min_act_default = match sub_act {
-            Some(a) => a.child_f64_or("minimum_activation", 0.01)?,
-            None => 0.01,
-        };
+        let (max_pen_default, min_act_default) = crate::muscles::submodel_defaults(el)?;
         let fiber_damping = el.child_f64_or("fiber_damping", 0.1)?;
         let maximum_pennation_angle =
             el.child_f64_or("maximum_pennation_angle", max_pen_default)?;
