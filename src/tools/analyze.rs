@@ -264,3 +264,37 @@ fn close_setup_contacts(
     crate::motion::closure::close_contacts(model, table, &closures)
         .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
 }
+
+/// Run `work` on every analysed frame of `stream` (rows `i0..=i1`, honouring
+/// `step_interval`), in parallel chunks of 256 with a per-thread workspace
+/// from `init`, and hand each result to `sink` in frame order — so tables
+/// hold every finished frame and memory stays bounded by the block.
+pub fn for_each_frame<W, T>(
+    stream: &mut crate::motion::stream::StateStream,
+    i0: usize,
+    i1: usize,
+    step_interval: usize,
+    init: impl Fn() -> W + Sync + Send,
+    work: impl Fn(&mut W, &crate::motion::stream::StateBlock, usize) -> Result<T> + Sync + Send,
+    mut sink: impl FnMut(T) -> Result<()>,
+) -> Result<()>
+where
+    T: Send,
+{
+    use rayon::prelude::*;
+    while let Some(block) = stream.next_block()? {
+        let sel: Vec<usize> = (0..block.time.len())
+            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
+            .collect();
+        for chunk in sel.chunks(256) {
+            let results: Vec<Result<T>> = chunk
+                .par_iter()
+                .map_init(&init, |w, &i| work(w, &block, i))
+                .collect();
+            for r in results {
+                sink(r?)?;
+            }
+        }
+    }
+    Ok(())
+}

@@ -36,7 +36,6 @@
 use std::path::PathBuf;
 
 use nalgebra::{DMatrix, DVector, Vector3};
-use rayon::prelude::*;
 
 use crate::dynamics::{kinematics, mass_matrix, rnea, BodyForce, Data};
 use crate::error::{Error, Location, Result};
@@ -49,7 +48,7 @@ use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::parse::setup::{resolve, AnalysisCommon, AnalyzeSetup};
 use crate::paths::{coupling, geometry};
 use crate::storage::{self, StoWriter, Storage};
-use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
+use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream, results_dir};
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
 use crate::tools::static_optimization::{Control, FrameResult, SoProblem};
 use crate::tools::{RunOptions, RunSummary};
@@ -713,31 +712,29 @@ pub fn run(
     )?;
     let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
     let start = std::time::Instant::now();
-    while let Some(block) = stream.next_block()? {
-        let sel: Vec<usize> = (0..block.time.len())
-            .filter(|&b| is_frame(block.first + b, i0, i1, step))
-            .collect();
-        for chunk in sel.chunks(256) {
-            let results: Vec<Result<Vec<f64>>> = chunk
-                .par_iter()
-                .map_init(
-                    || {
-                        (
-                            Data::new(&problem.model),
-                            MuscleFrame::new(&problem.muscles, &problem.model),
-                        )
-                    },
-                    |(data, mf), &i| {
-                        problem.frame(block.time[i], &block.q[i], &block.u[i], data, mf)
-                    },
-                )
-                .collect();
-            for (r, &i) in results.into_iter().zip(chunk) {
-                w.write_row(block.time[i], &r?)?;
-                progress.inc(1);
-            }
-        }
-    }
+    for_each_frame(
+        &mut stream,
+        i0,
+        i1,
+        step,
+        || {
+            (
+                Data::new(&problem.model),
+                MuscleFrame::new(&problem.muscles, &problem.model),
+            )
+        },
+        |(data, mf), block, i| {
+            Ok((
+                block.time[i],
+                problem.frame(block.time[i], &block.q[i], &block.u[i], data, mf)?,
+            ))
+        },
+        |(t, row)| {
+            w.write_row(t, &row)?;
+            progress.inc(1);
+            Ok(())
+        },
+    )?;
     progress.finish_and_clear();
     w.finish()?;
     Ok(RunSummary {

@@ -13,7 +13,6 @@
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
 
 use crate::contacts::{Contact, ContactState, Regime};
 use crate::dynamics::{kinematics, rnea, Data};
@@ -31,7 +30,7 @@ use crate::output::mcap_log;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::paths::coupling;
 use crate::storage::StoWriter;
-use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
+use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream, results_dir};
 use crate::tools::joint_reaction::{
     column_labels as jr_column_labels, resolve_reactions, static_optimization_reactions,
     JointReactionSetup, ReactionSpec, DESCRIPTION as JR_DESCRIPTION,
@@ -1102,107 +1101,101 @@ fn run_once(
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
-    while let Some(block) = stream.next_block()? {
-        let sel: Vec<usize> = (0..block.time.len())
-            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
-            .collect();
-        for chunk in sel.chunks(256) {
-            let results: Vec<Result<(FrameResult, Vec<Vec<f64>>, FrameMessages)>> = chunk
-                .par_iter()
-                .map_init(
-                    || {
-                        (
-                            Data::new(&problem.model),
-                            MuscleFrame::new(&problem.muscles, &problem.model),
-                        )
-                    },
-                    |(data, mf), &i| {
-                        let r = problem.solve_frame(
-                            block.time[i],
-                            &block.q[i],
-                            &block.u[i],
-                            &block.udot[i],
-                            data,
-                            mf,
-                        );
-                        let mut rows = Vec::with_capacity(reactions.len());
-                        for (_, specs) in reactions {
-                            let mut out = vec![0.0; 9 * specs.len()];
-                            static_optimization_reactions(
-                                problem,
-                                block.time[i],
-                                &block.q[i],
-                                &block.u[i],
-                                &r,
-                                data,
-                                mf,
-                                specs,
-                                &mut out,
-                            )?;
-                            rows.push(out);
-                        }
-                        let messages = log_names.encode(problem, &r, &rows)?;
-                        Ok((r, rows, messages))
-                    },
-                )
-                .collect();
-            for res in results {
-                let (r, jr_rows, messages) = res?;
-                for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
-                    w.write_row(r.time, row)?;
-                }
-                log.write(r.time, &messages)?;
-                src_w.write_row(r.time, &r.by_source)?;
-                power_w.write_row(r.time, &r.muscle_power)?;
-                if !r.solution.status.is_ok() {
-                    failures.push(format!(
-                        "t={}: {:?}, equation residual {:.3e}",
-                        r.time, r.solution.status, r.solution.eq_residual
-                    ));
-                }
-                for v in 0..nv {
-                    let up = problem.upper[v];
-                    if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
-                        match at_bound
-                            .iter_mut()
-                            .find(|(n, _, _)| *n == problem.labels[v])
-                        {
-                            Some(e) => e.1 += 1,
-                            None => at_bound.push((problem.labels[v].clone(), 1, r.time)),
-                        }
-                    }
-                }
-                for &v in &reserve_vars {
-                    if r.forces[v].abs() > reserve_peak.0 {
-                        reserve_peak = (
-                            r.forces[v].abs(),
-                            format!("{} at t={}", problem.labels[v], r.time),
-                        );
-                    }
-                }
-                act_w.write_row(r.time, &r.solution.x[..nv])?;
-                force_w.write_row(r.time, &r.force_row)?;
-                diag_w.write_row(
-                    r.time,
-                    &[
-                        status_code(r.solution.status),
-                        r.solution.iterations as f64,
-                        r.solution.objective,
-                        r.solution.eq_residual,
-                        r.relative_residual,
-                        r.friction_violation,
-                        r.solution.solve_time.as_secs_f64() * 1e3,
-                    ],
+    for_each_frame(
+        &mut stream,
+        i0,
+        i1,
+        step_interval,
+        || {
+            (
+                Data::new(&problem.model),
+                MuscleFrame::new(&problem.muscles, &problem.model),
+            )
+        },
+        |(data, mf), block, i| {
+            let r = problem.solve_frame(
+                block.time[i],
+                &block.q[i],
+                &block.u[i],
+                &block.udot[i],
+                data,
+                mf,
+            );
+            let mut rows = Vec::with_capacity(reactions.len());
+            for (_, specs) in reactions {
+                let mut out = vec![0.0; 9 * specs.len()];
+                static_optimization_reactions(
+                    problem,
+                    block.time[i],
+                    &block.q[i],
+                    &block.u[i],
+                    &r,
+                    data,
+                    mf,
+                    specs,
+                    &mut out,
                 )?;
-                if let Some((cw, bw, lw)) = contact_w.as_mut() {
-                    cw.write_row(r.time, &r.contacts.contact)?;
-                    bw.write_row(r.time, &r.contacts.bodies)?;
-                    lw.write_row(r.time, &r.contacts.loads)?;
-                }
-                progress.inc(1);
+                rows.push(out);
             }
-        }
-    }
+            let messages = log_names.encode(problem, &r, &rows)?;
+            Ok((r, rows, messages))
+        },
+        |(r, jr_rows, messages)| {
+            for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
+                w.write_row(r.time, row)?;
+            }
+            log.write(r.time, &messages)?;
+            src_w.write_row(r.time, &r.by_source)?;
+            power_w.write_row(r.time, &r.muscle_power)?;
+            if !r.solution.status.is_ok() {
+                failures.push(format!(
+                    "t={}: {:?}, equation residual {:.3e}",
+                    r.time, r.solution.status, r.solution.eq_residual
+                ));
+            }
+            for v in 0..nv {
+                let up = problem.upper[v];
+                if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+                    match at_bound
+                        .iter_mut()
+                        .find(|(n, _, _)| *n == problem.labels[v])
+                    {
+                        Some(e) => e.1 += 1,
+                        None => at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                    }
+                }
+            }
+            for &v in &reserve_vars {
+                if r.forces[v].abs() > reserve_peak.0 {
+                    reserve_peak = (
+                        r.forces[v].abs(),
+                        format!("{} at t={}", problem.labels[v], r.time),
+                    );
+                }
+            }
+            act_w.write_row(r.time, &r.solution.x[..nv])?;
+            force_w.write_row(r.time, &r.force_row)?;
+            diag_w.write_row(
+                r.time,
+                &[
+                    status_code(r.solution.status),
+                    r.solution.iterations as f64,
+                    r.solution.objective,
+                    r.solution.eq_residual,
+                    r.relative_residual,
+                    r.friction_violation,
+                    r.solution.solve_time.as_secs_f64() * 1e3,
+                ],
+            )?;
+            if let Some((cw, bw, lw)) = contact_w.as_mut() {
+                cw.write_row(r.time, &r.contacts.contact)?;
+                bw.write_row(r.time, &r.contacts.bodies)?;
+                lw.write_row(r.time, &r.contacts.loads)?;
+            }
+            progress.inc(1);
+            Ok(())
+        },
+    )?;
     progress.finish_and_clear();
     act_w.finish()?;
     force_w.finish()?;
