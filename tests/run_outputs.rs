@@ -18,37 +18,8 @@ const G: f64 = 9.80665;
 /// A block on a level floor (translations only), pushed along x and held by
 /// one point-on-plane contact; the joint `slide` reports reactions.
 fn model() -> String {
-    let t = |name: &str, c: &str, ax: &str| {
-        format!(
-            r#"<TransformAxis name="{name}"><coordinates>{c}</coordinates><axis>{ax}</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>"#
-        )
-    };
-    let r = |name: &str, ax: &str| {
-        format!(r#"<TransformAxis name="{name}"><coordinates/><axis>{ax}</axis></TransformAxis>"#)
-    };
-    let act = |name: &str, d: &str| {
-        format!(
-            r#"<PointActuator name="{name}"><body>block</body><point>0 0 0</point><direction>{d}</direction><force_is_global>true</force_is_global><optimal_force>100</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></PointActuator>"#
-        )
-    };
-    format!(
-        r#"<OpenSimDocument Version="40000"><Model name="block"><gravity>0 -{G} 0</gravity>
-<BodySet><objects><Body name="block"><mass>10</mass><mass_center>0 0.05 0</mass_center><inertia>0.1 0.1 0.1 0 0 0</inertia></Body></objects></BodySet>
-<JointSet><objects><CustomJoint name="slide"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/block</socket_child_frame>
-<coordinates><Coordinate name="tx"><range>-1000 1000</range></Coordinate><Coordinate name="ty"/><Coordinate name="tz"/></coordinates>
-<SpatialTransform>{}{}{}{}{}{}</SpatialTransform></CustomJoint></objects></JointSet>
-<ForceSet><objects>{}{}{}
-<PointOnPlaneContact name="floor"><point_body>block</point_body><point_location>0 0 0</point_location><plane_body>ground</plane_body><plane_normal>0 1 0</plane_normal></PointOnPlaneContact>
-</objects></ForceSet></Model></OpenSimDocument>"#,
-        r("rotation1", "1 0 0"),
-        r("rotation2", "0 1 0"),
-        r("rotation3", "0 0 1"),
-        t("translation1", "tx", "1 0 0"),
-        t("translation2", "ty", "0 1 0"),
-        t("translation3", "tz", "0 0 1"),
-        act("push", "1 0 0"),
-        act("lift", "0 1 0"),
-        act("side", "0 0 1")
+    common::block_model(
+        r#"<PointOnPlaneContact name="floor"><point_body>block</point_body><point_location>0 0 0</point_location><plane_body>ground</plane_body><plane_normal>0 1 0</plane_normal></PointOnPlaneContact>"#,
     )
 }
 

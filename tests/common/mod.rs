@@ -73,3 +73,43 @@ pub fn compare(
     }
     out
 }
+
+/// Standard gravity, as in OpenSim's default model.
+pub const G: f64 = 9.80665;
+
+/// A 10 kg block on three slider coordinates (a CustomJoint with only
+/// translations) with one point actuator (optimal force 100 N) along each
+/// axis; `extra_forces` is appended to its ForceSet (e.g. a contact).
+pub fn block_model(extra_forces: &str) -> String {
+    let t = |name: &str, c: &str, ax: &str| {
+        format!(
+            r#"<TransformAxis name="{name}"><coordinates>{c}</coordinates><axis>{ax}</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>"#
+        )
+    };
+    let r = |name: &str, ax: &str| {
+        format!(r#"<TransformAxis name="{name}"><coordinates/><axis>{ax}</axis></TransformAxis>"#)
+    };
+    let act = |name: &str, d: &str| {
+        format!(
+            r#"<PointActuator name="{name}"><body>block</body><point>0 0 0</point><direction>{d}</direction><force_is_global>true</force_is_global><optimal_force>100</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></PointActuator>"#
+        )
+    };
+    format!(
+        r#"<OpenSimDocument Version="40000"><Model name="block"><gravity>0 -{} 0</gravity>
+<BodySet><objects><Body name="block"><mass>10</mass><mass_center>0 0.05 0</mass_center><inertia>0.1 0.1 0.1 0 0 0</inertia></Body></objects></BodySet>
+<JointSet><objects><CustomJoint name="slide"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/block</socket_child_frame>
+<coordinates><Coordinate name="tx"><range>-1000 1000</range></Coordinate><Coordinate name="ty"><range>-1000 1000</range></Coordinate><Coordinate name="tz"/></coordinates>
+<SpatialTransform>{}{}{}{}{}{}</SpatialTransform></CustomJoint></objects></JointSet>
+<ForceSet><objects>{}{}{}{extra_forces}</objects></ForceSet></Model></OpenSimDocument>"#,
+        G,
+        r("rotation1", "1 0 0"),
+        r("rotation2", "0 1 0"),
+        r("rotation3", "0 0 1"),
+        t("translation1", "tx", "1 0 0"),
+        t("translation2", "ty", "0 1 0"),
+        t("translation3", "tz", "0 0 1"),
+        act("push", "1 0 0"),
+        act("lift", "0 1 0"),
+        act("side", "0 0 1")
+    )
+}
