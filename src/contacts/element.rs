@@ -21,6 +21,7 @@
 //! | `contact_transition_zone` | 0.01 | d_trans (m) |
 //! | `v_trans` | 0.1 | static/kinetic transition speed (m/s) |
 //! | `optimal_force` | 100 | F0 (N): force per unit multiplier |
+//! | `regime_blend` | 0 | statopt: slip-speed width (m/s) of a smooth static/kinetic transition centred on v_trans (0: the paper's hard switch; at most 2 v_trans); see [`super::kinematics`] |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
 //! The bodies may also be given as OpenSim-4 style sockets
@@ -87,6 +88,9 @@ pub struct Contact {
     pub v_trans: f64,
     /// F0 (N): the force of a unit multiplier at w = 1.
     pub optimal_force: f64,
+    /// Slip-speed width (m/s) of the smooth static/kinetic transition
+    /// (`regime_blend`, statopt); 0: the paper's hard switch at v_trans.
+    pub regime_blend: f64,
     pub applies_force: bool,
 }
 
@@ -179,6 +183,16 @@ impl Contact {
                 el.name
             )));
         }
+        let regime_blend = number(el, "regime_blend", 0.0)?;
+        // A blend reaching below zero slip would take static friction away
+        // from a contact at rest (β(0) > 0).
+        if regime_blend < 0.0 || regime_blend > 2.0 * v_trans {
+            return Err(at(el, "regime_blend").error(format!(
+                "{} '{name}': <regime_blend> is a slip-speed width in m/s and must lie in [0, 2 v_trans] = [0, {}], found {regime_blend}",
+                el.name,
+                2.0 * v_trans
+            )));
+        }
         Ok(Some(Contact {
             name,
             type_name: el.name.clone(),
@@ -195,6 +209,7 @@ impl Contact {
             d_trans,
             v_trans,
             optimal_force,
+            regime_blend,
             applies_force: applies_force(el)?,
         }))
     }

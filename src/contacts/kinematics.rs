@@ -22,6 +22,20 @@
 //! (point body) sliding along +x on the ground gets friction −μk λn F0 x̂.
 //! This is also the plugin's `computeForceVectors`.
 //!
+//! # Smooth regime transition (statopt extension, `regime_blend`)
+//!
+//! The paper switches hard at v_trans. With `regime_blend` = h > 0 the
+//! switch is blended by β = smoothstep((s − v_trans + h/2)/h) of the slip
+//! speed s (β = 3x² − 2x³, x clamped to [0, 1]; C¹, β = 0 for
+//! s ≤ v_trans − h/2, 1 for s ≥ v_trans + h/2), and
+//!
+//! F_B = w F0 (−λn n + β μk λn v̂ + λs1 e1 + λs2 e2),  ‖(λs1, λs2)‖ ≤ (1 − β) μs λn,
+//!
+//! which is linear in the multipliers with a (shrunken) second-order cone, so
+//! the frame problem stays convex. β = 0 is the static regime, β = 1 the
+//! kinetic one (the shear multipliers are then held at zero). With h = 0
+//! (default) β is 1 above v_trans and 0 at or below it: the paper's switch.
+//!
 //! # Differences from the plugin's geometry (deliberate)
 //!
 //! - The distance is signed ((p − o)·n, positive on the normal side) and
@@ -67,6 +81,11 @@ pub struct ContactState {
     /// In-plane velocity of p relative to the plane body.
     pub slip_velocity: Vector3<f64>,
     pub slip_speed: f64,
+    /// Kinetic share β ∈ [0, 1] ([`Contact::kinetic_share`]): 0 static,
+    /// 1 kinetic, between them the blended regime of `regime_blend`.
+    pub beta: f64,
+    /// `Kinetic` iff β = 1; `Static` otherwise (including blended frames,
+    /// whose static shear limit is (1 − β) μs λn).
     pub regime: Regime,
 }
 
@@ -104,6 +123,7 @@ impl Contact {
         let v_rel = data.station_velocity(a, &self.point) - v_b;
         let slip = v_rel - n * v_rel.dot(&n);
         let slip_speed = slip.norm();
+        let beta = self.kinetic_share(slip_speed);
         ContactState {
             distance: d,
             weight: weight(d, self.d_tol, self.d_trans),
@@ -114,11 +134,40 @@ impl Contact {
             e2_ground: r_b * self.e2,
             slip_velocity: slip,
             slip_speed,
-            regime: if slip_speed <= self.v_trans {
-                Regime::Static
-            } else {
+            beta,
+            regime: if beta >= 1.0 {
                 Regime::Kinetic
+            } else {
+                Regime::Static
             },
+        }
+    }
+
+    /// The kinetic share β of slip speed `s` (module doc): the hard switch
+    /// (0 at s ≤ v_trans, 1 above) when `regime_blend` is 0, else the C¹
+    /// smoothstep across [v_trans − h/2, v_trans + h/2].
+    pub fn kinetic_share(&self, s: f64) -> f64 {
+        let h = self.regime_blend;
+        if h <= 0.0 {
+            return if s > self.v_trans { 1.0 } else { 0.0 };
+        }
+        let x = ((s - self.v_trans + 0.5 * h) / h).clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    }
+
+    /// Static friction coefficient left to the free shear multipliers:
+    /// (1 − β) μs (μs itself with the hard switch in the static regime).
+    pub fn static_limit(&self, st: &ContactState) -> f64 {
+        (1.0 - st.beta) * self.mu_s
+    }
+
+    /// Kinetic shear direction scaled by μk β: the in-plane force on the
+    /// plane body per unit of the normal force component (zero without slip).
+    fn blended_shear(&self, st: &ContactState) -> Vector3<f64> {
+        if st.beta > 0.0 && st.slip_speed > 0.0 {
+            st.slip_velocity * (st.beta * self.mu_k / st.slip_speed)
+        } else {
+            Vector3::zeros()
         }
     }
 
@@ -154,7 +203,9 @@ impl Contact {
     /// multiplier i = (λn, λs1, λs2) at value 1 and the others 0, in the
     /// static-regime model (eq. 1 × F0): on the plane body at p*,
     /// −w F0 n, +w F0 e1, +w F0 e2; on the point body at p, the opposite.
-    /// Positions in `data` must be current.
+    /// In a blended frame (0 < β < 1) the normal column also carries the
+    /// kinetic shear w F0 β μk v̂ (module doc). Positions in `data` must be
+    /// current.
     pub fn add_unit_generalized_forces(
         &self,
         model: &Model,
@@ -166,7 +217,11 @@ impl Contact {
         if s == 0.0 {
             return;
         }
-        let dirs = [-st.normal_ground, st.e1_ground, st.e2_ground];
+        let dirs = [
+            self.blended_shear(st) - st.normal_ground,
+            st.e1_ground,
+            st.e2_ground,
+        ];
         for (col, dir) in out.iter_mut().zip(dirs) {
             self.add_pair(model, data, st, &(dir * s), col);
         }
@@ -204,7 +259,8 @@ impl Contact {
     /// Contact forces for multipliers `lambda` = (λn, λs1, λs2), in ground:
     /// (force on the point body, its application point p, force on the plane
     /// body). The plane-body force acts at `st.projection_ground` (p*). With
-    /// `kinetic`, λs1 and λs2 are ignored and the shear follows eq. 3.
+    /// `kinetic`, λs1 and λs2 are ignored and the shear follows eq. 3;
+    /// otherwise a blended frame adds β μk λn v̂ to the free shear.
     pub fn forces(
         &self,
         st: &ContactState,
@@ -214,7 +270,9 @@ impl Contact {
         let f_plane = if kinetic {
             self.kinetic_plane_force(st, lambda[0])
         } else {
-            (-st.normal_ground * lambda[0] + st.e1_ground * lambda[1] + st.e2_ground * lambda[2])
+            ((self.blended_shear(st) - st.normal_ground) * lambda[0]
+                + st.e1_ground * lambda[1]
+                + st.e2_ground * lambda[2])
                 * (st.weight * self.optimal_force)
         };
         (-f_plane, st.point_ground, f_plane)

@@ -193,7 +193,7 @@ pub struct FrameResult {
 #[derive(Debug, Clone, Default)]
 pub struct ContactRows {
     /// Per contact: force on the point body (ground), point, distance,
-    /// w(d), slip speed, regime (0 static, 1 kinetic), multipliers.
+    /// w(d), slip speed, regime β (0 static, 1 kinetic, between: blended), multipliers.
     pub contact: Vec<f64>,
     /// Per body touched by a contact: force (ground) and moment about the
     /// body origin (ground).
@@ -508,7 +508,7 @@ impl SoProblem {
                 static_contacts.push(StaticContact {
                     normal: v0,
                     shear: [v0 + 1, v0 + 2],
-                    mu: c.mu_s,
+                    mu: c.static_limit(&st),
                 });
             }
             states.push(st);
@@ -627,7 +627,7 @@ impl SoProblem {
                 st.distance,
                 st.weight,
                 st.slip_speed,
-                if kinetic { 1.0 } else { 0.0 },
+                st.beta,
                 l[0],
                 l[1],
                 l[2],
@@ -1007,7 +1007,7 @@ fn run_once(
         let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
         let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
         let desc = format!(
-            "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic), multipliers.\n",
+            "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
             problem.w0, problem.settings.friction
         );
         let cw = StoWriter::create(
