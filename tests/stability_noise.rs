@@ -37,7 +37,10 @@ fn repo(p: &str) -> PathBuf {
 /// the given motion file, filter cutoff and step interval.
 fn setup_text(motion: &Path, cutoff: f64, step: usize, results: &Path, reserves: &str) -> String {
     let s = std::fs::read_to_string(repo("setups/leg_extension_cam1.xml")).unwrap();
-    let (a, b) = (s.find("<Figure").unwrap(), s.find("<external_loads_file").unwrap());
+    let (a, b) = (
+        s.find("<Figure").unwrap(),
+        s.find("<external_loads_file").unwrap(),
+    );
     let s = format!("{}{}", &s[..a], &s[b..]);
     s.replace("../models/", &format!("{}/", repo("models").display()))
         .replace(
@@ -110,7 +113,8 @@ fn unit_noise(m: &Storage) -> Vec<Vec<f64>> {
             (0..m.time.len())
                 .map(|_| {
                     let (u1, u2): (f64, f64) = (rng.random(), rng.random());
-                    let z = (-2.0 * (1.0 - u1).ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
+                    let z =
+                        (-2.0 * (1.0 - u1).ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
                     if l.ends_with("_tx") || l.ends_with("_ty") || l.ends_with("_tz") {
                         0.0
                     } else {
@@ -143,11 +147,26 @@ fn outputs(out: &Path) -> (Storage, [Vec<f64>; 3], usize) {
     let act = read(out, &format!("{PREFIX}_SO_activation.sto"));
     let jr = read(out, &format!("{PREFIX}_JR_ReactionLoads.sto"));
     let diag = read(out, &format!("{PREFIX}_SO_diagnostics.sto"));
-    assert!(act.rows.iter().flatten().all(|v| v.is_finite()), "NaN activation");
-    assert!(jr.rows.iter().flatten().all(|v| v.is_finite()), "NaN reaction");
-    let c = |s: &str| jr.column(jr.column_index(&format!("knee_r_on_tibia_r_in_tibia_r_{s}")).unwrap());
+    assert!(
+        act.rows.iter().flatten().all(|v| v.is_finite()),
+        "NaN activation"
+    );
+    assert!(
+        jr.rows.iter().flatten().all(|v| v.is_finite()),
+        "NaN reaction"
+    );
+    let c = |s: &str| {
+        jr.column(
+            jr.column_index(&format!("knee_r_on_tibia_r_in_tibia_r_{s}"))
+                .unwrap(),
+        )
+    };
     let st = diag.column(diag.column_index("status").unwrap());
-    (act, [c("fx"), c("fy"), c("fz")], st.iter().filter(|s| **s < 0.0).count())
+    (
+        act,
+        [c("fx"), c("fy"), c("fz")],
+        st.iter().filter(|s| **s < 0.0).count(),
+    )
 }
 
 /// RMS activation difference (all muscles, all frames; reserves left out) and RMS magnitude of
@@ -181,25 +200,53 @@ fn noisy_kinematics_error_grows_with_noise_and_filtering_reduces_it() {
     let clean = storage::read(&repo("motions/leg_extension.mot")).unwrap();
     let z = unit_noise(&clean);
     let clean_path = dir.join("clean.mot");
-    write_motion(&clean_path, &clean, &vec![vec![0.0; clean.time.len()]; clean.labels.len()]);
+    write_motion(
+        &clean_path,
+        &clean,
+        &vec![vec![0.0; clean.time.len()]; clean.labels.len()],
+    );
     let mut base = Vec::new();
     for (tag, cutoff) in [("raw", -1.0), ("filtered", CUTOFF_HZ)] {
-        let (out, r) = run(&dir, &format!("clean_{tag}"), &clean_path, cutoff, 5, RESERVES);
+        let (out, r) = run(
+            &dir,
+            &format!("clean_{tag}"),
+            &clean_path,
+            cutoff,
+            5,
+            RESERVES,
+        );
         r.unwrap_or_else(|e| panic!("clean {tag}: {e}"));
         let o = outputs(&out);
         assert_eq!(o.2, 0, "noise-free run ({tag}) has failed frames");
         base.push(o);
     }
     println!("noise (deg) | activation RMS error raw / filtered | knee_r force RMS error (N) raw / filtered | reserve RMS (N m) raw / filtered | failed frames raw / filtered (of 21)");
-    println!("  clean | reserve RMS (N m) raw {:.4} / filtered {:.4}", reserve_rms(&base[0].0), reserve_rms(&base[1].0));
+    println!(
+        "  clean | reserve RMS (N m) raw {:.4} / filtered {:.4}",
+        reserve_rms(&base[0].0),
+        reserve_rms(&base[1].0)
+    );
     let mut table = Vec::new();
     for level in LEVELS_DEG {
-        let noise: Vec<Vec<f64>> = z.iter().map(|c| c.iter().map(|v| v * level).collect()).collect();
+        let noise: Vec<Vec<f64>> = z
+            .iter()
+            .map(|c| c.iter().map(|v| v * level).collect())
+            .collect();
         let p = dir.join(format!("noise_{level}.mot"));
         write_motion(&p, &clean, &noise);
         let mut row = Vec::new();
-        for (k, (tag, cutoff)) in [("raw", -1.0), ("filtered", CUTOFF_HZ)].into_iter().enumerate() {
-            let (out, r) = run(&dir, &format!("noise_{level}_{tag}"), &p, cutoff, 5, RESERVES);
+        for (k, (tag, cutoff)) in [("raw", -1.0), ("filtered", CUTOFF_HZ)]
+            .into_iter()
+            .enumerate()
+        {
+            let (out, r) = run(
+                &dir,
+                &format!("noise_{level}_{tag}"),
+                &p,
+                cutoff,
+                5,
+                RESERVES,
+            );
             r.unwrap_or_else(|e| panic!("noise {level} {tag}: {e}"));
             let o = outputs(&out);
             let (ea, ef) = errors(&o, &base[k]);
@@ -212,8 +259,14 @@ fn noisy_kinematics_error_grows_with_noise_and_filtering_reduces_it() {
         table.push(row);
     }
     for (l, row) in LEVELS_DEG.iter().zip(&table) {
-        assert!(row[1].0 < row[0].0, "{l} deg: filtering does not reduce the activation error");
-        assert!(row[1].1 < row[0].1, "{l} deg: filtering does not reduce the knee force error");
+        assert!(
+            row[1].0 < row[0].0,
+            "{l} deg: filtering does not reduce the activation error"
+        );
+        assert!(
+            row[1].1 < row[0].1,
+            "{l} deg: filtering does not reduce the knee force error"
+        );
     }
     // Activation errors grow strictly with the noise. The knee force error
     // is not strictly monotone (measured filtered: 441, 938, 890, 1382 N:
@@ -221,13 +274,22 @@ fn noisy_kinematics_error_grows_with_noise_and_filtering_reduces_it() {
     // exceed the 0.1 deg error at every level and to be largest at 2 deg.
     for k in 0..2 {
         for w in table.windows(2) {
-            assert!(w[1][k].0 > w[0][k].0, "activation error does not grow with noise");
+            assert!(
+                w[1][k].0 > w[0][k].0,
+                "activation error does not grow with noise"
+            );
         }
         for row in &table[1..] {
-            assert!(row[k].1 > table[0][k].1, "knee force error below the 0.1 deg one");
+            assert!(
+                row[k].1 > table[0][k].1,
+                "knee force error below the 0.1 deg one"
+            );
         }
         let last = table[table.len() - 1][k].1;
-        assert!(table.iter().all(|r| r[k].1 <= last), "knee force error not largest at 2 deg");
+        assert!(
+            table.iter().all(|r| r[k].1 <= last),
+            "knee force error not largest at 2 deg"
+        );
     }
 }
 
@@ -256,15 +318,32 @@ fn knee_at_full_extension_gives_a_defined_answer() {
     let diag = read(&out, &format!("{PREFIX}_SO_diagnostics.sto"));
     let (_, _, failed) = outputs(&out);
     let col = |l: &str| diag.column(diag.column_index(l).unwrap());
-    let (st, rr, fv) = (col("status"), col("relative_residual"), col("friction_violation"));
+    let (st, rr, fv) = (
+        col("status"),
+        col("relative_residual"),
+        col("friction_violation"),
+    );
     for i in 0..diag.time.len() {
         if st[i] >= 0.0 {
             assert!(rr[i] < 1e-5, "t={}: EOM residual {}", diag.time[i], rr[i]);
-            assert!(fv[i] < 1e-6, "t={}: friction violation {}", diag.time[i], fv[i]);
+            assert!(
+                fv[i] < 1e-6,
+                "t={}: friction violation {}",
+                diag.time[i],
+                fv[i]
+            );
         }
     }
     if failed > 0 {
-        assert!(s.warnings.iter().any(|w| w.contains("failed on")), "{:?}", s.warnings);
+        assert!(
+            s.warnings.iter().any(|w| w.contains("failed on")),
+            "{:?}",
+            s.warnings
+        );
     }
-    println!("knee -10..+5 deg: {failed} of {} frames failed; warnings {:?}", diag.time.len(), s.warnings);
+    println!(
+        "knee -10..+5 deg: {failed} of {} frames failed; warnings {:?}",
+        diag.time.len(),
+        s.warnings
+    );
 }

@@ -117,7 +117,9 @@ fn floor(name: &str, extra: &str) -> String {
 /// a · F_max along +x exactly (moment arm 1).
 fn one_muscle_model(f_max: f64) -> String {
     let t = |name: &str, c: &str, ax: &str| {
-        format!(r#"<TransformAxis name="{name}"><coordinates>{c}</coordinates><axis>{ax}</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>"#)
+        format!(
+            r#"<TransformAxis name="{name}"><coordinates>{c}</coordinates><axis>{ax}</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>"#
+        )
     };
     let r = |name: &str, ax: &str| {
         format!(r#"<TransformAxis name="{name}"><coordinates/><axis>{ax}</axis></TransformAxis>"#)
@@ -235,7 +237,11 @@ fn infeasible_frames_are_reported_per_frame_and_reserves_carry_the_exact_deficit
         let (muscle, reserve) = (col(&force, "puller"), col(&force, "tx_reserve"));
         let mut worst = 0.0f64;
         for i in 0..21 {
-            assert_eq!(col(&diag, "status")[i], 0.0, "r0 {r0}: frame {i} not solved");
+            assert_eq!(
+                col(&diag, "status")[i],
+                0.0,
+                "r0 {r0}: frame {i} not solved"
+            );
             let f = req[i];
             // x_r = (f − F_max a)/r0 leaves a 1-D convex quadratic in a: its
             // minimiser clamped into [0.01, 1].
@@ -276,7 +282,11 @@ fn contact_weight_sweep_is_monotone_over_fifteen_decades() {
     let model = common::block_model(&floor("floor", ""));
     let rows = block_rows(41, 2.0, |t| {
         let w = 2.0 * std::f64::consts::PI * t;
-        [0.01 * w.sin(), 0.002 * (2.0 * w).sin(), 0.005 * (2.0 * w).sin()]
+        [
+            0.01 * w.sin(),
+            0.002 * (2.0 * w).sin(),
+            0.005 * (2.0 * w).sin(),
+        ]
     });
     let (dir, summary) = run_case(
         "w0_sweep",
@@ -309,10 +319,17 @@ fn contact_weight_sweep_is_monotone_over_fifteen_decades() {
         for i in 0..diag.time.len() {
             if status[i] >= 0.0 {
                 assert!(col(&diag, "relative_residual")[i] < 1e-6, "w0 {w}: EOM");
-                assert!(col(&diag, "friction_violation")[i] < 1e-6, "w0 {w}: friction");
+                assert!(
+                    col(&diag, "friction_violation")[i] < 1e-6,
+                    "w0 {w}: friction"
+                );
             }
         }
-        let a_cost: Vec<f64> = act.rows.iter().map(|r| r.iter().map(|x| x * x).sum()).collect();
+        let a_cost: Vec<f64> = act
+            .rows
+            .iter()
+            .map(|r| r.iter().map(|x| x * x).sum())
+            .collect();
         let l_cost: Vec<f64> = (0..cf.time.len())
             .map(|i| {
                 ["lambda_n", "lambda_s1", "lambda_s2"]
@@ -323,8 +340,14 @@ fn contact_weight_sweep_is_monotone_over_fifteen_decades() {
             .collect();
         let (mut c, mut r) = (0.0, 0.0);
         for ax in ["tx", "ty", "tz"] {
-            c += col(&src, &format!("{ax}_contacts")).iter().map(|v| v.abs()).sum::<f64>();
-            r += col(&src, &format!("{ax}_required")).iter().map(|v| v.abs()).sum::<f64>();
+            c += col(&src, &format!("{ax}_contacts"))
+                .iter()
+                .map(|v| v.abs())
+                .sum::<f64>();
+            r += col(&src, &format!("{ax}_required"))
+                .iter()
+                .map(|v| v.abs())
+                .sum::<f64>();
         }
         let objective = col(&diag, "objective");
         per_w.push((w, status, a_cost, l_cost, c / r, objective));
@@ -367,12 +390,21 @@ fn contact_weight_sweep_is_monotone_over_fifteen_decades() {
                 l2[i]
             );
         }
-        assert!(s2 >= &(s1 - 1e-7), "contact share falls from w0 {w1} to {w2}: {s1} -> {s2}");
+        assert!(
+            s2 >= &(s1 - 1e-7),
+            "contact share falls from w0 {w1} to {w2}: {s1} -> {s2}"
+        );
     }
-    println!("largest rise of a'a between neighbours {worst_a:.2e}, largest fall of l'l {worst_l:.2e}");
+    println!(
+        "largest rise of a'a between neighbours {worst_a:.2e}, largest fall of l'l {worst_l:.2e}"
+    );
     let (first, last) = (&per_w[0], &per_w[per_w.len() - 1]);
     assert!(first.4 < 1e-3, "w0 1e-6: contacts carry {}", first.4);
-    assert!(last.4 > 1.0 - 1e-3, "w0 1e9: contacts carry only {}", last.4);
+    assert!(
+        last.4 > 1.0 - 1e-3,
+        "w0 1e9: contacts carry only {}",
+        last.4
+    );
 }
 
 // ---------------------------------------------------------------------------
@@ -434,7 +466,10 @@ fn regime_blend_removes_the_force_jump_of_the_hard_switch() {
         let (d_hard, f_hard, c_hard, _) = chatter_run(&format!("chatter_hard_{n}"), 0.0, n);
         let (d_soft, f_soft, c_soft, s_soft) = chatter_run(&format!("chatter_blend_{n}"), h, n);
         for d in [&d_hard, &d_soft] {
-            assert!(col(d, "status").iter().all(|s| *s == 0.0), "unsolved frames");
+            assert!(
+                col(d, "status").iter().all(|s| *s == 0.0),
+                "unsolved frames"
+            );
             assert!(col(d, "relative_residual").iter().all(|r| *r < 1e-6));
             assert!(col(d, "friction_violation").iter().all(|r| *r < 1e-6));
         }
@@ -447,7 +482,10 @@ fn regime_blend_removes_the_force_jump_of_the_hard_switch() {
         let (mut jump_hard, mut jump_soft) = (0.0f64, 0.0f64);
         let mut blended = 0;
         for i in 0..slip.len() {
-            assert!((beta[i] - smoothstep(slip[i], h)).abs() < 1e-12, "beta at frame {i}");
+            assert!(
+                (beta[i] - smoothstep(slip[i], h)).abs() < 1e-12,
+                "beta at frame {i}"
+            );
             assert_eq!(hard_regime[i], if slip[i] > V_TRANS { 1.0 } else { 0.0 });
             if beta[i] == 0.0 || beta[i] == 1.0 {
                 // Identical problem, identical answer.
@@ -482,14 +520,23 @@ fn regime_blend_removes_the_force_jump_of_the_hard_switch() {
         summary.push((n, jump_hard, jump_soft));
         println!("chattering, {n} frames (dt = {:.4} s): hard switch max push jump {jump_hard:.3} N (mu_k N = {:.3} N); blend h = {h} m/s: max jump {jump_soft:.3} N",
             2.0 / (n - 1) as f64, MU_K * n_normal);
-        assert!(jump_hard > 0.8 * MU_K * n_normal, "the hard switch should jump by about mu_k N");
-        assert!(jump_soft < 0.25 * jump_hard, "the blend should remove the jump");
+        assert!(
+            jump_hard > 0.8 * MU_K * n_normal,
+            "the hard switch should jump by about mu_k N"
+        );
+        assert!(
+            jump_soft < 0.25 * jump_hard,
+            "the blend should remove the jump"
+        );
     }
     // The hard jump stays, the blended one halves with the frame step.
     let (h1, s1) = (summary[0].1, summary[0].2);
     let (h2, s2) = (summary[1].1, summary[1].2);
     assert!(h2 > 0.8 * h1, "hard jump {h1} -> {h2}");
-    assert!(s2 < 0.65 * s1, "blended jump {s1} -> {s2} does not shrink with dt");
+    assert!(
+        s2 < 0.65 * s1,
+        "blended jump {s1} -> {s2} does not shrink with dt"
+    );
 }
 
 /// A `regime_blend` outside [0, 2 v_trans] is refused with a clear message.
@@ -497,7 +544,10 @@ fn regime_blend_removes_the_force_jump_of_the_hard_switch() {
 fn regime_blend_out_of_range_is_an_input_error() {
     for bad in ["-0.01", "0.25", "nan"] {
         let dir = common::out_dir(&format!("stability_blend_bad_{}", bad.replace('.', "_")));
-        let model = common::block_model(&floor("floor", &format!("<regime_blend>{bad}</regime_blend>")));
+        let model = common::block_model(&floor(
+            "floor",
+            &format!("<regime_blend>{bad}</regime_blend>"),
+        ));
         std::fs::write(dir.join("model.osim"), model).unwrap();
         let rows = block_rows(3, 1.0, |_| [0.0; 3]);
         std::fs::write(dir.join("motion.mot"), motion(&["tx", "ty", "tz"], &rows)).unwrap();
@@ -508,7 +558,10 @@ fn regime_blend_out_of_range_is_an_input_error() {
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{bad}: {err}");
-        assert!(err.contains("regime_blend") && err.contains("model.osim") && err.contains("line"), "{bad}: {err}");
+        assert!(
+            err.contains("regime_blend") && err.contains("model.osim") && err.contains("line"),
+            "{bad}: {err}"
+        );
     }
 }
 
@@ -522,11 +575,20 @@ fn assert_clean(dir: &Path, what: &str) -> (Storage, Storage, Storage) {
     let diag = read(dir, "case_SO_diagnostics.sto");
     let act = read(dir, "case_SO_activation.sto");
     let cf = read(dir, "case_SO_ContactForces.sto");
-    assert!(all_finite(&diag) && all_finite(&act) && all_finite(&cf), "{what}: NaN");
+    assert!(
+        all_finite(&diag) && all_finite(&act) && all_finite(&cf),
+        "{what}: NaN"
+    );
     for (i, t) in diag.time.iter().enumerate() {
         assert_eq!(col(&diag, "status")[i], 0.0, "{what} t={t}: not solved");
-        assert!(col(&diag, "relative_residual")[i] < 1e-6, "{what} t={t}: EOM residual");
-        assert!(col(&diag, "friction_violation")[i] < 1e-6, "{what} t={t}: friction");
+        assert!(
+            col(&diag, "relative_residual")[i] < 1e-6,
+            "{what} t={t}: EOM residual"
+        );
+        assert!(
+            col(&diag, "friction_violation")[i] < 1e-6,
+            "{what} t={t}: friction"
+        );
     }
     (diag, act, cf)
 }
@@ -559,7 +621,10 @@ fn contact_disengaging_mid_motion_hands_the_load_over() {
     let req = col(&src, "ty_required");
     let lift = col(&act, "lift");
     assert!(w[0] > 0.99 && *w.last().unwrap() == 0.0);
-    assert!(w.iter().any(|x| *x > 0.01 && *x < 0.99), "no frame in the transition zone");
+    assert!(
+        w.iter().any(|x| *x > 0.01 && *x < 0.99),
+        "no frame in the transition zone"
+    );
     for i in 0..w.len() {
         if w[i] == 0.0 {
             assert_eq!(fy[i], 0.0);
@@ -584,7 +649,13 @@ fn coincident_and_surplus_contacts_share_the_load_equally() {
         ("coincident", vec![[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]),
         (
             "surplus",
-            vec![[0.1, 0.0, 0.1], [-0.1, 0.0, 0.1], [0.1, 0.0, -0.1], [-0.1, 0.0, -0.1], [0.0, 0.0, 0.0]],
+            vec![
+                [0.1, 0.0, 0.1],
+                [-0.1, 0.0, 0.1],
+                [0.1, 0.0, -0.1],
+                [-0.1, 0.0, -0.1],
+                [0.0, 0.0, 0.0],
+            ],
         ),
     ] {
         let contacts: String = points
@@ -593,7 +664,10 @@ fn coincident_and_surplus_contacts_share_the_load_equally() {
             .map(|(k, p)| {
                 floor(&format!("c{k}"), "").replace(
                     "<point_location>0 0 0</point_location>",
-                    &format!("<point_location>{} {} {}</point_location>", p[0], p[1], p[2]),
+                    &format!(
+                        "<point_location>{} {} {}</point_location>",
+                        p[0], p[1], p[2]
+                    ),
                 )
             })
             .collect();
@@ -610,16 +684,29 @@ fn coincident_and_surplus_contacts_share_the_load_equally() {
         let n = points.len() as f64;
         let a_want = MASS * G / (100.0 * (1.0 + n * w0));
         for i in 0..act.time.len() {
-            assert!((col(&act, "lift")[i] - a_want).abs() < 1e-7, "{what}: lift {}", col(&act, "lift")[i]);
+            assert!(
+                (col(&act, "lift")[i] - a_want).abs() < 1e-7,
+                "{what}: lift {}",
+                col(&act, "lift")[i]
+            );
             for k in 0..points.len() {
                 let l = col(&cf, &format!("c{k}_lambda_n"))[i];
-                assert!((l - w0 * a_want).abs() < 1e-6, "{what}: c{k} lambda_n {l} vs {}", w0 * a_want);
+                assert!(
+                    (l - w0 * a_want).abs() < 1e-6,
+                    "{what}: c{k} lambda_n {l} vs {}",
+                    w0 * a_want
+                );
                 for s in ["s1", "s2"] {
                     assert!(col(&cf, &format!("c{k}_lambda_{s}"))[i].abs() < 1e-7);
                 }
             }
         }
-        println!("{what}: {} contacts, lambda_n = {:.6} each (closed form {:.6})", points.len(), col(&cf, "c0_lambda_n")[0], w0 * a_want);
+        println!(
+            "{what}: {} contacts, lambda_n = {:.6} each (closed form {:.6})",
+            points.len(),
+            col(&cf, "c0_lambda_n")[0],
+            w0 * a_want
+        );
     }
 }
 
