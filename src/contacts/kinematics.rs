@@ -161,10 +161,13 @@ impl Contact {
         (1.0 - st.beta) * self.mu_s
     }
 
-    /// Kinetic shear direction scaled by μk β: the in-plane force on the
-    /// plane body per unit of the normal force component (zero without slip).
+    /// Kinetic shear direction scaled by μk β in a blended frame
+    /// (0 < β < 1): the in-plane force on the plane body per unit of the
+    /// normal force component. Zero without slip and outside the blend, so
+    /// the static-model columns and forces of a fully static or kinetic
+    /// state are the paper's eq. 1.
     fn blended_shear(&self, st: &ContactState) -> Vector3<f64> {
-        if st.beta > 0.0 && st.slip_speed > 0.0 {
+        if st.beta > 0.0 && st.beta < 1.0 && st.slip_speed > 0.0 {
             st.slip_velocity * (st.beta * self.mu_k / st.slip_speed)
         } else {
             Vector3::zeros()
