@@ -140,24 +140,37 @@ impl Reduction {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "statopt reduce_model: what the model lost for this motion ({} frames scanned; tolerance {STATIC_TOLERANCE}).\nDropped muscles, actuators and contacts are absent from the output tables.\n",
+            "statopt reduce_model: what the model lost for this motion ({} frames scanned; tolerance {STATIC_TOLERANCE:e}).\nDropped muscles, actuators and contacts are absent from the output tables.\n",
             self.frames
         );
         let _ = writeln!(s, "[free coordinates] {}", self.free.len());
         for n in &self.free {
             let _ = writeln!(s, "{n}");
         }
-        let _ = writeln!(s, "\n[locked coordinates] {} (value, rad or m)", self.locked.len());
+        let _ = writeln!(
+            s,
+            "\n[locked coordinates] {} (value, rad or m)",
+            self.locked.len()
+        );
         for (n, v) in &self.locked {
             let _ = writeln!(s, "{n}\t{v:.17e}");
         }
         for (title, v) in [
             ("dropped muscles", &self.muscles),
             ("dropped actuators", &self.actuators),
-            ("skipped contacts (cannot act on a free coordinate)", &self.contacts_cannot_act),
-            ("skipped contacts (never engaged)", &self.contacts_never_engaged),
+            (
+                "skipped contacts (cannot act on a free coordinate)",
+                &self.contacts_cannot_act,
+            ),
+            (
+                "skipped contacts (never engaged)",
+                &self.contacts_never_engaged,
+            ),
             ("dropped bodies", &self.bodies),
-            ("coordinates dropped with their bodies", &self.coordinates_dropped),
+            (
+                "coordinates dropped with their bodies",
+                &self.coordinates_dropped,
+            ),
         ] {
             let _ = writeln!(s, "\n[{title}] {}", v.len());
             for n in v {
@@ -288,7 +301,10 @@ pub fn reduce(
         v
     };
     let mut contacts: Vec<(&Element, Contact)> = Vec::new();
-    for f in forces.iter().filter(|f| force_kind(f) == ForceKind::Contact) {
+    for f in forces
+        .iter()
+        .filter(|f| force_kind(f) == ForceKind::Contact)
+    {
         if let Some(c) = Contact::from_xml(f, model)? {
             contacts.push((f, c));
         }
@@ -355,7 +371,11 @@ pub fn reduce(
             }
         });
         let mut bodies: Vec<usize> = path.points.iter().map(|p| p.body).collect();
-        bodies.extend(path.wraps.iter().map(|w| muscles.wrap_objects[w.object].body));
+        bodies.extend(
+            path.wraps
+                .iter()
+                .map(|w| muscles.wrap_objects[w.object].body),
+        );
         if !passive_fiber_forces && !moving_point && clusters.same(&bodies) {
             red.muscles.push(m.muscle.name.clone());
             removed.insert(forces[m.force_index] as *const Element);
@@ -427,7 +447,11 @@ pub fn reduce(
         let dir = setup.setup_file.parent().unwrap_or(Path::new("."));
         let loads = ExternalLoads::load(p, dir, model)?;
         for ef in &loads.forces {
-            for b in [ef.applied_to_body, ef.force_expressed_in, ef.point_expressed_in] {
+            for b in [
+                ef.applied_to_body,
+                ef.force_expressed_in,
+                ef.point_expressed_in,
+            ] {
                 keep[b] = true;
             }
         }
@@ -466,8 +490,10 @@ pub fn reduce(
         .filter(|&c| !keep[model.coordinates[c].body])
         .map(|c| model.coordinates[c].name.clone())
         .collect();
-    spec.bodies.retain(|b| !dropped_bodies.contains(b.name.as_str()));
-    spec.joints.retain(|j| !dropped_joints.contains(j.name.as_str()));
+    spec.bodies
+        .retain(|b| !dropped_bodies.contains(b.name.as_str()));
+    spec.joints
+        .retain(|j| !dropped_joints.contains(j.name.as_str()));
     spec.frames.retain(|f| match model.frame(&f.path) {
         Some(fr) if fr.path == f.path => keep[fr.body],
         _ => true,
