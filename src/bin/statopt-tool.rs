@@ -50,6 +50,10 @@ struct RunArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
+    /// Run static optimization on the model reduced to what the motion needs
+    /// (overrides the setup's <reduce_model>).
+    #[arg(long)]
+    reduce: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -256,7 +260,10 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
     }
     match Setup::read(setup)? {
         Setup::InverseDynamics(s) => tools::inverse_dynamics::run(&s, &opts),
-        Setup::Analyze(s) => tools::analyze::run(&s, &opts),
+        Setup::Analyze(mut s) => {
+            s.reduce_model |= a.reduce;
+            tools::analyze::run(&s, &opts)
+        }
     }
 }
 

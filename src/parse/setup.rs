@@ -39,6 +39,9 @@ pub struct AnalyzeSetup {
     /// row of the motion so that the contact stays closed (e.g. a machine's
     /// lever angle from its pad on the shin), before speeds are splined.
     pub close_contacts: Vec<(String, String)>,
+    /// statopt: `<reduce_model>`: static optimization runs on the model
+    /// reduced to what the motion needs (`tools::reduce`; CLI `--reduce`).
+    pub reduce_model: bool,
     /// statopt: `<Figure>` and `<Metric>` elements (see `tools::study`),
     /// drawn from the run's tables after the analyses.
     pub figures: Vec<Element>,
@@ -306,6 +309,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
                 .collect::<Result<Vec<_>>>()?,
             None => Vec::new(),
         },
+        reduce_model: tool.child_bool_or("reduce_model", false)?,
         figures: tool
             .children
             .iter()

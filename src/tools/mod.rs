@@ -8,6 +8,7 @@ pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod progress;
+pub mod reduce;
 pub mod static_optimization;
 pub mod study;
 

@@ -225,7 +225,16 @@ impl SoProblem {
         setup: &AnalyzeSetup,
         so: &StaticOptimizationSetup,
     ) -> Result<(SoProblem, Vec<String>)> {
-        let am = load_analysis_model(setup)?;
+        Self::build_from(setup, so, load_analysis_model(setup)?)
+    }
+
+    /// [`SoProblem::build`] on an already loaded model (e.g. a reduced one,
+    /// `tools::reduce`).
+    pub fn build_from(
+        setup: &AnalyzeSetup,
+        so: &StaticOptimizationSetup,
+        am: crate::tools::loading::AnalysisModel,
+    ) -> Result<(SoProblem, Vec<String>)> {
         let model = am.model;
         let mut warnings = am.warnings;
         let mut forces: Vec<Element> = Vec::new();
@@ -760,7 +769,21 @@ pub fn run(
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
-    let (mut problem, mut warnings) = SoProblem::build(setup, &so)?;
+    let (mut problem, mut warnings, reduction) = if setup.reduce_model {
+        let am = load_analysis_model(setup)?;
+        let (am, r) = crate::tools::reduce::reduce(
+            setup,
+            &am,
+            so.common.step_interval,
+            so.passive_fiber_forces,
+            reactions,
+        )?;
+        let (p, w) = SoProblem::build_from(setup, &so, am)?;
+        (p, w, Some(r))
+    } else {
+        let (p, w) = SoProblem::build(setup, &so)?;
+        (p, w, None)
+    };
     // The states are streamed block by block (motion::stream): memory stays
     // flat however long the trial. Opened here for the checks, the missing
     // coordinates and the frame count; each run below streams them again.
@@ -781,6 +804,12 @@ pub fn run(
         warnings: Vec::new(),
         ..Default::default()
     };
+    if let Some(r) = &reduction {
+        let path = dir.join(format!("{base}reduction.txt"));
+        r.write(&path)?;
+        summary.files.push(path);
+        warnings.extend(r.summary_lines());
+    }
     let weights: Vec<f64> = if problem.contacts.is_empty() {
         vec![so.contact_weights[0]]
     } else {
