@@ -1367,8 +1367,12 @@ impl LogNames {
                     distance: c[6],
                     weight: c[7],
                     slip_speed: c[8],
-                    regime: if c[9] == 1.0 {
+                    // The table's regime column carries the kinetic share
+                    // beta: 0 static, 1 kinetic, between: <regime_blend>.
+                    regime: if c[9] >= 1.0 {
                         "kinetic".into()
+                    } else if c[9] > 0.0 {
+                        "blended".into()
                     } else {
                         "static".into()
                     },

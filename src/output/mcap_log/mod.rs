@@ -578,7 +578,7 @@ pub fn contacts_channel(contacts: &[&str]) -> Result<ChannelSpec> {
             "distance": {"type": "number", "description": "signed distance to the contact surface (m)"},
             "weight": {"type": "number", "description": "objective weight of the contact forces"},
             "slip_speed": {"type": "number", "description": "tangential speed of the contact point (m/s)"},
-            "regime": {"type": "string", "description": "contact regime (e.g. static, kinetic, inactive)"}
+            "regime": {"type": "string", "description": "contact regime: static, kinetic, or blended (0 < beta < 1 under regime_blend)"}
         },
         "additionalProperties": false
     });
