@@ -7,6 +7,7 @@ pub mod joint_reaction;
 pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
+pub mod perturbation;
 pub mod progress;
 pub mod static_optimization;
 pub mod study;
