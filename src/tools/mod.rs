@@ -2,6 +2,7 @@
 //! every frame and writes OpenSim-format results.
 pub mod analyze;
 pub mod bench;
+pub mod bench_grid;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod loading;
