@@ -88,7 +88,8 @@ pub struct GridRow {
     pub frames: usize,
     /// Best time per frame of the per-frame loop, ms.
     pub ms_per_frame: f64,
-    /// Against the reference run: max and RMS |Δactivation| over all columns and frames.
+    /// Against the reference run: max and RMS |Δactivation| over the
+    /// muscles (every actuator when the model has none) and frames.
     pub max_dactivation: f64,
     pub rms_dactivation: f64,
     /// Max |Δ contact force| (N, vector norm), when the model has contacts.
@@ -96,7 +97,8 @@ pub struct GridRow {
     /// Max |Δ reaction force| (N, vector norm) of the knee (or first)
     /// reaction, when the setup runs a JointReaction with static optimization.
     pub max_dreaction: Option<f64>,
-    /// Max |Δactivation| against OpenSim's activations, common columns and times.
+    /// Max |Δactivation| against OpenSim's activations: the same columns,
+    /// common times.
     pub max_dactivation_opensim: Option<f64>,
     /// Failed frames (solver status not solved) of the run.
     pub failed_frames: usize,
@@ -349,6 +351,26 @@ fn run_choice(
     } else {
         None
     };
+    // Activation errors cover the muscles (MusclePower's columns), or every
+    // actuator when the model has no muscle.
+    let muscles = storage::read(&dir.join(format!("{prefix}MusclePower.sto")))?.labels;
+    let activation = if muscles.is_empty() {
+        activation
+    } else {
+        let cols: Vec<usize> = muscles
+            .iter()
+            .filter_map(|m| activation.column_index(m))
+            .collect();
+        Storage {
+            labels: cols.iter().map(|&j| activation.labels[j].clone()).collect(),
+            rows: activation
+                .rows
+                .iter()
+                .map(|r| cols.iter().map(|&j| r[j]).collect())
+                .collect(),
+            ..activation
+        }
+    };
     let diag = storage::read(&dir.join(format!("{prefix}diagnostics.sto")))?;
     let failed = match diag.column_index("status") {
         Some(j) => diag.rows.iter().filter(|r| r[j] < 0.0).count(),
@@ -591,7 +613,8 @@ pub fn write_chart(
     let points = rows
         .iter()
         .map(|r| {
-            let (y, label) = if r.max_dactivation > 0.0 {
+            let (y, label) = if r.max_dactivation > 0.0 || r.max_dactivation.is_nan() {
+                // NaN (no common frames) is not drawn.
                 (r.max_dactivation, r.choice.clone())
             } else {
                 (CHART_FLOOR, format!("{} (error 0)", r.choice))
@@ -599,7 +622,7 @@ pub fn write_chart(
             ScatterPoint {
                 label,
                 x: r.ms_per_frame,
-                y: y.max(CHART_FLOOR),
+                y: if y.is_nan() { y } else { y.max(CHART_FLOOR) },
                 color: r.threads.saturating_sub(1),
             }
         })
@@ -661,13 +684,15 @@ pub fn run(setup_file: &Path, opts: &GridOptions) -> Result<(Vec<GridRow>, Vec<P
     let rows = run_grid(&setup, &reference_choice(), &choices, opts)?;
     let csv = opts.out.join("bench_grid.csv");
     write_csv(&rows, &csv)?;
-    let title = format!(
-        "{}: speed against accuracy",
-        setup_file
-            .file_name()
-            .map(|f| f.to_string_lossy().to_string())
-            .unwrap_or_default()
-    );
+    let file_name = setup_file
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let title = if setup.name.is_empty() {
+        format!("{file_name}: speed against accuracy")
+    } else {
+        format!("{} ({file_name}): speed against accuracy", setup.name)
+    };
     let mut files = vec![csv];
     files.extend(write_chart(
         &rows,
