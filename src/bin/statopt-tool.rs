@@ -12,7 +12,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use statopt::parse::setup::Setup;
-use statopt::tools::{self, bench, RunOptions};
+use statopt::tools::{self, bench, bench_grid, RunOptions};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -74,6 +74,21 @@ enum Command {
         /// Override the setup's coordinate low-pass cut-off (Hz; -1: no filtering).
         #[arg(long, allow_hyphen_values = true)]
         lowpass: Option<f64>,
+        /// Run a grid of method choices (constraint matrix, friction model, solver
+        /// tolerance, spline, filter, threads) against a reference run; writes
+        /// bench_grid.csv and bench_grid.png/.svg into --out.
+        #[arg(long)]
+        grid: bool,
+        /// Output folder of --grid.
+        #[arg(long, value_name = "DIR", default_value = ".", requires = "grid")]
+        out: PathBuf,
+        /// OpenSim 4.6's time per frame (ms), drawn as a reference line (--grid).
+        #[arg(long, value_name = "MS", requires = "grid")]
+        opensim_ms: Option<f64>,
+        /// OpenSim's *_StaticOptimization_activation.sto of the setup: the grid
+        /// reports max |Δactivation| against it.
+        #[arg(long, value_name = "FILE", requires = "grid")]
+        opensim_activations: Option<PathBuf>,
     },
     /// Write the model a setup composes (model_file + artifact_files + force_set_files, contact
     /// elements left out) as one OpenSim 4.x document.
@@ -281,7 +296,47 @@ fn main() -> ExitCode {
             repeat,
             tile,
             lowpass,
+            grid,
+            out,
+            opensim_ms,
+            opensim_activations,
         }) => {
+            if *grid {
+                let opts = bench_grid::GridOptions {
+                    out: out.clone(),
+                    repeat: *repeat,
+                    opensim_ms: *opensim_ms,
+                    opensim_activations: opensim_activations.clone(),
+                };
+                return match bench_grid::run(setup, &opts) {
+                    Ok((rows, files)) => {
+                        println!("choice\tthreads\tframes\tms_per_frame\tmax_da\trms_da\tmax_dcontact_N\tmax_dreaction_N\tmax_da_opensim\tfailed");
+                        let o = |v: Option<f64>| {
+                            v.map(|x| format!("{x:.3e}")).unwrap_or_else(|| "-".into())
+                        };
+                        for r in rows {
+                            println!(
+                                "{}\t{}\t{}\t{:.4}\t{:.3e}\t{:.3e}\t{}\t{}\t{}\t{}",
+                                r.choice,
+                                r.threads,
+                                r.frames,
+                                r.ms_per_frame,
+                                r.max_dactivation,
+                                r.rms_dactivation,
+                                o(r.max_dcontact),
+                                o(r.max_dreaction),
+                                o(r.max_dactivation_opensim),
+                                r.failed_frames
+                            );
+                        }
+                        for f in files {
+                            println!("wrote {}", f.display());
+                        }
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(e),
+                };
+            }
             let opts = bench::BenchOptions {
                 threads: threads.clone(),
                 repeat: *repeat,

@@ -50,6 +50,17 @@ impl CoordinateSplines {
         missing: MissingCoordinate,
         file: &std::path::Path,
     ) -> Result<Self> {
+        Self::with_degree(model, table, missing, file, 5)
+    }
+
+    /// As [`new`](Self::new) with interpolating splines of `degree` (1, 3 or 5).
+    pub fn with_degree(
+        model: &Model,
+        table: &Storage,
+        missing: MissingCoordinate,
+        file: &std::path::Path,
+        degree: usize,
+    ) -> Result<Self> {
         if table.time.len() < 6 {
             return Err(Error::input(
                 Location::file(file),
@@ -72,7 +83,7 @@ impl CoordinateSplines {
                         1.0
                     };
                     let v: Vec<f64> = table.rows.iter().map(|r| r[j] * scale).collect();
-                    let s = GcvSpline::interpolating(5, &table.time, &v).map_err(|e| {
+                    let s = GcvSpline::interpolating(degree, &table.time, &v).map_err(|e| {
                         e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
                     })?;
                     values.push(v);

@@ -26,7 +26,19 @@ pub struct States {
 
 impl States {
     pub fn from_coordinates(model: &Model, table: &Storage, file: &Path) -> Result<States> {
-        let splines = CoordinateSplines::new(model, table, MissingCoordinate::Zero, file)?;
+        Self::from_coordinates_with_degree(model, table, file, 5)
+    }
+
+    /// As [`from_coordinates`](Self::from_coordinates) with interpolating
+    /// splines of `degree` (statopt's `<coordinate_spline>`).
+    pub fn from_coordinates_with_degree(
+        model: &Model,
+        table: &Storage,
+        file: &Path,
+        degree: usize,
+    ) -> Result<States> {
+        let splines =
+            CoordinateSplines::with_degree(model, table, MissingCoordinate::Zero, file, degree)?;
         let n = table.time.len();
         let nq = model.nq();
         let mut q = vec![vec![0.0; nq]; n];
@@ -52,12 +64,21 @@ impl States {
     /// Target accelerations for static optimization (§6.3): the derivative of
     /// a quintic spline through each coordinate's speeds, at the rows.
     pub fn speed_derivatives(&self, file: &Path) -> Result<Vec<Vec<f64>>> {
+        self.speed_derivatives_with_degree(file, 5)
+    }
+
+    /// As [`speed_derivatives`](Self::speed_derivatives) with a spline of `degree`.
+    pub fn speed_derivatives_with_degree(
+        &self,
+        file: &Path,
+        degree: usize,
+    ) -> Result<Vec<Vec<f64>>> {
         let n = self.time.len();
         let nq = self.q.first().map_or(0, |r| r.len());
         let mut udot = vec![vec![0.0; nq]; n];
         for c in 0..nq {
             let col: Vec<f64> = self.u.iter().map(|r| r[c]).collect();
-            let s = GcvSpline::interpolating(5, &self.time, &col)
+            let s = GcvSpline::interpolating(degree, &self.time, &col)
                 .map_err(|e| Error::input(Location::file(file), format!("splining speeds: {e}")))?;
             for i in 0..n {
                 udot[i][c] = s.derivative(self.time[i], 1);

@@ -97,6 +97,8 @@ pub struct StateStream<'m> {
     block: usize,
     /// Rows computed in memory, handed out as one block ([`Self::in_memory`]).
     memory: Option<StateBlock>,
+    /// Degree of the interpolating splines for u and u̇ (5: OpenSim's).
+    degree: usize,
 }
 
 impl<'m> StateStream<'m> {
@@ -363,6 +365,7 @@ impl<'m> StateStream<'m> {
             next_out: first_row,
             block,
             memory: None,
+            degree: 5,
         })
     }
 
@@ -414,7 +417,16 @@ impl<'m> StateStream<'m> {
             next_out: first_row,
             block: rows.max(1),
             memory,
+            degree: 5,
         }
+    }
+
+    /// Spline the coordinates and speeds with interpolating splines of
+    /// `degree` instead of OpenSim's quintic (statopt's `<coordinate_spline>`;
+    /// the resampling of a non-uniform motion stays quintic).
+    pub fn with_spline_degree(mut self, degree: usize) -> Self {
+        self.degree = degree;
+        self
     }
 
     /// The next block of rows, in order; None after `last_row`.
@@ -478,7 +490,7 @@ impl<'m> StateStream<'m> {
         for (c, cc) in self.coord_cols.iter().enumerate() {
             let Some((j, scale)) = *cc else { continue };
             let v: Vec<f64> = cols[j][qa..qb].iter().map(|x| x * scale).collect();
-            let sp = GcvSpline::interpolating(5, &time[qa..qb], &v).map_err(|e| {
+            let sp = GcvSpline::interpolating(self.degree, &time[qa..qb], &v).map_err(|e| {
                 e.context(format!(
                     "{}: column '{}'",
                     self.file.display(),
@@ -497,7 +509,7 @@ impl<'m> StateStream<'m> {
         let mut udot = vec![vec![0.0; nq]; b - a];
         for c in 0..nq {
             let col: Vec<f64> = u.iter().map(|r| r[c]).collect();
-            let sp = GcvSpline::interpolating(5, &time[ua..ub], &col).map_err(|e| {
+            let sp = GcvSpline::interpolating(self.degree, &time[ua..ub], &col).map_err(|e| {
                 Error::input(Location::file(&self.file), format!("splining speeds: {e}"))
             })?;
             for i in oa..ob {

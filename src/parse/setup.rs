@@ -42,6 +42,10 @@ pub struct AnalyzeSetup {
     /// statopt: `<reduce_model>`: static optimization runs on the model
     /// reduced to what the motion needs (`tools::reduce`; CLI `--reduce`).
     pub reduce_model: bool,
+    /// statopt: degree of the interpolating spline through the coordinates
+    /// and speeds (`<coordinate_spline>gcv5|cubic</coordinate_spline>`): 5,
+    /// OpenSim's quintic GCV spline (default), or 3, a natural cubic.
+    pub coordinate_spline: usize,
     /// statopt: `<Figure>` and `<Metric>` elements (see `tools::study`),
     /// drawn from the run's tables after the analyses.
     pub figures: Vec<Element>,
@@ -310,6 +314,18 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             None => Vec::new(),
         },
         reduce_model: tool.child_bool_or("reduce_model", false)?,
+        coordinate_spline: match tool.child("coordinate_spline") {
+            Some(c) if !c.text().is_empty() => match c.text().to_ascii_lowercase().as_str() {
+                "gcv5" | "quintic" => 5,
+                "cubic" => 3,
+                other => {
+                    return Err(c.error(format!(
+                        "coordinate_spline must be 'gcv5' (OpenSim's quintic spline) or 'cubic', found '{other}'"
+                    )))
+                }
+            },
+            _ => 5,
+        },
         figures: tool
             .children
             .iter()

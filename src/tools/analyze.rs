@@ -74,7 +74,8 @@ pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<
     if !setup.close_contacts.is_empty() {
         close_setup_contacts(setup, model, &mut table)?;
     }
-    let states = States::from_coordinates(model, &table, file)?;
+    let states =
+        States::from_coordinates_with_degree(model, &table, file, setup.coordinate_spline)?;
     let (first, last) = (states.time[0], states.time[states.time.len() - 1]);
     check_time_range(setup, file, first, last)?;
     Ok(states)
@@ -93,7 +94,7 @@ pub fn open_state_stream<'m>(
     let file = coordinates_file(setup)?;
     if !setup.close_contacts.is_empty() {
         let states = load_states(setup, model)?;
-        let udot = states.speed_derivatives(file)?;
+        let udot = states.speed_derivatives_with_degree(file, setup.coordinate_spline)?;
         return Ok(StateStream::in_memory(
             model,
             states,
@@ -108,7 +109,8 @@ pub fn open_state_stream<'m>(
         setup.lowpass_cutoff,
         setup.initial_time,
         setup.final_time,
-    )?;
+    )?
+    .with_spline_degree(setup.coordinate_spline);
     check_time_range(setup, file, stream.first_time, stream.last_time)?;
     Ok(stream)
 }

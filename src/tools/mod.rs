@@ -2,11 +2,13 @@
 //! every frame and writes OpenSim-format results.
 pub mod analyze;
 pub mod bench;
+pub mod bench_grid;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
+pub mod perturbation;
 pub mod progress;
 pub mod reduce;
 pub mod static_optimization;

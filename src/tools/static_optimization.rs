@@ -36,6 +36,7 @@ use crate::tools::joint_reaction::{
     JointReactionSetup, ReactionSpec, DESCRIPTION as JR_DESCRIPTION,
 };
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
+use crate::tools::perturbation::Perturbation;
 use crate::tools::{RunOptions, RunSummary};
 use crate::xml::Element;
 
@@ -63,6 +64,27 @@ pub struct StaticOptimizationSetup {
     /// Static-regime friction constraint: the paper's four-sided pyramid
     /// (eq. 16), an eight-sided one, or the exact cone (eq. 2; default).
     pub friction: FrictionModel,
+    /// statopt: how the equations of motion become the constraint matrix
+    /// (`<constraint_matrix>analytic|perturbation</constraint_matrix>`).
+    pub constraint_matrix: ConstraintMatrix,
+    /// statopt: Clarabel's tolerance exactly (`<solver_tolerance>`), looser or
+    /// tighter than [`DEFAULT_TOLERANCE`]; unset: the convergence-criterion rule.
+    pub solver_tolerance: Option<f64>,
+}
+
+/// How a frame's equality constraints are built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ConstraintMatrix {
+    /// Force space: inverse dynamics once for the required generalized
+    /// forces, each variable's unit generalized force projected on the
+    /// coupling vectors (rows = C_kᵀ M u̇).
+    #[default]
+    Analytic,
+    /// Acceleration space by unit perturbation (Krüger & Wartzack eq. 14,
+    /// OpenSim's StaticOptimizationTarget): one forward-dynamics solve per
+    /// variable, column i = u̇_i − u̇_0, b = u̇_target − u̇_0
+    /// (see `tools::perturbation`).
+    Perturbation,
 }
 
 /// Clarabel's feasibility/gap tolerance unless the setup asks for tighter.
@@ -106,6 +128,24 @@ impl StaticOptimizationSetup {
                     other => return Err(f.error(format!("friction_cone must be 'cone', 'pyramid' (four-sided, the paper's eq. 16) or 'pyramid8', found '{other}'"))),
                 },
                 _ => FrictionModel::Cone,
+            },
+            constraint_matrix: match el.child("constraint_matrix") {
+                Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
+                    "analytic" => ConstraintMatrix::Analytic,
+                    "perturbation" => ConstraintMatrix::Perturbation,
+                    other => return Err(f.error(format!("constraint_matrix must be 'analytic' or 'perturbation', found '{other}'"))),
+                },
+                _ => ConstraintMatrix::Analytic,
+            },
+            solver_tolerance: match el.child("solver_tolerance") {
+                Some(r) if !r.text().is_empty() => {
+                    let v = r.f64()?;
+                    if !(v > 0.0 && v < 1.0) {
+                        return Err(r.error(format!("solver_tolerance must lie in (0, 1), found {v}")));
+                    }
+                    Some(v)
+                }
+                _ => None,
             },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {
@@ -392,6 +432,30 @@ impl SoProblem {
         data: &mut Data,
         mf: &mut MuscleFrame,
     ) -> (FrameProblem, Vec<f64>, Vec<f64>, Vec<ContactState>) {
+        let (p, scale, passive, states, _) =
+            self.frame_problem_scaled(t, q, u, udot_target, data, mf);
+        (p, scale, passive, states)
+    }
+
+    /// As [`frame_problem`](Self::frame_problem), with the matrix that turns
+    /// a row residual into generalized forces on the free coordinates: None
+    /// for the analytic rows (already forces), the constraint-reduced mass
+    /// matrix M_r = Cᵀ M C for the perturbation rows (accelerations).
+    pub fn frame_problem_scaled(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> (
+        FrameProblem,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<ContactState>,
+        Option<DMatrix<f64>>,
+    ) {
         let model = &self.model;
         let nq = model.nq();
         data.q.copy_from_slice(q);
@@ -439,7 +503,10 @@ impl SoProblem {
                 }
             }
         }
-        rnea::inverse_dynamics_after_kinematics(model, data, true);
+        let perturb = self.settings.constraint_matrix == ConstraintMatrix::Perturbation;
+        if !perturb {
+            rnea::inverse_dynamics_after_kinematics(model, data, true);
+        }
         // Rows: C_kᵀ τ_required = C_kᵀ Σ x_i f_i g_i.
         let nr = self.rows.len();
         let nv = self.controls.len();
@@ -450,8 +517,16 @@ impl SoProblem {
             .iter()
             .map(|&k| coupling::coupling_vector(model, &data.q, k))
             .collect();
-        for (r, cv) in couplings.iter().enumerate() {
-            b[r] = cv.iter().map(|(i, c)| c * data.tau[*i]).sum();
+        // Perturbation rows: u̇_I(x) = u̇_target,I by forward dynamics.
+        let fd = perturb.then(|| Perturbation::start(self, t, data, mf, &couplings));
+        if let Some(fd) = &fd {
+            for (r, &k) in self.rows.iter().enumerate() {
+                b[r] = fd.target[k] - fd.udot0[r];
+            }
+        } else {
+            for (r, cv) in couplings.iter().enumerate() {
+                b[r] = cv.iter().map(|(i, c)| c * data.tau[*i]).sum();
+            }
         }
         let mut scale = vec![0.0; nv];
         let mut g = vec![0.0; nq];
@@ -473,6 +548,11 @@ impl SoProblem {
                 }
             };
             scale[v] = f;
+            if let Some(fd) = &fd {
+                let col = fd.column(self, t, data, mf, gen, f);
+                a.set_column(v, &col);
+                continue;
+            }
             for (r, cv) in couplings.iter().enumerate() {
                 a[(r, v)] = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
             }
@@ -501,6 +581,11 @@ impl SoProblem {
                 c.add_unit_generalized_forces(model, data, &st, &mut cols);
             }
             for (k, col) in cols.iter().enumerate() {
+                if let Some(fd) = &fd {
+                    let column = fd.column(self, t, data, mf, col, 1.0);
+                    a.set_column(v0 + k, &column);
+                    continue;
+                }
                 for (r, cv) in couplings.iter().enumerate() {
                     a[(r, v0 + k)] = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
                 }
@@ -532,12 +617,16 @@ impl SoProblem {
             static_contacts,
             friction: self.settings.friction,
             settings: SolveSettings {
-                tolerance: self.settings.convergence_criterion.min(DEFAULT_TOLERANCE),
+                tolerance: self
+                    .settings
+                    .solver_tolerance
+                    .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
                 max_iter: self.settings.max_iterations.max(100),
                 ..SolveSettings::default()
             },
         };
-        (problem, scale, passive_values, states)
+        let m_r = fd.map(|fd| fd.finish(model, data));
+        (problem, scale, passive_values, states, m_r)
     }
 
     /// Bodies that receive contact forces, in body order.
@@ -664,8 +753,8 @@ impl SoProblem {
         data: &mut Data,
         mf: &mut MuscleFrame,
     ) -> FrameResult {
-        let (problem, scale, passive_values, states) =
-            self.frame_problem(t, q, u, udot_target, data, mf);
+        let (problem, scale, passive_values, states, m_r) =
+            self.frame_problem_scaled(t, q, u, udot_target, data, mf);
         let solution = optimize::solve(&problem);
         let bmax = problem.b.amax();
         let relative_residual = if bmax > 0.0 {
@@ -686,26 +775,31 @@ impl SoProblem {
             .fold(0.0, f64::max);
         let contacts = self.contact_outputs(&states, &solution.x[nv..], data);
         // Generalized forces by source on each free coordinate (reduced rows):
-        // required, muscles, other actuators, contacts.
-        let mut by_source = Vec::with_capacity(4 * self.rows.len());
-        for r in 0..self.rows.len() {
-            let part = |range: std::ops::Range<usize>| -> f64 {
-                range.map(|v| problem.a[(r, v)] * solution.x[v]).sum()
+        // required, muscles, other actuators, contacts. Perturbation rows are
+        // accelerations: M_r turns them into generalized forces.
+        let nr = self.rows.len();
+        let mut parts = [
+            problem.b.clone(),
+            DVector::zeros(nr),
+            DVector::zeros(nr),
+            DVector::zeros(nr),
+        ];
+        for v in 0..problem.a.ncols() {
+            let k = match self.controls.get(v) {
+                Some(Control::Muscle(_)) => 1,
+                Some(Control::Actuator(_)) => 2,
+                None => 3,
             };
-            let muscles: f64 = (0..nv)
-                .filter(|&v| matches!(self.controls[v], Control::Muscle(_)))
-                .map(|v| problem.a[(r, v)] * solution.x[v])
-                .sum();
-            let actuators: f64 = (0..nv)
-                .filter(|&v| matches!(self.controls[v], Control::Actuator(_)))
-                .map(|v| problem.a[(r, v)] * solution.x[v])
-                .sum();
-            by_source.extend([
-                problem.b[r],
-                muscles,
-                actuators,
-                part(nv..problem.a.ncols()),
-            ]);
+            parts[k].axpy(solution.x[v], &problem.a.column(v), 1.0);
+        }
+        if let Some(m) = &m_r {
+            for p in parts.iter_mut() {
+                *p = m * &*p;
+            }
+        }
+        let mut by_source = Vec::with_capacity(4 * nr);
+        for r in 0..nr {
+            by_source.extend(parts.iter().map(|p| p[r]));
         }
         // Mechanical power of each muscle: tension x shortening speed.
         let muscle_power: Vec<f64> = self

@@ -1,0 +1,704 @@
+//! `statopt-tool bench SETUP.xml --grid`: speed against accuracy of the
+//! method choices of static optimization.
+//!
+//! A setup runs once per [`Choice`] — a name, a thread count and an edit of
+//! the setup (an option of the StaticOptimization element such as
+//! `<constraint_matrix>`, `<friction_cone>`, `<solver_tolerance>`, or of the
+//! AnalyzeTool such as `<coordinate_spline>` or the low-pass cut-off) — and
+//! each run's time per frame (the whole per-frame loop, best of the repeats)
+//! is set against its error relative to a reference run of the same frames
+//! ([`reference_choice`]: exact friction cone, solver tolerance 1e-10,
+//! analytic constraint matrix, OpenSim's quintic spline, the setup's
+//! filtering). [`run_grid`] takes any list of choices, so other options (a
+//! reduced model, …) are one more [`Choice`]; [`default_choices`] is the
+//! one-factor-at-a-time grid around the setup's own options plus a few
+//! combinations. [`write_csv`] and [`write_chart`] write `bench_grid.csv`
+//! and `bench_grid.png`/`.svg` (max |Δactivation| on a log axis, the Pareto
+//! front marked, OpenSim 4.6's time per frame as a vertical line when given).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::{Error, Location, Result};
+use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
+use crate::plots::{self, RefLine, Scatter, ScatterPoint};
+use crate::storage::{self, Storage};
+use crate::tools::{analyze, RunOptions};
+use crate::xml::Element;
+
+/// An edit of a setup that makes one method choice.
+pub type Edit = Arc<dyn Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync>;
+
+/// One point of the grid.
+#[derive(Clone)]
+pub struct Choice {
+    /// Row name in the table and label in the chart.
+    pub name: String,
+    /// Worker threads of the run.
+    pub threads: usize,
+    pub edit: Edit,
+}
+
+impl Choice {
+    pub fn new(
+        name: impl Into<String>,
+        threads: usize,
+        edit: impl Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync + 'static,
+    ) -> Choice {
+        Choice {
+            name: name.into(),
+            threads,
+            edit: Arc::new(edit),
+        }
+    }
+
+    /// Several StaticOptimization options `(element, text)` at once.
+    pub fn so_options(name: impl Into<String>, threads: usize, options: &[(&str, &str)]) -> Choice {
+        let options: Vec<(String, String)> = options
+            .iter()
+            .map(|(a, b)| (a.to_string(), b.to_string()))
+            .collect();
+        Choice::new(name, threads, move |s| {
+            for (k, v) in &options {
+                set_so_option(s, k, v)?;
+            }
+            Ok(())
+        })
+    }
+}
+
+/// Options of a grid run.
+#[derive(Debug, Clone, Default)]
+pub struct GridOptions {
+    /// Where `bench_grid.csv`/`.png`/`.svg` go (and the runs, removed after).
+    pub out: PathBuf,
+    /// Runs per choice; the best time is kept.
+    pub repeat: usize,
+    /// OpenSim 4.6's time per frame (ms), drawn as a vertical line.
+    pub opensim_ms: Option<f64>,
+    /// An OpenSim `*_StaticOptimization_activation.sto` of the same setup.
+    pub opensim_activations: Option<PathBuf>,
+}
+
+/// One row of the grid table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridRow {
+    pub choice: String,
+    pub threads: usize,
+    pub frames: usize,
+    /// Best time per frame of the per-frame loop, ms.
+    pub ms_per_frame: f64,
+    /// Against the reference run: max and RMS |Δactivation| over the
+    /// muscles (every actuator when the model has none) and frames.
+    pub max_dactivation: f64,
+    pub rms_dactivation: f64,
+    /// Max |Δ contact force| (N, vector norm), when the model has contacts.
+    pub max_dcontact: Option<f64>,
+    /// Max |Δ reaction force| (N, vector norm) of the knee (or first)
+    /// reaction, when the setup runs a JointReaction with static optimization.
+    pub max_dreaction: Option<f64>,
+    /// Max |Δactivation| against OpenSim's activations: the same columns,
+    /// common times.
+    pub max_dactivation_opensim: Option<f64>,
+    /// Failed frames (solver status not solved) of the run.
+    pub failed_frames: usize,
+}
+
+/// CSV columns, in order.
+pub const CSV_COLUMNS: [&str; 11] = [
+    "choice",
+    "threads",
+    "frames",
+    "ms_per_frame",
+    "max_dactivation",
+    "rms_dactivation",
+    "max_dcontact_force_N",
+    "max_dreaction_force_N",
+    "max_dactivation_vs_opensim",
+    "failed_frames",
+    "pareto",
+];
+
+/// The active StaticOptimization element of the setup.
+fn so_element(setup: &mut AnalyzeSetup) -> Result<&mut Element> {
+    let file = setup.setup_file.clone();
+    setup
+        .analyses
+        .iter_mut()
+        .find_map(|a| match a {
+            Analysis::Other { element, common }
+                if element.name == "StaticOptimization" && common.on =>
+            {
+                Some(element)
+            }
+            _ => None,
+        })
+        .ok_or_else(|| {
+            Error::input(
+                Location::file(&file).with_element("<AnalysisSet>"),
+                "bench --grid needs a StaticOptimization analysis that is on",
+            )
+        })
+}
+
+/// Set the text of `<name>` in the setup's StaticOptimization element
+/// (added when absent).
+pub fn set_so_option(setup: &mut AnalyzeSetup, name: &str, text: &str) -> Result<()> {
+    let el = so_element(setup)?;
+    match el.children.iter_mut().find(|c| c.name == name) {
+        Some(c) => {
+            c.text = text.to_string();
+            c.children.clear();
+        }
+        None => {
+            let child = Element {
+                name: name.to_string(),
+                attrs: Vec::new(),
+                children: Vec::new(),
+                text: text.to_string(),
+                line: el.line,
+                file: el.file.clone(),
+            };
+            el.children.push(child);
+        }
+    }
+    Ok(())
+}
+
+/// The reference: exact friction cone, solver tolerance 1e-10, analytic
+/// matrix, OpenSim's quintic spline, the setup's filtering, one thread.
+pub fn reference_choice() -> Choice {
+    Choice::new("reference", 1, |s| {
+        s.coordinate_spline = 5;
+        set_so_option(s, "friction_cone", "cone")?;
+        set_so_option(s, "solver_tolerance", "1e-10")?;
+        set_so_option(s, "constraint_matrix", "analytic")
+    })
+}
+
+/// The default grid: the setup as it is (one thread), then one factor at a
+/// time — constraint matrix, friction model (with contacts), solver
+/// tolerance, spline, filter, threads — and a few combinations.
+pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> {
+    let mut v = vec![Choice::new("default", 1, |_| Ok(()))];
+    v.push(Choice::so_options(
+        "perturbation",
+        1,
+        &[("constraint_matrix", "perturbation")],
+    ));
+    if has_contacts {
+        for f in ["pyramid4", "pyramid8", "cone"] {
+            v.push(Choice::so_options(f, 1, &[("friction_cone", f)]));
+        }
+    }
+    for tol in ["1e-3", "1e-4", "1e-5", "1e-6", "1e-8", "1e-10"] {
+        v.push(Choice::so_options(
+            format!("tol {tol}"),
+            1,
+            &[("solver_tolerance", tol)],
+        ));
+    }
+    v.push(Choice::new("cubic spline", 1, |s| {
+        s.coordinate_spline = 3;
+        Ok(())
+    }));
+    if setup.lowpass_cutoff >= 0.0 {
+        v.push(Choice::new("filter off", 1, |s| {
+            s.lowpass_cutoff = -1.0;
+            Ok(())
+        }));
+    } else {
+        v.push(Choice::new("filter 6 Hz", 1, |s| {
+            s.lowpass_cutoff = 6.0;
+            Ok(())
+        }));
+    }
+    v.push(Choice::new("threads 2", 2, |_| Ok(())));
+    // Combinations.
+    v.push(Choice::so_options(
+        "perturbation, tol 1e-4 (OpenSim-like)",
+        1,
+        &[
+            ("constraint_matrix", "perturbation"),
+            ("solver_tolerance", "1e-4"),
+        ],
+    ));
+    let mut fast = vec![("solver_tolerance", "1e-4")];
+    if has_contacts {
+        fast.push(("friction_cone", "pyramid4"));
+    }
+    let name = if has_contacts {
+        "fast: tol 1e-4, pyramid4, 2 threads"
+    } else {
+        "fast: tol 1e-4, 2 threads"
+    };
+    v.push(Choice::so_options(name, 2, &fast));
+    v.push(Choice::so_options(
+        "cubic, tol 1e-6, 2 threads",
+        2,
+        &[("solver_tolerance", "1e-6")],
+    ));
+    if let Some(c) = v.last_mut() {
+        let so = c.edit.clone();
+        c.edit = Arc::new(move |s| {
+            so(s)?;
+            s.coordinate_spline = 3;
+            Ok(())
+        });
+    }
+    v
+}
+
+/// Tables of one run.
+struct RunTables {
+    activation: Storage,
+    contacts: Option<Storage>,
+    reaction: Option<(String, Storage)>,
+    failed: usize,
+}
+
+/// Only static optimization (with its coupled joint reactions) runs, with
+/// one contact weight and no figures.
+fn bench_setup(setup: &AnalyzeSetup) -> Result<AnalyzeSetup> {
+    let mut s = setup.clone();
+    s.figures.clear();
+    for a in s.analyses.iter_mut() {
+        match a {
+            Analysis::MuscleAnalysis(m) => m.common.on = false,
+            Analysis::Other { element, common } => {
+                let standalone_jr = element.name == "JointReaction"
+                    && element
+                        .child_text("forces_file")
+                        .is_some_and(|t| !t.is_empty() && t != "Unassigned");
+                if (element.name != "StaticOptimization" && element.name != "JointReaction")
+                    || standalone_jr
+                {
+                    common.on = false;
+                }
+            }
+        }
+    }
+    let el = so_element(&mut s)?;
+    let first_w0 = match el.child("contact_weight") {
+        Some(w) if !w.text().is_empty() => w.words().first().cloned(),
+        _ => None,
+    };
+    if let Some(w) = first_w0 {
+        set_so_option(&mut s, "contact_weight", &w)?;
+    }
+    Ok(s)
+}
+
+fn so_name(setup: &AnalyzeSetup) -> String {
+    setup
+        .analyses
+        .iter()
+        .find_map(|a| match a {
+            Analysis::Other { element, common }
+                if element.name == "StaticOptimization" && common.on =>
+            {
+                Some(common.name.clone())
+            }
+            _ => None,
+        })
+        .unwrap_or_default()
+}
+
+/// The JointReaction analyses computed inside static optimization.
+fn coupled_reactions(setup: &AnalyzeSetup) -> Vec<String> {
+    setup
+        .analyses
+        .iter()
+        .filter_map(|a| match a {
+            Analysis::Other { element, common } if element.name == "JointReaction" && common.on => {
+                Some(common.name.clone())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Run one choice `repeat` times; best ms per frame and the last run's tables.
+fn run_choice(
+    base: &AnalyzeSetup,
+    choice: &Choice,
+    dir: &Path,
+    repeat: usize,
+) -> Result<(usize, f64, RunTables)> {
+    let mut s = base.clone();
+    (choice.edit)(&mut s)
+        .map_err(|e| e.context(format!("bench --grid: choice '{}'", choice.name)))?;
+    let _ = std::fs::remove_dir_all(dir);
+    let opts = RunOptions {
+        results_dir: Some(dir.to_path_buf()),
+        threads: Some(choice.threads.max(1)),
+        verbose: false,
+        precision: Some(16),
+    };
+    let mut best = f64::INFINITY;
+    let mut frames = 0;
+    for _ in 0..repeat.max(1) {
+        let summary = analyze::run(&s, &opts)
+            .map_err(|e| e.context(format!("bench --grid: choice '{}'", choice.name)))?;
+        frames = summary.frames;
+        best = best.min(summary.loop_seconds);
+    }
+    let prefix = format!("{}_{}_", s.name, so_name(&s));
+    let activation = storage::read(&dir.join(format!("{prefix}activation.sto")))?;
+    let cpath = dir.join(format!("{prefix}ContactForces.sto"));
+    let contacts = if cpath.exists() {
+        Some(storage::read(&cpath)?)
+    } else {
+        None
+    };
+    // Activation errors cover the muscles (MusclePower's columns), or every
+    // actuator when the model has no muscle.
+    let muscles = storage::read(&dir.join(format!("{prefix}MusclePower.sto")))?.labels;
+    let activation = if muscles.is_empty() {
+        activation
+    } else {
+        let cols: Vec<usize> = muscles
+            .iter()
+            .filter_map(|m| activation.column_index(m))
+            .collect();
+        Storage {
+            labels: cols.iter().map(|&j| activation.labels[j].clone()).collect(),
+            rows: activation
+                .rows
+                .iter()
+                .map(|r| cols.iter().map(|&j| r[j]).collect())
+                .collect(),
+            ..activation
+        }
+    };
+    let diag = storage::read(&dir.join(format!("{prefix}diagnostics.sto")))?;
+    let failed = match diag.column_index("status") {
+        Some(j) => diag.rows.iter().filter(|r| r[j] < 0.0).count(),
+        None => 0,
+    };
+    let mut reaction = None;
+    for name in coupled_reactions(&s) {
+        let p = dir.join(format!("{}_{name}_ReactionLoads.sto", s.name));
+        if p.exists() {
+            let t = storage::read(&p)?;
+            let root = t
+                .labels
+                .iter()
+                .filter_map(|l| l.strip_suffix("_fx"))
+                .find(|r| r.to_ascii_lowercase().contains("knee"))
+                .or_else(|| t.labels.iter().find_map(|l| l.strip_suffix("_fx")))
+                .map(str::to_string);
+            if let Some(root) = root {
+                reaction = Some((root, t));
+                break;
+            }
+        }
+    }
+    let ms = if frames > 0 {
+        1e3 * best / frames as f64
+    } else {
+        f64::NAN
+    };
+    Ok((
+        frames,
+        ms,
+        RunTables {
+            activation,
+            contacts,
+            reaction,
+            failed,
+        },
+    ))
+}
+
+/// The row of `reference` at time `t`: the row with that time (within
+/// 1e-9 s), else linear interpolation between the neighbouring rows (runs
+/// whose frames differ, e.g. a filter that resamples a non-uniform motion);
+/// None outside the reference's time range.
+fn row_at(reference: &Storage, t: f64) -> Option<Vec<f64>> {
+    let n = reference.time.len();
+    let i = reference.time.partition_point(|&x| x < t - 1e-9);
+    if i < n && (reference.time[i] - t).abs() <= 1e-9 {
+        return Some(reference.rows[i].clone());
+    }
+    if i == 0 || i >= n {
+        return None;
+    }
+    let (t0, t1) = (reference.time[i - 1], reference.time[i]);
+    let w = (t - t0) / (t1 - t0);
+    Some(
+        reference.rows[i - 1]
+            .iter()
+            .zip(&reference.rows[i])
+            .map(|(a, b)| a + w * (b - a))
+            .collect(),
+    )
+}
+
+/// (max, RMS) of |Δ| over the common columns and times.
+fn scalar_errors(ours: &Storage, reference: &Storage) -> (f64, f64) {
+    let cols: Vec<(usize, usize)> = reference
+        .labels
+        .iter()
+        .enumerate()
+        .filter_map(|(j, l)| ours.column_index(l).map(|k| (k, j)))
+        .collect();
+    let (mut max, mut sum, mut n) = (0.0f64, 0.0, 0usize);
+    for (i, &t) in ours.time.iter().enumerate() {
+        let Some(r) = row_at(reference, t) else {
+            continue;
+        };
+        for &(k, j) in &cols {
+            let d = (ours.rows[i][k] - r[j]).abs();
+            let d = if d.is_nan() { f64::INFINITY } else { d };
+            max = max.max(d);
+            sum += d * d;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    (max, (sum / n as f64).sqrt())
+}
+
+/// Max norm of Δ of the vectors `<root>_fx/_fy/_fz` for the given roots.
+fn vector_error(ours: &Storage, reference: &Storage, roots: &[String]) -> f64 {
+    let mut max = 0.0f64;
+    let mut any = false;
+    for root in roots {
+        let idx = |t: &Storage| -> Option<[usize; 3]> {
+            Some([
+                t.column_index(&format!("{root}_fx"))?,
+                t.column_index(&format!("{root}_fy"))?,
+                t.column_index(&format!("{root}_fz"))?,
+            ])
+        };
+        let (Some(a), Some(b)) = (idx(ours), idx(reference)) else {
+            continue;
+        };
+        for (i, &t) in ours.time.iter().enumerate() {
+            let Some(r) = row_at(reference, t) else {
+                continue;
+            };
+            any = true;
+            let d: f64 = (0..3)
+                .map(|c| (ours.rows[i][a[c]] - r[b[c]]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            max = max.max(if d.is_nan() { f64::INFINITY } else { d });
+        }
+    }
+    if any {
+        max
+    } else {
+        f64::NAN
+    }
+}
+
+/// Run the setup under the reference choice and every choice (the
+/// reference first, and as a row of its own named as it is).
+pub fn run_grid(
+    setup: &AnalyzeSetup,
+    reference: &Choice,
+    choices: &[Choice],
+    opts: &GridOptions,
+) -> Result<Vec<GridRow>> {
+    let base = bench_setup(setup)?;
+    let runs = opts.out.join("bench_grid_runs");
+    let opensim = match &opts.opensim_activations {
+        Some(p) => Some(storage::read(p)?),
+        None => None,
+    };
+    let (ref_frames, ref_ms, ref_tables) =
+        run_choice(&base, reference, &runs.join("reference"), opts.repeat)?;
+    let contact_roots: Vec<String> = ref_tables
+        .contacts
+        .as_ref()
+        .map(|t| {
+            t.labels
+                .iter()
+                .filter_map(|l| l.strip_suffix("_lambda_n"))
+                .map(str::to_string)
+                .collect()
+        })
+        .unwrap_or_default();
+    let row = |name: &str, threads: usize, frames: usize, ms: f64, t: &RunTables| {
+        let (max_da, rms_da) = scalar_errors(&t.activation, &ref_tables.activation);
+        GridRow {
+            choice: name.to_string(),
+            threads,
+            frames,
+            ms_per_frame: ms,
+            max_dactivation: max_da,
+            rms_dactivation: rms_da,
+            max_dcontact: match (&t.contacts, &ref_tables.contacts) {
+                (Some(a), Some(b)) => Some(vector_error(a, b, &contact_roots)),
+                _ => None,
+            },
+            max_dreaction: match (&t.reaction, &ref_tables.reaction) {
+                (Some((_, a)), Some((root, b))) => {
+                    Some(vector_error(a, b, std::slice::from_ref(root)))
+                }
+                _ => None,
+            },
+            max_dactivation_opensim: opensim.as_ref().map(|o| scalar_errors(&t.activation, o).0),
+            failed_frames: t.failed,
+        }
+    };
+    let mut rows = vec![row(
+        &reference.name,
+        reference.threads,
+        ref_frames,
+        ref_ms,
+        &ref_tables,
+    )];
+    for (k, c) in choices.iter().enumerate() {
+        let dir = runs.join(format!("choice{k}"));
+        let (frames, ms, tables) = run_choice(&base, c, &dir, opts.repeat)?;
+        rows.push(row(&c.name, c.threads, frames, ms, &tables));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let _ = std::fs::remove_dir_all(&runs);
+    Ok(rows)
+}
+
+/// Indices of the rows on the Pareto front of (ms per frame, max |Δa|).
+pub fn pareto_rows(rows: &[GridRow]) -> Vec<usize> {
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.ms_per_frame, r.max_dactivation))
+        .collect();
+    plots::pareto_front(&pts)
+}
+
+/// `bench_grid.csv`: one row per choice, [`CSV_COLUMNS`]; empty cells where
+/// a column does not apply.
+pub fn write_csv(rows: &[GridRow], path: &Path) -> Result<()> {
+    let front = pareto_rows(rows);
+    let err = |e: csv::Error| Error::input(Location::file(path), format!("cannot write CSV: {e}"));
+    let mut w = csv::Writer::from_path(path).map_err(err)?;
+    w.write_record(CSV_COLUMNS).map_err(err)?;
+    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
+    for (i, r) in rows.iter().enumerate() {
+        w.write_record([
+            r.choice.clone(),
+            r.threads.to_string(),
+            r.frames.to_string(),
+            format!("{}", r.ms_per_frame),
+            format!("{:e}", r.max_dactivation),
+            format!("{:e}", r.rms_dactivation),
+            opt(r.max_dcontact),
+            opt(r.max_dreaction),
+            opt(r.max_dactivation_opensim),
+            r.failed_frames.to_string(),
+            front.contains(&i).to_string(),
+        ])
+        .map_err(err)?;
+    }
+    w.flush().map_err(|e| Error::io(path, e))
+}
+
+/// Smallest error drawn on the log axis; a zero error (the reference) is
+/// drawn there and labelled so.
+pub const CHART_FLOOR: f64 = 1e-12;
+
+/// `<stem>.png` and `<stem>.svg`: time per frame against max |Δactivation|.
+pub fn write_chart(
+    rows: &[GridRow],
+    stem: &Path,
+    title: &str,
+    opensim_ms: Option<f64>,
+) -> Result<Vec<PathBuf>> {
+    let points = rows
+        .iter()
+        .map(|r| {
+            let (y, label) = if r.max_dactivation > 0.0 || r.max_dactivation.is_nan() {
+                // NaN (no common frames) is not drawn.
+                (r.max_dactivation, r.choice.clone())
+            } else {
+                (CHART_FLOOR, format!("{} (error 0)", r.choice))
+            };
+            ScatterPoint {
+                label,
+                x: r.ms_per_frame,
+                y: if y.is_nan() { y } else { y.max(CHART_FLOOR) },
+                color: r.threads.saturating_sub(1),
+            }
+        })
+        .collect();
+    let s = Scatter {
+        title: title.to_string(),
+        x_label: "time per frame (ms, best of repeats)".into(),
+        y_label: "max |Δactivation| vs reference".into(),
+        points,
+        log_y: true,
+        pareto: true,
+        reference: opensim_ms
+            .map(|v| {
+                vec![RefLine::Vertical {
+                    value: v,
+                    label: "OpenSim 4.6".into(),
+                }]
+            })
+            .unwrap_or_default(),
+        ..Scatter::default()
+    };
+    plots::write_scatter(&s, stem)
+}
+
+/// Whether the setup's model has contacts (the friction choices apply).
+fn has_contacts(setup: &AnalyzeSetup) -> Result<bool> {
+    let mut s = setup.clone();
+    let el = so_element(&mut s)?.clone();
+    let common = match s.analyses.iter().find_map(|a| match a {
+        Analysis::Other { element, common }
+            if element.name == "StaticOptimization" && common.on =>
+        {
+            Some(common.clone())
+        }
+        _ => None,
+    }) {
+        Some(c) => c,
+        None => return Ok(false),
+    };
+    let so = crate::tools::static_optimization::StaticOptimizationSetup::from_xml(&el, common)?;
+    let (p, _) = crate::tools::static_optimization::SoProblem::build(&s, &so)?;
+    Ok(!p.contacts.is_empty())
+}
+
+/// The command: the default grid on a setup file; writes the CSV and the
+/// chart into `opts.out`; returns the rows and the files.
+pub fn run(setup_file: &Path, opts: &GridOptions) -> Result<(Vec<GridRow>, Vec<PathBuf>)> {
+    let setup = match Setup::read(setup_file)? {
+        Setup::Analyze(s) => s,
+        Setup::InverseDynamics(_) => {
+            return Err(Error::input(
+                Location::file(setup_file),
+                "bench --grid runs AnalyzeTool setups with static optimization",
+            ))
+        }
+    };
+    std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
+    let choices = default_choices(&setup, has_contacts(&setup)?);
+    let rows = run_grid(&setup, &reference_choice(), &choices, opts)?;
+    let csv = opts.out.join("bench_grid.csv");
+    write_csv(&rows, &csv)?;
+    let file_name = setup_file
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let title = if setup.name.is_empty() {
+        format!("{file_name}: speed against accuracy")
+    } else {
+        format!("{} ({file_name}): speed against accuracy", setup.name)
+    };
+    let mut files = vec![csv];
+    files.extend(write_chart(
+        &rows,
+        &opts.out.join("bench_grid"),
+        &title,
+        opts.opensim_ms,
+    )?);
+    Ok((rows, files))
+}

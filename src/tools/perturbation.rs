@@ -1,0 +1,170 @@
+//! Static optimization's constraint matrix by unit perturbation through
+//! forward dynamics (Krüger & Wartzack 2017 eq. 14; what OpenSim's
+//! `StaticOptimizationTarget` does): for each optimisation variable i, the
+//! generalized force it applies at unit control (a muscle at unit activation
+//! × its force scale, a contact multiplier at 1) is added to the frame's
+//! loads and the model's accelerations are solved for; column i is
+//! u̇_i − u̇_0 and the right-hand side u̇_target − u̇_0, where u̇_0 is forward
+//! dynamics with every variable at 0.
+//!
+//! Forward dynamics honours the model's constraints exactly as the analytic
+//! rows do (`SoProblem::frame_problem`): with C = [C_k] the coupling vectors
+//! of the free coordinates k (`paths::coupling`), u̇ = C u̇_I + ċ, ċ the
+//! accelerations of the constrained coordinates when the free ones have
+//! none (coupler curvature, prescribed functions, locks). Projecting the
+//! equations of motion on C gives
+//! M_r u̇_I = Cᵀ (τ_applied − τ_0), M_r = Cᵀ M C,
+//! τ_0 = M ċ + bias − loads, the inverse dynamics at u̇ = ċ (RNEA).
+//!
+//! Every column is a whole forward-dynamics solve — kinematics, external and
+//! passive loads, RNEA for the bias, the mass matrix, a Cholesky
+//! factorisation of M_r — with no factorisation shared between columns: the
+//! point of this path is to measure that method's cost
+//! (`statopt-tool bench --grid`). In exact arithmetic A_pert = M_r⁻¹ A_analytic
+//! and b_pert = M_r⁻¹ b_analytic, so both give the same solution.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::dynamics::{kinematics, mass_matrix::mass_matrix, rnea, Data};
+use crate::model::Model;
+use crate::muscles::set::MuscleFrame;
+use crate::tools::static_optimization::SoProblem;
+
+/// One frame's forward-dynamics state: the target and zero-variable
+/// accelerations and the constraint basis.
+pub struct Perturbation {
+    /// Target accelerations of every coordinate (constraint-consistent), as
+    /// set before the perturbations; restored by [`finish`](Self::finish).
+    pub target: Vec<f64>,
+    /// Accelerations of the constrained coordinates with the free ones at 0.
+    udot_c: Vec<f64>,
+    /// C (nq × n_free), dense.
+    c: DMatrix<f64>,
+    /// u̇_I with every variable at 0.
+    pub udot0: DVector<f64>,
+    /// M_r of the zero-variable solve.
+    m_r: DMatrix<f64>,
+}
+
+impl Perturbation {
+    /// Save the frame's target accelerations (in `data.udot`) and solve the
+    /// zero-variable forward dynamics.
+    pub fn start(
+        problem: &SoProblem,
+        t: f64,
+        data: &mut Data,
+        mf: &MuscleFrame,
+        couplings: &[Vec<(usize, f64)>],
+    ) -> Perturbation {
+        let model = &problem.model;
+        let nq = model.nq();
+        let target = data.udot.clone();
+        let mut udot_c = vec![0.0; nq];
+        for cp in &model.couplers {
+            let i = cp.independent[0];
+            let (_, _, d2) = cp.function.eval2(data.q[i]);
+            udot_c[cp.dependent] = cp.scale * d2 * data.u[i] * data.u[i];
+        }
+        for (k, coord) in model.coordinates.iter().enumerate() {
+            if let Some(f) = &coord.prescribed {
+                udot_c[k] = f.derivative(t, 2);
+            }
+        }
+        let mut c = DMatrix::zeros(nq, couplings.len());
+        for (r, cv) in couplings.iter().enumerate() {
+            for &(i, v) in cv {
+                c[(i, r)] += v;
+            }
+        }
+        let mut p = Perturbation {
+            target,
+            udot_c,
+            c,
+            udot0: DVector::zeros(couplings.len()),
+            m_r: DMatrix::zeros(0, 0),
+        };
+        let (udot0, m_r) = p.forward(problem, t, data, mf, &[], 0.0);
+        p.udot0 = udot0;
+        p.m_r = m_r;
+        p
+    }
+
+    /// Column of a variable applying `scale × gen` (generalized forces, all
+    /// coordinates): u̇_I(gen) − u̇_0, by a full forward-dynamics solve.
+    pub fn column(
+        &self,
+        problem: &SoProblem,
+        t: f64,
+        data: &mut Data,
+        mf: &MuscleFrame,
+        gen: &[f64],
+        scale: f64,
+    ) -> DVector<f64> {
+        let (udot, _) = self.forward(problem, t, data, mf, gen, scale);
+        udot - &self.udot0
+    }
+
+    /// Forward dynamics of the free coordinates with the frame's loads plus
+    /// `scale × gen`; returns u̇_I and M_r.
+    fn forward(
+        &self,
+        problem: &SoProblem,
+        t: f64,
+        data: &mut Data,
+        mf: &MuscleFrame,
+        gen: &[f64],
+        scale: f64,
+    ) -> (DVector<f64>, DMatrix<f64>) {
+        let model = &problem.model;
+        let nq = model.nq();
+        data.udot.copy_from_slice(&self.udot_c);
+        kinematics::full(model, data);
+        data.clear_applied();
+        if let Some(l) = &problem.loads {
+            l.apply(t, data);
+        }
+        let mut g = vec![0.0; nq];
+        for p in &problem.passive {
+            g.iter_mut().for_each(|x| *x = 0.0);
+            p.add_generalized_force(model, data, t, &mut g);
+            for k in 0..nq {
+                data.applied_gen[k] += g[k];
+            }
+        }
+        if problem.settings.passive_fiber_forces {
+            for (m, f) in mf.unit_force.iter().enumerate() {
+                let fp = mf.passive_force[m];
+                for k in 0..nq {
+                    data.applied_gen[k] += fp * f[k];
+                }
+            }
+        }
+        for (k, x) in gen.iter().enumerate() {
+            data.applied_gen[k] += scale * x;
+        }
+        // τ_0 = M ċ + bias − loads − scale·gen.
+        rnea::inverse_dynamics_after_kinematics(model, data, true);
+        let m = mass_matrix(model, data);
+        let m_r = self.c.transpose() * m * &self.c;
+        let rhs = -(self.c.transpose() * DVector::from_column_slice(&data.tau));
+        let udot = match m_r.clone().cholesky() {
+            Some(ch) => ch.solve(&rhs),
+            // Not positive definite (e.g. massless chains): LU, or NaN so
+            // that the solver reports the frame as failed.
+            None => m_r
+                .clone()
+                .lu()
+                .solve(&rhs)
+                .unwrap_or_else(|| DVector::from_element(rhs.len(), f64::NAN)),
+        };
+        (udot, m_r)
+    }
+
+    /// Leave `data` as the analytic path does (kinematics at the target
+    /// accelerations); returns M_r.
+    pub fn finish(self, model: &Model, data: &mut Data) -> DMatrix<f64> {
+        data.udot.copy_from_slice(&self.target);
+        kinematics::full(model, data);
+        self.m_r
+    }
+}
