@@ -240,6 +240,7 @@ fn grid_command_writes_table_and_chart() {
         repeat: 1,
         opensim_ms: Some(1.0),
         opensim_activations: None,
+        contact_weight: None,
     };
     let (rows, files) = bench_grid::run(&setup_file, &opts).unwrap_or_else(|e| panic!("{e}"));
     let setup = read_setup(&setup_file);

@@ -89,6 +89,9 @@ enum Command {
         /// reports max |Δactivation| against it.
         #[arg(long, value_name = "FILE", requires = "grid")]
         opensim_activations: Option<PathBuf>,
+        /// The contact weight w0 of every --grid run (default: the setup's first).
+        #[arg(long, value_name = "W0", requires = "grid")]
+        contact_weight: Option<f64>,
     },
     /// Write the model a setup composes (model_file + artifact_files + force_set_files, contact
     /// elements left out) as one OpenSim 4.x document.
@@ -300,6 +303,7 @@ fn main() -> ExitCode {
             out,
             opensim_ms,
             opensim_activations,
+            contact_weight,
         }) => {
             if *grid {
                 let opts = bench_grid::GridOptions {
@@ -307,6 +311,7 @@ fn main() -> ExitCode {
                     repeat: *repeat,
                     opensim_ms: *opensim_ms,
                     opensim_activations: opensim_activations.clone(),
+                    contact_weight: *contact_weight,
                 };
                 return match bench_grid::run(setup, &opts) {
                     Ok((rows, files)) => {

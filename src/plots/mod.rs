@@ -197,6 +197,9 @@ pub struct Scatter {
     /// Draw the Pareto front (both coordinates minimised).
     pub pareto: bool,
     pub reference: Vec<RefLine>,
+    /// Lines of text drawn in a column right of the plot (e.g. a key to
+    /// numbered point labels); none if empty.
+    pub key: Vec<String>,
     pub size: (u32, u32),
 }
 
@@ -211,6 +214,7 @@ impl Default for Scatter {
             log_y: false,
             pareto: true,
             reference: Vec::new(),
+            key: Vec::new(),
             size: (1000, 650),
         }
     }

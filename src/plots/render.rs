@@ -478,7 +478,34 @@ pub(super) fn scatter<DB: DrawingBackend>(
     };
     let xa = Axis::new(x0, x1, s.log_x);
     let ya = Axis::new(y0, y1, s.log_y);
-    scatter_body(area, s, &drawable, (tx0, tx1, ty0, ty1), xa, ya)
+    if s.key.is_empty() {
+        return scatter_body(area, s, &drawable, (tx0, tx1, ty0, ty1), xa, ya);
+    }
+    // A key column right of the plot, as wide as its longest line.
+    let m = metrics(area);
+    let font = TextStyle::from((FONT, m.point_label).into_font());
+    let key_w = s
+        .key
+        .iter()
+        .map(|l| area.estimate_text_size(l, &font).map_or(0, |(w, _)| w))
+        .max()
+        .unwrap_or(0)
+        + 2 * m.margin;
+    let (w, _) = area.dim_in_pixel();
+    let key_w = key_w.min(w / 2);
+    let (plot, key) = area.split_horizontally(w - key_w);
+    scatter_body(&plot, s, &drawable, (tx0, tx1, ty0, ty1), xa, ya)?;
+    let line_h = (1.3 * m.point_label) as i32;
+    let top = (m.title * 2.0) as i32;
+    for (k, line) in s.key.iter().enumerate() {
+        key.draw(&Text::new(
+            line.clone(),
+            (m.margin as i32 / 2, top + k as i32 * line_h),
+            font.clone(),
+        ))
+        .map_err(plot_err)?;
+    }
+    Ok(())
 }
 
 /// A chart axis over f64: linear (plotters' own ticks and labels) or

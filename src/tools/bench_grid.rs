@@ -78,6 +78,8 @@ pub struct GridOptions {
     pub opensim_ms: Option<f64>,
     /// An OpenSim `*_StaticOptimization_activation.sto` of the same setup.
     pub opensim_activations: Option<PathBuf>,
+    /// The contact weight w0 of every run (default: the setup's first).
+    pub contact_weight: Option<f64>,
 }
 
 /// One row of the grid table.
@@ -214,6 +216,14 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         }));
     }
     v.push(Choice::new("threads 2", 2, |_| Ok(())));
+    if !setup.reduce_model {
+        // Full versus reduced model (`<reduce_model>`, tools::reduce): the
+        // errors cover the kept muscles, contacts and joints only.
+        v.push(Choice::new("reduced model", 1, |s| {
+            s.reduce_model = true;
+            Ok(())
+        }));
+    }
     // Combinations.
     v.push(Choice::so_options(
         "perturbation, tol 1e-4 (OpenSim-like)",
@@ -258,8 +268,8 @@ struct RunTables {
 }
 
 /// Only static optimization (with its coupled joint reactions) runs, with
-/// one contact weight and no figures.
-fn bench_setup(setup: &AnalyzeSetup) -> Result<AnalyzeSetup> {
+/// one contact weight (`w0`, else the setup's first) and no figures.
+fn bench_setup(setup: &AnalyzeSetup, w0: Option<f64>) -> Result<AnalyzeSetup> {
     let mut s = setup.clone();
     s.figures.clear();
     for a in s.analyses.iter_mut() {
@@ -282,6 +292,10 @@ fn bench_setup(setup: &AnalyzeSetup) -> Result<AnalyzeSetup> {
     let first_w0 = match el.child("contact_weight") {
         Some(w) if !w.text().is_empty() => w.words().first().cloned(),
         _ => None,
+    };
+    let first_w0 = match w0 {
+        Some(w) => Some(format!("{w}")),
+        None => first_w0,
     };
     if let Some(w) = first_w0 {
         set_so_option(&mut s, "contact_weight", &w)?;
@@ -504,7 +518,7 @@ pub fn run_grid(
     choices: &[Choice],
     opts: &GridOptions,
 ) -> Result<Vec<GridRow>> {
-    let base = bench_setup(setup)?;
+    let base = bench_setup(setup, opts.contact_weight)?;
     let runs = opts.out.join("bench_grid_runs");
     let opensim = match &opts.opensim_activations {
         Some(p) => Some(storage::read(p)?),
@@ -610,14 +624,32 @@ pub fn write_chart(
     title: &str,
     opensim_ms: Option<f64>,
 ) -> Result<Vec<PathBuf>> {
+    // Points are numbered as the CSV's rows (1 = the reference); the key
+    // right of the plot names them, and points on the Pareto front also
+    // carry their name.
+    let front = pareto_rows(rows);
+    let key: Vec<String> = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let zero = if r.max_dactivation == 0.0 { " (error 0)" } else { "" };
+            format!("{}  {}{zero}", k + 1, r.choice)
+        })
+        .collect();
     let points = rows
         .iter()
-        .map(|r| {
-            let (y, label) = if r.max_dactivation > 0.0 || r.max_dactivation.is_nan() {
+        .enumerate()
+        .map(|(k, r)| {
+            let y = if r.max_dactivation > 0.0 || r.max_dactivation.is_nan() {
                 // NaN (no common frames) is not drawn.
-                (r.max_dactivation, r.choice.clone())
+                r.max_dactivation
             } else {
-                (CHART_FLOOR, format!("{} (error 0)", r.choice))
+                CHART_FLOOR
+            };
+            let label = if front.contains(&k) {
+                format!("{} {}", k + 1, r.choice)
+            } else {
+                format!("{}", k + 1)
             };
             ScatterPoint {
                 label,
@@ -632,8 +664,11 @@ pub fn write_chart(
         x_label: "time per frame (ms, best of repeats)".into(),
         y_label: "max |Δactivation| vs reference".into(),
         points,
+        log_x: true,
         log_y: true,
         pareto: true,
+        key,
+        size: (1400, 800),
         reference: opensim_ms
             .map(|v| {
                 vec![RefLine::Vertical {
