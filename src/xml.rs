@@ -261,10 +261,33 @@ impl Element {
         Some(el)
     }
 
-    /// Parse this element's text as numbers separated by whitespace or commas.
+    /// Parse this element's text as finite numbers separated by whitespace or
+    /// commas. `NaN` and `Inf` are refused with an error naming the element:
+    /// no property read this way has a meaning for them (the few that do,
+    /// such as `max_control`, use [`Element::numbers_allow_inf`]).
     pub fn numbers(&self) -> Result<Vec<f64>> {
-        parse_numbers(self.text())
-            .map_err(|tok| self.error(format!("expected numbers, found '{tok}'")))
+        let v = self.numbers_allow_inf()?;
+        if let Some(x) = v.iter().find(|x| x.is_infinite()) {
+            return Err(self.error(format!(
+                "value {x} is not finite (Inf is not accepted here)"
+            )));
+        }
+        Ok(v)
+    }
+
+    /// Like [`Element::numbers`], but `Inf` / `-Inf` are accepted (bounds
+    /// such as `max_control`, `time_range` or a coordinate's `range`, where
+    /// OpenSim itself writes `-Inf Inf` for "unbounded"). `NaN` is refused.
+    pub fn numbers_allow_inf(&self) -> Result<Vec<f64>> {
+        let v = parse_numbers(self.text())
+            .map_err(|tok| self.error(format!("expected numbers, found '{tok}'")))?;
+        if v.iter().any(|x| x.is_nan()) {
+            return Err(self.error(format!(
+                "NaN in '{}' is not accepted: every number must be given",
+                self.text()
+            )));
+        }
+        Ok(v)
     }
 
     /// Parse this element's text as exactly `n` numbers.
@@ -297,6 +320,21 @@ impl Element {
         self.text()
             .parse::<i64>()
             .map_err(|_| self.error(format!("expected an integer, found '{}'", self.text())))
+    }
+
+    /// Optional child parsed as one number that may be `Inf` / `-Inf` (not
+    /// `NaN`), with a default when absent.
+    pub fn child_f64_or_inf(&self, name: &str, default: f64) -> Result<f64> {
+        match self.child(name) {
+            Some(c) if !c.text().is_empty() => {
+                let v = c.numbers_allow_inf()?;
+                if v.len() != 1 {
+                    return Err(c.error(format!("expected 1 number, found {}", v.len())));
+                }
+                Ok(v[0])
+            }
+            _ => Ok(default),
+        }
     }
 
     /// Optional child parsed as f64, with a default when absent.

@@ -498,6 +498,7 @@ fn inverse_dynamics_matches_opensim() {
         output_gen_force_file: "id.sto".into(),
         joints_to_report_body_forces: vec![],
         output_body_forces_file: None,
+        warnings: Vec::new(),
         artifact_files: vec![],
     };
     let opts = RunOptions {

@@ -87,8 +87,8 @@ impl Actuator {
                 "optimal_force must be finite and non-zero, found {optimal_force}"
             )));
         }
-        let min_control = el.child_f64_or("min_control", f64::NEG_INFINITY)?;
-        let max_control = el.child_f64_or("max_control", f64::INFINITY)?;
+        let min_control = el.child_f64_or_inf("min_control", f64::NEG_INFINITY)?;
+        let max_control = el.child_f64_or_inf("max_control", f64::INFINITY)?;
         if min_control.is_nan() || max_control.is_nan() || min_control > max_control {
             return Err(el.error(format!(
                 "min_control ({min_control}) must not exceed max_control ({max_control})"

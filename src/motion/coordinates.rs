@@ -43,6 +43,81 @@ pub fn column_for(table: &Storage, name: &str) -> Option<usize> {
     })
 }
 
+/// Refuse a column whose values lie far outside the coordinate's range: the
+/// sign of wrong units (degrees in a file whose header says `inDegrees=no`,
+/// millimetres for metres). "Far": beyond the range widened on each side by
+/// its width (at least 2π for rotational coordinates). Checked only for a
+/// finite, non-empty range.
+fn check_units(
+    c: &crate::model::Coordinate,
+    table: &Storage,
+    j: usize,
+    v: &[f64],
+    file: &std::path::Path,
+) -> Result<()> {
+    for (i, x) in v.iter().enumerate() {
+        if let Some(e) = units_error(
+            c,
+            &table.labels[j],
+            table.in_degrees,
+            i,
+            table.time[i],
+            *x,
+            file,
+        ) {
+            return Err(e);
+        }
+    }
+    Ok(())
+}
+
+/// The error for one value (in model units, row `i` 0-based) of coordinate
+/// `c` read from column `label`, when it lies far outside the coordinate's
+/// range (see `check_units`); None when it does not.
+pub(crate) fn units_error(
+    c: &crate::model::Coordinate,
+    label: &str,
+    in_degrees: bool,
+    i: usize,
+    t: f64,
+    x: f64,
+    file: &std::path::Path,
+) -> Option<Error> {
+    let [lo, hi] = c.range;
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return None;
+    }
+    let rotational = c.motion_type == MotionType::Rotational;
+    let margin = if rotational {
+        (hi - lo).max(2.0 * std::f64::consts::PI)
+    } else {
+        hi - lo
+    };
+    if x >= lo - margin && x <= hi + margin {
+        return None;
+    }
+    let (unit, hint) = if rotational {
+        (
+            "rad",
+            if in_degrees {
+                "is the motion in radians while its header says inDegrees=yes?"
+            } else {
+                "is the motion in degrees while its header says inDegrees=no (or lacks inDegrees=yes)?"
+            },
+        )
+    } else {
+        ("m", "is the motion in millimetres instead of metres?")
+    };
+    Some(Error::input(
+        Location::file(file).with_element(format!("column '{label}'")),
+        format!(
+            "row {} (time {t}): value {x} {unit} is far outside coordinate {}'s range [{lo}, {hi}] {unit}; {hint}",
+            i + 1,
+            c.name
+        ),
+    ))
+}
+
 impl CoordinateSplines {
     pub fn new(
         model: &Model,
@@ -83,6 +158,7 @@ impl CoordinateSplines {
                         1.0
                     };
                     let v: Vec<f64> = table.rows.iter().map(|r| r[j] * scale).collect();
+                    check_units(c, table, j, &v, file)?;
                     let s = GcvSpline::interpolating(degree, &table.time, &v).map_err(|e| {
                         e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
                     })?;

@@ -45,7 +45,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Location, Result};
 use crate::functions::GcvSpline;
 use crate::model::{Model, MotionType};
-use crate::motion::coordinates::column_for;
+use crate::motion::coordinates::{column_for, units_error};
 use crate::motion::filter::{butterworth, iir_pass, pole_radius, MAX_RESAMPLE_SIZE};
 use crate::motion::states::assemble;
 use crate::storage::{open_rows, RowMark, RowReader};
@@ -160,8 +160,22 @@ impl<'m> StateStream<'m> {
         let ctx = |e: Error| e.context(format!("filtering {}", file.display()));
 
         // Pass 1: length and end times.
+        let in_degrees = reader.table.in_degrees;
         drop(reader);
-        let index = index_file(file, &sel)?;
+        let mut check = |k: usize, t: f64, picked: &[f64]| -> Result<()> {
+            // wrong units: values far outside a coordinate's range
+            for (c, cc) in model.coordinates.iter().zip(&coord_cols) {
+                if let Some((pos, scale)) = *cc {
+                    let label = &labels[pos];
+                    let x = picked[pos] * scale;
+                    if let Some(e) = units_error(c, label, in_degrees, k, t, x, file) {
+                        return Err(e);
+                    }
+                }
+            }
+            Ok(())
+        };
+        let index = index_file(file, &sel, &mut check)?;
         let (n, t0, tl) = (index.n, index.first.0, index.last.0);
         let p = if filtering && n >= 1 { n / 2 } else { 0 };
         let m = n + 2 * p;
@@ -540,7 +554,11 @@ struct RawIndex {
     marks: Vec<(usize, RowMark)>,
 }
 
-fn index_file(file: &Path, sel: &[usize]) -> Result<RawIndex> {
+fn index_file(
+    file: &Path,
+    sel: &[usize],
+    check: &mut dyn FnMut(usize, f64, &[f64]) -> Result<()>,
+) -> Result<RawIndex> {
     let mut r = open_rows(file)?;
     let mut row = Vec::new();
     let mut idx = RawIndex {
@@ -559,6 +577,7 @@ fn index_file(file: &Path, sel: &[usize]) -> Result<RawIndex> {
             break;
         };
         let picked: Vec<f64> = sel.iter().map(|&j| row[j]).collect();
+        check(idx.n, t, &picked)?;
         if idx.n == 0 {
             idx.first = (t, picked.clone());
         }

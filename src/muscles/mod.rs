@@ -180,8 +180,8 @@ fn read_common_params(el: &Element, version: i64) -> Result<MuscleParams> {
         Some(c) if !c.text().is_empty() => c.f64()?,
         _ => el.child_f64_or("pennation_angle", 0.0)?,
     };
-    let mut min_control = el.child_f64_or("min_control", 0.01)?;
-    let mut max_control = el.child_f64_or("max_control", 1.0)?;
+    let mut min_control = el.child_f64_or_inf("min_control", 0.01)?;
+    let mut max_control = el.child_f64_or_inf("max_control", 1.0)?;
     if version < 30513 {
         // Muscle::updateFromXMLNode: 0 and 1 were unupdated defaults.
         if el.child("min_control").is_some() && min_control.abs() <= pennation::significant_real() {

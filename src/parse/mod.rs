@@ -1,5 +1,7 @@
 //! Reading user files: model documents and tool setups.
 pub mod compose;
+pub mod known;
+mod known_properties;
 pub mod osim;
 pub mod scene;
 pub mod setup;

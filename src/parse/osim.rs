@@ -179,6 +179,10 @@ impl ModelSpec {
             unsupported: Vec::new(),
             warnings: Vec::new(),
         };
+        if version >= 40000 {
+            spec.warnings
+                .extend(super::known::unknown_properties(model));
+        }
         if version >= 30505 {
             read_40(&mut spec, model)?;
         } else if version >= 30000 {
@@ -206,7 +210,8 @@ fn read_40(spec: &mut ModelSpec, model: &Element) -> Result<()> {
                         unsupported(spec, b, "body type");
                         continue;
                     }
-                    spec.bodies.push(read_body(b)?);
+                    let body = read_body(b, &mut spec.warnings)?;
+                    spec.bodies.push(body);
                     collect_wraps(spec, b.name_attr(), b);
                     for c in &b.children {
                         if c.name == "components" || c.name == "frames" {
@@ -281,7 +286,7 @@ fn collect_wraps(spec: &mut ModelSpec, body: &str, el: &Element) {
     }
 }
 
-fn read_body(b: &Element) -> Result<BodySpec> {
+fn read_body(b: &Element, warnings: &mut Vec<String>) -> Result<BodySpec> {
     let mass = b.child_f64_or("mass", 0.0)?;
     let inertia = match b.child("inertia") {
         Some(i) if !i.text().is_empty() => {
@@ -314,6 +319,18 @@ fn read_body(b: &Element) -> Result<BodySpec> {
     if inertia.iter().any(|x| !x.is_finite()) {
         return Err(b.error("body inertia holds a non-finite value"));
     }
+    if let Some((fatal, why)) = invalid_inertia(&inertia) {
+        let el = b.child("inertia").unwrap_or(b);
+        let msg = format!(
+            "body inertia [Ixx Iyy Izz Ixy Ixz Iyz] = {inertia:?} is not physically possible: {why}"
+        );
+        if fatal {
+            return Err(el.error(format!("{msg} (a sign error or wrong units?)")));
+        }
+        // OpenSim's own planar models (leg6dof9musc) hold such inertias and
+        // OpenSim 4.6 accepts them: warn only.
+        warnings.push(format!("{}: {msg}", el.loc()));
+    }
     Ok(BodySpec {
         name: b.name_attr().to_string(),
         mass,
@@ -321,6 +338,35 @@ fn read_body(b: &Element) -> Result<BodySpec> {
         inertia,
         loc: b.loc(),
     })
+}
+
+/// Why an inertia `[Ixx Iyy Izz Ixy Ixz Iyz]` about the mass center cannot
+/// belong to a rigid body (None when it can), and whether that is fatal: its
+/// principal moments must be non-negative (fatal: the mass matrix would not be
+/// positive semi-definite) and satisfy the triangle inequality (a warning:
+/// OpenSim 4.6 checks this only in debug builds and its planar example models
+/// violate it). Tolerance: 1e-9 of the largest moment.
+pub fn invalid_inertia(i: &[f64; 6]) -> Option<(bool, String)> {
+    let m = nalgebra::Matrix3::new(i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2]);
+    let mut p: Vec<f64> = m.symmetric_eigenvalues().iter().copied().collect();
+    p.sort_by(f64::total_cmp);
+    let tol = 1e-9 * p.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if p[0] < -tol {
+        return Some((
+            true,
+            format!("a principal moment is negative ({:.6e})", p[0]),
+        ));
+    }
+    if p[0] + p[1] < p[2] - tol {
+        return Some((
+            false,
+            format!(
+                "principal moments {:.6e}, {:.6e}, {:.6e} violate the triangle inequality",
+                p[0], p[1], p[2]
+            ),
+        ));
+    }
+    None
 }
 
 fn read_frame(f: &Element, owner: &str) -> Result<FrameSpec> {
@@ -342,7 +388,16 @@ fn read_frame(f: &Element, owner: &str) -> Result<FrameSpec> {
 fn read_coordinate(c: &Element) -> Result<CoordinateSpec> {
     let range = match c.child("range") {
         Some(r) if !r.text().is_empty() => {
-            let v = r.numbers_n(2)?;
+            let v = r.numbers_allow_inf()?;
+            if v.len() != 2 {
+                return Err(r.error(format!("expected 2 numbers, found {}", v.len())));
+            }
+            if v[0] > v[1] {
+                return Err(r.error(format!(
+                    "coordinate range lower bound {} exceeds its upper bound {}",
+                    v[0], v[1]
+                )));
+            }
             [v[0], v[1]]
         }
         _ => [-10.0, 10.0],
@@ -503,7 +558,7 @@ fn read_3x(spec: &mut ModelSpec, model: &Element) -> Result<()> {
             collect_wraps(spec, "ground", b);
             continue;
         }
-        let mut body = read_body(b)?;
+        let mut body = read_body(b, &mut spec.warnings)?;
         if spec.version < 30500 {
             body.inertia = body.inertia.map(sig6);
         }

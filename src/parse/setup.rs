@@ -50,6 +50,8 @@ pub struct AnalyzeSetup {
     /// drawn from the run's tables after the analyses.
     pub figures: Vec<Element>,
     pub analyses: Vec<Analysis>,
+    /// Non-fatal remarks (unknown properties, see `parse::known`).
+    pub warnings: Vec<String>,
 }
 
 /// Properties every OpenSim analysis has.
@@ -99,6 +101,8 @@ pub struct InverseDynamicsSetup {
     pub output_gen_force_file: String,
     pub joints_to_report_body_forces: Vec<String>,
     pub output_body_forces_file: Option<String>,
+    /// Non-fatal remarks (unknown properties, see `parse::known`).
+    pub warnings: Vec<String>,
 }
 
 /// Resolve a path from a setup relative to the setup's folder.
@@ -161,7 +165,10 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
     };
     let time_range = match tool.child("time_range") {
         Some(t) if !t.text().is_empty() => {
-            let v = t.numbers_n(2)?;
+            let v = t.numbers_allow_inf()?;
+            if v.len() != 2 {
+                return Err(t.error(format!("expected 2 numbers, found {}", v.len())));
+            }
             if v[0] > v[1] {
                 return Err(t.error(format!(
                     "time_range start {} is after its end {}",
@@ -197,6 +204,7 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
             .unwrap_or_else(|| "inverse_dynamics.sto".into()),
         joints_to_report_body_forces: joints,
         output_body_forces_file: opt_text(tool, "output_body_forces_file"),
+        warnings: super::known::unknown_properties(tool),
     })
 }
 
@@ -261,8 +269,8 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             });
         }
     }
-    let initial_time = tool.child_f64_or("initial_time", 0.0)?;
-    let final_time = tool.child_f64_or("final_time", 1.0)?;
+    let initial_time = tool.child_f64_or_inf("initial_time", 0.0)?;
+    let final_time = tool.child_f64_or_inf("final_time", 1.0)?;
     if initial_time > final_time {
         return Err(tool.req("initial_time")?.error(format!(
             "initial_time {initial_time} is after final_time {final_time}"
@@ -333,5 +341,6 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             .cloned()
             .collect(),
         analyses,
+        warnings: super::known::unknown_properties(tool),
     })
 }

@@ -147,7 +147,10 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
 }
 
 fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
-    let mut summary = RunSummary::default();
+    let mut summary = RunSummary {
+        warnings: setup.warnings.clone(),
+        ..Default::default()
+    };
     let active: Vec<&Analysis> = setup
         .analyses
         .iter()

@@ -75,7 +75,8 @@ fn check_forces(spec: &ModelSpec, exclude: &[String]) -> Result<bool> {
 
 pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary> {
     let (spec, model) = load_composed_model(&setup.model_file, &setup.artifact_files)?;
-    let mut warnings: Vec<String> = model.warnings.clone();
+    let mut warnings: Vec<String> = setup.warnings.clone();
+    warnings.extend(model.warnings.iter().cloned());
     for (what, loc) in &spec.unsupported {
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));
     }

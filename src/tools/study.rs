@@ -67,8 +67,10 @@ fn table_column(
         .attr("scale")
         .map(|s| {
             s.trim()
-                .parse()
-                .map_err(|_| el.error(format!("scale '{s}' is not a number")))
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| el.error(format!("scale '{s}' is not a finite number")))
         })
         .transpose()?
         .unwrap_or(1.0);

@@ -1,0 +1,713 @@
+//! Malformed input of every kind the tool reads gets exit status 2 and one
+//! message naming the file, the element or column and the line or row —
+//! never a panic, never a silent NaN. Companion of tests/bad_input.rs (which
+//! covers missing files, sockets and the time range); docs/failure_modes.md
+//! lists what is checked and what the user should do.
+//!
+//! Files covered: model `.osim` (4.0 and 3.x layouts), artifact model
+//! (`artifact_files`), contacts force-set file, AnalyzeTool and
+//! InverseDynamicsTool setups, study document, motion `.mot`, external loads
+//! XML and its data file.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use proptest::prelude::*;
+
+const PENDULUM: &str = include_str!("../models/double_pendulum.osim");
+const MOTION: &str = include_str!("../motions/double_pendulum_swing.mot");
+
+/// The double pendulum with two reserve actuators, one Thelen muscle whose
+/// path has a fixed and a moving point (SimmSpline data), every property on
+/// its own line so that a line number identifies the property.
+fn rich_model() -> String {
+    let forces = r#"<ForceSet name="forceset">
+			<objects>
+				<CoordinateActuator name="r1">
+					<coordinate>q1</coordinate>
+					<optimal_force>100</optimal_force>
+					<min_control>-Inf</min_control>
+					<max_control>Inf</max_control>
+				</CoordinateActuator>
+				<CoordinateActuator name="r2">
+					<coordinate>q2</coordinate>
+					<optimal_force>100</optimal_force>
+				</CoordinateActuator>
+				<Thelen2003Muscle name="flexor">
+					<GeometryPath name="path">
+						<PathPointSet>
+							<objects>
+								<PathPoint name="p1">
+									<socket_parent_frame>/bodyset/upper</socket_parent_frame>
+									<location>0.05 -0.2 0</location>
+								</PathPoint>
+								<MovingPathPoint name="p2">
+									<socket_parent_frame>/bodyset/lower</socket_parent_frame>
+									<socket_x_coordinate>/jointset/elbow/q2</socket_x_coordinate>
+									<socket_y_coordinate>/jointset/elbow/q2</socket_y_coordinate>
+									<socket_z_coordinate>/jointset/elbow/q2</socket_z_coordinate>
+									<x_location>
+										<SimmSpline>
+											<x>-4 0 4</x>
+											<y>0.05 0.05 0.05</y>
+										</SimmSpline>
+									</x_location>
+									<y_location>
+										<SimmSpline>
+											<x>-4 0 4</x>
+											<y>-0.1 -0.1 -0.1</y>
+										</SimmSpline>
+									</y_location>
+									<z_location>
+										<Constant>
+											<value>0</value>
+										</Constant>
+									</z_location>
+								</MovingPathPoint>
+							</objects>
+						</PathPointSet>
+					</GeometryPath>
+					<max_isometric_force>500</max_isometric_force>
+					<optimal_fiber_length>0.3</optimal_fiber_length>
+					<tendon_slack_length>0.5</tendon_slack_length>
+					<pennation_angle_at_optimal>0</pennation_angle_at_optimal>
+					<max_contraction_velocity>10</max_contraction_velocity>
+				</Thelen2003Muscle>
+			</objects>
+			<groups />
+		</ForceSet>"#;
+    let start = PENDULUM.find("<ForceSet").unwrap();
+    let end = PENDULUM.find("</ForceSet>").unwrap() + "</ForceSet>".len();
+    format!("{}{}{}", &PENDULUM[..start], forces, &PENDULUM[end..])
+}
+
+/// A contact far below the pendulum (never active), in a force-set file.
+const CONTACTS: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000">
+	<ForceSet name="contacts">
+		<objects>
+			<PointOnPlaneContact name="tip">
+				<point_body>lower</point_body>
+				<point_location>0 -0.7 0</point_location>
+				<plane_body>ground</plane_body>
+				<plane_origin>0 -50 0</plane_origin>
+				<plane_normal>0 1 0</plane_normal>
+				<static_friction>0.8</static_friction>
+				<kinetic_friction>0.5</kinetic_friction>
+				<contact_tolerance>0.005</contact_tolerance>
+				<contact_transition_zone>0.01</contact_transition_zone>
+				<v_trans>0.01</v_trans>
+				<optimal_force>100</optimal_force>
+			</PointOnPlaneContact>
+		</objects>
+	</ForceSet>
+</OpenSimDocument>
+"#;
+
+/// A small artifact: one body welded to ground.
+const ARTIFACT: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000">
+	<Model name="frame">
+		<BodySet name="bodyset">
+			<objects>
+				<Body name="post">
+					<mass>5</mass>
+					<mass_center>0 0.5 0</mass_center>
+					<inertia>0.4 0.01 0.4 0 0 0</inertia>
+				</Body>
+			</objects>
+		</BodySet>
+		<JointSet name="jointset">
+			<objects>
+				<WeldJoint name="post_weld">
+					<socket_parent_frame>/ground</socket_parent_frame>
+					<socket_child_frame>/bodyset/post</socket_child_frame>
+				</WeldJoint>
+			</objects>
+		</JointSet>
+	</Model>
+</OpenSimDocument>
+"#;
+
+const ANALYZE: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000">
+	<AnalyzeTool name="run">
+		<model_file>model.osim</model_file>
+		<artifact_files>artifact.osim</artifact_files>
+		<force_set_files>contacts.xml</force_set_files>
+		<results_directory>out</results_directory>
+		<initial_time>0</initial_time>
+		<final_time>0.2</final_time>
+		<AnalysisSet name="Analyses">
+			<objects>
+				<StaticOptimization name="SO">
+					<activation_exponent>2</activation_exponent>
+					<contact_weight>1</contact_weight>
+					<optimizer_convergence_criterion>1e-4</optimizer_convergence_criterion>
+				</StaticOptimization>
+			</objects>
+		</AnalysisSet>
+		<coordinates_file>motion.mot</coordinates_file>
+		<lowpass_cutoff_frequency_for_coordinates>-1</lowpass_cutoff_frequency_for_coordinates>
+	</AnalyzeTool>
+</OpenSimDocument>
+"#;
+
+const ID_SETUP: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40600">
+	<InverseDynamicsTool name="id">
+		<results_directory>out</results_directory>
+		<model_file>model.osim</model_file>
+		<time_range>0 0.2</time_range>
+		<forces_to_exclude>Muscles</forces_to_exclude>
+		<external_loads_file>loads.xml</external_loads_file>
+		<coordinates_file>motion.mot</coordinates_file>
+		<lowpass_cutoff_frequency_for_coordinates>6</lowpass_cutoff_frequency_for_coordinates>
+		<output_gen_force_file>id.sto</output_gen_force_file>
+	</InverseDynamicsTool>
+</OpenSimDocument>
+"#;
+
+const LOADS: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000">
+	<ExternalLoads name="loads">
+		<objects>
+			<ExternalForce name="push">
+				<applied_to_body>lower</applied_to_body>
+				<force_expressed_in_body>ground</force_expressed_in_body>
+				<point_expressed_in_body>lower</point_expressed_in_body>
+				<force_identifier>f_</force_identifier>
+				<point_identifier>p_</point_identifier>
+			</ExternalForce>
+		</objects>
+		<datafile>loads.mot</datafile>
+	</ExternalLoads>
+</OpenSimDocument>
+"#;
+
+fn loads_data() -> String {
+    let mut s = String::from(
+        "loads\nversion=1\nnRows=11\nnColumns=7\ninDegrees=no\nendheader\ntime\tf_x\tf_y\tf_z\tp_x\tp_y\tp_z\n",
+    );
+    for k in 0..11 {
+        s.push_str(&format!(
+            "{:.2}\t1.0\t2.0\t0.0\t0.0\t-0.5\t0.0\n",
+            k as f64 * 0.2
+        ));
+    }
+    s
+}
+
+const STUDY: &str = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000">
+	<StatoptStudy name="study">
+		<setups>id_setup.xml</setups>
+		<results_directory>figs</results_directory>
+		<Figure name="f" title="t" y_label="y">
+			<Series file="out/id.sto" column="q1_moment" scale="1" label="q1"/>
+		</Figure>
+	</StatoptStudy>
+</OpenSimDocument>
+"#;
+
+/// One scenario's files, by name; `mutate` rewrites one of them.
+#[derive(Clone)]
+struct Files(Vec<(&'static str, String)>);
+
+impl Files {
+    fn analyze() -> Files {
+        Files(vec![
+            ("model.osim", rich_model()),
+            ("artifact.osim", ARTIFACT.to_string()),
+            ("contacts.xml", CONTACTS.to_string()),
+            ("motion.mot", MOTION.to_string()),
+            ("setup.xml", ANALYZE.to_string()),
+        ])
+    }
+    fn inverse_dynamics() -> Files {
+        Files(vec![
+            ("model.osim", rich_model()),
+            ("motion.mot", MOTION.to_string()),
+            ("loads.xml", LOADS.to_string()),
+            ("loads.mot", loads_data()),
+            ("id_setup.xml", ID_SETUP.to_string()),
+            ("study.xml", STUDY.to_string()),
+        ])
+    }
+    fn get(&self, name: &str) -> &str {
+        &self.0.iter().find(|(n, _)| *n == name).unwrap().1
+    }
+    /// Replace the only occurrence of `from` in file `name`; returns the
+    /// 1-based line where the replacement starts.
+    fn replace(&mut self, name: &str, from: &str, to: &str) -> usize {
+        let f = self.0.iter_mut().find(|(n, _)| *n == name).unwrap();
+        assert_eq!(
+            f.1.matches(from).count(),
+            1,
+            "'{from}' must occur once in {name}"
+        );
+        let at = f.1.find(from).unwrap();
+        let line = f.1[..at].matches('\n').count() + 1;
+        f.1 = f.1.replacen(from, to, 1);
+        line
+    }
+    fn write(&self, dir: &Path) {
+        for (n, t) in &self.0 {
+            std::fs::write(dir.join(n), t).unwrap();
+        }
+    }
+}
+
+/// Run the tool on `entry` in a fresh folder; (exit status, stderr).
+fn run(test: &str, files: &Files, entry: &str) -> (i32, String) {
+    let dir = common::out_dir(&format!("malformed_{test}"));
+    files.write(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join(entry))
+        .arg("--threads")
+        .arg("1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        !err.contains("panicked"),
+        "{test}: the tool panicked:\n{err}"
+    );
+    (out.status.code().unwrap_or(-1), err)
+}
+
+/// Assert exit status 2 and a message holding every one of `needles`.
+fn expect_input_error(test: &str, (code, err): (i32, String), needles: &[&str]) {
+    assert_eq!(
+        code, 2,
+        "{test}: expected exit status 2, got {code}:\n{err}"
+    );
+    for n in needles {
+        assert!(err.contains(n), "{test}: message lacks '{n}':\n{err}");
+    }
+}
+
+#[test]
+fn good_inputs_run() {
+    let (code, err) = run("good_analyze", &Files::analyze(), "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = run("good_study", &Files::inverse_dynamics(), "study.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("unknown property"), "{err}");
+}
+
+/// NaN and Inf in every kind of numeric field: (file, text, replacement,
+/// element named in the message). The reported line is the line of the text.
+#[test]
+fn nan_and_inf_in_every_numeric_field() {
+    let analyze_cases: &[(&str, &str, &str, &str)] = &[
+        ("model.osim", "<mass>2.3</mass>", "<mass>NaN</mass>", "<mass>"),
+        ("model.osim", "<mass>1.7</mass>", "<mass>Inf</mass>", "<mass>"),
+        ("model.osim", "0.11 0.02 0.11 0 0 0", "0.11 nan 0.11 0 0 0", "<inertia>"),
+        ("model.osim", "<mass_center>0 -0.4 0", "<mass_center>0 -inf 0", "<mass_center>"),
+        ("model.osim", "<translation>0 1.5 0", "<translation>0 NaN 0", "<translation>"),
+        ("model.osim", "<orientation>0 0 0</orientation>\n\t\t\t\t\t\t</PhysicalOffsetFrame>\n\t\t\t\t\t\t<PhysicalOffsetFrame name=\"upper_offset\">\n\t\t\t\t\t\t\t<socket_parent>/bodyset/upper</socket_parent>\n\t\t\t\t\t\t\t<translation>0 0 0", "<orientation>0 Inf 0</orientation>\n\t\t\t\t\t\t</PhysicalOffsetFrame>\n\t\t\t\t\t\t<PhysicalOffsetFrame name=\"upper_offset\">\n\t\t\t\t\t\t\t<socket_parent>/bodyset/upper</socket_parent>\n\t\t\t\t\t\t\t<translation>0 0 0", "<orientation>"),
+        ("model.osim", "<default_value>0</default_value>\n\t\t\t\t\t\t\t<range>-3.14159 3.14159</range>\n\t\t\t\t\t\t</Coordinate>\n\t\t\t\t\t</coordinates>\n\t\t\t\t\t<frames>\n\t\t\t\t\t\t<PhysicalOffsetFrame name=\"ground_offset\">", "<default_value>NaN</default_value>\n\t\t\t\t\t\t\t<range>-3.14159 3.14159</range>\n\t\t\t\t\t\t</Coordinate>\n\t\t\t\t\t</coordinates>\n\t\t\t\t\t<frames>\n\t\t\t\t\t\t<PhysicalOffsetFrame name=\"ground_offset\">", "<default_value>"),
+        ("model.osim", "<gravity>0 -9.80665 0</gravity>", "<gravity>0 NaN 0</gravity>", "<gravity>"),
+        ("model.osim", "<max_isometric_force>500<", "<max_isometric_force>NaN<", "<max_isometric_force>"),
+        ("model.osim", "<optimal_fiber_length>0.3<", "<optimal_fiber_length>Inf<", "<optimal_fiber_length>"),
+        ("model.osim", "<tendon_slack_length>0.5<", "<tendon_slack_length>-Inf<", "<tendon_slack_length>"),
+        ("model.osim", "<pennation_angle_at_optimal>0<", "<pennation_angle_at_optimal>nan<", "<pennation_angle_at_optimal>"),
+        ("model.osim", "<max_contraction_velocity>10<", "<max_contraction_velocity>inf<", "<max_contraction_velocity>"),
+        ("model.osim", "<location>0.05 -0.2 0</location>", "<location>0.05 NaN 0</location>", "<location>"),
+        ("model.osim", "<y>0.05 0.05 0.05</y>", "<y>0.05 NaN 0.05</y>", "<y>"),
+        ("model.osim", "<x>-4 0 4</x>\n\t\t\t\t\t\t\t\t\t\t\t<y>-0.1", "<x>-4 Inf 4</x>\n\t\t\t\t\t\t\t\t\t\t\t<y>-0.1", "<x>"),
+        ("model.osim", "<value>0</value>", "<value>NaN</value>", "<value>"),
+        ("model.osim", "<optimal_force>100</optimal_force>\n\t\t\t\t\t<min_control>", "<optimal_force>Inf</optimal_force>\n\t\t\t\t\t<min_control>", "<optimal_force>"),
+        ("model.osim", "<min_control>-Inf</min_control>", "<min_control>NaN</min_control>", "<min_control>"),
+        ("artifact.osim", "<mass>5</mass>", "<mass>NaN</mass>", "<mass>"),
+        ("artifact.osim", "<inertia>0.4 0.01 0.4 0 0 0", "<inertia>0.4 0.01 Inf 0 0 0", "<inertia>"),
+        ("contacts.xml", "<point_location>0 -0.7 0", "<point_location>0 NaN 0", "<point_location>"),
+        ("contacts.xml", "<plane_normal>0 1 0", "<plane_normal>0 Inf 0", "<plane_normal>"),
+        ("contacts.xml", "<static_friction>0.8<", "<static_friction>NaN<", "<static_friction>"),
+        ("contacts.xml", "<contact_tolerance>0.005<", "<contact_tolerance>Inf<", "<contact_tolerance>"),
+        ("contacts.xml", "<v_trans>0.01<", "<v_trans>NaN<", "<v_trans>"),
+        ("setup.xml", "<initial_time>0<", "<initial_time>NaN<", "<initial_time>"),
+        ("setup.xml", "<final_time>0.2<", "<final_time>nan<", "<final_time>"),
+        ("setup.xml", "<contact_weight>1<", "<contact_weight>NaN<", "<contact_weight>"),
+        ("setup.xml", "<activation_exponent>2<", "<activation_exponent>Inf<", "<activation_exponent>"),
+        ("setup.xml", "<optimizer_convergence_criterion>1e-4<", "<optimizer_convergence_criterion>NaN<", "<optimizer_convergence_criterion>"),
+        ("setup.xml", "<lowpass_cutoff_frequency_for_coordinates>-1<", "<lowpass_cutoff_frequency_for_coordinates>NaN<", "<lowpass_cutoff_frequency_for_coordinates>"),
+    ];
+    let mut failures = Vec::new();
+    for (k, (file, from, to, element)) in analyze_cases.iter().enumerate() {
+        let mut f = Files::analyze();
+        let line = f.replace(file, from, to);
+        let (code, err) = run(&format!("nan_{k}"), &f, "setup.xml");
+        let line_s = format!("line {line}");
+        if code != 2 || !err.contains(file) || !err.contains(&line_s) || !err.contains(element) {
+            failures.push(format!(
+                "{file}: {to:?} → exit {code}, expected 2 naming {file}, {line_s}, {element}:\n{err}"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn nan_in_storage_cells_and_time_column() {
+    // Motion: a data cell and the time column.
+    let cases: &[(&str, &str, &str, &str)] = &[
+        (
+            "motion.mot",
+            "0.0200\t1.88371559",
+            "0.0200\tNaN",
+            "column 'q1'",
+        ),
+        (
+            "motion.mot",
+            "0.0200\t1.88371559",
+            "NaN\t1.88371559",
+            "column 'time'",
+        ),
+        (
+            "motion.mot",
+            "0.0200\t1.88371559",
+            "0.0200\tInf",
+            "column 'q1'",
+        ),
+        ("loads.mot", "0.20\t1.0", "0.20\tNaN", "column 'f_x'"),
+        ("loads.mot", "0.40\t1.0", "inf\t1.0", "column 'time'"),
+    ];
+    for (k, (file, from, to, column)) in cases.iter().enumerate() {
+        let mut f = Files::inverse_dynamics();
+        let line = f.replace(file, from, to);
+        expect_input_error(
+            &format!("storage_{k}"),
+            run(&format!("storage_{k}"), &f, "id_setup.xml"),
+            &[file, &format!("line {line}"), column],
+        );
+    }
+}
+
+#[test]
+fn nan_in_setup_and_study_numbers() {
+    let mut f = Files::inverse_dynamics();
+    let line = f.replace("id_setup.xml", "<time_range>0 0.2<", "<time_range>0 NaN<");
+    expect_input_error(
+        "id_time_range",
+        run("id_time_range", &f, "id_setup.xml"),
+        &["id_setup.xml", &format!("line {line}"), "<time_range>"],
+    );
+    // -Inf Inf is OpenSim's own spelling of "the whole motion": accepted.
+    let mut f = Files::inverse_dynamics();
+    f.replace(
+        "id_setup.xml",
+        "<time_range>0 0.2<",
+        "<time_range>-Inf Inf<",
+    );
+    let (code, err) = run("id_time_range_inf", &f, "id_setup.xml");
+    assert_eq!(code, 0, "{err}");
+
+    let mut f = Files::inverse_dynamics();
+    let line = f.replace("study.xml", "scale=\"1\"", "scale=\"NaN\"");
+    expect_input_error(
+        "study_scale",
+        run("study_scale", &f, "study.xml"),
+        &["study.xml", &format!("line {line}"), "<Series", "scale"],
+    );
+}
+
+/// A truncated file of every kind: the message names the file and a line.
+#[test]
+fn truncated_files_of_every_kind() {
+    let cases: &[(&str, &str, fn() -> Files)] = &[
+        ("model.osim", "setup.xml", Files::analyze),
+        ("artifact.osim", "setup.xml", Files::analyze),
+        ("contacts.xml", "setup.xml", Files::analyze),
+        ("setup.xml", "setup.xml", Files::analyze),
+        ("motion.mot", "setup.xml", Files::analyze),
+        ("loads.xml", "id_setup.xml", Files::inverse_dynamics),
+        ("loads.mot", "id_setup.xml", Files::inverse_dynamics),
+        ("id_setup.xml", "id_setup.xml", Files::inverse_dynamics),
+        ("study.xml", "study.xml", Files::inverse_dynamics),
+    ];
+    for (file, entry, make) in cases {
+        let mut f = make();
+        let text = f.get(file).to_string();
+        let cut = text.len() * 2 / 3;
+        let cut = (0..=cut).rev().find(|&i| text.is_char_boundary(i)).unwrap();
+        f.0.iter_mut().find(|(n, _)| n == file).unwrap().1 = text[..cut].to_string();
+        let test = format!("truncated_{}", file.replace('.', "_"));
+        expect_input_error(&test, run(&test, &f, entry), &[file, "line"]);
+    }
+}
+
+#[test]
+fn unknown_element_types_are_named() {
+    let cases: &[(&str, &str, &str, &str, fn() -> Files, &str)] = &[
+        // joint type (3.x and 4.0 layouts are covered in tests/bad_input.rs and below)
+        (
+            "artifact.osim",
+            "WeldJoint name",
+            "HingeJoint name",
+            "HingeJoint",
+            Files::analyze,
+            "setup.xml",
+        ),
+        // analysis type
+        (
+            "setup.xml",
+            "<StaticOptimization name=\"SO\">",
+            "<InducedAccelerations name=\"SO\">",
+            "InducedAccelerations",
+            Files::analyze,
+            "setup.xml",
+        ),
+        // tool type
+        (
+            "id_setup.xml",
+            "<InverseDynamicsTool name=\"id\">",
+            "<ForwardTool name=\"id\">",
+            "ForwardTool",
+            Files::inverse_dynamics,
+            "id_setup.xml",
+        ),
+    ];
+    for (k, (file, from, to, named, make, entry)) in cases.iter().enumerate() {
+        let mut f = make();
+        let line = f.replace(file, from, to);
+        if *file == "artifact.osim" {
+            f.replace(file, "</WeldJoint>", "</HingeJoint>");
+        }
+        if *file == "setup.xml" {
+            f.replace(file, "</StaticOptimization>", "</InducedAccelerations>");
+        }
+        if *file == "id_setup.xml" {
+            f.replace(file, "</InverseDynamicsTool>", "</ForwardTool>");
+        }
+        expect_input_error(
+            &format!("unknown_{k}"),
+            run(&format!("unknown_{k}"), &f, entry),
+            &[file, &format!("line {line}"), named],
+        );
+    }
+}
+
+/// An unknown force type needed by static optimization is refused by name.
+#[test]
+fn unknown_force_type_is_named() {
+    let mut f = Files::analyze();
+    let line = f.replace(
+        "contacts.xml",
+        "<PointOnPlaneContact name=\"tip\">",
+        "<HuntCrossleyForce name=\"tip\">",
+    );
+    f.replace(
+        "contacts.xml",
+        "</PointOnPlaneContact>",
+        "</HuntCrossleyForce>",
+    );
+    let (code, err) = run("unknown_force", &f, "setup.xml");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("HuntCrossleyForce")
+            && err.contains("contacts.xml")
+            && err.contains(&format!("line {line}")),
+        "{err}"
+    );
+}
+
+/// Unknown properties of known elements: ignored as OpenSim 4.6 ignores them
+/// (checked: a `<frobnicate>` in a Body loads in OpenSim 4.6 without a
+/// message), but with a warning naming file, line and element.
+#[test]
+fn unknown_properties_warn_with_location() {
+    let mut f = Files::analyze();
+    let line = f.replace("model.osim", "<mass>2.3</mass>", "<mas>2.3</mas>");
+    let sline = f.replace(
+        "setup.xml",
+        "<activation_exponent>2</activation_exponent>",
+        "<activation_exponant>2</activation_exponant>",
+    );
+    let (code, err) = run("unknown_property", &f, "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("model.osim")
+            && err.contains("<Body name=\"upper\">")
+            && err.contains("unknown property <mas>")
+            && err.contains(&format!("(line {line})")),
+        "{err}"
+    );
+    assert!(
+        err.contains("setup.xml")
+            && err.contains("unknown property <activation_exponant>")
+            && err.contains(&format!("(line {sline})")),
+        "{err}"
+    );
+}
+
+#[test]
+fn physically_impossible_bodies() {
+    for (k, (from, to)) in [
+        ("<mass>2.3</mass>", "<mass>-2.3</mass>"),
+        ("0.11 0.02 0.11 0 0 0", "-0.11 0.02 0.11 0 0 0"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let mut f = Files::analyze();
+        let line = f.replace("model.osim", from, to);
+        expect_input_error(
+            &format!("impossible_{k}"),
+            run(&format!("impossible_{k}"), &f, "setup.xml"),
+            &["model.osim", &format!("line {line}"), "<"],
+        );
+    }
+    // The triangle inequality violated: OpenSim 4.6 accepts it (its
+    // leg6dof9musc model has such a body); statopt warns.
+    let mut f = Files::analyze();
+    f.replace("model.osim", "0.11 0.02 0.11 0 0 0", "0.11 0.02 0.5 0 0 0");
+    let (code, err) = run("triangle", &f, "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("triangle inequality") && err.contains("model.osim"),
+        "{err}"
+    );
+}
+
+/// Degrees in a file that says radians (and radians read as degrees the
+/// other way round are undetectable: they are small): refused, naming the
+/// file, column and row.
+#[test]
+fn motion_in_wrong_units() {
+    let mut f = Files::analyze();
+    f.replace("motion.mot", "inDegrees=yes", "inDegrees=no");
+    expect_input_error(
+        "units",
+        run("units", &f, "setup.xml"),
+        // q1 = 30 sin(pi t) degrees read as radians first leaves
+        // [-pi - 2pi, pi + 2pi] where sin(pi t) > 0.31416: t = 0.12, row 7.
+        &["motion.mot", "column 'q1'", "row 7 ", "inDegrees=no"],
+    );
+}
+
+/// The 3.x layout: NaN in a 3.x joint offset and a truncated 3.x file.
+#[test]
+fn model_3x_layout() {
+    let model3 = r#"<?xml version="1.0"?>
+<OpenSimDocument Version="30000">
+	<Model name="m3">
+		<BodySet>
+			<objects>
+				<Body name="ground">
+					<mass>0</mass>
+				</Body>
+				<Body name="upper">
+					<mass>2.3</mass>
+					<mass_center>0 -0.4 0</mass_center>
+					<inertia_xx>0.11</inertia_xx>
+					<inertia_yy>0.02</inertia_yy>
+					<inertia_zz>0.11</inertia_zz>
+					<Joint>
+						<PinJoint name="shoulder">
+							<parent_body>ground</parent_body>
+							<location_in_parent>0 1.5 0</location_in_parent>
+							<orientation_in_parent>0 0 0</orientation_in_parent>
+							<location>0 0 0</location>
+							<orientation>0 0 0</orientation>
+							<CoordinateSet>
+								<objects>
+									<Coordinate name="q1">
+										<range>-3.14159 3.14159</range>
+									</Coordinate>
+								</objects>
+							</CoordinateSet>
+						</PinJoint>
+					</Joint>
+				</Body>
+			</objects>
+		</BodySet>
+	</Model>
+</OpenSimDocument>
+"#;
+    let dir = common::out_dir("malformed_3x");
+    let p = dir.join("m3.osim");
+    std::fs::write(&p, model3).unwrap();
+    statopt::tools::loading::load_model(&p).expect("the 3.x model loads");
+    for (k, (from, to, el)) in [
+        (
+            "<location_in_parent>0 1.5 0",
+            "<location_in_parent>0 NaN 0",
+            "<location_in_parent>",
+        ),
+        ("<inertia_yy>0.02<", "<inertia_yy>Inf<", "<inertia_yy>"),
+        (
+            "<PinJoint name=\"shoulder\">",
+            "<HingeJoint name=\"shoulder\">",
+            "HingeJoint",
+        ),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let mut text = model3.replacen(from, to, 1);
+        if k == 2 {
+            text = text.replacen("</PinJoint>", "</HingeJoint>", 1);
+        }
+        let line = model3[..model3.find(from).unwrap()].matches('\n').count() + 1;
+        std::fs::write(&p, &text).unwrap();
+        let e = statopt::tools::loading::load_model(&p).unwrap_err();
+        let msg = e.to_string();
+        assert_eq!(e.exit_code(), 2, "{msg}");
+        assert!(
+            msg.contains("m3.osim") && msg.contains(&format!("line {line}")) && msg.contains(el),
+            "{msg}"
+        );
+    }
+}
+
+fn write_tmp(name: &str, text: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("malformed_prop");
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn xml_files() -> Vec<(&'static str, String)> {
+    let mut v = Files::analyze().0;
+    v.extend(Files::inverse_dynamics().0);
+    v.retain(|(n, _)| !n.ends_with(".mot"));
+    v
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+
+    /// Any cut of any XML input before its root's closing tag is an input
+    /// error naming the file and a line (the line of the unclosed element or
+    /// of the broken token).
+    #[test]
+    fn truncated_xml_is_located(which in 0usize..9, frac in 0.0f64..1.0) {
+        let files = xml_files();
+        let (name, text) = &files[which % files.len()];
+        let end = text.rfind("</").unwrap();
+        let mut cut = (frac * end as f64) as usize;
+        while !text.is_char_boundary(cut) { cut -= 1; }
+        let p = write_tmp(&format!("cut_{name}"), &text[..cut]);
+        let e = statopt::xml::parse_file(&p).unwrap_err();
+        prop_assert_eq!(e.exit_code(), 2);
+        let msg = e.to_string();
+        prop_assert!(msg.contains(name) && (msg.contains("line") || msg.contains("no XML element")), "{}", msg);
+    }
+
+    /// Any cut of a legacy motion (nRows given) is an error naming the file.
+    #[test]
+    fn truncated_motion_is_located(frac in 0.0f64..0.999) {
+        let text = MOTION.trim_end();
+        let cut = (frac * text.len() as f64) as usize;
+        let p = write_tmp("cut.mot", &text[..cut]);
+        let e = statopt::storage::read(&p).unwrap_err();
+        prop_assert_eq!(e.exit_code(), 2);
+        let msg = e.to_string();
+        prop_assert!(msg.contains("cut.mot"), "{}", msg);
+    }
+}
