@@ -28,9 +28,9 @@ pub struct StaticContact {
 /// Solver settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolveSettings {
-    /// Clarabel's absolute and relative duality-gap tolerance and its
-    /// primal/dual feasibility tolerance (`tol_gap_abs`, `tol_gap_rel`,
-    /// `tol_feas`). Default 1e-8. (OpenSim's IPOPT uses the
+    /// Clarabel's absolute duality-gap tolerance and its primal/dual
+    /// feasibility tolerance (`tol_gap_abs`, `tol_feas`); the relative gap
+    /// tolerance `tol_gap_rel` is 1e-4 of it (see `solve`). Default 1e-8. (OpenSim's IPOPT uses the
     /// `optimizer_convergence_criterion`, 1e-4, §6.4; a tighter tolerance
     /// here only makes the answer closer to the exact optimum.)
     pub tolerance: f64,
