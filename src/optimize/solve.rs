@@ -96,12 +96,24 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         };
         (Vec::new(), status, 0)
     } else {
-        run_guarded(p, false)
+        run_guarded(p, Mode::Plain)
     };
     if status == SolveStatus::Infeasible && n > 0 {
-        let (xe, _, it) = run_guarded(p, true);
-        x = xe;
+        // Clarabel's infeasibility test (tolerance 1e-8) can fire after a
+        // few iterations on feasible but badly scaled frames (seen: a frame
+        // with unbounded reserves and generalized forces of 1.8e3 declared
+        // infeasible at iteration 3). Check the claim once with a much
+        // stricter test before treating the frame as infeasible.
+        let (xs, ss, it) = run_guarded(p, Mode::StrictInfeasibility);
         iterations += it;
+        if matches!(ss, SolveStatus::Solved | SolveStatus::AlmostSolved) {
+            x = xs;
+            status = ss;
+        } else {
+            let (xe, _, it) = run_guarded(p, Mode::Elastic);
+            x = xe;
+            iterations += it;
+        }
     }
     for (i, xi) in x.iter_mut().enumerate() {
         if !xi.is_finite() {
@@ -127,13 +139,26 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
 /// [`run`], with a panic inside Clarabel (an internal assertion or index
 /// error on data it should have refused) turned into `NumericalError`, so
 /// that one bad frame cannot abort a whole analysis.
-fn run_guarded(p: &FrameProblem, elastic: bool) -> (Vec<f64>, SolveStatus, u32) {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(p, elastic)))
+fn run_guarded(p: &FrameProblem, mode: Mode) -> (Vec<f64>, SolveStatus, u32) {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(p, mode)))
         .unwrap_or_else(|_| (vec![0.0; p.n_var()], SolveStatus::NumericalError, 0))
 }
 
 /// Builds and solves the conic program; returns (x, status, iterations).
-fn run(p: &FrameProblem, elastic: bool) -> (Vec<f64>, SolveStatus, u32) {
+/// How [`run`] formulates and solves a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// The frame's program as it is.
+    Plain,
+    /// As `Plain`, with Clarabel's infeasibility tolerances at 1e-14
+    /// instead of 1e-8, to re-check an infeasibility claim.
+    StrictInfeasibility,
+    /// Equalities relaxed (see [`ELASTIC_PENALTY`]).
+    Elastic,
+}
+
+fn run(p: &FrameProblem, mode: Mode) -> (Vec<f64>, SolveStatus, u32) {
+    let elastic = mode == Mode::Elastic;
     let layout = Layout::new(p, elastic);
     let nz = layout.n_z;
 
@@ -225,6 +250,15 @@ fn run(p: &FrameProblem, elastic: bool) -> (Vec<f64>, SolveStatus, u32) {
         tol_gap_rel: (tol * 1e-4).max(1e-15),
         tol_feas: tol,
         ..DefaultSettings::default()
+    };
+    let settings = if mode == Mode::StrictInfeasibility {
+        DefaultSettings {
+            tol_infeas_abs: 1e-14,
+            tol_infeas_rel: 1e-14,
+            ..settings
+        }
+    } else {
+        settings
     };
     let mut solver = match DefaultSolver::new(&p_mat, &q, &m_mat, &h, &cones, settings) {
         Ok(s) => s,
