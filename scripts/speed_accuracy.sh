@@ -38,3 +38,5 @@ if [ -f "$g" ]; then
 else
   echo "SKIP: $g absent"
 fi
+python3 scripts/speed_accuracy_tables.py > "$out/tables.md"
+echo "wrote $out/tables.md"
