@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use criterion::{criterion_group, criterion_main, Criterion};
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
-use statopt::parse::setup::{Analysis, Setup};
+use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::static_optimization::{ConstraintMatrix, SoProblem, StaticOptimizationSetup};
 
@@ -22,14 +22,8 @@ fn bench_setup(c: &mut Criterion, name: &str, setup_file: &Path) {
         _ => unreachable!(),
     };
     let (el, common) = setup
-        .analyses
-        .iter()
-        .find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                Some((element.clone(), common.clone()))
-            }
-            _ => None,
-        })
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
     let mut so = StaticOptimizationSetup::from_xml(&el, common).unwrap();
     let (mut problem, _) = SoProblem::build(&setup, &so).unwrap();

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use criterion::{criterion_group, criterion_main, Criterion};
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
-use statopt::parse::setup::{Analysis, Setup};
+use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
 
@@ -76,14 +76,8 @@ fn bench(c: &mut Criterion) {
         _ => unreachable!(),
     };
     let (el, common) = setup
-        .analyses
-        .iter()
-        .find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                Some((element.clone(), common.clone()))
-            }
-            _ => None,
-        })
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
     for (label, xml) in [
         ("cone", "<friction_cone>cone</friction_cone>"),

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::DMatrix;
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
-use statopt::parse::setup::{Analysis, AnalyzeSetup, Setup};
+use statopt::parse::setup::{AnalyzeSetup, Setup};
 use statopt::tools::bench_grid::{self, Choice, GridOptions, GridRow};
 use statopt::tools::static_optimization::{ConstraintMatrix, SoProblem, StaticOptimizationSetup};
 
@@ -25,14 +25,8 @@ fn read_setup(p: &Path) -> AnalyzeSetup {
 
 fn so_setup(setup: &AnalyzeSetup) -> StaticOptimizationSetup {
     let (el, c) = setup
-        .analyses
-        .iter()
-        .find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                Some((element.clone(), common.clone()))
-            }
-            _ => None,
-        })
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
     StaticOptimizationSetup::from_xml(&el, c).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -288,14 +282,8 @@ fn bad_method_options_are_located_errors() {
     let setup = contact_case("grid_bad", "<constraint_matrix>numeric</constraint_matrix>");
     let s = read_setup(&setup);
     let (el, c) = s
-        .analyses
-        .iter()
-        .find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                Some((element.clone(), common.clone()))
-            }
-            _ => None,
-        })
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
     let e = StaticOptimizationSetup::from_xml(&el, c)
         .unwrap_err()
@@ -307,14 +295,8 @@ fn bad_method_options_are_located_errors() {
     let setup = contact_case("grid_bad_tol", "<solver_tolerance>2</solver_tolerance>");
     let s = read_setup(&setup);
     let el = s
-        .analyses
-        .iter()
-        .find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                Some((element.clone(), common.clone()))
-            }
-            _ => None,
-        })
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
     let e = StaticOptimizationSetup::from_xml(&el.0, el.1)
         .unwrap_err()

@@ -8,7 +8,7 @@ mod common;
 
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
-use statopt::parse::setup::{Analysis, Setup};
+use statopt::parse::setup::Setup;
 use statopt::storage;
 use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
 use statopt::tools::{analyze, RunOptions};
@@ -171,14 +171,8 @@ fn statopt_optimum_is_never_worse_than_opensims_on_the_same_equations() {
             _ => unreachable!(),
         };
         let (el, common_) = setup
-            .analyses
-            .iter()
-            .find_map(|a| match a {
-                Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                    Some((element.clone(), common.clone()))
-                }
-                _ => None,
-            })
+            .analysis_element("StaticOptimization")
+            .map(|(e, c)| (e.clone(), c.clone()))
             .unwrap();
         let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
         let (problem, _) = SoProblem::build(&setup, &so).unwrap();

@@ -73,6 +73,19 @@ pub enum Analysis {
     },
 }
 
+impl AnalyzeSetup {
+    /// The first analysis kept as XML whose element is `type_name` (e.g.
+    /// `StaticOptimization`), on or off: its element and common settings.
+    pub fn analysis_element(&self, type_name: &str) -> Option<(&Element, &AnalysisCommon)> {
+        self.analyses.iter().find_map(|a| match a {
+            Analysis::Other { element, common } if element.name == type_name => {
+                Some((element, common))
+            }
+            _ => None,
+        })
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct MuscleAnalysisSetup {
     pub common: AnalysisCommon,

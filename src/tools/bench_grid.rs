@@ -632,7 +632,11 @@ pub fn write_chart(
         .iter()
         .enumerate()
         .map(|(k, r)| {
-            let zero = if r.max_dactivation == 0.0 { " (error 0)" } else { "" };
+            let zero = if r.max_dactivation == 0.0 {
+                " (error 0)"
+            } else {
+                ""
+            };
             format!("{}  {}{zero}", k + 1, r.choice)
         })
         .collect();
