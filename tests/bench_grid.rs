@@ -372,9 +372,7 @@ fn tx_states(setup_file: &Path) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (_, model) = statopt::tools::loading::load_model(&setup.model_file).unwrap();
     let file = setup.coordinates_file.clone().unwrap();
     let states = statopt::tools::analyze::load_states(&setup, &model).unwrap();
-    let udot = states
-        .speed_derivatives_with_degree(&file, setup.coordinate_spline)
-        .unwrap();
+    let udot = states.speed_derivatives(&file).unwrap();
     let u: Vec<f64> = states.u.iter().map(|r| r[0]).collect();
     let a: Vec<f64> = udot.iter().map(|r| r[0]).collect();
     let mut stream = statopt::tools::analyze::open_state_stream(&setup, &model).unwrap();

@@ -22,6 +22,8 @@ pub struct States {
     pub u: Vec<Vec<f64>>,
     /// Coordinates the table lacked (set to 0, as AnalyzeTool does).
     pub missing: Vec<String>,
+    /// Degree of the interpolating splines through q and u (5: OpenSim's).
+    pub spline_degree: usize,
 }
 
 impl States {
@@ -58,21 +60,15 @@ impl States {
             q,
             u,
             missing: splines.missing,
+            spline_degree: degree,
         })
     }
 
     /// Target accelerations for static optimization (§6.3): the derivative of
-    /// a quintic spline through each coordinate's speeds, at the rows.
+    /// a spline through each coordinate's speeds, at the rows (of the same
+    /// degree as the states' splines: quintic unless `<coordinate_spline>`).
     pub fn speed_derivatives(&self, file: &Path) -> Result<Vec<Vec<f64>>> {
-        self.speed_derivatives_with_degree(file, 5)
-    }
-
-    /// As [`speed_derivatives`](Self::speed_derivatives) with a spline of `degree`.
-    pub fn speed_derivatives_with_degree(
-        &self,
-        file: &Path,
-        degree: usize,
-    ) -> Result<Vec<Vec<f64>>> {
+        let degree = self.spline_degree;
         let n = self.time.len();
         let nq = self.q.first().map_or(0, |r| r.len());
         let mut udot = vec![vec![0.0; nq]; n];

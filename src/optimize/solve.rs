@@ -144,7 +144,6 @@ fn run_guarded(p: &FrameProblem, mode: Mode) -> (Vec<f64>, SolveStatus, u32) {
         .unwrap_or_else(|_| (vec![0.0; p.n_var()], SolveStatus::NumericalError, 0))
 }
 
-/// Builds and solves the conic program; returns (x, status, iterations).
 /// How [`run`] formulates and solves a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Mode {
@@ -157,6 +156,7 @@ enum Mode {
     Elastic,
 }
 
+/// Builds and solves the conic program; returns (x, status, iterations).
 fn run(p: &FrameProblem, mode: Mode) -> (Vec<f64>, SolveStatus, u32) {
     let elastic = mode == Mode::Elastic;
     let layout = Layout::new(p, elastic);

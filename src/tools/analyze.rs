@@ -94,7 +94,7 @@ pub fn open_state_stream<'m>(
     let file = coordinates_file(setup)?;
     if !setup.close_contacts.is_empty() {
         let states = load_states(setup, model)?;
-        let udot = states.speed_derivatives_with_degree(file, setup.coordinate_spline)?;
+        let udot = states.speed_derivatives(file)?;
         return Ok(StateStream::in_memory(
             model,
             states,
