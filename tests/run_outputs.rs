@@ -249,3 +249,88 @@ fn a_killed_run_leaves_readable_tables_and_log() {
     );
     assert!(count > 0, "no complete MCAP chunk survived");
 }
+
+/// The force file's labels stand over their own values when a force-set file
+/// adds an actuator after a passive force (it used to put every actuator's
+/// value first, so the header ended `spring_Force extra` over the values
+/// `extra spring_Force`), with reserves after the ForceSet.
+#[test]
+fn force_file_columns_match_their_values_with_a_passive_force_among_actuators() {
+    let spring = r#"<SpringGeneralizedForce name="spring"><coordinate>tx</coordinate><stiffness>50</stiffness><rest_length>0</rest_length><viscosity>0</viscosity></SpringGeneralizedForce>"#;
+    let dir = common::out_dir("outputs_force_columns");
+    std::fs::write(dir.join("block.osim"), common::block_model(spring)).unwrap();
+    // A coordinate actuator of optimal force 10 on tz added by a force-set file.
+    std::fs::write(
+        dir.join("extra.xml"),
+        r#"<OpenSimDocument Version="40000"><ForceSet name="extra"><objects><CoordinateActuator name="extra"><coordinate>tz</coordinate><optimal_force>10</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></CoordinateActuator></objects></ForceSet></OpenSimDocument>"#,
+    )
+    .unwrap();
+    // tx = 0.2 sin(t/2); tz = 0.1 t² (so the extra actuator carries m·0.2 = 2 N
+    // against the side actuator's share).
+    let mut mot =
+        "block\nversion=1\nnRows=31\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n"
+            .to_string();
+    for k in 0..31 {
+        let t = k as f64 * 0.01;
+        mot.push_str(&format!(
+            "{t:.6}\t{:.12}\t0\t{:.12}\n",
+            0.2 * (t * 0.5).sin(),
+            0.1 * t * t
+        ));
+    }
+    std::fs::write(dir.join("motion.mot"), mot).unwrap();
+    let setup = r#"<OpenSimDocument Version="40000"><AnalyzeTool name="block"><model_file>block.osim</model_file><replace_force_set>false</replace_force_set><force_set_files>extra.xml</force_set_files><results_directory>out</results_directory>
+<initial_time>0</initial_time><final_time>100000</final_time><output_precision>12</output_precision>
+<AnalysisSet name="Analyses"><objects><StaticOptimization name="SO"><reserve_actuators>1</reserve_actuators></StaticOptimization></objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#;
+    std::fs::write(dir.join("setup.xml"), setup).unwrap();
+    run(&dir.join("setup.xml"), RunOptions::default());
+    let forces = storage::read(&dir.join("out/block_SO_force.sto")).unwrap();
+    let act = storage::read(&dir.join("out/block_SO_activation.sto")).unwrap();
+    let motion = storage::read(&dir.join("motion.mot")).unwrap();
+    let labels: Vec<&str> = forces.labels.iter().map(String::as_str).collect();
+    assert_eq!(
+        labels,
+        [
+            "push",
+            "lift",
+            "side",
+            "spring_Force",
+            "extra",
+            "tx_reserve",
+            "ty_reserve",
+            "tz_reserve"
+        ],
+        "force file columns in ForceSet order, reserves last"
+    );
+    let col = |s: &storage::Storage, name: &str| s.column_index(name).unwrap();
+    let tx_col = col(&motion, "tx");
+    for (r, &t) in forces.time.iter().enumerate() {
+        let m = motion
+            .time
+            .iter()
+            .position(|&u| (u - t).abs() < 1e-9)
+            .unwrap();
+        // The spring's generalized force −k·tx, under its own label.
+        let spring = forces.rows[r][col(&forces, "spring_Force")];
+        let expect = -50.0 * motion.rows[m][tx_col];
+        assert!(
+            (spring - expect).abs() < 1e-9,
+            "t={t}: spring_Force {spring} vs -k·tx {expect}"
+        );
+        // Every actuator's force is its activation times its optimal force.
+        for (name, fopt) in [
+            ("push", 100.0),
+            ("side", 100.0),
+            ("extra", 10.0),
+            ("tz_reserve", 1.0),
+        ] {
+            let f = forces.rows[r][col(&forces, name)];
+            let a = act.rows[r][col(&act, name)];
+            assert!(
+                (f - a * fopt).abs() < 1e-9 * (1.0 + f.abs()),
+                "t={t}: {name} force {f} vs activation {a} x {fopt}"
+            );
+        }
+    }
+}

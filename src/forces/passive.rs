@@ -372,6 +372,16 @@ impl PassiveForce {
         }
     }
 
+    /// How many record columns the force has ([`Self::record_labels`]'s length).
+    pub fn record_size(&self) -> usize {
+        match self {
+            PassiveForce::CoordinateLimit { .. } => 2,
+            PassiveForce::PointToPointSpring { frame_names, .. } => 6 * frame_names.len(),
+            PassiveForce::ExpressionBasedCoordinate { .. }
+            | PassiveForce::SpringGeneralized { .. } => 1,
+        }
+    }
+
     /// Record values matching [`Self::record_labels`], at the state in `data`.
     pub fn record_values(&self, data: &Data, _t: f64) -> Vec<f64> {
         match self {

@@ -192,16 +192,45 @@ pub struct SoProblem {
     pub lower: Vec<f64>,
     pub upper: Vec<f64>,
     pub passive: Vec<PassiveForce>,
+    /// For each passive force, how many controls precede it in ForceSet
+    /// order: where its record columns stand in the force file.
+    pub passive_after: Vec<usize>,
     pub loads: Option<ExternalLoads>,
     /// Independent, unconstrained coordinates: the equations' rows.
     pub rows: Vec<usize>,
     pub settings: StaticOptimizationSetup,
-    /// Labels of the force file (ForceSet record labels, then external forces).
+    /// Labels of the force file: ForceSet record labels in ForceSet order
+    /// (see [`force_file_row`]), reserves, then external forces.
     pub force_labels: Vec<String>,
     /// Point-on-plane contacts; three multipliers each follow the controls.
     pub contacts: Vec<Contact>,
     /// The contact weight w0 of the current run.
     pub w0: f64,
+}
+
+/// The ForceSet part of a force-file row (labels or values): each control's
+/// entry, with the record entries of passive force `j` (`passive_sizes[j]` of
+/// them, concatenated in `passive`) placed after the first
+/// `passive_after[j]` controls, i.e. where the force stands in the ForceSet,
+/// as OpenSim's ForceReporter orders them. Controls added after the ForceSet
+/// (reserves) come last.
+pub fn force_file_row<T: Clone>(
+    controls: &[T],
+    passive: &[T],
+    passive_sizes: &[usize],
+    passive_after: &[usize],
+) -> Vec<T> {
+    let mut row = Vec::with_capacity(controls.len() + passive.len());
+    let mut next_control = 0;
+    let mut next_passive = 0;
+    for (&size, &after) in passive_sizes.iter().zip(passive_after) {
+        row.extend_from_slice(&controls[next_control..after]);
+        next_control = after;
+        row.extend_from_slice(&passive[next_passive..next_passive + size]);
+        next_passive += size;
+    }
+    row.extend_from_slice(&controls[next_control..]);
+    row
 }
 
 /// Result of one frame.
@@ -291,7 +320,7 @@ impl SoProblem {
         let mut lower = Vec::new();
         let mut upper = Vec::new();
         let mut passive = Vec::new();
-        let mut force_labels = Vec::new();
+        let mut passive_after = Vec::new();
         let mut contacts: Vec<Contact> = Vec::new();
         let muscles;
         if !so.use_model_force_set {
@@ -300,8 +329,7 @@ impl SoProblem {
             for &c in &rows {
                 let name = format!("{}_actuator", model.coordinates[c].name);
                 controls.push(Control::Actuator(free_coordinate_actuator(&name, c, 1.0)));
-                labels.push(name.clone());
-                force_labels.push(name);
+                labels.push(name);
                 lower.push(f64::NEG_INFINITY);
                 upper.push(f64::INFINITY);
             }
@@ -317,7 +345,6 @@ impl SoProblem {
                     let m = &muscles.muscles[next_muscle];
                     controls.push(Control::Muscle(next_muscle));
                     labels.push(m.muscle.name.clone());
-                    force_labels.push(m.muscle.name.clone());
                     lower.push(m.muscle.params.min_control);
                     upper.push(m.muscle.params.max_control);
                     next_muscle += 1;
@@ -326,7 +353,6 @@ impl SoProblem {
                     let a =
                         Actuator::from_xml(f, &model)?.ok_or_else(|| f.error("not an actuator"))?;
                     labels.push(a.name.clone());
-                    force_labels.push(a.name.clone());
                     lower.push(a.min_control);
                     upper.push(a.max_control);
                     controls.push(Control::Actuator(a));
@@ -341,7 +367,7 @@ impl SoProblem {
                 }
                 ForceKind::Other => match PassiveForce::from_xml(f, &model)? {
                     Some(p) => {
-                        force_labels.extend(p.record_labels());
+                        passive_after.push(controls.len());
                         passive.push(p);
                     }
                     None => {
@@ -363,10 +389,8 @@ impl SoProblem {
                     ));
                 }
                 controls.push(Control::Actuator(free_coordinate_actuator(&name, c, opt)));
-                // Reserve columns follow the ForceSet's actuators in both files.
-                let at = labels.len();
-                labels.insert(at, name.clone());
-                force_labels.insert(at, name);
+                // Reserve columns follow the ForceSet in both files.
+                labels.push(name);
                 lower.push(f64::NEG_INFINITY);
                 upper.push(f64::INFINITY);
             }
@@ -390,6 +414,10 @@ impl SoProblem {
             Some(p) => Some(ExternalLoads::load(p, setup_dir, &model)?),
             None => None,
         };
+        let passive_labels: Vec<String> = passive.iter().flat_map(|p| p.record_labels()).collect();
+        let passive_sizes: Vec<usize> = passive.iter().map(PassiveForce::record_size).collect();
+        let mut force_labels =
+            force_file_row(&labels, &passive_labels, &passive_sizes, &passive_after);
         if let Some(l) = &loads {
             for ef in &l.forces {
                 force_labels.extend(ef.labels.iter().cloned());
@@ -410,6 +438,7 @@ impl SoProblem {
                 lower,
                 upper,
                 passive,
+                passive_after,
                 loads,
                 rows,
                 settings: so.clone(),
@@ -811,8 +840,13 @@ impl SoProblem {
                 Control::Actuator(_) => None,
             })
             .collect();
-        let mut force_row = forces.clone();
-        force_row.extend(passive_values);
+        let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
+        let mut force_row = force_file_row(
+            &forces,
+            &passive_values,
+            &passive_sizes,
+            &self.passive_after,
+        );
         if let Some(l) = &self.loads {
             for ef in &l.forces {
                 let (f, p, tq) = ef.evaluate(t, data);
