@@ -521,7 +521,11 @@ fn unknown_force_type_is_named() {
 #[test]
 fn unknown_properties_warn_with_location() {
     let mut f = Files::analyze();
-    let line = f.replace("model.osim", "<mass>2.3</mass>", "<mas>2.3</mas>");
+    let line = f.replace(
+        "model.osim",
+        "<mass_center>0 -0.4 0</mass_center>",
+        "<mass_centre>0 -0.4 0</mass_centre>",
+    );
     let sline = f.replace(
         "setup.xml",
         "<activation_exponent>2</activation_exponent>",
@@ -532,7 +536,7 @@ fn unknown_properties_warn_with_location() {
     assert!(
         err.contains("model.osim")
             && err.contains("<Body name=\"upper\">")
-            && err.contains("unknown property <mas>")
+            && err.contains("unknown property <mass_centre>")
             && err.contains(&format!("(line {line})")),
         "{err}"
     );
@@ -709,5 +713,75 @@ proptest! {
         prop_assert_eq!(e.exit_code(), 2);
         let msg = e.to_string();
         prop_assert!(msg.contains("cut.mot"), "{}", msg);
+    }
+}
+
+/// statopt's own elements get the same check: a misspelled contact property
+/// used to be ignored without a word, so the run used the default friction.
+#[test]
+fn misspelled_contact_property_warns_with_location() {
+    for ty in ["PointOnPlaneContact", "ContactPointOnPlane"] {
+        let mut f = Files::analyze();
+        if ty != "PointOnPlaneContact" {
+            f.replace(
+                "contacts.xml",
+                "<PointOnPlaneContact name=\"tip\">",
+                &format!("<{ty} name=\"tip\">"),
+            );
+            f.replace(
+                "contacts.xml",
+                "</PointOnPlaneContact>",
+                &format!("</{ty}>"),
+            );
+        }
+        let line = f.replace(
+            "contacts.xml",
+            "<static_friction>0.8</static_friction>",
+            "<static_fricton>0.05</static_fricton>",
+        );
+        let (code, err) = run(&format!("misspelled_contact_{ty}"), &f, "setup.xml");
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            err.contains("contacts.xml")
+                && err.contains(&format!("<{ty} name=\"tip\">"))
+                && err.contains("unknown property <static_fricton>")
+                && err.contains(&format!("(line {line})")),
+            "{ty}: {err}"
+        );
+    }
+}
+
+/// OpenSim's own `<defaults>` block (in the stock gait2392 setups) and
+/// statopt's setup extensions are known: no "check its spelling" false alarm.
+#[test]
+fn defaults_block_and_statopt_setup_options_draw_no_warning() {
+    let mut f = Files::analyze();
+    f.replace(
+        "setup.xml",
+        "<model_file>model.osim</model_file>",
+        "<defaults><StaticOptimization name=\"default\"><on>true</on></StaticOptimization></defaults>\n<model_file>model.osim</model_file><reduce_model>false</reduce_model><coordinate_spline>gcv5</coordinate_spline>",
+    );
+    f.replace(
+        "setup.xml",
+        "<activation_exponent>2</activation_exponent>",
+        "<activation_exponent>2</activation_exponent><constraint_matrix>analytic</constraint_matrix><solver_tolerance>1e-8</solver_tolerance>",
+    );
+    let (code, err) = run("defaults_block", &f, "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("unknown property"), "{err}");
+}
+
+/// A Body without `<mass>` is refused, as OpenSim 4.6 refuses it
+/// ("unspecified or negative mass"); it used to run as massless.
+#[test]
+fn body_without_mass_is_refused() {
+    for (k, to) in [(0, ""), (1, "<mas>2.3</mas>")] {
+        let mut f = Files::analyze();
+        f.replace("model.osim", "<mass>2.3</mass>", to);
+        expect_input_error(
+            &format!("no_mass_{k}"),
+            run(&format!("no_mass_{k}"), &f, "setup.xml"),
+            &["model.osim", "<Body name=\"upper\">", "mass"],
+        );
     }
 }

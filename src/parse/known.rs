@@ -4,7 +4,7 @@
 //! silently ignores any other child element (checked with OpenSim 4.6: a
 //! `<frobnicate>` inside a `<Body>` loads without a message). statopt ignores
 //! them too, but warns, naming the file, the line and the element: a
-//! misspelled property (`<mas>` for `<mass>`) would otherwise silently fall
+//! misspelled property (`<mass_centre>` for `<mass_center>`) would otherwise silently fall
 //! back to its default.
 //!
 //! A child is known when its tag or its `name` attribute (OpenSim writes
@@ -12,7 +12,10 @@
 //! element type's properties ([`OPENSIM_PROPERTIES`], generated from OpenSim
 //! 4.6), or one of statopt's own extensions ([`STATOPT_PROPERTIES`]), or a
 //! property of an older document version that OpenSim still converts
-//! ([`LEGACY_PROPERTIES`]). Only element types in these tables are checked.
+//! ([`LEGACY_PROPERTIES`]). Element types statopt defines itself
+//! ([`STATOPT_ELEMENTS`], e.g. `PointOnPlaneContact`) are checked the same
+//! way, in models and in force-set files. Only element types in these tables
+//! are checked.
 
 use super::known_properties::OPENSIM_PROPERTIES;
 use crate::xml::Element;
@@ -21,7 +24,14 @@ use crate::xml::Element;
 pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
     (
         "AnalyzeTool",
-        &["artifact_files", "close_contacts", "Figure", "Metric"],
+        &[
+            "artifact_files",
+            "close_contacts",
+            "Figure",
+            "Metric",
+            "coordinate_spline",
+            "reduce_model",
+        ],
     ),
     ("InverseDynamicsTool", &["artifact_files"]),
     (
@@ -31,9 +41,41 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "friction_cone",
             "reserve_actuators",
             "passive_fiber_forces",
+            "constraint_matrix",
+            "solver_tolerance",
         ],
     ),
 ];
+
+/// Element types statopt defines, with every property it reads. Their
+/// unknown children are reported the same way as OpenSim elements'.
+pub const STATOPT_ELEMENTS: &[(&str, &[&str])] = &[
+    ("PointOnPlaneContact", CONTACT_PROPERTIES),
+    ("ContactPointOnPlane", CONTACT_PROPERTIES),
+];
+
+const CONTACT_PROPERTIES: &[&str] = &[
+    "point_body",
+    "socket_point_frame",
+    "point_location",
+    "plane_body",
+    "socket_plane_frame",
+    "plane_origin",
+    "plane_normal",
+    "static_friction",
+    "kinetic_friction",
+    "contact_tolerance",
+    "contact_transition_zone",
+    "v_trans",
+    "optimal_force",
+    "regime_blend",
+    "appliesForce",
+    "isDisabled",
+];
+
+/// Children OpenSim reads in any object it serialises: `<defaults>` holds
+/// default objects (OpenSim's stock setups, e.g. gait2392's, carry one).
+const ANY_ELEMENT: &[&str] = &["defaults"];
 
 /// Properties of older documents that OpenSim still reads and converts.
 pub const LEGACY_PROPERTIES: &[(&str, &[&str])] = &[
@@ -60,7 +102,7 @@ fn listed(table: &[(&str, &[&str])], ty: &str, child: &Element) -> bool {
 
 /// One warning per unknown property under `root` (elements of the types in
 /// the tables only), e.g. `m.osim, line 12, <Body name="upper">: unknown
-/// property <mas> ignored (OpenSim ignores it too)`.
+/// property <mass_centre> ignored (OpenSim ignores it too)`.
 pub fn unknown_properties(root: &Element) -> Vec<String> {
     let mut out = Vec::new();
     walk(root, &mut out);
@@ -69,14 +111,23 @@ pub fn unknown_properties(root: &Element) -> Vec<String> {
 
 fn walk(el: &Element, out: &mut Vec<String>) {
     let ty = el.name.as_str();
-    if OPENSIM_PROPERTIES.iter().any(|(t, _)| *t == ty) {
+    let opensim = OPENSIM_PROPERTIES.iter().any(|(t, _)| *t == ty);
+    let statopt = STATOPT_ELEMENTS.iter().any(|(t, _)| *t == ty);
+    if opensim || statopt {
         for c in &el.children {
             if !listed(OPENSIM_PROPERTIES, ty, c)
                 && !listed(STATOPT_PROPERTIES, ty, c)
                 && !listed(LEGACY_PROPERTIES, ty, c)
+                && !listed(STATOPT_ELEMENTS, ty, c)
+                && !ANY_ELEMENT.contains(&c.name.as_str())
             {
+                let why = if opensim {
+                    "ignored, as OpenSim ignores it"
+                } else {
+                    "ignored (its default applies)"
+                };
                 out.push(format!(
-                    "{}: unknown property <{}> (line {}) ignored, as OpenSim ignores it; check its spelling",
+                    "{}: unknown property <{}> (line {}) {why}; check its spelling",
                     el.loc(),
                     c.name,
                     c.line

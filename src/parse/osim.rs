@@ -287,7 +287,16 @@ fn collect_wraps(spec: &mut ModelSpec, body: &str, el: &Element) {
 }
 
 fn read_body(b: &Element, warnings: &mut Vec<String>) -> Result<BodySpec> {
-    let mass = b.child_f64_or("mass", 0.0)?;
+    // OpenSim's Body mass defaults to NaN and a model without one is refused
+    // ("unspecified or negative mass", Body::extendFinalizeFromProperties).
+    let mass = match b.child("mass") {
+        Some(m) => m.f64()?,
+        None => {
+            return Err(b.error(
+                "body has no <mass>: OpenSim 4.6 refuses a body with unspecified mass; give its mass in kg (0 for a massless body)",
+            ))
+        }
+    };
     let inertia = match b.child("inertia") {
         Some(i) if !i.text().is_empty() => {
             let v = i.numbers_n(6)?;

@@ -100,10 +100,14 @@ pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<
     } else {
         spec.forces.clone()
     };
-    for f in &setup.force_set_files {
-        forces.extend(crate::forces::read_force_set_file(f)?);
-    }
     let mut warnings = model.warnings.clone();
+    for f in &setup.force_set_files {
+        let members = crate::forces::read_force_set_file(f)?;
+        for m in &members {
+            warnings.extend(crate::parse::known::unknown_properties(m));
+        }
+        forces.extend(members);
+    }
     for (what, loc) in &spec.unsupported {
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));
     }
