@@ -704,10 +704,13 @@ proptest! {
     }
 
     /// Any cut of a legacy motion (nRows given) is an error naming the file.
+    /// Cuts inside the last value are left out: "0.00000000" cut to "0.0000"
+    /// is still a complete, valid file (a case proptest once found).
     #[test]
-    fn truncated_motion_is_located(frac in 0.0f64..0.999) {
+    fn truncated_motion_is_located(frac in 0.0f64..1.0) {
         let text = MOTION.trim_end();
-        let cut = (frac * text.len() as f64) as usize;
+        let last_value = text.rfind('\t').unwrap() + 1;
+        let cut = (frac * last_value as f64) as usize;
         let p = write_tmp("cut.mot", &text[..cut]);
         let e = statopt::storage::read(&p).unwrap_err();
         prop_assert_eq!(e.exit_code(), 2);
@@ -784,4 +787,101 @@ fn body_without_mass_is_refused() {
             &["model.osim", "<Body name=\"upper\">", "mass"],
         );
     }
+}
+
+/// Where OpenSim clamps or ignores silently, statopt says so; where the
+/// input would make the numbers meaningless, it refuses. Each case failed
+/// silently before (exit 0, nothing said).
+#[test]
+fn silent_clamps_are_said_out_loud() {
+    // (name, file, from, to, expected exit status, words the message holds)
+    let cases: &[(&str, &str, &str, &str, i32, &[&str])] = &[
+        (
+            "nyquist",
+            "setup.xml",
+            "<lowpass_cutoff_frequency_for_coordinates>-1</lowpass_cutoff_frequency_for_coordinates>",
+            "<lowpass_cutoff_frequency_for_coordinates>30</lowpass_cutoff_frequency_for_coordinates>",
+            0,
+            &["motion.mot", "30 Hz", "Nyquist", "25 Hz", "0.49 fs"],
+        ),
+        (
+            "final_time_past_data",
+            "setup.xml",
+            "<final_time>0.2</final_time>",
+            "<final_time>5</final_time>",
+            0,
+            &["setup.xml", "end time 5 is past the last time", "(2)"],
+        ),
+        (
+            "unmatched_column",
+            "motion.mot",
+            "time\tq1\tq2",
+            "time\tq1\tq2_typo",
+            0,
+            &["motion.mot", "1 column(s) match no coordinate", "q2_typo"],
+        ),
+        (
+            "mu_k_above_mu_s",
+            "contacts.xml",
+            "<kinetic_friction>0.5</kinetic_friction>",
+            "<kinetic_friction>0.9</kinetic_friction>",
+            0,
+            &["contacts.xml", "<PointOnPlaneContact name=\"tip\">", "kinetic_friction 0.9 exceeds static_friction 0.8"],
+        ),
+        (
+            "empty_contact_weight",
+            "setup.xml",
+            "<contact_weight>1</contact_weight>",
+            "<contact_weight/>",
+            2,
+            &["setup.xml", "<contact_weight>", "empty"],
+        ),
+        (
+            "tiny_contact_weight",
+            "setup.xml",
+            "<contact_weight>1</contact_weight>",
+            "<contact_weight>1e-300</contact_weight>",
+            2,
+            &["setup.xml", "<contact_weight>", "1e-300", "outside"],
+        ),
+        (
+            "near_duplicate_rows",
+            "motion.mot",
+            "0.0200\t1.88371559\t0.08879722",
+            "0.0000001\t0.00000001\t0.00000001",
+            2,
+            &["motion.mot", "near-duplicate", "1e-7"],
+        ),
+        (
+            "non_uniform_time",
+            "motion.mot",
+            "0.0200\t1.88371559\t0.08879722",
+            "0.0100\t0.94185779\t0.02219930",
+            0,
+            &["motion.mot", "not uniform", "0.01 s to 0.03"],
+        ),
+    ];
+    for (name, file, from, to, code, needles) in cases {
+        let mut f = Files::analyze();
+        f.replace(file, from, to);
+        let (got, err) = run(&format!("clamp_{name}"), &f, "setup.xml");
+        assert_eq!(got, *code, "{name}: exit status {got}:\n{err}");
+        for n in *needles {
+            assert!(err.contains(n), "{name}: message lacks '{n}':\n{err}");
+        }
+    }
+    // forces_to_exclude naming nothing (inverse dynamics).
+    let mut f = Files::inverse_dynamics();
+    f.replace(
+        "id_setup.xml",
+        "<forces_to_exclude>Muscles</forces_to_exclude>",
+        "<forces_to_exclude>Muscles elbow_sprng</forces_to_exclude>",
+    );
+    let (code, err) = run("clamp_forces_to_exclude", &f, "id_setup.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("forces_to_exclude: 'elbow_sprng' matches no force"),
+        "{err}"
+    );
+    assert!(!err.contains("'Muscles' matches no force"), "{err}");
 }

@@ -176,7 +176,21 @@ fn infeasible_frames_are_reported_per_frame_and_reserves_carry_the_exact_deficit
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    // Unsolved frames: every output written, exit status 3 (it was 0).
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    // --quiet silences progress and the summary, never the failures.
+    let quiet = std::process::Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join("setup.xml"))
+        .arg("-q")
+        .output()
+        .unwrap();
+    let quiet_err = String::from_utf8_lossy(&quiet.stderr);
+    assert_eq!(quiet.status.code(), Some(3), "{quiet_err}");
+    assert!(
+        quiet_err.contains("could not solve") && quiet_err.contains("case_SO_diagnostics.sto"),
+        "{quiet_err}"
+    );
+    assert!(!quiet_err.contains("warning:"), "{quiet_err}");
     let diag = read(&dir, "case_SO_diagnostics.sto");
     let src = read(&dir, "case_SO_GeneralizedForcesBySource.sto");
     let act = read(&dir, "case_SO_activation.sto");
@@ -219,6 +233,18 @@ fn infeasible_frames_are_reported_per_frame_and_reserves_carry_the_exact_deficit
     let line = format!("failed on {failed} of 21 frames");
     assert!(msg.contains(&line), "{msg}");
     assert!(stderr.contains(&line), "{stderr}");
+    assert_eq!((summary.solves, summary.failed), (21, failed));
+    assert!(
+        stderr.contains(&format!(
+            "{} of 21 frame problems solved, {failed} failed",
+            21 - failed
+        )),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("wrote "),
+        "one summary, not a line per file: {stderr}"
+    );
     println!("infeasible: {failed} of 21 frames reported (status -1), residual = F_req - F_max, peak deficit {:.3} N", req[20] - f_max);
 
     // Reserves: expensive (r0 = 1 N) and cheap (r0 = 50 N).
@@ -253,10 +279,19 @@ fn infeasible_frames_are_reported_per_frame_and_reserves_carry_the_exact_deficit
         }
         println!("reserves r0 = {r0} N: worst deviation from the KKT optimum {worst:.2e} N; peak reserve {:.4} N", reserve[20]);
         assert!(worst < 1e-5, "r0 {r0}: reserve split off by {worst} N");
+        let (peak, _) = summary
+            .reserve_peak
+            .clone()
+            .expect("the run reports what reserves carried");
+        assert!(
+            (peak - reserve[20].abs()).abs() < 1e-6 * (1.0 + peak),
+            "reported {peak} vs table {}",
+            reserve[20]
+        );
         assert!(summary
-            .warnings
+            .report()
             .iter()
-            .any(|w| w.contains("reserve actuators carried at most")));
+            .any(|l| l.contains("reserve actuators carried at most")));
     }
 }
 

@@ -5,7 +5,8 @@
 //! write a minimum-jerk motion.
 //!
 //! Exit status: 0 success, 2 bad input (a file, element or option is wrong),
-//! 1 internal failure.
+//! 3 some frames could not be solved (every output is written; see the
+//! diagnostics table), 1 internal failure.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -24,7 +25,8 @@ use statopt::tools::{self, bench, bench_grid, RunOptions};
     long_about = "Reads one XML setup file (OpenSim InverseDynamicsTool / AnalyzeTool style), runs the tool it \
 describes, and writes OpenSim .sto tables. Paths inside the setup are relative to the setup file's folder, \
 as in OpenSim.\n\nExit status: 0 on success, 2 when the input is wrong (the message names the file, element \
-and line), 1 on an internal failure."
+and line), 3 when some frames could not be solved (every output is still written; the diagnostics table \
+says which), 1 on an internal failure."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -47,7 +49,7 @@ struct RunArgs {
     /// Worker threads for the per-frame work (default: all cores). Results do not depend on it.
     #[arg(short = 'j', long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     threads: Option<u16>,
-    /// Print nothing but errors.
+    /// Print nothing but errors (unsolved frames are always said).
     #[arg(short, long)]
     quiet: bool,
     /// Run static optimization on the model reduced to what the motion needs
@@ -383,15 +385,26 @@ fn main() -> ExitCode {
         None => match run_setup(&cli.run) {
             Ok(summary) => {
                 if !cli.run.quiet {
-                    for w in &summary.warnings {
+                    // Analyses of one setup share the motion: say each thing once.
+                    let mut said = std::collections::HashSet::new();
+                    for w in summary.warnings.iter().filter(|w| said.insert(w.as_str())) {
                         eprintln!("warning: {w}");
                     }
-                    eprintln!("{} frames", summary.frames);
-                    for f in &summary.files {
-                        eprintln!("wrote {}", f.display());
+                    for n in &summary.notes {
+                        eprintln!("{n}");
+                    }
+                    for line in summary.report() {
+                        eprintln!("{line}");
                     }
                 }
-                ExitCode::SUCCESS
+                // Failures are said even with --quiet.
+                match summary.failure_line() {
+                    Some(line) => {
+                        eprintln!("error: {line}");
+                        ExitCode::from(tools::EXIT_FRAMES_FAILED)
+                    }
+                    None => ExitCode::SUCCESS,
+                }
             }
             Err(e) => fail(e),
         },

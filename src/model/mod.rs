@@ -182,6 +182,14 @@ impl Model {
     pub fn body_index(&self, name: &str) -> Option<usize> {
         self.bodies.iter().position(|b| b.name == name)
     }
+    /// Whether coordinate `c` belongs to a root joint: a joint on ground
+    /// with three or more coordinates (a person's pelvis), not a one-axis
+    /// machine joint. Residual actuators act there.
+    pub fn is_root_coordinate(&self, c: usize) -> bool {
+        let b = self.coordinates[c].body;
+        let j = &self.joints[b];
+        j.parent_body == 0 && j.nq >= 3
+    }
     pub fn coordinate_index(&self, name: &str) -> Option<usize> {
         self.coordinates.iter().position(|c| c.name == name)
     }

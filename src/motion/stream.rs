@@ -78,6 +78,11 @@ pub struct StateStream<'m> {
     labels: Vec<String>,
     /// Coordinates the table lacks (set to 0, as AnalyzeTool does).
     pub missing: Vec<String>,
+    /// What [`super::checks::time_warnings`] says about the file, and the
+    /// requested time range (see [`Self::motion_warnings`]).
+    pub warnings: Vec<String>,
+    /// The file's columns that name no coordinate of the model.
+    pub unmatched_columns: Vec<String>,
     /// Rows of the whole states table and its first and last times.
     pub rows: usize,
     pub first_time: f64,
@@ -102,6 +107,23 @@ pub struct StateStream<'m> {
 }
 
 impl<'m> StateStream<'m> {
+    /// Everything to say about the motion file: its time column, the time
+    /// range asked for, and columns that match no coordinate (but for
+    /// `known`, e.g. coordinates a model reduction removed).
+    pub fn motion_warnings(&self, known: &[String]) -> Vec<String> {
+        let unmatched: Vec<String> = self
+            .unmatched_columns
+            .iter()
+            .filter(|c| !known.contains(c))
+            .cloned()
+            .collect();
+        let mut out = self.warnings.clone();
+        out.extend(super::checks::unmatched_columns_warning(
+            &self.file, &unmatched,
+        ));
+        out
+    }
+
     /// Open the coordinates `file` for the model; `cutoff` < 0 means no
     /// filtering; rows from `findIndex(initial)` to `findIndex(final)` are
     /// produced.
@@ -156,6 +178,8 @@ impl<'m> StateStream<'m> {
             .iter()
             .map(|&j| reader.table.labels[j].clone())
             .collect();
+        let all_labels = reader.table.labels.clone();
+        let mut steps = super::checks::TimeSteps::default();
         let filtering = cutoff >= 0.0;
         let ctx = |e: Error| e.context(format!("filtering {}", file.display()));
 
@@ -163,6 +187,7 @@ impl<'m> StateStream<'m> {
         let in_degrees = reader.table.in_degrees;
         drop(reader);
         let mut check = |k: usize, t: f64, picked: &[f64]| -> Result<()> {
+            steps.push(t);
             // wrong units: values far outside a coordinate's range
             for (c, cc) in model.coordinates.iter().zip(&coord_cols) {
                 if let Some((pos, scale)) = *cc {
@@ -176,6 +201,8 @@ impl<'m> StateStream<'m> {
             Ok(())
         };
         let index = index_file(file, &sel, &mut check)?;
+        let warnings = super::checks::time_warnings(file, &steps, cutoff)?;
+        let unmatched_columns = super::checks::unmatched_columns(model, &all_labels);
         let (n, t0, tl) = (index.n, index.first.0, index.last.0);
         let p = if filtering && n >= 1 { n / 2 } else { 0 };
         let m = n + 2 * p;
@@ -365,6 +392,8 @@ impl<'m> StateStream<'m> {
             coord_cols,
             labels,
             missing,
+            warnings,
+            unmatched_columns,
             rows,
             first_time,
             last_time,
@@ -417,6 +446,8 @@ impl<'m> StateStream<'m> {
             coord_cols: Vec::new(),
             labels: Vec::new(),
             missing: states.missing,
+            warnings: Vec::new(),
+            unmatched_columns: Vec::new(),
             rows,
             first_time,
             last_time,

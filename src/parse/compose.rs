@@ -180,6 +180,7 @@ pub fn merge(base: ModelSpec, artifact: ModelSpec) -> Result<ModelSpec> {
     out.frames.extend(artifact.frames);
     out.couplers.extend(artifact.couplers);
     out.forces.extend(artifact.forces);
+    out.force_groups.extend(artifact.force_groups);
     out.wrap_objects.extend(artifact.wrap_objects);
     out.unsupported.extend(artifact.unsupported);
     out.warnings.extend(

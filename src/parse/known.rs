@@ -105,13 +105,23 @@ fn listed(table: &[(&str, &[&str])], ty: &str, child: &Element) -> bool {
 /// property <mass_centre> ignored (OpenSim ignores it too)`.
 pub fn unknown_properties(root: &Element) -> Vec<String> {
     let mut out = Vec::new();
-    walk(root, &mut out);
+    walk(root, true, &mut out);
     out
 }
 
-fn walk(el: &Element, out: &mut Vec<String>) {
+/// [`unknown_properties`] for an element of a document of OpenSim version
+/// `version`: OpenSim's element types are checked only in 4.0 documents
+/// (40000 and later; older ones carry properties OpenSim converts), statopt's
+/// own element types always.
+pub fn unknown_properties_in_version(root: &Element, version: Option<u32>) -> Vec<String> {
+    let mut out = Vec::new();
+    walk(root, version.is_some_and(|v| v >= 40000), &mut out);
+    out
+}
+
+fn walk(el: &Element, check_opensim: bool, out: &mut Vec<String>) {
     let ty = el.name.as_str();
-    let opensim = OPENSIM_PROPERTIES.iter().any(|(t, _)| *t == ty);
+    let opensim = check_opensim && OPENSIM_PROPERTIES.iter().any(|(t, _)| *t == ty);
     let statopt = STATOPT_ELEMENTS.iter().any(|(t, _)| *t == ty);
     if opensim || statopt {
         for c in &el.children {
@@ -136,6 +146,6 @@ fn walk(el: &Element, out: &mut Vec<String>) {
         }
     }
     for c in &el.children {
-        walk(c, out);
+        walk(c, check_opensim, out);
     }
 }

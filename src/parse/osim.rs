@@ -40,6 +40,8 @@ pub struct ModelSpec {
     /// Force elements (muscles, actuators, contacts, ...) kept as XML for the
     /// modules that read them.
     pub forces: Vec<Element>,
+    /// Names of the ForceSet's groups (`<groups><ObjectGroup name=...>`).
+    pub force_groups: Vec<String>,
     /// Wrap objects per body (and ground), kept as XML.
     pub wrap_objects: Vec<(String, Element)>,
     /// Elements that may affect dynamics but that this reader does not support.
@@ -175,6 +177,7 @@ impl ModelSpec {
             frames: Vec::new(),
             couplers: Vec::new(),
             forces: Vec::new(),
+            force_groups: Vec::new(),
             wrap_objects: Vec::new(),
             unsupported: Vec::new(),
             warnings: Vec::new(),
@@ -235,6 +238,10 @@ fn read_40(spec: &mut ModelSpec, model: &Element) -> Result<()> {
             "ForceSet" => {
                 for f in objects(child) {
                     spec.forces.push(f.clone());
+                }
+                if let Some(groups) = child.child("groups") {
+                    spec.force_groups
+                        .extend(groups.children.iter().map(|g| g.name_attr().to_string()));
                 }
             }
             "components" | "ComponentSet" => {
@@ -590,6 +597,10 @@ fn read_3x(spec: &mut ModelSpec, model: &Element) -> Result<()> {
             "ForceSet" => {
                 for f in objects(child) {
                     spec.forces.push(f.clone());
+                }
+                if let Some(groups) = child.child("groups") {
+                    spec.force_groups
+                        .extend(groups.children.iter().map(|g| g.name_attr().to_string()));
                 }
             }
             "BodySet" | "gravity" => {}

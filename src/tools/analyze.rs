@@ -92,26 +92,40 @@ pub fn open_state_stream<'m>(
     model: &'m crate::model::Model,
 ) -> Result<StateStream<'m>> {
     let file = coordinates_file(setup)?;
-    if !setup.close_contacts.is_empty() {
+    let mut stream = if !setup.close_contacts.is_empty() {
         let states = load_states(setup, model)?;
         let udot = states.speed_derivatives(file)?;
-        return Ok(StateStream::in_memory(
+        let mut stream =
+            StateStream::in_memory(model, states, udot, setup.initial_time, setup.final_time);
+        let raw = crate::storage::read(file)?;
+        stream.warnings = crate::motion::checks::time_warnings(
+            file,
+            &crate::motion::checks::TimeSteps::of(&raw.time),
+            setup.lowpass_cutoff,
+        )?;
+        stream.unmatched_columns = crate::motion::checks::unmatched_columns(model, &raw.labels);
+        stream
+    } else {
+        let stream = StateStream::open(
             model,
-            states,
-            udot,
+            file,
+            setup.lowpass_cutoff,
             setup.initial_time,
             setup.final_time,
-        ));
-    }
-    let stream = StateStream::open(
-        model,
+        )?
+        .with_spline_degree(setup.coordinate_spline);
+        check_time_range(setup, file, stream.first_time, stream.last_time)?;
+        stream
+    };
+    let range = crate::motion::checks::time_range_warnings(
+        &setup.setup_file,
         file,
-        setup.lowpass_cutoff,
         setup.initial_time,
         setup.final_time,
-    )?
-    .with_spline_degree(setup.coordinate_spline);
-    check_time_range(setup, file, stream.first_time, stream.last_time)?;
+        stream.first_time,
+        stream.last_time,
+    );
+    stream.warnings.extend(range);
     Ok(stream)
 }
 
@@ -193,25 +207,18 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
         match a {
             Analysis::MuscleAnalysis(m) => {
                 let s = muscle_analysis::run(setup, m, opts)?;
-                summary.frames = summary.frames.max(s.frames);
-                summary.files.extend(s.files);
-                summary.warnings.extend(s.warnings);
+                summary.absorb(s, None);
             }
             Analysis::Other { element, common } if element.name == "StaticOptimization" => {
                 let s = static_optimization::run(setup, element, common, &coupled, opts)?;
-                summary.loop_seconds += s.loop_seconds;
-                summary.frames = summary.frames.max(s.frames);
-                summary.files.extend(s.files);
-                summary.warnings.extend(s.warnings);
+                summary.absorb(s, None);
             }
             Analysis::Other { element, common } if element.name == "JointReaction" => {
                 if coupled.iter().any(|jr| jr.common.name == common.name) {
                     continue; // computed inside static optimization
                 }
                 let s = joint_reaction::run(setup, element, common, opts)?;
-                summary.frames = summary.frames.max(s.frames);
-                summary.files.extend(s.files);
-                summary.warnings.extend(s.warnings);
+                summary.absorb(s, None);
             }
             Analysis::Other { element, .. } => {
                 return Err(element.error(format!(

@@ -12,7 +12,7 @@ use crate::parse::osim::ModelSpec;
 use crate::parse::setup::InverseDynamicsSetup;
 use crate::storage::StoWriter;
 use crate::tools::loading::{
-    applies_force, force_kind, load_composed_model, load_coordinates, ForceKind,
+    applies_force, filter_coordinates, force_kind, load_composed_model, ForceKind,
 };
 use crate::tools::{RunOptions, RunSummary};
 
@@ -37,8 +37,19 @@ pub fn labels(model: &Model) -> Vec<String> {
 
 /// Check which model forces remain after `forces_to_exclude` and refuse those
 /// this tool cannot evaluate. Returns whether external loads stay included.
-fn check_forces(spec: &ModelSpec, exclude: &[String]) -> Result<bool> {
+fn check_forces(spec: &ModelSpec, exclude: &[String], warnings: &mut Vec<String>) -> Result<bool> {
     let upper: Vec<String> = exclude.iter().map(|s| s.to_uppercase()).collect();
+    // OpenSim: "could not find Force or ForceSet group named ... to be excluded".
+    for name in exclude {
+        let known = ["ALL", "MUSCLES", "ACTUATORS"].contains(&name.to_uppercase().as_str())
+            || spec.forces.iter().any(|f| f.name_attr() == name)
+            || spec.force_groups.iter().any(|g| g == name);
+        if !known {
+            warnings.push(format!(
+                "forces_to_exclude: '{name}' matches no force and no ForceSet group of the model (nor All, Muscles, Actuators), so it excludes nothing; check its spelling"
+            ));
+        }
+    }
     if upper.iter().any(|s| s == "ALL") {
         return Ok(false);
     }
@@ -80,7 +91,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     for (what, loc) in &spec.unsupported {
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));
     }
-    let use_loads = check_forces(&spec, &setup.forces_to_exclude)?;
+    let use_loads = check_forces(&spec, &setup.forces_to_exclude, &mut warnings)?;
     let setup_dir = setup
         .setup_file
         .parent()
@@ -89,7 +100,25 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
         _ => None,
     };
-    let table = load_coordinates(&setup.coordinates_file, setup.lowpass_cutoff)?;
+    let raw = crate::storage::read(&setup.coordinates_file)?;
+    warnings.extend(crate::motion::checks::motion_warnings(
+        &model,
+        &setup.coordinates_file,
+        &raw.labels,
+        &crate::motion::checks::TimeSteps::of(&raw.time),
+        setup.lowpass_cutoff,
+    )?);
+    if let (Some(&first), Some(&last)) = (raw.time.first(), raw.time.last()) {
+        warnings.extend(crate::motion::checks::time_range_warnings(
+            &setup.setup_file,
+            &setup.coordinates_file,
+            setup.time_range.0,
+            setup.time_range.1,
+            first,
+            last,
+        ));
+    }
+    let table = filter_coordinates(raw, &setup.coordinates_file, setup.lowpass_cutoff)?;
     let splines = CoordinateSplines::new(
         &model,
         &table,
@@ -143,6 +172,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     writer.finish()?;
     Ok(RunSummary {
         frames: i1 + 1 - i0,
+        results_dirs: vec![dir.clone()],
         files: vec![out],
         warnings,
         ..Default::default()

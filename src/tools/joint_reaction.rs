@@ -684,6 +684,7 @@ pub fn run(
     let (problem, mut warnings) = JointReactionProblem::build(setup, &jr)?;
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_state_stream(setup, &problem.model)?;
+    warnings.extend(stream.motion_warnings(&[]));
     if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
@@ -739,9 +740,11 @@ pub fn run(
     w.finish()?;
     Ok(RunSummary {
         frames: nframes,
+        results_dirs: path.parent().map(|d| d.to_path_buf()).into_iter().collect(),
         files: vec![path],
         warnings,
         loop_seconds: start.elapsed().as_secs_f64(),
+        ..Default::default()
     })
 }
 

@@ -29,7 +29,11 @@ pub fn load_composed_model(path: &Path, artifact_files: &[PathBuf]) -> Result<(M
 /// Read a coordinates file and, with a non-negative cutoff, pad it by half its
 /// length and low-pass filter it as OpenSim's tools do (§9.2).
 pub fn load_coordinates(path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
-    let mut table = storage::read(path)?;
+    filter_coordinates(storage::read(path)?, path, lowpass_cutoff)
+}
+
+/// [`load_coordinates`] on a table already read from `path`.
+pub fn filter_coordinates(mut table: Storage, path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
     if lowpass_cutoff >= 0.0 {
         let n = table.time.len() / 2;
         filter::pad(&mut table, n);
@@ -102,9 +106,13 @@ pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<
     };
     let mut warnings = model.warnings.clone();
     for f in &setup.force_set_files {
-        let members = crate::forces::read_force_set_file(f)?;
+        let root = crate::xml::parse_file(f)?;
+        let members = crate::forces::force_set_members(&root)?;
+        let version = root.attr("Version").and_then(|v| v.trim().parse().ok());
         for m in &members {
-            warnings.extend(crate::parse::known::unknown_properties(m));
+            warnings.extend(crate::parse::known::unknown_properties_in_version(
+                m, version,
+            ));
         }
         forces.extend(members);
     }

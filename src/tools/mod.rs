@@ -33,9 +33,133 @@ pub struct RunOptions {
 /// What a run produced.
 #[derive(Debug, Clone, Default)]
 pub struct RunSummary {
+    /// Motion frames analysed (the most of any analysis of the run).
     pub frames: usize,
     pub files: Vec<PathBuf>,
     pub warnings: Vec<String>,
     /// Wall time of the per-frame loop (solving and writing), seconds.
     pub loop_seconds: f64,
+    /// Static-optimization frame problems of the run, every w0 and setup
+    /// counted, and how many of them the optimiser could not solve.
+    pub solves: usize,
+    pub failed: usize,
+    /// The first unsolved frame and where its diagnostics are.
+    pub first_failure: Option<String>,
+    /// Largest equation-of-motion residual of a solved frame (N or N·m).
+    pub worst_residual: f64,
+    /// What reserve actuators carried at most (N or N·m) and where.
+    pub reserve_peak: Option<(f64, String)>,
+    /// What non-muscle actuators (residuals) supplied at most on the root
+    /// joint's coordinates: force (N) and moment (N·m), with where.
+    pub root_force_peak: Option<(f64, String)>,
+    pub root_moment_peak: Option<(f64, String)>,
+    /// Information lines (timings), not warnings.
+    pub notes: Vec<String>,
+    /// Folders the outputs went to.
+    pub results_dirs: Vec<PathBuf>,
+}
+
+/// Exit status of a run in which some frames could not be solved (the
+/// outputs are complete; those rows hold the solver's best point).
+pub const EXIT_FRAMES_FAILED: u8 = 3;
+
+fn keep_max(a: &mut Option<(f64, String)>, b: Option<(f64, String)>) {
+    if let Some(b) = b {
+        if a.as_ref().is_none_or(|a| b.0 > a.0) {
+            *a = Some(b);
+        }
+    }
+}
+
+impl RunSummary {
+    /// Add another run's summary (an analysis of the same setup, a w0 of a
+    /// sweep, a setup of a study); its warnings get `label` in front.
+    pub fn absorb(&mut self, other: RunSummary, label: Option<&str>) {
+        self.frames = self.frames.max(other.frames);
+        self.files.extend(other.files);
+        self.warnings
+            .extend(other.warnings.into_iter().map(|w| match label {
+                Some(l) => format!("{l}: {w}"),
+                None => w,
+            }));
+        self.loop_seconds += other.loop_seconds;
+        self.solves += other.solves;
+        self.failed += other.failed;
+        if self.first_failure.is_none() {
+            self.first_failure = other.first_failure.map(|f| match label {
+                Some(l) => format!("{l}: {f}"),
+                None => f,
+            });
+        }
+        self.worst_residual = self.worst_residual.max(other.worst_residual);
+        keep_max(&mut self.reserve_peak, other.reserve_peak);
+        keep_max(&mut self.root_force_peak, other.root_force_peak);
+        keep_max(&mut self.root_moment_peak, other.root_moment_peak);
+        self.notes.extend(other.notes);
+        for d in other.results_dirs {
+            if !self.results_dirs.contains(&d) {
+                self.results_dirs.push(d);
+            }
+        }
+    }
+
+    /// The lines that end a run: frames, solves and failures, the worst
+    /// residual, what reserves and root residuals carried, where the
+    /// outputs are.
+    pub fn report(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut first = format!("{} frames", self.frames);
+        if self.solves > 0 {
+            first.push_str(&format!(
+                "; static optimization: {} of {} frame problems solved, {} failed; worst equation residual of a solved frame {:.3e} (N or N m)",
+                self.solves - self.failed,
+                self.solves,
+                self.failed,
+                self.worst_residual
+            ));
+        }
+        out.push(first);
+        if let Some((v, at)) = &self.reserve_peak {
+            out.push(format!(
+                "reserve actuators carried at most {v:.6} (N or N m), {at}"
+            ));
+        }
+        if let Some((v, at)) = &self.root_force_peak {
+            out.push(format!(
+                "residual actuators on the root joint carried at most {v:.3} N, {at}"
+            ));
+        }
+        if let Some((v, at)) = &self.root_moment_peak {
+            out.push(format!(
+                "residual actuators on the root joint carried at most {v:.3} N m, {at}"
+            ));
+        }
+        let dirs: Vec<String> = self
+            .results_dirs
+            .iter()
+            .map(|d| d.display().to_string())
+            .collect();
+        out.push(format!(
+            "{} files written to {}",
+            self.files.len(),
+            if dirs.is_empty() {
+                "-".to_string()
+            } else {
+                dirs.join(", ")
+            }
+        ));
+        out
+    }
+
+    /// The line that says frames failed, if any (printed even with --quiet).
+    pub fn failure_line(&self) -> Option<String> {
+        (self.failed > 0).then(|| {
+            format!(
+                "static optimization could not solve {} of {} frame problems (first: {}); their rows hold the solver's best point; exit status {EXIT_FRAMES_FAILED}",
+                self.failed,
+                self.solves,
+                self.first_failure.as_deref().unwrap_or("?")
+            )
+        })
+    }
 }

@@ -37,6 +37,7 @@ pub fn run(
     let set = MuscleSet::compile(&spec, &forces, &model)?;
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_state_stream(setup, &model)?;
+    warnings.extend(stream.motion_warnings(&[]));
     if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
@@ -161,6 +162,7 @@ pub fn run(
     }
     Ok(RunSummary {
         frames: nframes,
+        results_dirs: vec![dir],
         files,
         warnings,
         ..Default::default()

@@ -111,14 +111,25 @@ impl StaticOptimizationSetup {
             max_iterations: max_iter as u32,
             passive_fiber_forces: el.child_bool_or("passive_fiber_forces", false)?,
             contact_weights: match el.child("contact_weight") {
-                Some(w) if !w.text().is_empty() => {
+                Some(w) if w.text().trim().is_empty() => {
+                    return Err(w.error(format!(
+                        "contact_weight is empty: give w0 (one or more positive numbers), or leave the element out for the default {DEFAULT_CONTACT_WEIGHT}"
+                    )))
+                }
+                Some(w) => {
                     let v = w.numbers()?;
                     if v.is_empty() || v.iter().any(|x| !(*x > 0.0 && x.is_finite())) {
                         return Err(w.error(format!("contact_weight must be one or more positive numbers, found '{}'", w.text())));
                     }
+                    if let Some(x) = v.iter().find(|x| !(CONTACT_WEIGHT_RANGE.0..=CONTACT_WEIGHT_RANGE.1).contains(*x)) {
+                        return Err(w.error(format!(
+                            "contact_weight {x:e} lies outside [{:e}, {:e}]: the objective weighs contacts by 1/w0, and past these bounds one term no longer counts in double precision (the answer saturates long before: beyond w0 = 1e4 contacts carry more than 99.99 %, below 1e-4 muscles do)",
+                            CONTACT_WEIGHT_RANGE.0, CONTACT_WEIGHT_RANGE.1
+                        )));
+                    }
                     v
                 }
-                _ => vec![1000.0],
+                None => vec![DEFAULT_CONTACT_WEIGHT],
             },
             friction: match el.child("friction_cone") {
                 Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
@@ -181,6 +192,13 @@ fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -
         type_name: "CoordinateActuator".into(),
     }
 }
+
+/// w0 when a StaticOptimization has no `<contact_weight>`.
+pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;
+
+/// The w0 statopt accepts: 1/w0 and w0 times a unit multiplier stay within
+/// ten decades of the activations' scale either way.
+pub const CONTACT_WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
 
 /// Everything a frame needs, compiled once.
 pub struct SoProblem {
@@ -359,6 +377,14 @@ impl SoProblem {
                 }
                 ForceKind::Contact => {
                     if let Some(c) = Contact::from_xml(f, &model)? {
+                        if c.mu_k > c.mu_s {
+                            warnings.push(format!(
+                                "{}: kinetic_friction {} exceeds static_friction {}; Coulomb's law allows it, but sliding usually needs less force than breaking away: check the two values",
+                                f.loc(),
+                                c.mu_k,
+                                c.mu_s
+                            ));
+                        }
                         if contacts.iter().any(|x: &Contact| x.name == c.name) {
                             return Err(f.error(format!("two contacts are named '{}'", c.name)));
                         }
@@ -916,6 +942,12 @@ pub fn run(
     // flat however long the trial. Opened here for the checks, the missing
     // coordinates and the frame count; each run below streams them again.
     let stream = open_state_stream(setup, &problem.model)?;
+    // Columns of coordinates a reduction removed are not the user's typos.
+    let dropped = reduction
+        .as_ref()
+        .map(|r| r.coordinates_dropped.clone())
+        .unwrap_or_default();
+    warnings.extend(stream.motion_warnings(&dropped));
     if !stream.missing.is_empty() {
         warnings.push(format!(
             "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
@@ -970,15 +1002,8 @@ pub fn run(
             .map(|(n, s)| (jr_prefix(n), s.as_slice()))
             .collect();
         let s = run_once(&problem, setup, step_interval, &dir, &prefix, &jr, opts)?;
-        summary.files.extend(s.files);
-        summary.loop_seconds += s.loop_seconds;
-        summary.warnings.extend(s.warnings.into_iter().map(|w| {
-            if sweep {
-                format!("w0 = {w0}: {w}")
-            } else {
-                w
-            }
-        }));
+        let label = format!("w0 = {w0}");
+        summary.absorb(s, sweep.then_some(label.as_str()));
         prefixes.push(prefix);
     }
     if sweep {
@@ -1251,6 +1276,27 @@ fn run_once(
         .map(|(i, _)| i)
         .collect();
     let mut reserve_peak = (0.0f64, String::new());
+    let mut worst_residual = 0.0f64;
+    // Rows of the root joint's coordinates (a joint on ground with three or
+    // more coordinates: a person's pelvis, not a machine's lever), with
+    // whether they translate; what residual actuators supplied there.
+    let root_rows: Vec<(usize, bool)> = problem
+        .rows
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| problem.model.is_root_coordinate(c))
+        .map(|(k, &c)| {
+            (
+                k,
+                problem.model.coordinates[c].motion_type == crate::model::MotionType::Translational,
+            )
+        })
+        .collect();
+    let root_names: Vec<String> = root_rows
+        .iter()
+        .map(|&(k, _)| problem.model.coordinates[problem.rows[k]].name.clone())
+        .collect();
+    let mut root_peaks: [Option<(f64, String)>; 2] = [None, None];
     let nv = problem.controls.len();
     // Actuators saturated at a finite upper bound: reported, never silent.
     let mut at_bound: Vec<(String, usize, f64)> = Vec::new();
@@ -1309,6 +1355,16 @@ fn run_once(
                     "t={}: {:?}, equation residual {:.3e}",
                     r.time, r.solution.status, r.solution.eq_residual
                 ));
+            } else {
+                worst_residual = worst_residual.max(r.solution.eq_residual);
+            }
+            for (k, &(row, translational)) in root_rows.iter().enumerate() {
+                // by_source holds, per row: required, muscles, actuators, contacts.
+                let v = r.by_source[4 * row + 2].abs();
+                let peak = &mut root_peaks[usize::from(!translational)];
+                if v > peak.as_ref().map_or(0.0, |p| p.0) {
+                    *peak = Some((v, format!("{} at t={}", root_names[k], r.time)));
+                }
             }
             for v in 0..nv {
                 let up = problem.upper[v];
@@ -1388,30 +1444,27 @@ fn run_once(
             list.join(", ")
         ));
     }
-    if !reserve_vars.is_empty() {
-        warnings.push(format!(
-            "reserve actuators carried at most {:.6} (N or N m){}",
-            reserve_peak.0,
-            if reserve_peak.1.is_empty() {
-                String::new()
-            } else {
-                format!(", {}", reserve_peak.1)
-            }
-        ));
-    }
-    if opts.verbose {
-        warnings.push(format!(
-            "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
-            nframes,
-            loop_seconds,
-            nframes as f64 / loop_seconds.max(1e-12)
-        ));
-    }
     Ok(RunSummary {
         frames: nframes,
         files,
         warnings,
         loop_seconds,
+        solves: nframes,
+        failed: failures.len(),
+        first_failure: failures
+            .first()
+            .map(|f| format!("{f}; see {}", diag_path.display())),
+        worst_residual,
+        reserve_peak: (!reserve_vars.is_empty()).then_some(reserve_peak),
+        root_force_peak: root_peaks[0].clone(),
+        root_moment_peak: root_peaks[1].clone(),
+        notes: vec![format!(
+            "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
+            nframes,
+            loop_seconds,
+            nframes as f64 / loop_seconds.max(1e-12)
+        )],
+        results_dirs: vec![dir.to_path_buf()],
     })
 }
 

@@ -216,12 +216,7 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             Setup::Analyze(a) => analyze::run(&a, &run_opts)?,
             Setup::InverseDynamics(i) => inverse_dynamics::run(&i, &run_opts)?,
         };
-        summary.frames = summary.frames.max(r.frames);
-        summary.loop_seconds += r.loop_seconds;
-        summary.files.extend(r.files);
-        summary
-            .warnings
-            .extend(r.warnings.into_iter().map(|w| format!("{s}: {w}")));
+        summary.absorb(r, Some(s.as_str()));
     }
     let out = opts
         .results_dir
