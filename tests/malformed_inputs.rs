@@ -885,3 +885,24 @@ fn silent_clamps_are_said_out_loud() {
     );
     assert!(!err.contains("'Muscles' matches no force"), "{err}");
 }
+
+/// A file the setup names but that is not there: the error names the setup,
+/// the element and its line (it named only the path before).
+#[test]
+fn missing_input_files_name_the_setup_element_and_line() {
+    for (element, from, to) in [
+        ("model_file", "<model_file>model.osim<", "<model_file>nomodel.osim<"),
+        ("coordinates_file", "<coordinates_file>motion.mot<", "<coordinates_file>nomotion.mot<"),
+        ("force_set_files", "<force_set_files>contacts.xml<", "<force_set_files>nocontacts.xml<"),
+        ("artifact_files", "<artifact_files>artifact.osim<", "<artifact_files>noartifact.osim<"),
+    ] {
+        let mut f = Files::analyze();
+        let line = f.replace("setup.xml", from, to);
+        let missing = to.trim_start_matches(&format!("<{element}>")).trim_end_matches('<');
+        expect_input_error(
+            &format!("missing_{element}"),
+            run(&format!("missing_{element}"), &f, "setup.xml"),
+            &["setup.xml", &format!("line {line}"), &format!("<{element}>"), missing, "file not found"],
+        );
+    }
+}

@@ -139,6 +139,42 @@ fn path_list(tool: &Element, name: &str, dir: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
+/// Every input file a setup names must exist; the error names the setup,
+/// the element and its line (a missing model used to be reported by its
+/// path alone, without saying which element named it).
+fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
+    let missing = |el: &Element, p: &str| -> Result<()> {
+        let path = resolve(dir, p);
+        if path.exists() {
+            Ok(())
+        } else {
+            Err(el.error(format!(
+                "file not found: {} (a relative path is taken from the setup's folder, as in OpenSim)",
+                path.display()
+            )))
+        }
+    };
+    for name in [
+        "model_file",
+        "coordinates_file",
+        "states_file",
+        "speeds_file",
+        "external_loads_file",
+    ] {
+        if let (Some(el), Some(text)) = (tool.child(name), opt_text(tool, name)) {
+            missing(el, &text)?;
+        }
+    }
+    for name in ["artifact_files", "force_set_files"] {
+        if let Some(el) = tool.child(name) {
+            for w in el.words().iter().filter(|w| w.as_str() != "Unassigned") {
+                missing(el, w)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn opt_text(el: &Element, name: &str) -> Option<String> {
     el.child_text(name)
         .filter(|s| !s.is_empty() && *s != "Unassigned")
@@ -161,6 +197,9 @@ impl Setup {
         } else {
             dir
         };
+        if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {
+            check_inputs_exist(tool, &dir)?;
+        }
         match tool.name.as_str() {
             "InverseDynamicsTool" => Ok(Setup::InverseDynamics(read_id(tool, path, &dir)?)),
             "AnalyzeTool" => Ok(Setup::Analyze(read_analyze(tool, path, &dir)?)),

@@ -304,6 +304,7 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
             break; // OpenSim reads exactly nRows rows and ignores the rest
         }
         last_line = no;
+        empty_cell(path, &st.labels, no, text)?;
         let toks: Vec<&str> = text.split_whitespace().collect();
         push_row(path, &mut st, no, &toks, nc)?;
     }
@@ -311,6 +312,30 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
         return Err(too_few_rows(path, last_line, limit, st.time.len()));
     }
     Ok(st)
+}
+
+/// A tab-separated row with an empty cell (two tabs in a row) names the
+/// cell's own column; split on white space, the gap would shift the values
+/// and blame the last column instead.
+fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<()> {
+    if !line.contains('\t') {
+        return Ok(());
+    }
+    let cells: Vec<&str> = line.trim_end_matches(['\t', ' ', '\r']).split('\t').collect();
+    if let Some(k) = cells.iter().position(|c| c.trim().is_empty()) {
+        let column = if k == 0 {
+            "time"
+        } else {
+            labels.get(k - 1).map_or("?", String::as_str)
+        };
+        return Err(Error::input(
+            Location::file(path)
+                .with_line(no)
+                .with_element(format!("column '{column}'")),
+            "empty cell: every column needs a value on every row",
+        ));
+    }
+    Ok(())
 }
 
 /// Parse `toks` = time then `labels.len()` values into `row`; returns the time.
@@ -736,6 +761,7 @@ impl RowReader {
                 if line.trim().is_empty() {
                     continue;
                 }
+                empty_cell(&self.path, &self.table.labels, *line_no, &line)?;
                 let toks: Vec<&str> = line.split_whitespace().collect();
                 let t = parse_row(&self.path, &self.table.labels, *line_no, &toks, row)?;
                 break (t, *line_no);

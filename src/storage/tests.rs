@@ -249,6 +249,19 @@ fn err_of(name: &str, text: &str) -> String {
     e.to_string()
 }
 
+/// The error the streaming row reader gives on `text`.
+fn read_stream_err(name: &str, text: &str) -> String {
+    let mut r = super::read::open_rows(&write_text(name, text)).unwrap();
+    let mut row = Vec::new();
+    loop {
+        match r.next_row(&mut row) {
+            Ok(Some(_)) => continue,
+            Ok(None) => panic!("{name}: read without error"),
+            Err(e) => return e.to_string(),
+        }
+    }
+}
+
 const HEAD: &str = "test\nversion=1\nnRows=3\nnColumns=3\ninDegrees=no\nendheader\ntime\ta\tb\n";
 
 #[test]
@@ -266,6 +279,15 @@ fn input_errors_name_file_line_and_column() {
 
     let e = err_of("few.sto", &format!("{HEAD}0 1 2\n0.1 1\n0.2 1 2\n"));
     assert!(e.contains("line 9") && e.contains("column 'b'"), "{e}");
+
+    // An empty cell in a tab-separated row names its own column (it blamed
+    // the last column before: the values shifted left).
+    let e = err_of("empty.sto", &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n"));
+    assert!(
+        e.contains("line 9") && e.contains("column 'a'") && e.contains("empty cell"),
+        "{e}"
+    );
+    assert!(read_stream_err("empty_stream.sto", &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n")).contains("column 'a'"));
 
     let e = err_of("word.sto", &format!("{HEAD}0 1 2\n0.1 1 abc\n0.2 1 2\n"));
     assert!(
