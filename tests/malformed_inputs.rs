@@ -891,18 +891,143 @@ fn silent_clamps_are_said_out_loud() {
 #[test]
 fn missing_input_files_name_the_setup_element_and_line() {
     for (element, from, to) in [
-        ("model_file", "<model_file>model.osim<", "<model_file>nomodel.osim<"),
-        ("coordinates_file", "<coordinates_file>motion.mot<", "<coordinates_file>nomotion.mot<"),
-        ("force_set_files", "<force_set_files>contacts.xml<", "<force_set_files>nocontacts.xml<"),
-        ("artifact_files", "<artifact_files>artifact.osim<", "<artifact_files>noartifact.osim<"),
+        (
+            "model_file",
+            "<model_file>model.osim<",
+            "<model_file>nomodel.osim<",
+        ),
+        (
+            "coordinates_file",
+            "<coordinates_file>motion.mot<",
+            "<coordinates_file>nomotion.mot<",
+        ),
+        (
+            "force_set_files",
+            "<force_set_files>contacts.xml<",
+            "<force_set_files>nocontacts.xml<",
+        ),
+        (
+            "artifact_files",
+            "<artifact_files>artifact.osim<",
+            "<artifact_files>noartifact.osim<",
+        ),
     ] {
         let mut f = Files::analyze();
         let line = f.replace("setup.xml", from, to);
-        let missing = to.trim_start_matches(&format!("<{element}>")).trim_end_matches('<');
+        let missing = to
+            .trim_start_matches(&format!("<{element}>"))
+            .trim_end_matches('<');
         expect_input_error(
             &format!("missing_{element}"),
             run(&format!("missing_{element}"), &f, "setup.xml"),
-            &["setup.xml", &format!("line {line}"), &format!("<{element}>"), missing, "file not found"],
+            &[
+                "setup.xml",
+                &format!("line {line}"),
+                &format!("<{element}>"),
+                missing,
+                "file not found",
+            ],
         );
     }
+}
+
+/// A study of the analyze setup (static optimization with one contact).
+fn analyze_study(series_file: &str) -> Files {
+    let mut f = Files::analyze();
+    f.0.push((
+        "study.xml",
+        format!(
+            r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000"><StatoptStudy name="study"><setups>setup.xml</setups><results_directory>figs</results_directory>
+<Figure name="f" title="t" y_label="y"><Series file="{series_file}" column="q1_reserve q1_reserve" label="q1"/></Figure>
+</StatoptStudy></OpenSimDocument>
+"#
+        ),
+    ));
+    f.replace(
+        "setup.xml",
+        "<contact_weight>1</contact_weight>",
+        "<contact_weight>1 1000</contact_weight><reserve_actuators>1</reserve_actuators>",
+    );
+    f
+}
+
+/// A study's figure naming a w0 its setup does not run is refused before
+/// anything is computed (it used to fail, or draw an old table, after the
+/// whole computation).
+#[test]
+fn study_figures_are_checked_against_the_runs_before_computing() {
+    let f = analyze_study("out/run_SO_w0_500_activation.sto");
+    let (code, err) = run("study_w0", &f, "study.xml");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("malformed_study_w0");
+    assert_eq!(code, 2, "{err}");
+    for n in ["study.xml", "<Series", "names w0 = 500", "w0 = 1, 1000"] {
+        assert!(err.contains(n), "lacks '{n}': {err}");
+    }
+    assert!(
+        !dir.join("out").exists(),
+        "nothing may be computed before the check"
+    );
+}
+
+/// A table left over from an earlier run is not drawn: the study stops and
+/// names it. Here the first run wrote ContactForces; the second run has no
+/// contacts, so the old table would have been drawn as if it were current.
+#[test]
+fn study_never_draws_a_stale_table() {
+    let mut f = analyze_study("out/run_SO_w0_1_ContactForces.sto");
+    f.replace(
+        "study.xml",
+        "column=\"q1_reserve q1_reserve\"",
+        "column=\"tip_distance\"",
+    );
+    let (code, err) = run("study_stale", &f, "study.xml");
+    assert_eq!(code, 0, "first run: {err}");
+    // Same folder, contacts dropped: ContactForces is no longer written.
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("malformed_study_stale");
+    let setup = std::fs::read_to_string(dir.join("setup.xml")).unwrap();
+    std::fs::write(
+        dir.join("setup.xml"),
+        setup.replace("<force_set_files>contacts.xml</force_set_files>", ""),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join("study.xml"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("run_SO_w0_1_ContactForces.sto") && err.contains("stale"),
+        "{err}"
+    );
+}
+
+/// `-o DIR` on a study moves every output, the setups' tables too.
+#[test]
+fn study_results_dir_moves_every_output() {
+    let f = analyze_study("out/run_SO_w0_1_activation.sto");
+    let dir = common::out_dir("malformed_study_moved");
+    f.write(&dir);
+    let moved = dir.join("moved");
+    let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join("study.xml"))
+        .arg("-o")
+        .arg(&moved)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        moved.join("out/run_SO_w0_1_activation.sto").is_file(),
+        "{err}"
+    );
+    assert!(moved.join("f.png").is_file());
+    assert!(
+        !dir.join("out").exists(),
+        "the setup's own folder stays empty"
+    );
+    assert!(!dir.join("figs").exists());
+    // The summary counts every solve of the study (two w0, 11 frames each).
+    assert!(err.contains("22 of 22 frame problems solved"), "{err}");
 }

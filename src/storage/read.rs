@@ -321,7 +321,10 @@ fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<(
     if !line.contains('\t') {
         return Ok(());
     }
-    let cells: Vec<&str> = line.trim_end_matches(['\t', ' ', '\r']).split('\t').collect();
+    let cells: Vec<&str> = line
+        .trim_end_matches(['\t', ' ', '\r'])
+        .split('\t')
+        .collect();
     if let Some(k) = cells.iter().position(|c| c.trim().is_empty()) {
         let column = if k == 0 {
             "time"

@@ -282,12 +282,19 @@ fn input_errors_name_file_line_and_column() {
 
     // An empty cell in a tab-separated row names its own column (it blamed
     // the last column before: the values shifted left).
-    let e = err_of("empty.sto", &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n"));
+    let e = err_of(
+        "empty.sto",
+        &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n"),
+    );
     assert!(
         e.contains("line 9") && e.contains("column 'a'") && e.contains("empty cell"),
         "{e}"
     );
-    assert!(read_stream_err("empty_stream.sto", &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n")).contains("column 'a'"));
+    assert!(read_stream_err(
+        "empty_stream.sto",
+        &format!("{HEAD}0\t1\t2\n0.1\t\t2\n0.2\t1\t2\n")
+    )
+    .contains("column 'a'"));
 
     let e = err_of("word.sto", &format!("{HEAD}0 1 2\n0.1 1 abc\n0.2 1 2\n"));
     assert!(

@@ -906,7 +906,7 @@ fn status_code(s: SolveStatus) -> f64 {
 }
 
 /// Format a contact weight for file names: `500`, `0.001`, `1e+06`.
-fn w0_tag(w0: f64) -> String {
+pub fn w0_tag(w0: f64) -> String {
     let t = format!("{w0}");
     if t.len() <= 8 {
         t

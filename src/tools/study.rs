@@ -185,7 +185,172 @@ fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
     Ok((name, v))
 }
 
-/// Run a study document.
+/// What the study knows of one of its setups before running it: where its
+/// tables go and which w0 runs it makes (for checking figure references).
+struct PlannedRun {
+    file: PathBuf,
+    setup: Setup,
+    /// The setup's own results folder, and where this run writes (moved
+    /// under the study's `-o` folder when one is given).
+    own_dir: PathBuf,
+    out_dir: PathBuf,
+    name: String,
+    /// w0 tags in file names (`1`, `500`, `mean`, ...); empty without a sweep.
+    w0_tags: Vec<String>,
+    /// The one table an InverseDynamicsTool writes (its names are not
+    /// prefixed by the setup's name).
+    only_file: Option<String>,
+}
+
+fn plan(p: PathBuf, moved_to: Option<&Path>) -> Result<PlannedRun> {
+    let setup = Setup::read(&p)?;
+    let mut only_file = None;
+    let (own_dir, name, w0_tags) = match &setup {
+        Setup::Analyze(a) => {
+            let mut tags = Vec::new();
+            if let Some((el, common)) = a.analysis_element("StaticOptimization") {
+                let so = crate::tools::static_optimization::StaticOptimizationSetup::from_xml(
+                    el,
+                    common.clone(),
+                )?;
+                if so.contact_weights.len() > 1 {
+                    tags.extend(
+                        so.contact_weights
+                            .iter()
+                            .map(|w| crate::tools::static_optimization::w0_tag(*w)),
+                    );
+                    tags.extend(["mean", "min", "max"].map(String::from));
+                }
+            }
+            (a.results_directory.clone(), a.name.clone(), tags)
+        }
+        Setup::InverseDynamics(i) => {
+            only_file = Some(i.output_gen_force_file.clone());
+            (i.results_directory.clone(), i.name.clone(), Vec::new())
+        }
+    };
+    let out_dir = match moved_to {
+        Some(o) => o.join(own_dir.file_name().unwrap_or(std::ffi::OsStr::new(&name))),
+        None => own_dir.clone(),
+    };
+    Ok(PlannedRun {
+        file: p,
+        setup,
+        own_dir,
+        out_dir,
+        name,
+        w0_tags,
+        only_file,
+    })
+}
+
+/// The attributes of a Figure's or Metric's elements that name tables.
+const FILE_ATTRS: [&str; 4] = ["file", "mean", "min", "max"];
+
+/// Lexically normalised path (no `.`/`..`), so references and output
+/// folders compare whether or not they exist yet.
+fn normalise(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                if !out.pop() {
+                    out.push("..");
+                }
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Check every table a figure or metric names against the planned runs,
+/// before anything is computed, and point it at where the run will write
+/// it. A table in a setup's results folder must be one that setup writes
+/// (its name, a w0 it runs); any other table must exist already.
+fn check_and_move_references(
+    elements: &mut [Element],
+    dir: &Path,
+    runs: &[PlannedRun],
+) -> Result<Vec<(PathBuf, Location)>> {
+    let mut from_runs = Vec::new();
+    let mut visit = |el: &mut Element| -> Result<()> {
+        for attr in FILE_ATTRS {
+            let Some(value) = el.attr(attr).map(str::to_string) else {
+                continue;
+            };
+            let path = normalise(&resolve(dir, &value));
+            let run = runs
+                .iter()
+                .find(|r| path.parent() == Some(normalise(&r.own_dir).as_path()));
+            let Some(run) = run else {
+                if !path.is_file() {
+                    return Err(el.error(format!(
+                        "{attr}=\"{value}\": {} does not exist and no setup of the study writes to its folder",
+                        path.display()
+                    )));
+                }
+                continue;
+            };
+            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+            if let Some(only) = &run.only_file {
+                if file != only {
+                    return Err(el.error(format!(
+                        "{attr}=\"{value}\": {} writes only {only} to that folder",
+                        run.file.display()
+                    )));
+                }
+            } else if !file.starts_with(&format!("{}_", run.name)) {
+                return Err(el.error(format!(
+                    "{attr}=\"{value}\": {} is in the results folder of {}, whose tables are named {}_...",
+                    file,
+                    run.file.display(),
+                    run.name
+                )));
+            }
+            if let Some(k) = file.find("_w0_") {
+                let tag = file[k + 4..].split('_').next().unwrap_or("");
+                if !run.w0_tags.iter().any(|t| t == tag) {
+                    return Err(el.error(format!(
+                        "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
+                        run.file.display(),
+                        if run.w0_tags.is_empty() {
+                            "a single w0 (its tables carry no w0 in their names)".to_string()
+                        } else {
+                            format!("w0 = {}", run.w0_tags[..run.w0_tags.len() - 3].join(", "))
+                        }
+                    )));
+                }
+            }
+            // Absolute, so that drawing (which resolves against the
+            // study's folder) finds it wherever the study was started.
+            let moved = std::path::absolute(run.out_dir.join(file))
+                .map_err(|e| Error::io(&run.out_dir, e))?;
+            from_runs.push((moved.clone(), el.loc()));
+            set_attr(el, attr, &moved.to_string_lossy());
+        }
+        Ok(())
+    };
+    for e in elements.iter_mut() {
+        visit(e)?;
+        for c in e.children.iter_mut() {
+            visit(c)?;
+        }
+    }
+    Ok(from_runs)
+}
+
+fn set_attr(el: &mut Element, name: &str, value: &str) {
+    if let Some(a) = el.attrs.iter_mut().find(|(n, _)| n == name) {
+        a.1 = value.to_string();
+    }
+}
+
+/// Run a study document. Everything it names is checked before the first
+/// run starts; its figures and metrics draw only tables its own runs wrote;
+/// with `-o DIR` every output goes under DIR (each setup's tables in
+/// DIR/<its results folder's name>).
 pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let root = xml::parse_file(path)?;
     let study = if root.name == "StatoptStudy" {
@@ -203,37 +368,69 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     } else {
         dir
     };
-    let mut summary = RunSummary::default();
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
-    for s in &setups {
-        let p = resolve(&dir, s);
-        // The study's own results directory option does not apply to its setups.
-        let run_opts = RunOptions {
-            results_dir: None,
-            ..opts.clone()
-        };
-        let r = match Setup::read(&p)? {
-            Setup::Analyze(a) => analyze::run(&a, &run_opts)?,
-            Setup::InverseDynamics(i) => inverse_dynamics::run(&i, &run_opts)?,
-        };
-        summary.absorb(r, Some(s.as_str()));
+    if setups.is_empty() {
+        return Err(study.error("the study names no <setups>"));
     }
-    let out = opts
-        .results_dir
-        .clone()
-        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
-    let elements: Vec<Element> = study
+    let runs: Vec<PlannedRun> = setups
+        .iter()
+        .map(|s| plan(resolve(&dir, s), opts.results_dir.as_deref()))
+        .collect::<Result<_>>()?;
+    let mut elements: Vec<Element> = study
         .children
         .iter()
         .filter(|c| c.name == "Figure" || c.name == "Metric")
         .cloned()
         .collect();
+    let expected = check_and_move_references(&mut elements, &dir, &runs)?;
+    for m in elements.iter().filter(|e| e.name == "Metric") {
+        let op = m.attr("op").unwrap_or("max");
+        if !["max", "min", "absmax", "mean", "integral"].contains(&op) {
+            return Err(m.error(format!(
+                "unknown op '{op}' (max, min, absmax, mean, integral)"
+            )));
+        }
+    }
+
+    let mut summary = RunSummary::default();
+    for (s, r) in setups.iter().zip(&runs) {
+        let run_opts = RunOptions {
+            results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
+            ..opts.clone()
+        };
+        let done = match &r.setup {
+            Setup::Analyze(a) => analyze::run(a, &run_opts)?,
+            Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts)?,
+        };
+        summary.absorb(done, Some(s.as_str()));
+    }
+    // Only what this run wrote: a table left from an earlier run is stale.
+    let key = |p: &Path| normalise(&std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()));
+    let written: Vec<PathBuf> = summary.files.iter().map(|f| key(f)).collect();
+    for (file, loc) in &expected {
+        if !written.contains(&key(file)) {
+            return Err(Error::input(
+                loc.clone(),
+                format!(
+                    "{} was not written by this run of the study (a table left from an earlier run is stale); check the setup's analyses and names",
+                    file.display()
+                ),
+            ));
+        }
+    }
+    let out = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
     summary.files.extend(draw(
         &elements,
         &dir,
         &out,
         study.attr("name").unwrap_or("study"),
     )?);
+    if !summary.results_dirs.contains(&out) {
+        summary.results_dirs.push(out);
+    }
     Ok(summary)
 }
 
