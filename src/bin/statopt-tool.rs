@@ -294,6 +294,9 @@ fn fail(e: statopt::Error) -> ExitCode {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = tools::interrupt::install() {
+        return fail(e);
+    }
     match &cli.command {
         Some(Command::Bench {
             setup,
@@ -397,7 +400,11 @@ fn main() -> ExitCode {
                         eprintln!("{line}");
                     }
                 }
-                // Failures are said even with --quiet.
+                // A stop and failures are said even with --quiet.
+                if let Some((code, _)) = summary.stopped {
+                    eprintln!("{}", summary.stopped_line().unwrap_or_default());
+                    return ExitCode::from(code);
+                }
                 match summary.failure_line() {
                     Some(line) => {
                         eprintln!("error: {line}");

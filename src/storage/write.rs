@@ -195,6 +195,28 @@ impl StoWriter {
         })
     }
 
+    /// [`Self::create`] with two header lines in front of the description
+    /// that say what wrote the file: `statopt_version=` and `statopt_setup=`
+    /// (key=value lines: OpenSim's Storage skips them, its TimeSeriesTable
+    /// keeps them as metadata).
+    pub fn create_for_setup(
+        setup: &Path,
+        path: &Path,
+        name: &str,
+        description: &str,
+        labels: &[String],
+        precision: usize,
+        in_degrees: bool,
+    ) -> Result<StoWriter> {
+        let setup = std::path::absolute(setup).unwrap_or_else(|_| setup.to_path_buf());
+        let head = format!(
+            "statopt_version={}\nstatopt_setup={}\n{description}",
+            env!("CARGO_PKG_VERSION"),
+            setup.display()
+        );
+        Self::create(path, name, &head, labels, precision, in_degrees)
+    }
+
     /// Append one row (time, then one value per label) and update `nRows=`.
     /// A wrong number of values is an internal error (the caller built the row).
     pub fn write_row(&mut self, t: f64, values: &[f64]) -> Result<()> {

@@ -146,7 +146,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
         None => run_analyses(setup, opts),
     }
     .and_then(|mut summary| {
-        if !setup.figures.is_empty() {
+        if !setup.figures.is_empty() && summary.stopped.is_none() {
             // Figures read the run's tables: their paths are relative to the results directory.
             let out = results_dir(setup, opts)?;
             summary.files.extend(crate::tools::study::draw(
@@ -208,10 +208,16 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
             Analysis::MuscleAnalysis(m) => {
                 let s = muscle_analysis::run(setup, m, opts)?;
                 summary.absorb(s, None);
+                if summary.stopped.is_some() {
+                    return Ok(summary);
+                }
             }
             Analysis::Other { element, common } if element.name == "StaticOptimization" => {
                 let s = static_optimization::run(setup, element, common, &coupled, opts)?;
                 summary.absorb(s, None);
+                if summary.stopped.is_some() {
+                    return Ok(summary);
+                }
             }
             Analysis::Other { element, common } if element.name == "JointReaction" => {
                 if coupled.iter().any(|jr| jr.common.name == common.name) {
@@ -219,6 +225,9 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 }
                 let s = joint_reaction::run(setup, element, common, opts)?;
                 summary.absorb(s, None);
+                if summary.stopped.is_some() {
+                    return Ok(summary);
+                }
             }
             Analysis::Other { element, .. } => {
                 return Err(element.error(format!(
@@ -281,6 +290,8 @@ fn close_setup_contacts(
 /// `step_interval`), in parallel chunks of 256 with a per-thread workspace
 /// from `init`, and hand each result to `sink` in frame order — so tables
 /// hold every finished frame and memory stays bounded by the block.
+/// Returns false when a stop was requested ([`crate::tools::interrupt`]):
+/// the frames handed to `sink` so far are complete, no later one is.
 pub fn for_each_frame<W, T>(
     stream: &mut crate::motion::stream::StateStream,
     i0: usize,
@@ -289,7 +300,7 @@ pub fn for_each_frame<W, T>(
     init: impl Fn() -> W + Sync + Send,
     work: impl Fn(&mut W, &crate::motion::stream::StateBlock, usize) -> Result<T> + Sync + Send,
     mut sink: impl FnMut(T) -> Result<()>,
-) -> Result<()>
+) -> Result<bool>
 where
     T: Send,
 {
@@ -299,6 +310,9 @@ where
             .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
             .collect();
         for chunk in sel.chunks(256) {
+            if crate::tools::interrupt::requested().is_some() {
+                return Ok(false);
+            }
             let results: Vec<Result<T>> = chunk
                 .par_iter()
                 .map_init(&init, |w, &i| work(w, &block, i))
@@ -308,5 +322,5 @@ where
             }
         }
     }
-    Ok(())
+    Ok(true)
 }

@@ -153,7 +153,8 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         .unwrap_or_else(|| setup.results_directory.clone());
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let out = dir.join(&setup.output_gen_force_file);
-    let mut writer = StoWriter::create(
+    let mut writer = StoWriter::create_for_setup(
+        &setup.setup_file,
         &out,
         "Inverse Dynamics Generalized Forces",
         "",

@@ -703,7 +703,8 @@ pub fn run(
         setup.name, jr.common.name
     ));
     let precision = opts.precision.unwrap_or(setup.output_precision);
-    let mut w = StoWriter::create(
+    let mut w = StoWriter::create_for_setup(
+        &setup.setup_file,
         &path,
         "Joint Reaction Loads",
         DESCRIPTION,
@@ -713,7 +714,8 @@ pub fn run(
     )?;
     let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
     let start = std::time::Instant::now();
-    for_each_frame(
+    let mut last = None;
+    let completed = for_each_frame(
         &mut stream,
         i0,
         i1,
@@ -732,6 +734,7 @@ pub fn run(
         },
         |(t, row)| {
             w.write_row(t, &row)?;
+            last = Some(t);
             progress.inc(1);
             Ok(())
         },
@@ -739,6 +742,7 @@ pub fn run(
     progress.finish_and_clear();
     w.finish()?;
     Ok(RunSummary {
+        stopped: (!completed).then(|| (crate::tools::interrupt::requested().unwrap_or(130), last)),
         frames: nframes,
         results_dirs: path.parent().map(|d| d.to_path_buf()).into_iter().collect(),
         files: vec![path],

@@ -9,6 +9,7 @@ pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod perturbation;
+pub mod interrupt;
 pub mod progress;
 pub mod reduce;
 pub mod static_optimization;
@@ -57,6 +58,9 @@ pub struct RunSummary {
     pub notes: Vec<String>,
     /// Folders the outputs went to.
     pub results_dirs: Vec<PathBuf>,
+    /// Set when a signal stopped the run: the exit status it asks for and
+    /// the time of the last frame written (None: none was).
+    pub stopped: Option<(u8, Option<f64>)>,
 }
 
 /// Exit status of a run in which some frames could not be solved (the
@@ -101,6 +105,22 @@ impl RunSummary {
                 self.results_dirs.push(d);
             }
         }
+        if self.stopped.is_none() {
+            self.stopped = other.stopped;
+        }
+    }
+
+    /// The line that says where a stopped run stopped, if it was stopped.
+    pub fn stopped_line(&self) -> Option<String> {
+        self.stopped.map(|(_, t)| {
+            format!(
+                "stopped by a signal {}; every table and the MCAP log hold the frames solved so far and are closed; run again to compute the rest",
+                match t {
+                    Some(t) => format!("after the frame at t = {t}"),
+                    None => "before the first frame".to_string(),
+                }
+            )
+        })
     }
 
     /// The lines that end a run: frames, solves and failures, the worst

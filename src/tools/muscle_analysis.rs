@@ -86,7 +86,7 @@ pub fn run(
     let open = |suffix: &str, name: &str, desc: &str| -> Result<(StoWriter, std::path::PathBuf)> {
         let p = dir.join(format!("{prefix}{suffix}.sto"));
         Ok((
-            StoWriter::create(&p, name, desc, &labels, precision, false)?,
+            StoWriter::create_for_setup(&setup.setup_file, &p, name, desc, &labels, precision, false)?,
             p,
         ))
     };
@@ -121,10 +121,16 @@ pub fn run(
     let mut frame = MuscleFrame::new(&set, &model);
     let mut row = vec![0.0; muscles.len()];
     let mut nframes = 0;
-    while let Some(block) = stream.next_block()? {
+    let mut stopped = None;
+    let mut last_t = None;
+    'blocks: while let Some(block) = stream.next_block()? {
         for b in 0..block.time.len() {
             if !is_frame(block.first + b, i0, i1, step) {
                 continue;
+            }
+            if let Some(code) = crate::tools::interrupt::requested() {
+                stopped = Some((code, last_t));
+                break 'blocks;
             }
             nframes += 1;
             data.q.copy_from_slice(&block.q[b]);
@@ -153,6 +159,7 @@ pub fn run(
                 }
                 writers[4 + j].0.write_row(t, &row)?;
             }
+            last_t = Some(t);
         }
     }
     let mut files = Vec::new();
@@ -165,6 +172,7 @@ pub fn run(
         results_dirs: vec![dir],
         files,
         warnings,
+        stopped,
         ..Default::default()
     })
 }

@@ -1004,6 +1004,12 @@ pub fn run(
         let s = run_once(&problem, setup, step_interval, &dir, &prefix, &jr, opts)?;
         let label = format!("w0 = {w0}");
         summary.absorb(s, sweep.then_some(label.as_str()));
+        if summary.stopped.is_some() {
+            // The sweep's statistics need every w0: none are written.
+            warnings.extend(std::mem::take(&mut summary.warnings));
+            summary.warnings = warnings;
+            return Ok(summary);
+        }
         prefixes.push(prefix);
     }
     if sweep {
@@ -1021,6 +1027,7 @@ pub fn run(
                 .map(|p| dir.join(format!("{p}{kind}.sto")))
                 .collect();
             summary.files.extend(write_sweep_statistics(
+                &setup.setup_file,
                 &files,
                 &dir,
                 &format!("{base}w0_"),
@@ -1041,6 +1048,7 @@ pub fn run(
                 })
                 .collect();
             summary.files.extend(write_sweep_statistics(
+                &setup.setup_file,
                 &files,
                 &dir,
                 &format!("{}_{name}_w0_", setup.name),
@@ -1058,6 +1066,7 @@ pub fn run(
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
 /// (the paper's uncertainty band, section 3.2).
 fn write_sweep_statistics(
+    setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
     dir: &std::path::Path,
     prefix: &str,
@@ -1074,7 +1083,8 @@ fn write_sweep_statistics(
     for stat in ["mean", "min", "max"] {
         let path = dir.join(format!("{prefix}{stat}_{kind}.sto"));
         let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
-        let mut w = StoWriter::create(
+        let mut w = StoWriter::create_for_setup(
+            setup_file,
             &path,
             &format!("{kind} {stat}"),
             &desc,
@@ -1146,7 +1156,8 @@ fn run_once(
     let force_path = dir.join(format!("{prefix}force.sto"));
     let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
     let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
-    let mut act_w = StoWriter::create(
+    let mut act_w = StoWriter::create_for_setup(
+            &setup.setup_file,
         &act_path,
         "Static Optimization",
         "This file contains static optimization results.\n",
@@ -1154,7 +1165,8 @@ fn run_once(
         precision,
         false,
     )?;
-    let mut force_w = StoWriter::create(
+    let mut force_w = StoWriter::create_for_setup(
+            &setup.setup_file,
         &force_path,
         "ModelForces",
         FORCE_DESCRIPTION,
@@ -1174,7 +1186,8 @@ fn run_once(
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let mut diag_w = StoWriter::create(
+    let mut diag_w = StoWriter::create_for_setup(
+            &setup.setup_file,
         &diag_path,
         "Static Optimization Diagnostics",
         "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n",
@@ -1192,7 +1205,8 @@ fn run_once(
             "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
             problem.w0, problem.settings.friction
         );
-        let cw = StoWriter::create(
+        let cw = StoWriter::create_for_setup(
+            &setup.setup_file,
             &cpath,
             "Contact Forces",
             &desc,
@@ -1200,7 +1214,7 @@ fn run_once(
             precision,
             false,
         )?;
-        let bw = StoWriter::create(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision, false)?;
+        let bw = StoWriter::create_for_setup(&setup.setup_file, &bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision, false)?;
         let mut load_labels = Vec::new();
         for (_, _, id) in problem.contact_load_forces() {
             load_labels.extend(
@@ -1210,7 +1224,8 @@ fn run_once(
                 .map(|s| format!("{id}{s}")),
             );
         }
-        let lw = StoWriter::create(
+        let lw = StoWriter::create_for_setup(
+            &setup.setup_file,
             &lpath,
             "statopt contact forces",
             "",
@@ -1228,7 +1243,8 @@ fn run_once(
         contact_w = Some((cw, bw, lw));
     }
     let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
-    let mut src_w = StoWriter::create(
+    let mut src_w = StoWriter::create_for_setup(
+            &setup.setup_file,
         &src_path,
         "Generalized Forces By Source",
         "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
@@ -1237,7 +1253,8 @@ fn run_once(
         false,
     )?;
     let power_path = dir.join(format!("{prefix}MusclePower.sto"));
-    let mut power_w = StoWriter::create(
+    let mut power_w = StoWriter::create_for_setup(
+            &setup.setup_file,
         &power_path,
         "Muscle Power",
         "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
@@ -1249,7 +1266,8 @@ fn run_once(
     let mut jr_w = Vec::new();
     for (p, specs) in reactions {
         let path = dir.join(format!("{p}ReactionLoads.sto"));
-        jr_w.push(StoWriter::create(
+        jr_w.push(StoWriter::create_for_setup(
+            &setup.setup_file,
             &path,
             "Joint Reaction Loads",
             JR_DESCRIPTION,
@@ -1301,10 +1319,11 @@ fn run_once(
     // Actuators saturated at a finite upper bound: reported, never silent.
     let mut at_bound: Vec<(String, usize, f64)> = Vec::new();
     let start = Instant::now();
+    let mut last = None;
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
-    for_each_frame(
+    let completed = for_each_frame(
         &mut stream,
         i0,
         i1,
@@ -1386,6 +1405,7 @@ fn run_once(
                     );
                 }
             }
+            last = Some(r.time);
             act_w.write_row(r.time, &r.solution.x[..nv])?;
             force_w.write_row(r.time, &r.force_row)?;
             diag_w.write_row(
@@ -1465,6 +1485,7 @@ fn run_once(
             nframes as f64 / loop_seconds.max(1e-12)
         )],
         results_dirs: vec![dir.to_path_buf()],
+        stopped: (!completed).then(|| (crate::tools::interrupt::requested().unwrap_or(130), last)),
     })
 }
 

@@ -403,6 +403,9 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts)?,
         };
         summary.absorb(done, Some(s.as_str()));
+        if summary.stopped.is_some() {
+            return Ok(summary);
+        }
     }
     // Only what this run wrote: a table left from an earlier run is stale.
     let key = |p: &Path| normalise(&std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()));
