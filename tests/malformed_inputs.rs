@@ -1031,3 +1031,67 @@ fn study_results_dir_moves_every_output() {
     // The summary counts every solve of the study (two w0, 11 frames each).
     assert!(err.contains("22 of 22 frame problems solved"), "{err}");
 }
+
+/// `--check` reports every problem at once and runs nothing.
+#[test]
+fn check_reports_every_problem_at_once_without_running() {
+    let check = |test: &str, f: &Files, entry: &str| -> (i32, String, PathBuf) {
+        let dir = common::out_dir(&format!("malformed_{test}"));
+        f.write(&dir);
+        let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+            .arg(dir.join(entry))
+            .arg("--check")
+            .output()
+            .unwrap();
+        (
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+            dir,
+        )
+    };
+    // Two missing files.
+    let mut f = Files::analyze();
+    f.replace(
+        "setup.xml",
+        "<coordinates_file>motion.mot<",
+        "<coordinates_file>nomotion.mot<",
+    );
+    f.replace(
+        "setup.xml",
+        "<force_set_files>contacts.xml<",
+        "<force_set_files>nocontacts.xml<",
+    );
+    let (code, err, dir) = check("check_missing", &f, "setup.xml");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("nomotion.mot")
+            && err.contains("nocontacts.xml")
+            && err.contains("2 problem(s)"),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists());
+    // Problems in two stages: a contact property and the motion.
+    let mut f = Files::analyze();
+    f.replace(
+        "contacts.xml",
+        "<static_friction>0.8</static_friction>",
+        "<static_friction>-0.8</static_friction>",
+    );
+    f.replace(
+        "motion.mot",
+        "0.0200\t1.88371559\t0.08879722",
+        "0.0200\tNaN\t0.08879722",
+    );
+    let (code, err, dir) = check("check_stages", &f, "setup.xml");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("static_friction") && err.contains("NaN") && err.contains("2 problem(s)"),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists());
+    // A good setup: no problem, nothing written.
+    let (code, err, dir) = check("check_good", &Files::analyze(), "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("0 problem(s)"), "{err}");
+    assert!(!dir.join("out").exists());
+}

@@ -363,7 +363,10 @@ fn a_signal_stops_the_run_cleanly() {
             if rows >= 2000 {
                 break;
             }
-            assert!(start.elapsed() < Duration::from_secs(240), "too little progress ({rows} rows)");
+            assert!(
+                start.elapsed() < Duration::from_secs(240),
+                "too little progress ({rows} rows)"
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
         let sent = Instant::now();
@@ -377,15 +380,23 @@ fn a_signal_stops_the_run_cleanly() {
         let stopped_in = sent.elapsed();
         let err = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(code), "SIG{signal}: {err}");
-        assert!(stopped_in < Duration::from_secs(3), "SIG{signal}: took {stopped_in:?} to stop");
+        assert!(
+            stopped_in < Duration::from_secs(3),
+            "SIG{signal}: took {stopped_in:?} to stop"
+        );
         // Tables: complete, and every table holds the same frames.
         let act = storage::read(&act_path).unwrap();
         let diag = storage::read(&out.join("block_SO_diagnostics.sto")).unwrap();
-        assert_eq!(act.time, diag.time, "SIG{signal}: tables disagree on the frames written");
+        assert_eq!(
+            act.time, diag.time,
+            "SIG{signal}: tables disagree on the frames written"
+        );
         assert!(act.rows.iter().flatten().all(|v| v.is_finite()));
         let last = *act.time.last().unwrap();
         assert!(
-            err.contains(&format!("stopped by a signal after the frame at t = {last}")),
+            err.contains(&format!(
+                "stopped by a signal after the frame at t = {last}"
+            )),
             "SIG{signal}: {err}"
         );
         // MCAP: closed properly, read by the standard reader, one activation
@@ -399,7 +410,10 @@ fn a_signal_stops_the_run_cleanly() {
             }
         }
         assert_eq!(activations, act.time.len(), "SIG{signal}");
-        println!("SIG{signal}: stopped after {} frames in {stopped_in:?}", act.time.len());
+        println!(
+            "SIG{signal}: stopped after {} frames in {stopped_in:?}",
+            act.time.len()
+        );
     }
 }
 
@@ -416,9 +430,24 @@ fn output_headers_carry_the_version_and_the_setup() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "sto") {
             let t = storage::read(&p).unwrap();
-            let get = |k: &str| t.metadata.iter().find(|(key, _)| key == k).map(|(_, v)| v.clone());
-            assert_eq!(get("statopt_version").as_deref(), Some(env!("CARGO_PKG_VERSION")), "{}", p.display());
-            assert_eq!(get("statopt_setup"), Some(setup_abs.display().to_string()), "{}", p.display());
+            let get = |k: &str| {
+                t.metadata
+                    .iter()
+                    .find(|(key, _)| key == k)
+                    .map(|(_, v)| v.clone())
+            };
+            assert_eq!(
+                get("statopt_version").as_deref(),
+                Some(env!("CARGO_PKG_VERSION")),
+                "{}",
+                p.display()
+            );
+            assert_eq!(
+                get("statopt_setup"),
+                Some(setup_abs.display().to_string()),
+                "{}",
+                p.display()
+            );
             n += 1;
         }
     }

@@ -56,6 +56,10 @@ struct RunArgs {
     /// (overrides the setup's <reduce_model>).
     #[arg(long)]
     reduce: bool,
+    /// Read and compile everything the setup (or study) names and report every
+    /// problem found, without running; exit 2 if there is one.
+    #[arg(long)]
+    check: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -385,6 +389,30 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => fail(e),
         },
+        None if cli.run.check => {
+            let Some(setup) = cli.run.setup.as_ref() else {
+                return fail(statopt::Error::msg("no setup file given"));
+            };
+            let report = tools::check::run(setup);
+            let mut said = std::collections::HashSet::new();
+            for w in report.warnings.iter().filter(|w| said.insert(w.as_str())) {
+                eprintln!("warning: {w}");
+            }
+            for e in &report.errors {
+                eprintln!("error: {e}");
+            }
+            eprintln!(
+                "check: {} problem(s), {} warning(s) in {}",
+                report.errors.len(),
+                said.len(),
+                report.checked.join(", ")
+            );
+            if report.errors.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(2)
+            }
+        }
         None => match run_setup(&cli.run) {
             Ok(summary) => {
                 if !cli.run.quiet {

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::xml::{self, Element};
 
 /// A parsed setup file.
@@ -143,6 +143,35 @@ fn path_list(tool: &Element, name: &str, dir: &Path) -> Vec<PathBuf> {
 /// the element and its line (a missing model used to be reported by its
 /// path alone, without saying which element named it).
 fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
+    match missing_inputs(tool, dir).into_iter().next() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// Every input file a setup document names that is not there, one error
+/// each (for `--check`, which reports all problems at once).
+pub fn missing_input_files(setup: &Path) -> Result<Vec<Error>> {
+    let root = xml::parse_file(setup)?;
+    let tool = if root.name == "OpenSimDocument" {
+        match root.children.first() {
+            Some(t) => t,
+            None => return Ok(Vec::new()),
+        }
+    } else {
+        &root
+    };
+    let dir = setup.parent().map(Path::to_path_buf).unwrap_or_default();
+    let dir = if dir.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        dir
+    };
+    Ok(missing_inputs(tool, &dir))
+}
+
+fn missing_inputs(tool: &Element, dir: &Path) -> Vec<Error> {
+    let mut out = Vec::new();
     let missing = |el: &Element, p: &str| -> Result<()> {
         let path = resolve(dir, p);
         if path.exists() {
@@ -162,17 +191,21 @@ fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
         "external_loads_file",
     ] {
         if let (Some(el), Some(text)) = (tool.child(name), opt_text(tool, name)) {
-            missing(el, &text)?;
+            if let Err(e) = missing(el, &text) {
+                out.push(e);
+            }
         }
     }
     for name in ["artifact_files", "force_set_files"] {
         if let Some(el) = tool.child(name) {
             for w in el.words().iter().filter(|w| w.as_str() != "Unassigned") {
-                missing(el, w)?;
+                if let Err(e) = missing(el, w) {
+                    out.push(e);
+                }
             }
         }
     }
-    Ok(())
+    out
 }
 
 fn opt_text(el: &Element, name: &str) -> Option<String> {

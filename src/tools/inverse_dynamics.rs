@@ -37,7 +37,11 @@ pub fn labels(model: &Model) -> Vec<String> {
 
 /// Check which model forces remain after `forces_to_exclude` and refuse those
 /// this tool cannot evaluate. Returns whether external loads stay included.
-fn check_forces(spec: &ModelSpec, exclude: &[String], warnings: &mut Vec<String>) -> Result<bool> {
+pub(crate) fn check_forces(
+    spec: &ModelSpec,
+    exclude: &[String],
+    warnings: &mut Vec<String>,
+) -> Result<bool> {
     let upper: Vec<String> = exclude.iter().map(|s| s.to_uppercase()).collect();
     // OpenSim: "could not find Force or ForceSet group named ... to be excluded".
     for name in exclude {

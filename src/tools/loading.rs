@@ -84,6 +84,7 @@ pub fn applies_force(el: &Element) -> Result<bool> {
 }
 
 /// A model with the force set an AnalyzeTool setup asks for.
+#[derive(Clone)]
 pub struct AnalysisModel {
     pub model: Model,
     pub spec: ModelSpec,

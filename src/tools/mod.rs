@@ -3,13 +3,14 @@
 pub mod analyze;
 pub mod bench;
 pub mod bench_grid;
+pub mod check;
+pub mod interrupt;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod perturbation;
-pub mod interrupt;
 pub mod progress;
 pub mod reduce;
 pub mod static_optimization;

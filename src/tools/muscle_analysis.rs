@@ -86,7 +86,15 @@ pub fn run(
     let open = |suffix: &str, name: &str, desc: &str| -> Result<(StoWriter, std::path::PathBuf)> {
         let p = dir.join(format!("{prefix}{suffix}.sto"));
         Ok((
-            StoWriter::create_for_setup(&setup.setup_file, &p, name, desc, &labels, precision, false)?,
+            StoWriter::create_for_setup(
+                &setup.setup_file,
+                &p,
+                name,
+                desc,
+                &labels,
+                precision,
+                false,
+            )?,
             p,
         ))
     };

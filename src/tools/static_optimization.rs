@@ -1157,7 +1157,7 @@ fn run_once(
     let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
     let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
     let mut act_w = StoWriter::create_for_setup(
-            &setup.setup_file,
+        &setup.setup_file,
         &act_path,
         "Static Optimization",
         "This file contains static optimization results.\n",
@@ -1166,7 +1166,7 @@ fn run_once(
         false,
     )?;
     let mut force_w = StoWriter::create_for_setup(
-            &setup.setup_file,
+        &setup.setup_file,
         &force_path,
         "ModelForces",
         FORCE_DESCRIPTION,

@@ -347,34 +347,60 @@ fn set_attr(el: &mut Element, name: &str, value: &str) {
     }
 }
 
-/// Run a study document. Everything it names is checked before the first
-/// run starts; its figures and metrics draw only tables its own runs wrote;
-/// with `-o DIR` every output goes under DIR (each setup's tables in
-/// DIR/<its results folder's name>).
-pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
-    let root = xml::parse_file(path)?;
-    let study = if root.name == "StatoptStudy" {
-        &root
+/// The study element of a study document.
+fn study_element(root: &Element) -> Result<&Element> {
+    if root.name == "StatoptStudy" {
+        Ok(root)
     } else {
         root.child("StatoptStudy")
-            .ok_or_else(|| root.error("no <StatoptStudy>"))?
-    };
-    let dir = path
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| PathBuf::from("."));
-    let dir = if dir.as_os_str().is_empty() {
-        PathBuf::from(".")
-    } else {
-        dir
-    };
+            .ok_or_else(|| root.error("no <StatoptStudy>"))
+    }
+}
+
+fn study_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The setup files a study document names.
+pub fn setup_files(path: &Path) -> Result<Vec<PathBuf>> {
+    let root = xml::parse_file(path)?;
+    let study = study_element(&root)?;
+    let dir = study_dir(path);
+    Ok(study
+        .child("setups")
+        .map(|s| s.words())
+        .unwrap_or_default()
+        .iter()
+        .map(|s| resolve(&dir, s))
+        .collect())
+}
+
+/// Everything [`run`] checks before its first run; returns the setup files.
+pub fn check(path: &Path) -> Result<Vec<PathBuf>> {
+    let root = xml::parse_file(path)?;
+    let study = study_element(&root)?;
+    let dir = study_dir(path);
+    let (runs, _, _) = prepare(study, &dir, None)?;
+    Ok(runs.into_iter().map(|r| r.file).collect())
+}
+
+/// Plan the runs, check every reference and metric, and point figure
+/// references at where the runs will write.
+fn prepare(
+    study: &Element,
+    dir: &Path,
+    moved_to: Option<&Path>,
+) -> Result<(Vec<PlannedRun>, Vec<Element>, Vec<(PathBuf, Location)>)> {
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
     if setups.is_empty() {
         return Err(study.error("the study names no <setups>"));
     }
     let runs: Vec<PlannedRun> = setups
         .iter()
-        .map(|s| plan(resolve(&dir, s), opts.results_dir.as_deref()))
+        .map(|s| plan(resolve(dir, s), moved_to))
         .collect::<Result<_>>()?;
     let mut elements: Vec<Element> = study
         .children
@@ -382,7 +408,7 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
         .filter(|c| c.name == "Figure" || c.name == "Metric")
         .cloned()
         .collect();
-    let expected = check_and_move_references(&mut elements, &dir, &runs)?;
+    let expected = check_and_move_references(&mut elements, dir, &runs)?;
     for m in elements.iter().filter(|e| e.name == "Metric") {
         let op = m.attr("op").unwrap_or("max");
         if !["max", "min", "absmax", "mean", "integral"].contains(&op) {
@@ -391,9 +417,21 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             )));
         }
     }
+    Ok((runs, elements, expected))
+}
 
+/// Run a study document. Everything it names is checked before the first
+/// run starts; its figures and metrics draw only tables its own runs wrote;
+/// with `-o DIR` every output goes under DIR (each setup's tables in
+/// DIR/<its results folder's name>).
+pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
+    let root = xml::parse_file(path)?;
+    let study = study_element(&root)?;
+    let dir = study_dir(path);
+    let (runs, elements, expected) = prepare(study, &dir, opts.results_dir.as_deref())?;
     let mut summary = RunSummary::default();
-    for (s, r) in setups.iter().zip(&runs) {
+    for r in &runs {
+        let s = r.file.display().to_string();
         let run_opts = RunOptions {
             results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
             ..opts.clone()
