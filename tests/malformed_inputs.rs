@@ -1095,3 +1095,33 @@ fn check_reports_every_problem_at_once_without_running() {
     assert!(err.contains("0 problem(s)"), "{err}");
     assert!(!dir.join("out").exists());
 }
+
+/// Errors about `<close_contacts>` entries carry the setup's line.
+#[test]
+fn close_contacts_errors_carry_a_line() {
+    for (entry, needle) in [
+        ("nocontact=q1", "no contact named 'nocontact'"),
+        ("tip=q9", "q9"),
+    ] {
+        let mut f = Files::analyze();
+        let line = f.replace(
+            "setup.xml",
+            "<coordinates_file>motion.mot</coordinates_file>",
+            &format!("<close_contacts>{entry}</close_contacts><coordinates_file>motion.mot</coordinates_file>"),
+        );
+        expect_input_error(
+            &format!("close_{entry}"),
+            run(
+                &format!("close_{}", entry.replace('=', "_")),
+                &f,
+                "setup.xml",
+            ),
+            &[
+                "setup.xml",
+                &format!("line {line}"),
+                "<close_contacts>",
+                needle,
+            ],
+        );
+    }
+}

@@ -39,6 +39,8 @@ pub struct AnalyzeSetup {
     /// row of the motion so that the contact stays closed (e.g. a machine's
     /// lever angle from its pad on the shin), before speeds are splined.
     pub close_contacts: Vec<(String, String)>,
+    /// Where `<close_contacts>` stands, for errors about its entries.
+    pub close_contacts_loc: Option<crate::error::Location>,
     /// statopt: `<reduce_model>`: static optimization runs on the model
     /// reduced to what the motion needs (`tools::reduce`; CLI `--reduce`).
     pub reduce_model: bool,
@@ -406,6 +408,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
                 .collect::<Result<Vec<_>>>()?,
             None => Vec::new(),
         },
+        close_contacts_loc: tool.child("close_contacts").map(Element::loc),
         reduce_model: tool.child_bool_or("reduce_model", false)?,
         coordinate_spline: match tool.child("coordinate_spline") {
             Some(c) if !c.text().is_empty() => match c.text().to_ascii_lowercase().as_str() {

@@ -258,7 +258,12 @@ fn close_setup_contacts(
     table: &mut crate::storage::Storage,
 ) -> Result<()> {
     let am = crate::tools::loading::load_analysis_model(setup)?;
-    let at = || Location::file(&setup.setup_file).with_element("<close_contacts>");
+    let at = || {
+        setup
+            .close_contacts_loc
+            .clone()
+            .unwrap_or_else(|| Location::file(&setup.setup_file).with_element("<close_contacts>"))
+    };
     let mut closures = Vec::new();
     for (contact, coordinate) in &setup.close_contacts {
         let el = am
