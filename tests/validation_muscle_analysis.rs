@@ -250,3 +250,76 @@ fn muscle_geometry_at_opensim_states_matches_on_every_case() {
         );
     }
 }
+
+/// The moco_walk3d case (OpenSim Moco's 3-D walk: Rajagopal-derived, 80
+/// Millard muscles, paths over two wrap cylinders), its setup_MA.xml run
+/// unchanged: every muscle's length within 1e-6 m and moment arms about hip,
+/// knee and ankle of both legs within 1e-5 m of OpenSim 4.6, end to end
+/// (filter, splines, assembly, paths). gaslat_r/l wrap over two active
+/// cylinders: their lengths used to be up to 6.9 mm long, because OpenSim
+/// keeps a tangent point's ground location from its first pass (see
+/// `paths::geometry::CurrentPoint::ground`).
+#[test]
+fn moco_walk3d_muscle_analysis_matches_opensim() {
+    let Some(root) = common::validation_dir("moco_walk3d_muscle_analysis_matches_opensim") else {
+        return;
+    };
+    let dir = root.join("moco_walk3d");
+    let setup = match Setup::read(&dir.join("setup_MA.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("ma_moco_walk3d");
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        precision: Some(16),
+        verbose: false,
+        ..Default::default()
+    };
+    analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let base = format!("{}_MuscleAnalysis_", setup.name);
+    let refdir = dir.join("results");
+    let mut tables = vec![("Length".to_string(), 1e-6)];
+    for entry in std::fs::read_dir(&refdir).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().to_string();
+        if let Some(rest) = name.strip_prefix(&format!("{base}MomentArm_")) {
+            tables.push((format!("MomentArm_{}", rest.trim_end_matches(".sto")), 1e-5));
+        }
+    }
+    assert_eq!(tables.len(), 11, "Length and ten moment-arm tables");
+    let mut failures = Vec::new();
+    for (table, tol) in &tables {
+        let ours = storage::read(&out.join(format!("{base}{table}.sto"))).unwrap();
+        let reference = storage::read(&refdir.join(format!("{base}{table}.sto"))).unwrap();
+        assert_eq!(ours.time.len(), reference.time.len(), "{table}: row count");
+        let mut worst = (0.0f64, String::new());
+        for (j, label) in reference.labels.iter().enumerate() {
+            let k = ours
+                .column_index(label)
+                .unwrap_or_else(|| panic!("{table}: no column {label}"));
+            for i in 0..reference.time.len() {
+                assert!(
+                    (ours.time[i] - reference.time[i]).abs() < 1e-9,
+                    "{table}: times differ"
+                );
+                let d = (ours.rows[i][k] - reference.rows[i][j]).abs();
+                if !(d <= *tol) {
+                    failures.push(format!("{table}/{label} t={}: {d:.3e}", reference.time[i]));
+                }
+                if d > worst.0 {
+                    worst = (d, format!("{label} t={:.3}", reference.time[i]));
+                }
+            }
+        }
+        println!(
+            "moco_walk3d {table}: worst |diff| {:.2e} ({})",
+            worst.0, worst.1
+        );
+    }
+    assert!(
+        failures.is_empty(),
+        "{} values out of tolerance, first: {:?}",
+        failures.len(),
+        &failures[..failures.len().min(10)]
+    );
+}

@@ -26,8 +26,16 @@ pub struct CurrentPoint {
     pub body: usize,
     /// Location in the body frame.
     pub local: Vector3<f64>,
-    /// Location in ground.
+    /// Location in ground as OpenSim reads it for lengths and directions. For
+    /// a wrap tangent point this is where the point was when its path wrap
+    /// first wrapped in this evaluation: OpenSim caches a point's ground
+    /// location at Stage::Position on first read and `PathWrapPoint::
+    /// setLocation` does not invalidate it, so later passes over several wrap
+    /// objects move the point (`at`) but not its ground location.
     pub ground: Vector3<f64>,
+    /// Where the point is now, in ground: what the next wrap computation
+    /// starts from and where a tension acts (OpenSim's `getLocation`).
+    pub at: Vector3<f64>,
 }
 
 /// Reusable per-path workspace.
@@ -106,11 +114,13 @@ pub fn evaluate(
         if is_active(path, i, data) {
             let body = path.points[i].body;
             let local = point_local(model, path, i, data);
+            let ground = data.station_position(body, &local);
             st.points.push(CurrentPoint {
                 origin: Origin::Point(i),
                 body,
                 local,
-                ground: data.station_position(body, &local),
+                ground,
+                at: ground,
             });
         }
     }
@@ -133,6 +143,9 @@ fn apply_wrap_objects(
     let mut result = vec![WrapAction::NoWrap; n];
     let mut last_length = f64::INFINITY;
     let npts = path.points.len();
+    // Ground locations of each path wrap's two tangent points as first set
+    // in this evaluation (see `CurrentPoint::ground`).
+    let mut latched: Vec<Option<[Vector3<f64>; 2]>> = vec![None; n];
     for kk in 0..max_iter {
         for i in 0..n {
             let wi = order[i];
@@ -188,8 +201,8 @@ fn apply_wrap_objects(
                 if same_other_wrap {
                     continue;
                 }
-                let p1 = to_wrap(&st.points[pt1].ground);
-                let p2 = to_wrap(&st.points[pt2].ground);
+                let p1 = to_wrap(&st.points[pt1].at);
+                let p2 = to_wrap(&st.points[pt2].at);
                 let wr = wrap_line(&wo.object, pw.wrap.method, p1, p2, n == 1);
                 result[i] = wr.action;
                 match wr.action {
@@ -198,9 +211,15 @@ fn apply_wrap_objects(
                         break;
                     }
                     WrapAction::Wrapped => {
-                        let straight = (p2 - p1).norm();
+                        // OpenSim's calcPathLengthChange reads the ends'
+                        // ground locations (latched for tangent points).
+                        let (g1, g2) = (
+                            to_wrap(&st.points[pt1].ground),
+                            to_wrap(&st.points[pt2].ground),
+                        );
+                        let straight = (g2 - g1).norm();
                         let change =
-                            (wr.r1 - p1).norm() + wr.wrap_path_length + (p2 - wr.r2).norm()
+                            (wr.r1 - g1).norm() + wr.wrap_path_length + (g2 - wr.r2).norm()
                                 - straight;
                         if change < min_change {
                             min_change = change;
@@ -215,6 +234,11 @@ fn apply_wrap_objects(
                 let l1 = wo.rotation * wr.r1 + wo.translation;
                 let l2 = wo.rotation * wr.r2 + wo.translation;
                 st.wrap_length[wi] = wr.wrap_path_length;
+                let (a1, a2) = (
+                    data.station_position(body, &l1),
+                    data.station_position(body, &l2),
+                );
+                let [g1, g2] = *latched[wi].get_or_insert([a1, a2]);
                 let p1 = CurrentPoint {
                     origin: Origin::Wrap {
                         wrap: wi,
@@ -222,7 +246,8 @@ fn apply_wrap_objects(
                     },
                     body,
                     local: l1,
-                    ground: data.station_position(body, &l1),
+                    ground: g1,
+                    at: a1,
                 };
                 let p2 = CurrentPoint {
                     origin: Origin::Wrap {
@@ -231,7 +256,8 @@ fn apply_wrap_objects(
                     },
                     body,
                     local: l2,
-                    ground: data.station_position(body, &l2),
+                    ground: g2,
+                    at: a2,
                 };
                 st.points.insert(at, p1);
                 st.points.insert(at + 1, p2);
@@ -336,7 +362,7 @@ pub fn add_unit_tension_force(
     gen: &mut [f64],
 ) {
     for (p, e) in unit_pulls(st) {
-        jacobian::add_point_force(model, data, p.body, &p.ground, &e, gen);
+        jacobian::add_point_force(model, data, p.body, &p.at, &e, gen);
         if let Some((c, dp)) = moving_point_rate(path, data, p) {
             gen[c] += dp.dot(&e);
         }
@@ -361,7 +387,7 @@ pub fn add_tension_forces(
 ) {
     for (p, e) in unit_pulls(st) {
         let f = e * tension;
-        applied[p.body].add(&crate::dynamics::BodyForce::at_point(f, p.ground));
+        applied[p.body].add(&crate::dynamics::BodyForce::at_point(f, p.at));
         if let Some((c, dp)) = moving_point_rate(path, data, p) {
             gen[c] += dp.dot(&f);
         }
