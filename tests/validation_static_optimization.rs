@@ -295,3 +295,94 @@ fn static_optimization_matches_converged_opensim_arm26() {
         );
     }
 }
+
+/// moco_walk3d (Rajagopal-derived, 80 Millard muscles, walker knee with a
+/// patella coupler) with its setup_SO.xml unchanged. Muscles: every
+/// activation within 0.01 of OpenSim 4.6 and the RMS of each column within
+/// 0.003 (OpenSim's optimizer stops at 1e-4). The residual, reserve and
+/// model actuators are held to 0.02 / 0.005: on them OpenSim's own answer is
+/// not converged that far (rerun at tolerance 1e-10 with
+/// tests/reference_scripts/opensim_so_converged.py it moves by up to 0.0105,
+/// and it reports equation residuals of about 1.2e-3 on the frames where its
+/// assembler relaxes the patella coupler); statopt's residual_pelvis_tx
+/// differs by up to 0.011 (RMS 0.0033).
+#[test]
+fn moco_walk3d_static_optimization_matches_opensim() {
+    let Some(root) = common::validation_dir("moco_walk3d_static_optimization_matches_opensim")
+    else {
+        return;
+    };
+    let dir = root.join("moco_walk3d");
+    let setup = match Setup::read(&dir.join("setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("so_moco_walk3d");
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        precision: Some(12),
+        verbose: false,
+        ..Default::default()
+    };
+    let summary = analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(summary.failed, 0, "every frame solved");
+    let (spec, _) = statopt::tools::loading::load_model(&setup.model_file).unwrap();
+    let muscles: Vec<String> = spec
+        .forces
+        .iter()
+        .filter(|f| statopt::muscles::set::is_muscle(f))
+        .map(|f| f.name_attr().to_string())
+        .collect();
+    assert_eq!(muscles.len(), 80);
+    let base = format!("{}_StaticOptimization_", setup.name);
+    let ours = storage::read(&out.join(format!("{base}activation.sto"))).unwrap();
+    let reference =
+        storage::read(&dir.join("results").join(format!("{base}activation.sto"))).unwrap();
+    assert_eq!(ours.time.len(), reference.time.len(), "frame count");
+    let mut worst = [(0.0f64, String::new()), (0.0f64, String::new())];
+    let mut worst_rms = [(0.0f64, String::new()), (0.0f64, String::new())];
+    let mut failures = Vec::new();
+    for (j, label) in reference.labels.iter().enumerate() {
+        let k = ours
+            .column_index(label)
+            .unwrap_or_else(|| panic!("no column {label}"));
+        let is_muscle = muscles.contains(label);
+        let (max_tol, rms_tol) = if is_muscle {
+            (0.01, 0.003)
+        } else {
+            (0.02, 0.005)
+        };
+        let g = usize::from(!is_muscle);
+        let mut sum2 = 0.0;
+        for i in 0..reference.time.len() {
+            assert!((ours.time[i] - reference.time[i]).abs() < 1e-9);
+            let d = (ours.rows[i][k] - reference.rows[i][j]).abs();
+            sum2 += d * d;
+            if d > max_tol {
+                failures.push(format!("{label} t={}: {d:.3e}", reference.time[i]));
+            }
+            if d > worst[g].0 {
+                worst[g] = (d, format!("{label} t={:.3}", reference.time[i]));
+            }
+        }
+        let rms = (sum2 / reference.time.len() as f64).sqrt();
+        if rms > rms_tol {
+            failures.push(format!("{label}: RMS {rms:.3e}"));
+        }
+        if rms > worst_rms[g].0 {
+            worst_rms[g] = (rms, label.clone());
+        }
+    }
+    for (g, what) in ["muscles", "other actuators"].iter().enumerate() {
+        println!(
+            "moco_walk3d SO, {what}: worst |da| {:.2e} ({}), worst column RMS {:.2e} ({})",
+            worst[g].0, worst[g].1, worst_rms[g].0, worst_rms[g].1
+        );
+    }
+    assert!(
+        failures.is_empty(),
+        "{} out of tolerance, first: {:?}",
+        failures.len(),
+        &failures[..failures.len().min(10)]
+    );
+}
