@@ -386,3 +386,67 @@ fn moco_walk3d_static_optimization_matches_opensim() {
         &failures[..failures.len().min(10)]
     );
 }
+
+/// OpenSim Moco's coordinates.sto as users have it: its dependent columns
+/// (`knee_angle_*_beta`, set by the patella couplers) hold degrees in a
+/// radian file. statopt refused it; now, as OpenSim's assembler does, the
+/// couplers set those coordinates, the disagreement is said in a warning,
+/// and the activations equal the run on the corrected file bit for bit.
+#[test]
+fn dependent_coordinates_come_from_their_couplers_not_the_file() {
+    let Some(root) =
+        common::validation_dir("dependent_coordinates_come_from_their_couplers_not_the_file")
+    else {
+        return;
+    };
+    let dir = root.join("moco_walk3d");
+    let raw = root.join("../models/moco_walk3d/coordinates.sto");
+    if !raw.is_file() {
+        eprintln!(
+            "SKIP dependent_coordinates_come_from_their_couplers_not_the_file: {} is absent",
+            raw.display()
+        );
+        return;
+    }
+    let run = |coordinates: &std::path::Path, name: &str| {
+        let mut setup = match Setup::read(&dir.join("setup_SO.xml")).unwrap() {
+            Setup::Analyze(s) => s,
+            _ => unreachable!(),
+        };
+        setup.coordinates_file = Some(coordinates.to_path_buf());
+        let out = common::out_dir(name);
+        let opts = RunOptions {
+            results_dir: Some(out.clone()),
+            precision: Some(16),
+            verbose: false,
+            ..Default::default()
+        };
+        let s = analyze::run(&setup, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let text =
+            std::fs::read_to_string(out.join("walk3d_StaticOptimization_activation.sto")).unwrap();
+        let rows: Vec<String> = text
+            .lines()
+            .skip_while(|l| !l.starts_with("time"))
+            .map(String::from)
+            .collect();
+        (s.warnings, rows)
+    };
+    let (warnings, raw_rows) = run(&raw, "so_moco_raw_coordinates");
+    let (_, fixed_rows) = run(
+        &dir.join("inputs/coordinates_fixed.sto"),
+        "so_moco_fixed_coordinates",
+    );
+    for side in ["r", "l"] {
+        assert!(
+            warnings.iter().any(|w| w
+                .contains(&format!("dependent coordinate knee_angle_{side}_beta"))
+                && w.contains("coupler")),
+            "{warnings:?}"
+        );
+    }
+    assert_eq!(raw_rows.len(), 128, "header line and 127 frames");
+    assert!(
+        raw_rows == fixed_rows,
+        "activations differ between the raw and the corrected file"
+    );
+}

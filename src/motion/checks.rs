@@ -218,3 +218,57 @@ pub fn time_range_warnings(
     }
     out
 }
+
+/// How far a motion's values for coupler-driven (dependent) coordinates lie
+/// from what their couplers give. OpenSim's assembler solves dependent
+/// coordinates from their couplers whatever the file holds, and so does
+/// statopt; a file that disagrees (e.g. Moco's coordinates.sto, whose
+/// `knee_angle_*_beta` columns hold degrees in a radian file) is said, not
+/// refused.
+#[derive(Debug, Clone, Default)]
+pub struct DependentMismatch {
+    /// Per coupler of the model: largest |file − coupler value| and its time.
+    worst: Vec<(f64, f64)>,
+}
+
+/// A difference below this (rad or m) is rounding in the file.
+pub const DEPENDENT_TOLERANCE: f64 = 1e-6;
+
+impl DependentMismatch {
+    pub fn new(model: &Model) -> Self {
+        DependentMismatch {
+            worst: vec![(0.0, f64::NAN); model.couplers.len()],
+        }
+    }
+
+    /// Feed one row: `value(c)` gives coordinate c's file value (model
+    /// units), or None when the file has no column for it.
+    pub fn push(&mut self, model: &Model, t: f64, value: impl Fn(usize) -> Option<f64>) {
+        for (k, cp) in model.couplers.iter().enumerate() {
+            let (Some(dep), Some(ind)) = (value(cp.dependent), value(cp.independent[0])) else {
+                continue;
+            };
+            let d = (dep - cp.scale * cp.function.value(ind)).abs();
+            if d > self.worst[k].0 {
+                self.worst[k] = (d, t);
+            }
+        }
+    }
+
+    pub fn warnings(&self, model: &Model, file: &Path) -> Vec<String> {
+        model
+            .couplers
+            .iter()
+            .zip(&self.worst)
+            .filter(|(_, (d, _))| *d > DEPENDENT_TOLERANCE)
+            .map(|(cp, (d, t))| {
+                format!(
+                    "{}: the column of dependent coordinate {} differs from its coupler {} by up to {d:.4} (at t = {t}); the coupler's values are used, as OpenSim's assembler does",
+                    file.display(),
+                    model.coordinates[cp.dependent].name,
+                    cp.name
+                )
+            })
+            .collect()
+    }
+}

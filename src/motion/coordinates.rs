@@ -158,7 +158,10 @@ impl CoordinateSplines {
                         1.0
                     };
                     let v: Vec<f64> = table.rows.iter().map(|r| r[j] * scale).collect();
-                    check_units(c, table, j, &v, file)?;
+                    // Dependent coordinates are set by their couplers.
+                    if !c.dependent {
+                        check_units(c, table, j, &v, file)?;
+                    }
                     let s = GcvSpline::interpolating(degree, &table.time, &v).map_err(|e| {
                         e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
                     })?;

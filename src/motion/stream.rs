@@ -186,10 +186,18 @@ impl<'m> StateStream<'m> {
         // Pass 1: length and end times.
         let in_degrees = reader.table.in_degrees;
         drop(reader);
+        let mut dependent = super::checks::DependentMismatch::new(model);
         let mut check = |k: usize, t: f64, picked: &[f64]| -> Result<()> {
             steps.push(t);
-            // wrong units: values far outside a coordinate's range
+            dependent.push(model, t, |c| {
+                coord_cols[c].map(|(pos, scale)| picked[pos] * scale)
+            });
+            // wrong units: values far outside a coordinate's range (not for
+            // dependent coordinates: their couplers set them)
             for (c, cc) in model.coordinates.iter().zip(&coord_cols) {
+                if c.dependent {
+                    continue;
+                }
                 if let Some((pos, scale)) = *cc {
                     let label = &labels[pos];
                     let x = picked[pos] * scale;
@@ -201,7 +209,8 @@ impl<'m> StateStream<'m> {
             Ok(())
         };
         let index = index_file(file, &sel, &mut check)?;
-        let warnings = super::checks::time_warnings(file, &steps, cutoff)?;
+        let mut warnings = super::checks::time_warnings(file, &steps, cutoff)?;
+        warnings.extend(dependent.warnings(model, file));
         let unmatched_columns = super::checks::unmatched_columns(model, &all_labels);
         let (n, t0, tl) = (index.n, index.first.0, index.last.0);
         let p = if filtering && n >= 1 { n / 2 } else { 0 };
