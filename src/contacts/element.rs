@@ -22,6 +22,7 @@
 //! | `v_trans` | 0.1 | static/kinetic transition speed (m/s) |
 //! | `optimal_force` | 100 | F0 (N): force per unit multiplier |
 //! | `regime_blend` | 0 | statopt: slip-speed width (m/s) of a smooth static/kinetic transition centred on v_trans (0: the paper's hard switch; at most 2 v_trans); see [`super::kinematics`] |
+//! | `speed_weight` | off | statopt: two slip speeds `s_full s_zero` (m/s): the contact weakens with the slip speed of its point over the plane, full strength up to `s_full`, none from `s_zero` (a C¹ smoothstep between), multiplying w(d); AnyBody's ground-reaction prediction uses about `0.12 0.8`. Off (absent) by default, so the paper's model is unchanged |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
 //! The bodies may also be given as OpenSim-4 style sockets
@@ -91,6 +92,10 @@ pub struct Contact {
     /// Slip-speed width (m/s) of the smooth static/kinetic transition
     /// (`regime_blend`, statopt); 0: the paper's hard switch at v_trans.
     pub regime_blend: f64,
+    /// `speed_weight` (statopt): slip speeds (m/s) at which the contact
+    /// starts to weaken and is off; None: the weight does not depend on the
+    /// slip speed (the paper's model).
+    pub speed_weight: Option<(f64, f64)>,
     pub applies_force: bool,
 }
 
@@ -193,6 +198,19 @@ impl Contact {
                 2.0 * v_trans
             )));
         }
+        let speed_weight = match el.child("speed_weight") {
+            Some(w) if !w.text().trim().is_empty() => {
+                let v = w.numbers_n(2)?;
+                if !(v[0] >= 0.0 && v[1] > v[0] && v[1].is_finite()) {
+                    return Err(w.error(format!(
+                        "{} '{name}': <speed_weight> takes two slip speeds in m/s, full strength up to the first and none from the second (0 <= first < second), found {} {}",
+                        el.name, v[0], v[1]
+                    )));
+                }
+                Some((v[0], v[1]))
+            }
+            _ => None,
+        };
         Ok(Some(Contact {
             name,
             type_name: el.name.clone(),
@@ -210,6 +228,7 @@ impl Contact {
             v_trans,
             optimal_force,
             regime_blend,
+            speed_weight,
             applies_force: applies_force(el)?,
         }))
     }

@@ -68,7 +68,8 @@ pub enum Regime {
 pub struct ContactState {
     /// Signed point-to-plane distance d, positive on the normal side.
     pub distance: f64,
-    /// w(d) of eq. 8 ([`weight`]); 1 when d_tol < 0.
+    /// w(d) of eq. 8 ([`weight`]); 1 when d_tol < 0. Times the slip-speed
+    /// factor ([`Contact::speed_factor`]) when `speed_weight` is given.
     pub weight: f64,
     /// p: the point (on body A).
     pub point_ground: Vector3<f64>,
@@ -126,7 +127,7 @@ impl Contact {
         let beta = self.kinetic_share(slip_speed);
         ContactState {
             distance: d,
-            weight: weight(d, self.d_tol, self.d_trans),
+            weight: weight(d, self.d_tol, self.d_trans) * self.speed_factor(slip_speed),
             point_ground: p,
             projection_ground: p_star,
             normal_ground: n,
@@ -140,6 +141,19 @@ impl Contact {
             } else {
                 Regime::Static
             },
+        }
+    }
+
+    /// The slip-speed factor of the weight (`speed_weight`, statopt): 1 up
+    /// to s_full, 0 from s_zero, the C¹ smoothstep 1 − (3x² − 2x³) between
+    /// (x = (s − s_full)/(s_zero − s_full)); 1 when the property is absent.
+    pub fn speed_factor(&self, s: f64) -> f64 {
+        match self.speed_weight {
+            None => 1.0,
+            Some((full, zero)) => {
+                let x = ((s - full) / (zero - full)).clamp(0.0, 1.0);
+                1.0 - x * x * (3.0 - 2.0 * x)
+            }
         }
     }
 

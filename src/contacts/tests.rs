@@ -763,3 +763,41 @@ fn bad_input_is_a_located_error() {
         "<point_body>rod</point_body><contact_transition_zone>0</contact_transition_zone>",
     );
 }
+
+/// `speed_weight` (statopt): the weight falls with the slip speed from full
+/// strength at s_full to none at s_zero, times w(d); without the property the
+/// weight is the paper's w(d) at any slip speed.
+#[test]
+fn speed_weight_weakens_a_sliding_contact() {
+    let m = test_model();
+    let p = Vector3::new(0.5, -0.6, 0.1);
+    let props = format!(
+        "<point_body>ground</point_body><point_location>{}</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>",
+        v3(p.into())
+    );
+    let plain = contact(&m, &props);
+    let weighted = contact(&m, &format!("{props}<speed_weight>0.12 0.8</speed_weight>"));
+    let q: f64 = 0.3;
+    let (s, co) = q.sin_cos();
+    let k = (-p.y * co + p.x * s).abs(); // slip speed = |ω| k
+    for (speed, want) in [(0.0, 1.0), (0.12, 1.0), (0.46, 0.5), (0.8, 0.0), (2.0, 0.0)] {
+        let d = data_at(&m, &[("qs", q)], &[("qs", speed / k)]);
+        let (a, b) = (plain.state(&m, &d), weighted.state(&m, &d));
+        assert!((a.slip_speed - speed).abs() < 1e-12);
+        assert_eq!(a.weight, 1.0, "no speed effect without the property");
+        assert!(
+            (b.weight - want).abs() < 1e-12,
+            "s = {speed}: weight {}",
+            b.weight
+        );
+    }
+    // Monotone and C¹ in between: the smoothstep's slope vanishes at both ends.
+    let f = |s: f64| weighted.speed_factor(s);
+    assert!((f(0.12 + 1e-7) - 1.0).abs() < 1e-12 && f(0.8 - 1e-7) < 1e-12);
+    let xs: Vec<f64> = (0..=100).map(|i| 0.1 + 0.72 * i as f64 / 100.0).collect();
+    assert!(xs.windows(2).all(|w| f(w[1]) <= f(w[0])));
+    // Bad values are refused with the element's location.
+    let e = contact_err(&m, &format!("<PointOnPlaneContact name=\"c\">{props}<speed_weight>0.8 0.12</speed_weight></PointOnPlaneContact>"));
+    assert!(e.contains("speed_weight") && e.contains("line"), "{e}");
+}

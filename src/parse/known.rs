@@ -69,6 +69,7 @@ const CONTACT_PROPERTIES: &[&str] = &[
     "v_trans",
     "optimal_force",
     "regime_blend",
+    "speed_weight",
     "appliesForce",
     "isDisabled",
 ];
