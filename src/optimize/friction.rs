@@ -23,17 +23,35 @@
 //! interior-point method).
 use std::f64::consts::FRAC_1_SQRT_2;
 
-use super::problem::StaticContact;
+/// A contact in the static friction regime (Krüger & Wartzack 2017, eq. 2
+/// and 16): indices of its normal multiplier λn and its two shear
+/// multipliers λs1, λs2 among the problem variables, and the static friction
+/// coefficient μ_s. The friction constraint couples them as
+/// ‖(λs1, λs2)‖ ≤ μ_s λn (approximated according to
+/// [`super::FrameProblem::friction`]). The unilateral bound λn ≥ 0 (eq. 10) is not
+/// implied by this struct: set it through [`super::FrameProblem::lower`]. (Any of the
+/// friction models does force λn ≥ 0 when μ_s > 0.)
+///
+/// Contacts in the kinetic regime are not listed here: their shear force is
+/// a fixed multiple of the normal force (eq. 3) and belongs in the columns
+/// of `A` that the physics layer builds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticContact {
+    pub normal: usize,
+    pub shear: [usize; 2],
+    pub mu: f64,
+}
 
-/// Representation of the static friction cone.
+/// Representation of the static friction cone. The default is the exact
+/// cone, as a StaticOptimization without `<friction_cone>` uses (README).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FrictionModel {
     /// Four-sided circumscribed pyramid, eq. 16 of the paper.
-    #[default]
     Pyramid4,
     /// Eight-sided circumscribed pyramid (faces tangent to the cone every 45°).
     Pyramid8,
     /// Exact second-order cone ‖(λs1, λs2)‖ ≤ μ_s λn (eq. 2).
+    #[default]
     Cone,
 }
 

@@ -4,26 +4,8 @@ use std::time::Duration;
 use nalgebra::{DMatrix, DVector};
 
 use super::friction::FrictionModel;
+pub use super::friction::StaticContact;
 use crate::{Error, Result};
-
-/// A contact in the static friction regime (Krüger & Wartzack 2017, eq. 2
-/// and 16): indices of its normal multiplier λn and its two shear
-/// multipliers λs1, λs2 among the problem variables, and the static friction
-/// coefficient μ_s. The friction constraint couples them as
-/// ‖(λs1, λs2)‖ ≤ μ_s λn (approximated according to
-/// [`FrameProblem::friction`]). The unilateral bound λn ≥ 0 (eq. 10) is not
-/// implied by this struct: set it through [`FrameProblem::lower`]. (Any of the
-/// friction models does force λn ≥ 0 when μ_s > 0.)
-///
-/// Contacts in the kinetic regime are not listed here: their shear force is
-/// a fixed multiple of the normal force (eq. 3) and belongs in the columns
-/// of `A` that the physics layer builds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StaticContact {
-    pub normal: usize,
-    pub shear: [usize; 2],
-    pub mu: f64,
-}
 
 /// Solver settings.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -700,3 +700,31 @@ fn degenerate_problems_do_not_panic() {
     assert_eq!(sol.status, SolveStatus::Infeasible);
     assert_close(sol.x[0], 1.5, 1e-5, "elastic compromise");
 }
+
+/// The friction model a StaticOptimization uses without `<friction_cone>`
+/// is `FrictionModel::default()`, and both are the exact cone the README
+/// promises (the type's default used to be the pyramid).
+#[test]
+fn friction_default_is_the_cone_everywhere() {
+    use crate::optimize::friction::FrictionModel;
+    assert_eq!(FrictionModel::default(), FrictionModel::Cone);
+    let el = crate::xml::parse_str(
+        "<StaticOptimization name=\"SO\"/>",
+        std::path::Path::new("setup.xml"),
+    )
+    .unwrap();
+    let common = crate::parse::setup::AnalysisCommon {
+        name: "SO".into(),
+        on: true,
+        step_interval: 1,
+        in_degrees: false,
+    };
+    let so =
+        crate::tools::static_optimization::StaticOptimizationSetup::from_xml(&el, common).unwrap();
+    assert_eq!(so.friction, FrictionModel::Cone);
+    let readme = include_str!("../../README.md");
+    assert!(
+        readme.contains("**Exact friction cone.**"),
+        "README states the cone default"
+    );
+}

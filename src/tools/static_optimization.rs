@@ -138,7 +138,7 @@ impl StaticOptimizationSetup {
                     "pyramid8" => FrictionModel::Pyramid8,
                     other => return Err(f.error(format!("friction_cone must be 'cone', 'pyramid' (four-sided, the paper's eq. 16) or 'pyramid8', found '{other}'"))),
                 },
-                _ => FrictionModel::Cone,
+                _ => FrictionModel::default(),
             },
             constraint_matrix: match el.child("constraint_matrix") {
                 Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
