@@ -22,6 +22,7 @@
 //! | `v_trans` | 0.1 | static/kinetic transition speed (m/s) |
 //! | `optimal_force` | 100 | F0 (N): force per unit multiplier |
 //! | `regime_blend` | 0 | statopt: slip-speed width (m/s) of a smooth static/kinetic transition centred on v_trans (0: the paper's hard switch; at most 2 v_trans); see [`super::kinematics`] |
+//! | `plane_velocity` | `0 0 0` | statopt: velocity (m/s, plane body frame) of the plane's surface relative to its body, e.g. a treadmill belt `-1.2 0 0`; slip is taken against the moving surface. 0: the paper's rigid plane |
 //! | `speed_weight` | off | statopt: two slip speeds `s_full s_zero` (m/s): the contact weakens with the slip speed of its point over the plane, full strength up to `s_full`, none from `s_zero` (a C¹ smoothstep between), multiplying w(d); AnyBody's ground-reaction prediction uses about `0.12 0.8`. Off (absent) by default, so the paper's model is unchanged |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
@@ -96,6 +97,10 @@ pub struct Contact {
     /// starts to weaken and is off; None: the weight does not depend on the
     /// slip speed (the paper's model).
     pub speed_weight: Option<(f64, f64)>,
+    /// `plane_velocity` (statopt): velocity of the plane's surface relative
+    /// to its body (a treadmill belt), given in the plane's frame like
+    /// `plane_normal` and kept in the body's; zero for the paper's rigid plane.
+    pub surface_velocity: Vector3<f64>,
     pub applies_force: bool,
 }
 
@@ -198,6 +203,16 @@ impl Contact {
                 2.0 * v_trans
             )));
         }
+        // Given in the plane's frame, like plane_normal; kept in the body's.
+        let surface_velocity =
+            plane_frame.transform.rotation * finite_vec3(el, "plane_velocity", [0.0; 3])?;
+        if surface_velocity.dot(&normal).abs() > 1e-9 * (1.0 + surface_velocity.norm()) {
+            return Err(at(el, "plane_velocity").error(format!(
+                "{} '{name}': <plane_velocity> is the velocity of the plane's surface and must lie in the plane (its component along the normal is {})",
+                el.name,
+                surface_velocity.dot(&normal)
+            )));
+        }
         let speed_weight = match el.child("speed_weight") {
             Some(w) if !w.text().trim().is_empty() => {
                 let v = w.numbers_n(2)?;
@@ -229,6 +244,7 @@ impl Contact {
             optimal_force,
             regime_blend,
             speed_weight,
+            surface_velocity,
             applies_force: applies_force(el)?,
         }))
     }

@@ -119,8 +119,11 @@ impl Contact {
         let n = r_b * self.normal;
         let d = (p - o).dot(&n);
         let p_star = p - n * d;
-        // Velocity of p relative to the material point of B at p.
-        let v_b = data.velocity[b] + data.omega[b].cross(&(p - data.position[b]));
+        // Velocity of p relative to the material point of B's surface at p
+        // (a moving surface, `plane_velocity`, slides over B).
+        let v_b = data.velocity[b]
+            + data.omega[b].cross(&(p - data.position[b]))
+            + r_b * self.surface_velocity;
         let v_rel = data.station_velocity(a, &self.point) - v_b;
         let slip = v_rel - n * v_rel.dot(&n);
         let slip_speed = slip.norm();

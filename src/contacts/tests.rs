@@ -801,3 +801,37 @@ fn speed_weight_weakens_a_sliding_contact() {
     let e = contact_err(&m, &format!("<PointOnPlaneContact name=\"c\">{props}<speed_weight>0.8 0.12</speed_weight></PointOnPlaneContact>"));
     assert!(e.contains("speed_weight") && e.contains("line"), "{e}");
 }
+
+/// `plane_velocity` (statopt): slip is taken against the plane's moving
+/// surface. A point at rest over a belt running at +1 m/s slips at −1 m/s
+/// (kinetic); a point moving with the belt does not slip (static).
+#[test]
+fn plane_velocity_makes_slip_relative_to_a_moving_surface() {
+    let m = test_model();
+    let props = "<point_body>ground</point_body><point_location>0.5 -0.6 0.1</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>";
+    let belt = contact(
+        &m,
+        &format!("{props}<plane_velocity>1 0 0</plane_velocity>"),
+    );
+    let still = contact(&m, props);
+    // The plate at rest (q = 0, no speed): the point is at rest over it.
+    let d = data_at(&m, &[("qs", 0.0)], &[("qs", 0.0)]);
+    let (a, b) = (still.state(&m, &d), belt.state(&m, &d));
+    assert_eq!(a.slip_speed, 0.0);
+    assert!(
+        close(&b.slip_velocity, &Vector3::new(-1.0, 0.0, 0.0), 1e-15),
+        "{}",
+        b.slip_velocity
+    );
+    assert_eq!(b.regime, Regime::Kinetic);
+    // Rotated plate: the surface velocity turns with it (plane frame).
+    let q: f64 = 0.3;
+    let d = data_at(&m, &[("qs", q)], &[("qs", 0.0)]);
+    let b = belt.state(&m, &d);
+    let t = Vector3::new(q.cos(), q.sin(), 0.0);
+    assert!(close(&b.slip_velocity, &(-t), 1e-14), "{}", b.slip_velocity);
+    // A velocity off the plane is refused with the element's location.
+    let e = contact_err(&m, &format!("<PointOnPlaneContact name=\"c\">{props}<plane_velocity>0 1 0</plane_velocity></PointOnPlaneContact>"));
+    assert!(e.contains("plane_velocity") && e.contains("line"), "{e}");
+}

@@ -70,6 +70,7 @@ const CONTACT_PROPERTIES: &[&str] = &[
     "optimal_force",
     "regime_blend",
     "speed_weight",
+    "plane_velocity",
     "appliesForce",
     "isDisabled",
 ];
