@@ -453,3 +453,39 @@ fn output_headers_carry_the_version_and_the_setup() {
     }
     assert!(n >= 7, "only {n} tables");
 }
+
+/// What residual actuators on the root joint carried is reported in N and as
+/// a share of body weight, with a warning above 5 %: here the block's three
+/// point actuators are its only support, so they carry all its weight.
+#[test]
+fn root_residuals_are_reported_against_body_weight() {
+    let dir = common::out_dir("outputs_root_residuals");
+    std::fs::write(dir.join("block.osim"), common::block_model("")).unwrap();
+    std::fs::write(dir.join("motion.mot"), motion(21, 0.01)).unwrap();
+    let setup = r#"<OpenSimDocument Version="40000"><AnalyzeTool name="block"><model_file>block.osim</model_file><results_directory>out</results_directory>
+<AnalysisSet name="Analyses"><objects><StaticOptimization name="SO"/></objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#;
+    std::fs::write(dir.join("setup.xml"), setup).unwrap();
+    let s = match Setup::read(&dir.join("setup.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let summary = analyze::run(&s, &RunOptions::default()).unwrap();
+    let bw = summary.root_body_weight.expect("the block's weight");
+    assert!((bw - 10.0 * G).abs() < 1e-9, "{bw}");
+    let (f, _) = summary.root_force_peak.clone().expect("root residual peak");
+    // The lift actuator holds the weight (the motion has no vertical part).
+    assert!((f - 10.0 * G).abs() < 1e-3 * f, "{f}");
+    assert!(summary
+        .report()
+        .iter()
+        .any(|l| l.contains("% of body weight")));
+    assert!(
+        summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("% of body weight") && w.contains("more than 5 %")),
+        "{:?}",
+        summary.warnings
+    );
+}

@@ -190,6 +190,22 @@ impl Model {
         let j = &self.joints[b];
         j.parent_body == 0 && j.nq >= 3
     }
+    /// Mass of body `b` and of every body carried by it (kg).
+    pub fn subtree_mass(&self, b: usize) -> f64 {
+        (0..self.bodies.len())
+            .filter(|&k| {
+                let mut at = Some(k);
+                while let Some(i) = at {
+                    if i == b {
+                        return true;
+                    }
+                    at = self.bodies[i].parent;
+                }
+                false
+            })
+            .map(|k| self.bodies[k].mass)
+            .sum()
+    }
     pub fn coordinate_index(&self, name: &str) -> Option<usize> {
         self.coordinates.iter().position(|c| c.name == name)
     }

@@ -55,6 +55,9 @@ pub struct RunSummary {
     /// joint's coordinates: force (N) and moment (N·m), with where.
     pub root_force_peak: Option<(f64, String)>,
     pub root_moment_peak: Option<(f64, String)>,
+    /// Weight (N) of what the root joint carries: the body weight residual
+    /// forces are compared with.
+    pub root_body_weight: Option<f64>,
     /// Information lines (timings), not warnings.
     pub notes: Vec<String>,
     /// Folders the outputs went to.
@@ -100,6 +103,7 @@ impl RunSummary {
         keep_max(&mut self.reserve_peak, other.reserve_peak);
         keep_max(&mut self.root_force_peak, other.root_force_peak);
         keep_max(&mut self.root_moment_peak, other.root_moment_peak);
+        self.root_body_weight = self.root_body_weight.or(other.root_body_weight);
         self.notes.extend(other.notes);
         for d in other.results_dirs {
             if !self.results_dirs.contains(&d) {
@@ -146,8 +150,12 @@ impl RunSummary {
             ));
         }
         if let Some((v, at)) = &self.root_force_peak {
+            let share = match self.root_body_weight {
+                Some(bw) if bw > 0.0 => format!(" ({:.1} % of body weight)", 100.0 * v / bw),
+                _ => String::new(),
+            };
             out.push(format!(
-                "residual actuators on the root joint carried at most {v:.3} N, {at}"
+                "residual actuators on the root joint carried at most {v:.3} N{share}, {at}"
             ));
         }
         if let Some((v, at)) = &self.root_moment_peak {

@@ -193,6 +193,9 @@ fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -
     }
 }
 
+/// Root residual force, as a share of body weight, above which a run warns.
+pub const ROOT_RESIDUAL_WARNING: f64 = 0.05;
+
 /// w0 when a StaticOptimization has no `<contact_weight>`.
 pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;
 
@@ -1464,6 +1467,21 @@ fn run_once(
             list.join(", ")
         ));
     }
+    // Residual forces on the root above a few % of body weight mean the
+    // motion and the model's forces do not balance: say so.
+    let root_body_weight = root_rows.first().map(|&(k, _)| {
+        let body = problem.model.coordinates[problem.rows[k]].body;
+        problem.model.subtree_mass(body) * problem.model.gravity.norm()
+    });
+    if let (Some(bw), Some((f, at))) = (root_body_weight, &root_peaks[0]) {
+        if bw > 0.0 && *f > ROOT_RESIDUAL_WARNING * bw {
+            warnings.push(format!(
+                "residual actuators on the root joint carried up to {f:.1} N = {:.1} % of body weight ({at}; more than {:.0} %): the motion and the model's forces do not balance there, so muscle and contact forces near those frames are doubtful",
+                100.0 * f / bw,
+                100.0 * ROOT_RESIDUAL_WARNING
+            ));
+        }
+    }
     Ok(RunSummary {
         frames: nframes,
         files,
@@ -1476,6 +1494,7 @@ fn run_once(
             .map(|f| format!("{f}; see {}", diag_path.display())),
         worst_residual,
         reserve_peak: (!reserve_vars.is_empty()).then_some(reserve_peak),
+        root_body_weight,
         root_force_peak: root_peaks[0].clone(),
         root_moment_peak: root_peaks[1].clone(),
         notes: vec![format!(
