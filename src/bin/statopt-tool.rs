@@ -108,6 +108,21 @@ enum Command {
         #[arg(short = 'o', long = "output", value_name = "FILE")]
         output: PathBuf,
     },
+    /// Predict ground reactions from kinematics alone: the setup's static optimization with foot
+    /// contacts built from the model's feet; its external loads, if any, are the measured
+    /// reference (not applied). Writes <name>_predicted_grf.sto, <name>_foot_contacts.xml and,
+    /// with measured loads, <name>_grf_comparison.csv.
+    #[command(name = "predict-grf")]
+    PredictGrf {
+        /// An AnalyzeTool setup with a StaticOptimization analysis.
+        setup: PathBuf,
+        /// Write results here instead of the setup's <results_directory>.
+        #[arg(short = 'o', long = "results-dir", value_name = "DIR")]
+        results_dir: Option<PathBuf>,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Write a .mot in which a coordinate moves from --from to --to along a minimum-jerk
     /// (bell-shaped velocity) profile; every other coordinate stays at its default value.
     Motion {
@@ -377,6 +392,63 @@ fn main() -> ExitCode {
                         );
                     }
                     ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Some(Command::PredictGrf {
+            setup,
+            results_dir,
+            quiet,
+        }) => {
+            let opts = RunOptions {
+                results_dir: results_dir.clone(),
+                verbose: !quiet,
+                ..Default::default()
+            };
+            let run = match Setup::read(setup) {
+                Ok(Setup::Analyze(s)) => tools::predict_grf::run(&s, &opts),
+                Ok(_) => Err(statopt::Error::msg(
+                    "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
+                )),
+                Err(e) => Err(e),
+            };
+            match run {
+                Ok(p) => {
+                    if !quiet {
+                        let mut said = std::collections::HashSet::new();
+                        for w in p
+                            .summary
+                            .warnings
+                            .iter()
+                            .filter(|w| said.insert(w.as_str()))
+                        {
+                            eprintln!("warning: {w}");
+                        }
+                        eprintln!(
+                            "foot contacts: {} points, floor at y = {:.4} m, belt velocity ({:.3}, {:.3}) m/s",
+                            p.contacts.points.len(),
+                            p.contacts.floor_height,
+                            p.contacts.belt_velocity.x,
+                            p.contacts.belt_velocity.z
+                        );
+                        for m in &p.metrics {
+                            eprintln!(
+                                "foot {} axis {}: rho {:.3}, RMSE {:.1} N = {:.2} % BW, peak error {:.1} N",
+                                m.side, m.axis, m.rho, m.rmse_n, m.rmse_bw, m.peak_error_n
+                            );
+                        }
+                        for line in p.summary.report() {
+                            eprintln!("{line}");
+                        }
+                    }
+                    match p.summary.failure_line() {
+                        Some(line) => {
+                            eprintln!("error: {line}");
+                            ExitCode::from(tools::EXIT_FRAMES_FAILED)
+                        }
+                        None => ExitCode::SUCCESS,
+                    }
                 }
                 Err(e) => fail(e),
             }

@@ -6,8 +6,11 @@
 //!   (`PointOnPlaneContact`, or the original plugin's `ContactPointOnPlane`);
 //! - [`kinematics`]: per-frame geometry ([`ContactState`]: distance, weight
 //!   w(d), projection p*, slip velocity, friction regime), the generalized
-//!   force of each multiplier, and the contact forces for output.
+//!   force of each multiplier, and the contact forces for output;
+//! - [`feet`]: foot contact sets built from a model's feet and the motion,
+//!   for ground-reaction prediction.
 pub mod element;
+pub mod feet;
 pub mod kinematics;
 #[cfg(test)]
 mod tests;

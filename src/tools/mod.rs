@@ -11,6 +11,7 @@ pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;
 pub mod perturbation;
+pub mod predict_grf;
 pub mod progress;
 pub mod reduce;
 pub mod static_optimization;
