@@ -13,13 +13,15 @@ use statopt::tools::RunOptions;
 
 mod common;
 
-fn predict(case: &str) -> Option<(Vec<AxisMetrics>, predict_grf::Prediction)> {
+/// Run predict-grf on a validation case into its own folder `predict_grf_<tag>`
+/// (tests run in parallel).
+fn predict(case: &str, tag: &str) -> Option<(Vec<AxisMetrics>, predict_grf::Prediction)> {
     let root = common::validation_dir(&format!("predict_grf {case}"))?;
     let setup = match Setup::read(&root.join(case).join("setup_SO.xml")).unwrap() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };
-    let out = common::out_dir(&format!("predict_grf_{case}"));
+    let out = common::out_dir(&format!("predict_grf_{tag}"));
     let opts = RunOptions {
         results_dir: Some(out.clone()),
         verbose: false,
@@ -56,7 +58,7 @@ fn mean(metrics: &[AxisMetrics], axis: char) -> (f64, f64) {
 
 #[test]
 fn gait10dof18musc_treadmill_walk_against_force_plates() {
-    let Some((metrics, p)) = predict("gait10dof18musc_walk") else {
+    let Some((metrics, p)) = predict("gait10dof18musc_walk", "gait10dof") else {
         return;
     };
     // Treadmill: the stance feet move back at about 1.1 m/s.
@@ -81,7 +83,7 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
 
 #[test]
 fn moco_walk3d_overground_walk_against_force_plates() {
-    let Some((metrics, p)) = predict("moco_walk3d") else {
+    let Some((metrics, p)) = predict("moco_walk3d", "moco") else {
         return;
     };
     assert_eq!(p.contacts.belt_velocity.norm(), 0.0, "overground: no belt");
@@ -113,5 +115,71 @@ fn a_model_without_calcn_and_toes_is_told_what_to_provide() {
     assert!(
         e.contains("calcn_r") && e.contains("force_set_files"),
         "{e}"
+    );
+}
+
+/// The predicted loads are an OpenSim ExternalLoads pair that replaces the
+/// measured one: fed into statopt's InverseDynamicsTool (the case's
+/// setup_ID.xml with the prediction as its external loads) they balance the
+/// pelvis about as well as the force plates do, where without any ground
+/// reaction the pelvis would carry the whole body.
+#[test]
+fn predicted_loads_replace_the_measured_ones_in_inverse_dynamics() {
+    let Some((_, p)) = predict("gait10dof18musc_walk", "gait10dof_id") else {
+        return;
+    };
+    let root = common::validation_dir("predicted loads in ID").unwrap();
+    let case = root.join("gait10dof18musc_walk");
+    // The prediction's folder (not wiped: it holds the loads).
+    let out =
+        std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("predict_grf_gait10dof_id");
+    let xml = p
+        .summary
+        .files
+        .iter()
+        .find(|f| f.to_string_lossy().ends_with("_predicted_grf.xml"))
+        .expect("the ExternalLoads file")
+        .clone();
+    assert!(xml.is_file());
+    let pelvis_ty = |loads: Option<std::path::PathBuf>, tag: &str| -> f64 {
+        let mut id = match Setup::read(&case.join("setup_ID.xml")).unwrap() {
+            Setup::InverseDynamics(s) => s,
+            _ => unreachable!(),
+        };
+        id.external_loads_file = loads;
+        id.output_gen_force_file = format!("id_{tag}.sto");
+        let opts = RunOptions {
+            results_dir: Some(out.clone()),
+            verbose: false,
+            ..Default::default()
+        };
+        statopt::tools::inverse_dynamics::run(&id, &opts).unwrap_or_else(|e| panic!("{tag}: {e}"));
+        let t = statopt::storage::read(&out.join(format!("id_{tag}.sto"))).unwrap();
+        let j = t.column_index("pelvis_ty_force").unwrap();
+        // RMS over the frames of the prediction (the SO setup's time range).
+        let (t0, t1) = (p.predicted.time[0], *p.predicted.time.last().unwrap());
+        let v: Vec<f64> = t
+            .rows
+            .iter()
+            .zip(&t.time)
+            .filter(|(_, &s)| s >= t0 && s <= t1)
+            .map(|(r, _)| r[j])
+            .collect();
+        (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    let predicted = pelvis_ty(Some(xml), "predicted");
+    let measured = pelvis_ty(Some(case.join("inputs/subject01_walk_grf.xml")), "measured");
+    let none = pelvis_ty(None, "none");
+    println!(
+        "pelvis_ty residual force RMS: predicted loads {predicted:.1} N, force plates {measured:.1} N, no loads {none:.1} N (body weight {:.1} N)",
+        p.body_weight
+    );
+    assert!(
+        none > 0.8 * p.body_weight,
+        "without loads the pelvis carries the body"
+    );
+    assert!(
+        predicted < 0.1 * p.body_weight,
+        "predicted loads leave {predicted} N on the pelvis"
     );
 }

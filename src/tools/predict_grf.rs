@@ -97,6 +97,15 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     let out = dir.join(format!("{}_predicted_grf.sto", setup.name));
     write_foot_loads(&prediction.predicted, &out, &setup.setup_file)?;
     prediction.summary.files.push(out);
+    // The prediction as an OpenSim ExternalLoads pair: the measured file's
+    // layout when there is one, else one ExternalForce per foot with
+    // OpenSim's usual names.
+    let layout = match &measured_file {
+        Some(mf) => external_forces_of(mf)?,
+        None => default_layout(),
+    };
+    let (mot, xml) = write_external_loads(&prediction.predicted, &layout, &dir, &setup)?;
+    prediction.summary.files.extend([mot, xml]);
     if let Some(mf) = measured_file {
         let setup_dir = setup
             .setup_file
@@ -307,4 +316,121 @@ fn write_metrics(metrics: &[AxisMetrics], path: &PathBuf) -> Result<()> {
         .map_err(err)?;
     }
     w.flush().map_err(|e| Error::io(path, e))
+}
+
+/// One ExternalForce of a layout: its name, the foot body it is applied to
+/// and its data column identifiers.
+#[derive(Debug, Clone)]
+pub struct ForceLayout {
+    pub name: String,
+    pub body: String,
+    pub force_identifier: String,
+    pub point_identifier: String,
+    pub torque_identifier: String,
+}
+
+/// The ExternalForces of a measured ExternalLoads file (their columns are
+/// reused for the prediction).
+fn external_forces_of(path: &std::path::Path) -> Result<Vec<ForceLayout>> {
+    let root = crate::xml::parse_file(path)?;
+    let mut out = Vec::new();
+    let mut visit = vec![&root];
+    while let Some(el) = visit.pop() {
+        if el.name == "ExternalForce" {
+            let text = |n: &str| el.child_text(n).unwrap_or("").trim().to_string();
+            out.push(ForceLayout {
+                name: el.name_attr().to_string(),
+                body: text("applied_to_body"),
+                force_identifier: text("force_identifier"),
+                point_identifier: text("point_identifier"),
+                torque_identifier: text("torque_identifier"),
+            });
+        }
+        visit.extend(el.children.iter());
+    }
+    out.reverse();
+    Ok(out)
+}
+
+/// OpenSim's usual names: right foot `ground_force_v`, left `1_ground_force_v`.
+fn default_layout() -> Vec<ForceLayout> {
+    [("right", "calcn_r", ""), ("left", "calcn_l", "1_")]
+        .iter()
+        .map(|(name, body, prefix)| ForceLayout {
+            name: name.to_string(),
+            body: body.to_string(),
+            force_identifier: format!("{prefix}ground_force_v"),
+            point_identifier: format!("{prefix}ground_force_p"),
+            torque_identifier: format!("{prefix}ground_torque_"),
+        })
+        .collect()
+}
+
+/// Write `<name>_predicted_grf.mot` and `.xml`: per ExternalForce of the
+/// layout, the predicted loads of the foot of its body (force and point in
+/// ground, the free moment as a torque about the vertical).
+fn write_external_loads(
+    loads: &FootLoads,
+    layout: &[ForceLayout],
+    dir: &std::path::Path,
+    setup: &AnalyzeSetup,
+) -> Result<(PathBuf, PathBuf)> {
+    let mot = dir.join(format!("{}_predicted_grf.mot", setup.name));
+    let xml = dir.join(format!("{}_predicted_grf.xml", setup.name));
+    let mut labels = Vec::new();
+    for f in layout {
+        for id in [
+            &f.force_identifier,
+            &f.point_identifier,
+            &f.torque_identifier,
+        ] {
+            if !id.is_empty() {
+                labels.extend(["x", "y", "z"].iter().map(|a| format!("{id}{a}")));
+            }
+        }
+    }
+    let mut w = StoWriter::create_for_setup(
+        &setup.setup_file,
+        &mot,
+        "predicted_grf",
+        "Ground reactions predicted by statopt predict-grf (force N, point m, torque N m; ground frame).\n",
+        &labels,
+        8,
+        false,
+    )?;
+    for i in 0..loads.time.len() {
+        let mut row = Vec::with_capacity(labels.len());
+        for f in layout {
+            let s = usize::from(f.body.ends_with("_l"));
+            let force = loads.force[s][i];
+            let cop = loads.cop[s][i].map(|x| if x.is_finite() { x } else { 0.0 });
+            if !f.force_identifier.is_empty() {
+                row.extend(force.iter());
+            }
+            if !f.point_identifier.is_empty() {
+                row.extend(cop.iter());
+            }
+            if !f.torque_identifier.is_empty() {
+                row.extend([0.0, loads.free_moment[s][i], 0.0]);
+            }
+        }
+        w.write_row(loads.time[i], &row)?;
+    }
+    w.finish()?;
+    let mut objects = String::new();
+    for f in layout {
+        objects.push_str(&format!(
+            "\t\t\t<ExternalForce name=\"{}\">\n\t\t\t\t<applied_to_body>{}</applied_to_body>\n\t\t\t\t<force_expressed_in_body>ground</force_expressed_in_body>\n\t\t\t\t<point_expressed_in_body>ground</point_expressed_in_body>\n\t\t\t\t<force_identifier>{}</force_identifier>\n\t\t\t\t<point_identifier>{}</point_identifier>\n\t\t\t\t<torque_identifier>{}</torque_identifier>\n\t\t\t</ExternalForce>\n",
+            f.name, f.body, f.force_identifier, f.point_identifier, f.torque_identifier
+        ));
+    }
+    let datafile = mot
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let text = format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Ground reactions predicted by statopt predict-grf; replaces the measured loads in an OpenSim or statopt setup. -->\n<OpenSimDocument Version=\"40000\">\n\t<ExternalLoads name=\"predicted_grf\">\n\t\t<objects>\n{objects}\t\t</objects>\n\t\t<groups />\n\t\t<datafile>{datafile}</datafile>\n\t</ExternalLoads>\n</OpenSimDocument>\n"
+    );
+    std::fs::write(&xml, text).map_err(|e| Error::io(&xml, e))?;
+    Ok((mot, xml))
 }
