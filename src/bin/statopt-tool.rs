@@ -438,6 +438,12 @@ fn main() -> ExitCode {
                                 m.side, m.axis, m.rho, m.rmse_n, m.rmse_bw, m.peak_error_n
                             );
                         }
+                        for st in &p.stance {
+                            eprintln!(
+                                "foot {}: centre of pressure off by {:.0} mm over stance; heel strike {:.0} ms, toe-off {:.0} ms",
+                                st.side, st.cop_error_mm, st.heel_strike_error_ms, st.toe_off_error_ms
+                            );
+                        }
                         for line in p.summary.report() {
                             eprintln!("{line}");
                         }

@@ -51,7 +51,121 @@ pub struct Prediction {
     pub predicted: FootLoads,
     pub measured: Option<FootLoads>,
     pub metrics: Vec<AxisMetrics>,
+    /// Per foot: centre-of-pressure and event-timing errors over stance.
+    pub stance: Vec<StanceMetrics>,
     pub body_weight: f64,
+}
+
+/// Stance: vertical force above this (N).
+pub const STANCE_THRESHOLD: f64 = 20.0;
+
+/// Per foot, over stance: mean centre-of-pressure error in the floor plane
+/// (mm, frames where both vertical forces exceed [`STANCE_THRESHOLD`]) and
+/// mean timing error of heel strikes and toe-offs (ms, each measured event
+/// matched to the nearest predicted one of the same kind).
+#[derive(Debug, Clone)]
+pub struct StanceMetrics {
+    pub side: char,
+    pub cop_error_mm: f64,
+    pub heel_strike_error_ms: f64,
+    pub toe_off_error_ms: f64,
+}
+
+/// Times where the vertical force crosses the stance threshold upwards
+/// (heel strike) and downwards (toe-off).
+fn events(time: &[f64], fy: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (mut on, mut off) = (Vec::new(), Vec::new());
+    for i in 1..fy.len() {
+        let (a, b) = (fy[i - 1] > STANCE_THRESHOLD, fy[i] > STANCE_THRESHOLD);
+        if !a && b {
+            on.push(time[i]);
+        } else if a && !b {
+            off.push(time[i]);
+        }
+    }
+    (on, off)
+}
+
+fn event_error_ms(measured: &[f64], predicted: &[f64]) -> f64 {
+    if measured.is_empty() || predicted.is_empty() {
+        return f64::NAN;
+    }
+    let sum: f64 = measured
+        .iter()
+        .map(|m| {
+            predicted
+                .iter()
+                .map(|p| (p - m).abs())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .sum();
+    1000.0 * sum / measured.len() as f64
+}
+
+/// [`StanceMetrics`] of foot `s`.
+pub fn stance_metrics(side: char, pred: &FootLoads, meas: &FootLoads, s: usize) -> StanceMetrics {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..pred.time.len() {
+        if pred.force[s][i].y > STANCE_THRESHOLD && meas.force[s][i].y > STANCE_THRESHOLD {
+            let (a, b) = (pred.cop[s][i], meas.cop[s][i]);
+            let d = ((a.x - b.x).powi(2) + (a.z - b.z).powi(2)).sqrt();
+            if d.is_finite() {
+                sum += d;
+                n += 1;
+            }
+        }
+    }
+    let fy = |l: &FootLoads| l.force[s].iter().map(|f| f.y).collect::<Vec<f64>>();
+    let (pon, poff) = events(&pred.time, &fy(pred));
+    let (mon, moff) = events(&meas.time, &fy(meas));
+    StanceMetrics {
+        side,
+        cop_error_mm: if n > 0 {
+            1000.0 * sum / n as f64
+        } else {
+            f64::NAN
+        },
+        heel_strike_error_ms: event_error_ms(&mon, &pon),
+        toe_off_error_ms: event_error_ms(&moff, &poff),
+    }
+}
+
+/// Predicted over measured, one panel per axis, both feet.
+fn draw_comparison(
+    pred: &FootLoads,
+    meas: &FootLoads,
+    stem: &std::path::Path,
+) -> Result<Vec<PathBuf>> {
+    use crate::plots::{Chart, Layout, Series, Style};
+    let mut panels = Vec::new();
+    for (k, axis) in ["anteroposterior (x)", "vertical (y)", "mediolateral (z)"]
+        .iter()
+        .enumerate()
+    {
+        let mut chart = Chart {
+            title: format!("Ground reaction, {axis}"),
+            x_label: "time (s)".into(),
+            y_label: "force (N)".into(),
+            ..Chart::default()
+        };
+        for (s, side) in ["right", "left"].iter().enumerate() {
+            let y = |l: &FootLoads| l.force[s].iter().map(|f| f[k]).collect::<Vec<f64>>();
+            chart.series.push(Series::new(
+                &format!("{side}, measured"),
+                pred.time.clone(),
+                y(meas),
+                Style::dashed(s),
+            ));
+            chart.series.push(Series::new(
+                &format!("{side}, predicted"),
+                pred.time.clone(),
+                y(pred),
+                Style::color(s),
+            ));
+        }
+        panels.push(chart);
+    }
+    crate::plots::write_panels(&panels, stem, Layout::row(3))
 }
 
 /// Run the prediction for an AnalyzeTool setup with a StaticOptimization.
@@ -92,6 +206,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
         predicted,
         measured: None,
         metrics: Vec::new(),
+        stance: Vec::new(),
         body_weight,
     };
     let out = dir.join(format!("{}_predicted_grf.sto", setup.name));
@@ -114,9 +229,19 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
         let loads = ExternalLoads::load(&mf, setup_dir, &model)?;
         let measured = measured_foot_loads(&loads, &model, &states, &prediction.predicted.time)?;
         prediction.metrics = compare(&prediction.predicted, &measured, body_weight);
+        prediction.stance = ['r', 'l']
+            .into_iter()
+            .enumerate()
+            .map(|(s, side)| stance_metrics(side, &prediction.predicted, &measured, s))
+            .collect();
         let csv = dir.join(format!("{}_grf_comparison.csv", setup.name));
-        write_metrics(&prediction.metrics, &csv)?;
+        write_metrics(&prediction.metrics, &prediction.stance, &csv)?;
         prediction.summary.files.push(csv);
+        let stem = dir.join(format!("{}_grf_comparison", setup.name));
+        prediction
+            .summary
+            .files
+            .extend(draw_comparison(&prediction.predicted, &measured, &stem)?);
         prediction.measured = Some(measured);
     }
     Ok(prediction)
@@ -292,7 +417,7 @@ fn write_foot_loads(loads: &FootLoads, path: &PathBuf, setup: &std::path::Path) 
     w.finish()
 }
 
-fn write_metrics(metrics: &[AxisMetrics], path: &PathBuf) -> Result<()> {
+fn write_metrics(metrics: &[AxisMetrics], stance: &[StanceMetrics], path: &PathBuf) -> Result<()> {
     let err = |e: csv::Error| Error::input(Location::file(path), e.to_string());
     let mut w = csv::Writer::from_path(path).map_err(err)?;
     w.write_record([
@@ -302,9 +427,14 @@ fn write_metrics(metrics: &[AxisMetrics], path: &PathBuf) -> Result<()> {
         "rmse_N",
         "rmse_percent_bw",
         "peak_error_N",
+        "cop_error_mm",
+        "heel_strike_error_ms",
+        "toe_off_error_ms",
     ])
     .map_err(err)?;
     for m in metrics {
+        let st = stance.iter().find(|s| s.side == m.side);
+        let f = |v: Option<f64>| v.map(|x| format!("{x:.1}")).unwrap_or_default();
         w.write_record([
             m.side.to_string(),
             m.axis.to_string(),
@@ -312,6 +442,9 @@ fn write_metrics(metrics: &[AxisMetrics], path: &PathBuf) -> Result<()> {
             format!("{:.2}", m.rmse_n),
             format!("{:.2}", m.rmse_bw),
             format!("{:.2}", m.peak_error_n),
+            f(st.map(|s| s.cop_error_mm)),
+            f(st.map(|s| s.heel_strike_error_ms)),
+            f(st.map(|s| s.toe_off_error_ms)),
         ])
         .map_err(err)?;
     }
