@@ -192,31 +192,11 @@ fn mcap_log_has_every_channel_schema_and_frame() {
 fn a_killed_run_leaves_readable_tables_and_log() {
     let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization>";
     let (setup, out) = write_case("outputs_killed", 400_000, so);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
-        .arg(&setup)
-        .arg("--quiet")
-        .arg("--threads")
-        .arg("1")
-        .spawn()
-        .unwrap();
     let act_path = out.join("block_SO_activation.sto");
     let log_path = out.join("block_SO_log.mcap");
-    let start = Instant::now();
-    loop {
-        if let Ok(Some(status)) = child.try_wait() {
-            panic!("the run finished ({status}) before it could be killed; make the motion longer");
-        }
-        let rows = storage::read(&act_path).map(|t| t.time.len()).unwrap_or(0);
-        let log_size = std::fs::metadata(&log_path).map(|m| m.len()).unwrap_or(0);
-        if rows >= 3000 && log_size > 400_000 {
-            break;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(240),
-            "the run made too little progress ({rows} rows)"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let mut child = spawn_until(&setup, &act_path, 3000, || {
+        std::fs::metadata(&log_path).map(|m| m.len()).unwrap_or(0) > 400_000
+    });
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
     // Tables: every row the header announces is there, complete and finite.
@@ -248,6 +228,39 @@ fn a_killed_run_leaves_readable_tables_and_log() {
         act.time.len()
     );
     assert!(count > 0, "no complete MCAP chunk survived");
+}
+
+/// Start the tool on `setup` (one thread, quiet, stderr captured) and wait
+/// until its activation table holds `rows` rows and `more()` holds.
+fn spawn_until(
+    setup: &Path,
+    act_path: &Path,
+    rows: usize,
+    more: impl Fn() -> bool,
+) -> std::process::Child {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(setup)
+        .arg("--quiet")
+        .arg("--threads")
+        .arg("1")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if let Ok(Some(status)) = child.try_wait() {
+            panic!("the run finished ({status}) too early; make the motion longer");
+        }
+        let n = storage::read(act_path).map(|t| t.time.len()).unwrap_or(0);
+        if n >= rows && more() {
+            return child;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(240),
+            "the run made too little progress ({n} rows)"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
 
 /// The force file's labels stand over their own values when a force-set file
@@ -344,31 +357,9 @@ fn a_signal_stops_the_run_cleanly() {
     for (signal, code) in [("INT", 130), ("TERM", 143)] {
         let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization>";
         let (setup, out) = write_case(&format!("outputs_signal_{signal}"), 400_000, so);
-        let mut child = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
-            .arg(&setup)
-            .arg("--quiet")
-            .arg("--threads")
-            .arg("1")
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
         let act_path = out.join("block_SO_activation.sto");
         let log_path = out.join("block_SO_log.mcap");
-        let start = Instant::now();
-        loop {
-            if let Ok(Some(status)) = child.try_wait() {
-                panic!("the run finished ({status}) before the signal; make the motion longer");
-            }
-            let rows = storage::read(&act_path).map(|t| t.time.len()).unwrap_or(0);
-            if rows >= 2000 {
-                break;
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(240),
-                "too little progress ({rows} rows)"
-            );
-            std::thread::sleep(Duration::from_millis(50));
-        }
+        let child = spawn_until(&setup, &act_path, 2000, || true);
         let sent = Instant::now();
         let ok = Command::new("kill")
             .arg(format!("-{signal}"))

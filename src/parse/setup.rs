@@ -155,21 +155,28 @@ fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
 /// each (for `--check`, which reports all problems at once).
 pub fn missing_input_files(setup: &Path) -> Result<Vec<Error>> {
     let root = xml::parse_file(setup)?;
-    let tool = if root.name == "OpenSimDocument" {
-        match root.children.first() {
-            Some(t) => t,
-            None => return Ok(Vec::new()),
-        }
+    let tool = tool_element(&root)?;
+    Ok(missing_inputs(tool, &setup_dir(setup)))
+}
+
+/// The tool element of a setup document (the root, or the first child of
+/// an `OpenSimDocument`).
+fn tool_element(root: &Element) -> Result<&Element> {
+    if root.name == "OpenSimDocument" {
+        root.children
+            .first()
+            .ok_or_else(|| root.error("the setup holds no tool element"))
     } else {
-        &root
-    };
-    let dir = setup.parent().map(Path::to_path_buf).unwrap_or_default();
-    let dir = if dir.as_os_str().is_empty() {
-        PathBuf::from(".")
-    } else {
-        dir
-    };
-    Ok(missing_inputs(tool, &dir))
+        Ok(root)
+    }
+}
+
+/// The folder paths in a setup are relative to ("." for a bare file name).
+fn setup_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
 }
 
 fn missing_inputs(tool: &Element, dir: &Path) -> Vec<Error> {
@@ -219,19 +226,8 @@ fn opt_text(el: &Element, name: &str) -> Option<String> {
 impl Setup {
     pub fn read(path: &Path) -> Result<Setup> {
         let root = xml::parse_file(path)?;
-        let tool = if root.name == "OpenSimDocument" {
-            root.children
-                .first()
-                .ok_or_else(|| root.error("the setup holds no tool element"))?
-        } else {
-            &root
-        };
-        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let dir = if dir.as_os_str().is_empty() {
-            PathBuf::from(".")
-        } else {
-            dir
-        };
+        let tool = tool_element(&root)?;
+        let dir = setup_dir(path);
         if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {
             check_inputs_exist(tool, &dir)?;
         }
