@@ -5,7 +5,8 @@
 //! is not applied but kept as the measured reference; foot contacts built
 //! from the model's feet and the motion ([`crate::contacts::feet`]) are
 //! written to `<name>_foot_contacts.xml` in the results folder and added to
-//! the setup's force-set files; the setup runs as usual; the contacts'
+//! the setup's force-set files, whose root (pelvis) residuals are replaced
+//! by weak ones ([`ROOT_RESIDUAL_OPTIMAL_FORCE`]); the setup runs as usual; the contacts'
 //! forces are summed per foot into `<name>_predicted_grf.sto` (per foot:
 //! force, centre of pressure on the floor, free moment about the floor
 //! normal) and, with measured loads, compared in `<name>_grf_comparison.csv`.
@@ -186,9 +187,12 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
     std::fs::write(&contacts_file, contacts.force_set_xml())
         .map_err(|e| Error::io(&contacts_file, e))?;
+    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir)?;
+    setup.force_set_files = force_sets;
     setup.force_set_files.push(contacts_file.clone());
     let mut summary = analyze::run(&setup, opts)?;
-    summary.files.push(contacts_file);
+    written.push(contacts_file);
+    summary.files.extend(written);
     let (el, common) = setup
         .analysis_element("StaticOptimization")
         .expect("checked above");
@@ -566,4 +570,86 @@ fn write_external_loads(
     );
     std::fs::write(&xml, text).map_err(|e| Error::io(&xml, e))?;
     Ok((mot, xml))
+}
+
+/// Optimal force (N or N·m) of the weak root residuals predict-grf uses: 100 N
+/// on the pelvis costs as much as 100 muscles at full activation.
+pub const ROOT_RESIDUAL_OPTIMAL_FORCE: f64 = 1.0;
+
+/// One policy for the root (pelvis) residuals, whatever the setup defines:
+/// in each force-set file the actuators acting on the root joint only (point
+/// and torque actuators on the root body, coordinate actuators on its
+/// coordinates) are dropped (a filtered copy is written to the results
+/// folder), and one coordinate actuator per root coordinate, named
+/// `<coordinate>_residual`, with [`ROOT_RESIDUAL_OPTIMAL_FORCE`], is added
+/// in `<name>_root_residuals.xml`. The model's own ForceSet is left as it
+/// is. Returns the force-set files to use and the files written.
+fn weak_root_residuals(
+    setup: &AnalyzeSetup,
+    model: &crate::model::Model,
+    dir: &std::path::Path,
+) -> Result<(Vec<PathBuf>, Vec<PathBuf>)> {
+    let roots: Vec<usize> = (0..model.nq())
+        .filter(|&c| model.is_root_coordinate(c))
+        .collect();
+    if roots.is_empty() {
+        return Ok((setup.force_set_files.clone(), Vec::new()));
+    }
+    let root_body = model.bodies[model.coordinates[roots[0]].body].name.clone();
+    let root_names: Vec<&str> = roots
+        .iter()
+        .map(|&c| model.coordinates[c].name.as_str())
+        .collect();
+    let is_root_residual = |el: &crate::xml::Element| -> bool {
+        let text = |n: &str| el.child_text(n).map(str::trim).unwrap_or("");
+        let on_root_body = |n: &str| {
+            let b = text(n);
+            b == root_body || b.rsplit('/').next() == Some(root_body.as_str())
+        };
+        match el.name.as_str() {
+            "CoordinateActuator" => root_names.contains(&text("coordinate")),
+            "PointActuator" => on_root_body("body"),
+            "TorqueActuator" => on_root_body("bodyA") || on_root_body("bodyB"),
+            _ => false,
+        }
+    };
+    let mut files = Vec::new();
+    let mut written = Vec::new();
+    for (k, f) in setup.force_set_files.iter().enumerate() {
+        let mut root = crate::xml::parse_file(f)?;
+        let mut removed = 0;
+        let mut stack = vec![&mut root];
+        while let Some(el) = stack.pop() {
+            if el.name == "objects" {
+                let before = el.children.len();
+                el.children.retain(|c| !is_root_residual(c));
+                removed += before - el.children.len();
+            }
+            stack.extend(el.children.iter_mut());
+        }
+        if removed == 0 {
+            files.push(f.clone());
+            continue;
+        }
+        let out = dir.join(format!(
+            "{}_force_set_{k}_without_root_residuals.xml",
+            setup.name
+        ));
+        std::fs::write(&out, crate::parse::scene::to_xml_string(&root))
+            .map_err(|e| Error::io(&out, e))?;
+        files.push(out.clone());
+        written.push(out);
+    }
+    let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Weak root residuals of statopt predict-grf (docs/grf_prediction.md). -->\n<OpenSimDocument Version=\"40000\">\n\t<ForceSet name=\"root_residuals\">\n\t\t<objects>\n");
+    for name in &root_names {
+        xml.push_str(&format!(
+            "\t\t\t<CoordinateActuator name=\"{name}_residual\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{ROOT_RESIDUAL_OPTIMAL_FORCE}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
+        ));
+    }
+    xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
+    let out = dir.join(format!("{}_root_residuals.xml", setup.name));
+    std::fs::write(&out, xml).map_err(|e| Error::io(&out, e))?;
+    files.push(out.clone());
+    written.push(out);
+    Ok((files, written))
 }
