@@ -146,6 +146,14 @@ fn apply_wrap_objects(
     // Ground locations of each path wrap's two tangent points as first set
     // in this evaluation (see `CurrentPoint::ground`).
     let mut latched: Vec<Option<[Vector3<f64>; 2]>> = vec![None; n];
+    // OpenSim's PathWrap::previousWrap (tangent points, wrap frame): set by
+    // the best wrap of a pass, reset (to −∞) when a pass ends without one. A
+    // torus whose inner cylinder does not wrap still reports `wrapped`, with
+    // these points as its tangent points and no length: GeometryPath ranks
+    // that empty wrap by the length change through them, and if it wins, the
+    // object does not wrap on this pass. Reset at the start of an evaluation,
+    // as for a fresh model (results do not depend on evaluation order).
+    let mut previous: Vec<Option<[Vector3<f64>; 2]>> = vec![None; n];
     for kk in 0..max_iter {
         for i in 0..n {
             let wi = order[i];
@@ -207,10 +215,22 @@ fn apply_wrap_objects(
                 result[i] = wr.action;
                 match wr.action {
                     WrapAction::MandatoryWrap => {
+                        previous[wi] = Some([wr.r1, wr.r2]);
                         best = Some((pt2, wr));
                         break;
                     }
                     WrapAction::Wrapped => {
+                        // An empty wrap (a torus whose cylinder missed)
+                        // carries the previous tangent points; after a
+                        // reset they are at −∞ and it never wins.
+                        let (r1, r2) = if wr.wraps() {
+                            (wr.r1, wr.r2)
+                        } else {
+                            match previous[wi] {
+                                Some([a, b]) => (a, b),
+                                None => continue,
+                            }
+                        };
                         // OpenSim's calcPathLengthChange reads the ends'
                         // ground locations (latched for tangent points).
                         let (g1, g2) = (
@@ -219,17 +239,21 @@ fn apply_wrap_objects(
                         );
                         let straight = (g2 - g1).norm();
                         let change =
-                            (wr.r1 - g1).norm() + wr.wrap_path_length + (g2 - wr.r2).norm()
-                                - straight;
+                            (r1 - g1).norm() + wr.wrap_path_length + (g2 - r2).norm() - straight;
                         if change < min_change {
                             min_change = change;
+                            previous[wi] = Some([r1, r2]);
                             best = Some((pt2, wr));
                         }
                     }
                     _ => {}
                 }
             }
-            if let Some((at, wr)) = best.filter(|(_, wr)| wr.wraps()) {
+            let best = best.filter(|(_, wr)| wr.wraps());
+            if best.is_none() {
+                previous[wi] = None;
+            }
+            if let Some((at, wr)) = best {
                 let body = wo.body;
                 let l1 = wo.rotation * wr.r1 + wo.translation;
                 let l2 = wo.rotation * wr.r2 + wo.translation;
