@@ -480,3 +480,106 @@ fn root_residuals_are_reported_against_body_weight() {
         summary.warnings
     );
 }
+
+/// `--resume` after a kill: the run keeps the frames its tables and log hold
+/// completely, computes the rest, and its tables equal an uninterrupted
+/// run's bit for bit (the diagnostics' solve times aside), its log message
+/// for message. (The log's chunks close by wall-clock age, so two
+/// uninterrupted runs' logs already differ in their bytes.)
+#[test]
+fn resume_after_a_kill_equals_an_uninterrupted_run() {
+    let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization><JointReaction name=\"JR\"><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>";
+    let rows = 60_000;
+    let (full_setup, full_out) = write_case("outputs_resume_full", rows, so);
+    run(&full_setup, RunOptions::default());
+    let (setup, out) = write_case("outputs_resume_killed", rows, so);
+    let act_path = out.join("block_SO_activation.sto");
+    let mut child = spawn_until(&setup, &act_path, 3000, || true);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let kept = storage::read(&act_path).map(|t| t.time.len()).unwrap_or(0);
+    assert!(kept >= 3000 && kept < rows, "killed after {kept} rows");
+    let resumed = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(&setup)
+        .arg("--resume")
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    for name in [
+        "block_SO_activation.sto",
+        "block_SO_force.sto",
+        "block_SO_ContactForces.sto",
+        "block_SO_ContactBodyForces.sto",
+        "block_SO_ContactExternalLoads.mot",
+        "block_SO_GeneralizedForcesBySource.sto",
+        "block_SO_MusclePower.sto",
+        "block_JR_ReactionLoads.sto",
+    ] {
+        let a = std::fs::read(full_out.join(name)).unwrap();
+        let b = std::fs::read(out.join(name)).unwrap();
+        // The header names the setup file, which differs between the folders.
+        let body = |x: &[u8]| {
+            let s = String::from_utf8_lossy(x).to_string();
+            s.lines()
+                .filter(|l| !l.starts_with("statopt_setup="))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        assert!(
+            body(&a) == body(&b),
+            "{name} differs from the uninterrupted run"
+        );
+    }
+    let diag = |d: &Path| {
+        let t = storage::read(&d.join("block_SO_diagnostics.sto")).unwrap();
+        let j = t.column_index("solve_time_ms").unwrap();
+        (
+            t.time.clone(),
+            t.rows
+                .iter()
+                .map(|r| {
+                    let mut r = r.clone();
+                    r.remove(j);
+                    r
+                })
+                .collect::<Vec<_>>(),
+        )
+    };
+    assert!(diag(&full_out) == diag(&out), "diagnostics differ");
+    let messages = |d: &Path| {
+        let bytes = std::fs::read(d.join("block_SO_log.mcap")).unwrap();
+        mcap::MessageStream::new(&bytes)
+            .expect("a closed log")
+            .map(|m| {
+                let m = m.unwrap();
+                let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+                (m.channel.topic.clone(), m.log_time, v)
+            })
+            .collect::<Vec<_>>()
+    };
+    let (ma, mb) = (messages(&full_out), messages(&out));
+    assert_eq!(ma.len(), mb.len(), "log message count");
+    // The solver channel carries the solve time; every other field is equal.
+    for (x, y) in ma.iter().zip(&mb) {
+        let strip = |v: &serde_json::Value| {
+            let mut v = v.clone();
+            if let Some(o) = v.as_object_mut() {
+                o.remove("solve_time_ms");
+                o.remove("solve_time");
+            }
+            v
+        };
+        assert!(
+            x.0 == y.0 && x.1 == y.1 && strip(&x.2) == strip(&y.2),
+            "log differs at {} {}",
+            x.0,
+            x.1
+        );
+    }
+    println!("killed after {kept} of {rows} frames; resumed run equals the uninterrupted one");
+}

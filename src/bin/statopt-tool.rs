@@ -60,6 +60,10 @@ struct RunArgs {
     /// problem found, without running; exit 2 if there is one.
     #[arg(long)]
     check: bool,
+    /// Continue a stopped or killed run: static optimization keeps the frames its tables and
+    /// log hold completely and computes the rest (tables equal an uninterrupted run's).
+    #[arg(long)]
+    resume: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -289,6 +293,7 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         precision: a.precision.map(usize::from),
         verbose: !a.quiet,
         threads: a.threads.map(usize::from),
+        resume: a.resume,
     };
     let setup = a
         .setup

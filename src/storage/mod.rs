@@ -9,7 +9,7 @@ mod read;
 mod write;
 
 pub use read::{open_rows, read, RowMark, RowReader};
-pub use write::{format_c_fixed, write, StoWriter, DEFAULT_PRECISION};
+pub use write::{complete_rows, format_c_fixed, write, StoWriter, DEFAULT_PRECISION};
 
 /// A table of samples over time, as OpenSim's `Storage`.
 #[derive(Debug, Clone, PartialEq, Default)]

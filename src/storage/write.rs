@@ -255,6 +255,71 @@ impl StoWriter {
         Ok(())
     }
 
+    /// Reopen a table this writer wrote, keep its first `keep` rows (all of
+    /// them complete) and go on writing after them: for `--resume`. The
+    /// label line must hold `n_labels` labels after `time`.
+    pub fn resume(
+        path: &Path,
+        n_labels: usize,
+        precision: usize,
+        keep: usize,
+    ) -> Result<StoWriter> {
+        let at = || Location::file(path);
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let text = String::from_utf8_lossy(&bytes);
+        let n_rows_offset = text
+            .find("\nnRows=")
+            .map(|i| (i + "\nnRows=".len()) as u64)
+            .ok_or_else(|| Error::input(at(), "cannot resume: no nRows= line"))?;
+        let end = text
+            .find("\nendheader\n")
+            .map(|i| i + "\nendheader\n".len())
+            .ok_or_else(|| Error::input(at(), "cannot resume: no endheader line"))?;
+        let labels_end = text[end..]
+            .find('\n')
+            .map(|i| end + i + 1)
+            .ok_or_else(|| Error::input(at(), "cannot resume: no column labels"))?;
+        let found = text[end..labels_end].trim_end().split('\t').count();
+        if found != n_labels + 1 {
+            return Err(Error::input(
+                at(),
+                format!(
+                    "cannot resume: the table has {found} columns, this run writes {}",
+                    n_labels + 1
+                ),
+            ));
+        }
+        let mut offset = labels_end;
+        for k in 0..keep {
+            offset = text[offset..]
+                .find('\n')
+                .map(|i| offset + i + 1)
+                .ok_or_else(|| {
+                    Error::input(at(), format!("cannot resume: only {k} complete rows"))
+                })?;
+        }
+        let io = |e| Error::io(path, e);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(io)?;
+        file.set_len(offset as u64).map_err(io)?;
+        file.seek(SeekFrom::Start(n_rows_offset)).map_err(io)?;
+        file.write_all(format!("{keep:<NROWS_WIDTH$}").as_bytes())
+            .map_err(io)?;
+        file.seek(SeekFrom::End(0)).map_err(io)?;
+        Ok(StoWriter {
+            file,
+            path: path.to_path_buf(),
+            n_labels,
+            precision,
+            n_rows: keep,
+            n_rows_offset,
+            line: String::new(),
+        })
+    }
+
     /// Number of rows written so far.
     pub fn rows_written(&self) -> usize {
         self.n_rows
@@ -337,4 +402,25 @@ mod fast_format_tests {
             "only {checked} values took the fast path"
         );
     }
+}
+
+/// Number of complete data rows of a table a [`StoWriter`] wrote (lines
+/// after the label line that end in a newline); 0 when there is no file.
+pub fn complete_rows(path: &Path) -> Result<usize> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let text = String::from_utf8_lossy(&bytes);
+    let Some(end) = text
+        .find("\nendheader\n")
+        .map(|i| i + "\nendheader\n".len())
+    else {
+        return Ok(0);
+    };
+    let Some(labels_end) = text[end..].find('\n').map(|i| end + i + 1) else {
+        return Ok(0);
+    };
+    Ok(text[labels_end..].matches('\n').count())
 }

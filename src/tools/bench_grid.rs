@@ -348,6 +348,7 @@ fn run_choice(
         threads: Some(choice.threads.max(1)),
         verbose: false,
         precision: Some(16),
+        resume: false,
     };
     let mut best = f64::INFINITY;
     let mut frames = 0;

@@ -31,6 +31,9 @@ pub struct RunOptions {
     /// Worker threads for per-frame work (None: all cores). Results do not
     /// depend on it.
     pub threads: Option<usize>,
+    /// Continue static-optimization runs from the last frame their tables
+    /// and log hold completely (`--resume`).
+    pub resume: bool,
 }
 
 /// What a run produced.

@@ -1144,6 +1144,99 @@ fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
         .count()
 }
 
+/// Where a resumed run goes on: the frames that every table of the run and
+/// its MCAP log hold completely are kept.
+struct Resume {
+    /// Rows kept in every table.
+    keep: usize,
+    /// Time of the last kept frame.
+    last_time: f64,
+    /// The kept frames' log messages: topic, time, serialized message.
+    messages: Vec<(String, f64, Vec<u8>)>,
+}
+
+/// The [`Resume`] of a run writing with `prefix` into `dir`, or None when it
+/// has nothing to keep (no tables yet, or one of them or the log empty).
+fn resume_point(
+    dir: &std::path::Path,
+    prefix: &str,
+    problem: &SoProblem,
+    reactions: &[(String, &[ReactionSpec])],
+) -> Result<Option<Resume>> {
+    let mut tables: Vec<std::path::PathBuf> = [
+        "activation.sto",
+        "force.sto",
+        "diagnostics.sto",
+        "GeneralizedForcesBySource.sto",
+        "MusclePower.sto",
+    ]
+    .iter()
+    .map(|s| dir.join(format!("{prefix}{s}")))
+    .collect();
+    if !problem.contacts.is_empty() {
+        for s in [
+            "ContactForces.sto",
+            "ContactBodyForces.sto",
+            "ContactExternalLoads.mot",
+        ] {
+            tables.push(dir.join(format!("{prefix}{s}")));
+        }
+    }
+    for (p, _) in reactions {
+        tables.push(dir.join(format!("{p}ReactionLoads.sto")));
+    }
+    let mut keep = usize::MAX;
+    for t in &tables {
+        keep = keep.min(crate::storage::complete_rows(t)?);
+    }
+    if keep == 0 {
+        return Ok(None);
+    }
+    // The log: messages of whole frames, read as far as its chunks are
+    // complete (a killed run's last chunk may be torn).
+    let log_path = dir.join(format!("{prefix}log.mcap"));
+    let bytes = match std::fs::read(&log_path) {
+        Ok(b) => b,
+        Err(_) => return Ok(None),
+    };
+    let mut frames: Vec<Vec<(String, f64, Vec<u8>)>> = Vec::new();
+    let mut last_stamp = None;
+    if let Ok(stream) =
+        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+    {
+        for m in stream {
+            let Ok(m) = m else { break };
+            let t = serde_json::from_slice::<serde_json::Value>(&m.data)
+                .ok()
+                .and_then(|v| v.get("time").and_then(|t| t.as_f64()));
+            let Some(t) = t else { break };
+            if last_stamp != Some(m.log_time) {
+                frames.push(Vec::new());
+                last_stamp = Some(m.log_time);
+            }
+            frames.last_mut().expect("pushed above").push((
+                m.channel.topic.clone(),
+                t,
+                m.data.into_owned(),
+            ));
+        }
+    }
+    // The last frame read may be incomplete: keep only frames followed by
+    // another one.
+    let whole = frames.len().saturating_sub(1);
+    keep = keep.min(whole);
+    if keep == 0 {
+        return Ok(None);
+    }
+    frames.truncate(keep);
+    let last_time = frames[keep - 1][0].1;
+    Ok(Some(Resume {
+        keep,
+        last_time,
+        messages: frames.into_iter().flatten().collect(),
+    }))
+}
+
 fn run_once(
     problem: &SoProblem,
     setup: &AnalyzeSetup,
@@ -1159,23 +1252,44 @@ fn run_once(
     let force_path = dir.join(format!("{prefix}force.sto"));
     let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
     let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
-    let mut act_w = StoWriter::create_for_setup(
-        &setup.setup_file,
+    let resume = if opts.resume {
+        resume_point(dir, prefix, problem, reactions)?
+    } else {
+        None
+    };
+    // Each table is created, or, when resuming, reopened after its kept rows.
+    let open_table = |path: &std::path::Path,
+                      name: &str,
+                      desc: &str,
+                      labels: &[String],
+                      precision: usize|
+     -> Result<StoWriter> {
+        match &resume {
+            Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
+            None => StoWriter::create_for_setup(
+                &setup.setup_file,
+                path,
+                name,
+                desc,
+                labels,
+                precision,
+                false,
+            ),
+        }
+    };
+    let mut act_w = open_table(
         &act_path,
         "Static Optimization",
         "This file contains static optimization results.\n",
         &problem.labels,
         precision,
-        false,
     )?;
-    let mut force_w = StoWriter::create_for_setup(
-        &setup.setup_file,
+    let mut force_w = open_table(
         &force_path,
         "ModelForces",
         FORCE_DESCRIPTION,
         &problem.force_labels,
         precision,
-        false,
     )?;
     let diag_labels: Vec<String> = [
         "status",
@@ -1189,14 +1303,12 @@ fn run_once(
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let mut diag_w = StoWriter::create_for_setup(
-            &setup.setup_file,
+    let mut diag_w = open_table(
         &diag_path,
         "Static Optimization Diagnostics",
         "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n",
         &diag_labels,
         16,
-        false,
     )?;
     let mut contact_w = None;
     if !problem.contacts.is_empty() {
@@ -1208,16 +1320,14 @@ fn run_once(
             "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
             problem.w0, problem.settings.friction
         );
-        let cw = StoWriter::create_for_setup(
-            &setup.setup_file,
+        let cw = open_table(
             &cpath,
             "Contact Forces",
             &desc,
             &problem.contact_labels(),
             precision,
-            false,
         )?;
-        let bw = StoWriter::create_for_setup(&setup.setup_file, &bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision, false)?;
+        let bw = open_table(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision)?;
         let mut load_labels = Vec::new();
         for (_, _, id) in problem.contact_load_forces() {
             load_labels.extend(
@@ -1227,14 +1337,12 @@ fn run_once(
                 .map(|s| format!("{id}{s}")),
             );
         }
-        let lw = StoWriter::create_for_setup(
-            &setup.setup_file,
+        let lw = open_table(
             &lpath,
             "statopt contact forces",
             "",
             &load_labels,
             precision,
-            false,
         )?;
         let datafile = lpath
             .file_name()
@@ -1246,43 +1354,41 @@ fn run_once(
         contact_w = Some((cw, bw, lw));
     }
     let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
-    let mut src_w = StoWriter::create_for_setup(
-            &setup.setup_file,
+    let mut src_w = open_table(
         &src_path,
         "Generalized Forces By Source",
         "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
         &problem.by_source_labels(),
         precision,
-        false,
     )?;
     let power_path = dir.join(format!("{prefix}MusclePower.sto"));
-    let mut power_w = StoWriter::create_for_setup(
-            &setup.setup_file,
+    let mut power_w = open_table(
         &power_path,
         "Muscle Power",
         "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
         &problem.muscle_labels(),
         precision,
-        false,
     )?;
     files.extend([src_path, power_path]);
     let mut jr_w = Vec::new();
     for (p, specs) in reactions {
         let path = dir.join(format!("{p}ReactionLoads.sto"));
-        jr_w.push(StoWriter::create_for_setup(
-            &setup.setup_file,
+        jr_w.push(open_table(
             &path,
             "Joint Reaction Loads",
             JR_DESCRIPTION,
             &jr_column_labels(specs),
             precision,
-            false,
         )?);
         files.push(path);
     }
     let log_path = dir.join(format!("{prefix}log.mcap"));
     let log_names = LogNames::new(problem, reactions.first().map(|(_, s)| *s));
     let mut log = FrameLog::create(&log_path, &log_names)?;
+    if let Some(r) = &resume {
+        log.replay(&r.messages)?;
+    }
+    let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
     files.push(log_path);
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
@@ -1338,6 +1444,10 @@ fn run_once(
             )
         },
         |(data, mf), block, i| {
+            // Frames a resumed run already holds are not computed again.
+            if block.time[i] <= skip_until {
+                return Ok(None);
+            }
             let r = problem.solve_frame(
                 block.time[i],
                 &block.q[i],
@@ -1363,9 +1473,12 @@ fn run_once(
                 rows.push(out);
             }
             let messages = log_names.encode(problem, &r, &rows)?;
-            Ok((r, rows, messages))
+            Ok(Some((r, rows, messages)))
         },
-        |(r, jr_rows, messages)| {
+        |item| {
+            let Some((r, jr_rows, messages)) = item else {
+                return Ok(());
+            };
             for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
                 w.write_row(r.time, row)?;
             }
@@ -1633,6 +1746,20 @@ impl LogNames {
 }
 
 impl FrameLog {
+    /// Log again the messages a resumed run keeps (see [`resume_point`]).
+    fn replay(&mut self, messages: &[(String, f64, Vec<u8>)]) -> Result<()> {
+        for (topic, t, data) in messages {
+            let idx = self.log.topic_index(topic).ok_or_else(|| {
+                Error::input(
+                    Location::file(self.log.path()),
+                    format!("cannot resume: the log has a topic '{topic}' this run does not write"),
+                )
+            })?;
+            self.log.log_serialized(idx, *t, data)?;
+        }
+        Ok(())
+    }
+
     fn create(path: &std::path::Path, names: &LogNames) -> Result<FrameLog> {
         let channels = mcap_log::StatoptChannels {
             coordinates: names.coordinates.clone(),

@@ -215,6 +215,11 @@ impl McapLog {
     }
 
     /// Path of the file being written.
+    /// Index of the channel of `topic`.
+    pub fn topic_index(&self, topic: &str) -> Option<usize> {
+        self.topics.iter().position(|t| t == topic)
+    }
+
     pub fn path(&self) -> &Path {
         &self.path
     }
