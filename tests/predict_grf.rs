@@ -2,8 +2,9 @@
 //! plates of the two development cases (issue 14; docs/grf_prediction.md).
 //! The issue's bars (mean over the feet: vertical rho >= 0.97 and RMSE <= 8 %
 //! body weight; anteroposterior >= 0.90 and <= 5 %; mediolateral >= 0.70 and
-//! <= 3 %) are not all met yet; these tests hold what the method reaches
-//! today so that it cannot slip back, and print every number.
+//! <= 3 %) are asserted on both development cases, and on gait2392
+//! subject01_walk, a trial the parameters were not chosen on; every number
+//! is printed.
 
 use std::path::Path;
 
@@ -71,9 +72,10 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
     let (rho_v, rmse_v) = mean(&metrics, 'y');
     let (rho_ap, rmse_ap) = mean(&metrics, 'x');
     println!("gait10dof18musc: vertical rho {rho_v:.3} / {rmse_v:.1} % BW; AP rho {rho_ap:.3} / {rmse_ap:.1} % BW");
-    assert!(rho_v >= 0.97 && rmse_v <= 10.5, "vertical {rho_v} {rmse_v}");
+    // The issue's bars (reached: 0.988 / 7.1 % and 0.950 / 2.9 %).
+    assert!(rho_v >= 0.97 && rmse_v <= 8.0, "vertical {rho_v} {rmse_v}");
     assert!(
-        rho_ap >= 0.83 && rmse_ap <= 6.5,
+        rho_ap >= 0.90 && rmse_ap <= 5.0,
         "anteroposterior {rho_ap} {rmse_ap}"
     );
     // The root residuals carry little: the feet carry the body.
@@ -92,14 +94,14 @@ fn moco_walk3d_overground_walk_against_force_plates() {
     let (rho_ap, rmse_ap) = mean(&metrics, 'x');
     let (rho_ml, rmse_ml) = mean(&metrics, 'z');
     println!("moco_walk3d: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; ML {rho_ml:.3} / {rmse_ml:.1} % BW");
-    // Vertical and mediolateral meet the issue's bars; anteroposterior not yet.
-    assert!(rho_v >= 0.99 && rmse_v <= 5.5, "vertical {rho_v} {rmse_v}");
+    // The issue's bars (reached: 0.995 / 4.5 %, 0.916 / 3.8 %, 0.921 / 1.0 %).
+    assert!(rho_v >= 0.97 && rmse_v <= 8.0, "vertical {rho_v} {rmse_v}");
     assert!(
-        rho_ap >= 0.82 && rmse_ap <= 6.0,
+        rho_ap >= 0.90 && rmse_ap <= 5.0,
         "anteroposterior {rho_ap} {rmse_ap}"
     );
     assert!(
-        rho_ml >= 0.80 && rmse_ml <= 2.0,
+        rho_ml >= 0.70 && rmse_ml <= 3.0,
         "mediolateral {rho_ml} {rmse_ml}"
     );
     // The setup's own pelvis residuals (optimal force 100) were replaced by
@@ -111,6 +113,47 @@ fn moco_walk3d_overground_walk_against_force_plates() {
         .files
         .iter()
         .any(|f| f.to_string_lossy().ends_with("_root_residuals.xml")));
+}
+
+/// gait2392 subject01_walk (treadmill, 3-D), not used to choose the
+/// parameters: the method holds unchanged. Its motion sinks 2 cm at the end
+/// of the trial, which the check of the points against the motion reports.
+#[test]
+fn gait2392_walk_not_used_for_tuning_meets_the_bars() {
+    let Some(root) = common::validation_dir("predict_grf gait2392") else {
+        return;
+    };
+    let setup_file = root.join("../models/gait2392/subject01_walk/setup_SO.xml");
+    if !setup_file.is_file() {
+        println!("SKIP gait2392 prediction: {} is absent", setup_file.display());
+        return;
+    }
+    let setup = match Setup::read(&setup_file).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_gait2392")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    assert_eq!(p.summary.failed, 0);
+    let (rho_v, rmse_v) = mean(&p.metrics, 'y');
+    let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
+    let (rho_ml, rmse_ml) = mean(&p.metrics, 'z');
+    println!("gait2392 subject01: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; ML {rho_ml:.3} / {rmse_ml:.1} % BW");
+    assert!(rho_v >= 0.97 && rmse_v <= 8.0, "vertical {rho_v} {rmse_v}");
+    assert!(rho_ap >= 0.90 && rmse_ap <= 5.0, "anteroposterior {rho_ap} {rmse_ap}");
+    assert!(rho_ml >= 0.70 && rmse_ml <= 3.0, "mediolateral {rho_ml} {rmse_ml}");
+    assert!(
+        p.summary.warnings.iter().any(|w| w.starts_with("foot r:") && w.contains("sink")),
+        "the sinking right foot at the end is reported: {:?}",
+        p.summary.warnings
+    );
+    // A treadmill whose floor rises slightly along x (found from the motion).
+    let (ax, _) = p.contacts.floor_tilt_degrees();
+    assert!(ax.abs() < 2.0, "floor tilt {ax} deg");
 }
 
 /// A model without the gait2392/Rajagopal foot bodies gets an error naming

@@ -431,9 +431,13 @@ fn main() -> ExitCode {
                             eprintln!("warning: {w}");
                         }
                         eprintln!(
-                            "foot contacts: {} points, floor at y = {:.4} m, belt velocity ({:.3}, {:.3}) m/s",
+                            "foot contacts: {} points, floor at y = {:.4} m (points' contact levels {:.4} to {:.4} m), rising {:.2} deg along x and {:.2} deg along z, belt velocity ({:.3}, {:.3}) m/s",
                             p.contacts.points.len(),
                             p.contacts.floor_height,
+                            p.contacts.points.iter().map(|q| q.contact_level).fold(f64::INFINITY, f64::min),
+                            p.contacts.points.iter().map(|q| q.contact_level).fold(f64::NEG_INFINITY, f64::max),
+                            p.contacts.floor_tilt_degrees().0,
+                            p.contacts.floor_tilt_degrees().1,
                             p.contacts.belt_velocity.x,
                             p.contacts.belt_velocity.z
                         );

@@ -38,6 +38,13 @@ pub struct FootPoint {
     pub body: usize,
     pub body_name: String,
     pub local: Vector3<f64>,
+    /// Height of the floor under this point (m, ground y): the level at
+    /// which the point dwells in stance, found from the motion (see
+    /// [`build`]); the common floor when the point never dwells.
+    pub contact_level: f64,
+    /// Where the point dwells on the floor (ground x and z, m): with the
+    /// level, a point of the floor plane under this point.
+    pub dwell_xz: (f64, f64),
 }
 
 /// Contact parameters of the generated set (documented in
@@ -60,12 +67,12 @@ pub struct FootContactParameters {
 impl Default for FootContactParameters {
     fn default() -> Self {
         FootContactParameters {
-            contact_tolerance: 0.01,
-            transition_zone: 0.04,
-            static_friction: 0.8,
-            kinetic_friction: 0.5,
-            v_trans: 0.3,
-            speed_weight: (0.3, 1.0),
+            contact_tolerance: 0.005,
+            transition_zone: 0.03,
+            static_friction: 0.35,
+            kinetic_friction: 0.25,
+            v_trans: 0.8,
+            speed_weight: (0.3, 1.2),
             optimal_force: 100.0,
         }
     }
@@ -78,6 +85,11 @@ pub const BELT_THRESHOLD: f64 = 0.2;
 #[derive(Debug, Clone)]
 pub struct FootContactSet {
     pub points: Vec<FootPoint>,
+    /// Slope of the floor found from the motion: dh/dx and dh/dz (ground);
+    /// (0, 0) when the floor height is given.
+    pub floor_slope: (f64, f64),
+    /// What the check of the points against the motion found.
+    pub warnings: Vec<String>,
     pub floor_height: f64,
     pub belt_velocity: Vector3<f64>,
     pub parameters: FootContactParameters,
@@ -128,6 +140,8 @@ pub fn foot_points(model: &Model) -> Result<Vec<FootPoint>> {
                 body: c,
                 body_name: calcn.clone(),
                 local: Vector3::new(x * l, 0.0, lat * z * l),
+                contact_level: 0.0,
+                dwell_xz: (0.0, 0.0),
             });
         }
         // The hallux, in the toes frame (at the MTP joint), on the sole.
@@ -137,6 +151,8 @@ pub fn foot_points(model: &Model) -> Result<Vec<FootPoint>> {
             body: t,
             body_name: toes.clone(),
             local: Vector3::new(0.25 * l, -mtp.y, -lat * 0.05 * l),
+            contact_level: 0.0,
+            dwell_xz: (0.0, 0.0),
         });
     }
     Ok(out)
@@ -156,6 +172,7 @@ pub fn build(
     let mut lowest = vec![f64::INFINITY; points.len()];
     let mut heights = vec![Vec::with_capacity(n); points.len()];
     let mut velocities = vec![Vec::with_capacity(n); points.len()];
+    let mut positions = vec![Vec::with_capacity(n); points.len()];
     for i in 0..n {
         data.q.copy_from_slice(&states.q[i]);
         data.u.copy_from_slice(&states.u[i]);
@@ -167,6 +184,7 @@ pub fn build(
             lowest[k] = lowest[k].min(g.y);
             heights[k].push(g.y);
             velocities[k].push(v);
+            positions[k].push(g);
         }
     }
     let floor_height = match floor {
@@ -193,13 +211,144 @@ pub fn build(
     } else {
         Vector3::zeros()
     };
+    let mut points = points;
+    let mut dwell_samples = Vec::with_capacity(points.len());
+    for (k, p) in points.iter_mut().enumerate() {
+        let samples = dwell_samples_of(&positions[k], &velocities[k], floor_height, &belt_velocity);
+        match (floor, samples.len() >= DWELL_MIN_FRAMES) {
+            (None, true) => {
+                let mut h: Vec<f64> = samples.iter().map(|g| g.y).collect();
+                let mut x: Vec<f64> = samples.iter().map(|g| g.x).collect();
+                let mut z: Vec<f64> = samples.iter().map(|g| g.z).collect();
+                p.contact_level =
+                    median(&mut h).clamp(floor_height - DWELL_BAND, floor_height + DWELL_BAND);
+                p.dwell_xz = (median(&mut x), median(&mut z));
+            }
+            _ => {
+                p.contact_level = floor.unwrap_or(floor_height);
+                let mut x: Vec<f64> = positions[k].iter().map(|g| g.x).collect();
+                let mut z: Vec<f64> = positions[k].iter().map(|g| g.z).collect();
+                p.dwell_xz = (median(&mut x), median(&mut z));
+            }
+        }
+        dwell_samples.push(samples);
+    }
+    let mut warnings = Vec::new();
+    for side in ['r', 'l'] {
+        // Deepest sink of each point of this foot below its contact level.
+        let sinks: Vec<(usize, f64, usize)> = points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.side == side)
+            .map(|(k, p)| {
+                positions[k].iter().enumerate().fold((k, 0.0f64, 0usize), |acc, (i, g)| {
+                    let s = p.contact_level - g.y;
+                    if s > acc.1 { (k, s, i) } else { acc }
+                })
+            })
+            .collect();
+        let sunk: Vec<&(usize, f64, usize)> = sinks.iter().filter(|s| s.1 > SINK_WARNING).collect();
+        if sunk.len() * 2 > sinks.len() {
+            let worst = sunk.iter().max_by(|a, b| a.1.total_cmp(&b.1)).expect("not empty");
+            warnings.push(format!(
+                "foot {side}: {} of its {} contact points sink more than {:.0} cm below their contact levels (up to {:.1} cm, at t = {:.3} s): the motion's vertical position drifts there, or the floor is not flat; the predicted forces there are uncertain",
+                sunk.len(), sinks.len(), 100.0 * SINK_WARNING, 100.0 * worst.1, states.time[worst.2]
+            ));
+        } else {
+            for &&(k, s, i) in &sunk {
+                warnings.push(format!(
+                    "foot contact point {} on {} sinks {:.1} cm below its contact level at t = {:.3} s: the foot is rigid there (a toe rolling over) or the markers err; the force there is uncertain",
+                    points[k].name, points[k].body_name, 100.0 * s, states.time[i]
+                ));
+            }
+        }
+    }
+    let floor_slope = match floor {
+        Some(_) => (0.0, 0.0),
+        None => slope_of(&dwell_samples),
+    };
     Ok(FootContactSet {
         points,
+        warnings,
+        floor_slope,
         floor_height,
         belt_velocity,
         parameters,
     })
 }
+
+/// A point dwells where it rests on the floor: low (within
+/// [`DWELL_BAND`] of the common floor), hardly moving vertically (below
+/// [`DWELL_VERTICAL_SPEED`]) and moving with the floor horizontally (within
+/// [`DWELL_SLIP_SPEED`] of the belt). Its ground positions there.
+fn dwell_samples_of(
+    positions: &[Vector3<f64>],
+    velocities: &[Vector3<f64>],
+    floor: f64,
+    belt: &Vector3<f64>,
+) -> Vec<Vector3<f64>> {
+    positions
+        .iter()
+        .zip(velocities)
+        .filter(|(g, v)| {
+            let slip = Vector3::new(v.x - belt.x, 0.0, v.z - belt.z).norm();
+            g.y < floor + DWELL_BAND && v.y.abs() < DWELL_VERTICAL_SPEED && slip < DWELL_SLIP_SPEED
+        })
+        .map(|(g, _)| *g)
+        .collect()
+}
+
+/// The floor's slope (dh/dx, dh/dz) from the dwell samples: height against
+/// position, pooled over the points with one level per point (each point's
+/// samples taken about their own means), by least squares. A direction in
+/// which the samples spread less than [`SLOPE_MIN_SPREAD`] (RMS) gets slope 0.
+fn slope_of(samples: &[Vec<Vector3<f64>>]) -> (f64, f64) {
+    let (mut sxx, mut sxz, mut szz, mut sxh, mut szh, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0usize);
+    for s in samples.iter().filter(|s| s.len() >= DWELL_MIN_FRAMES) {
+        let m = s.iter().sum::<Vector3<f64>>() / s.len() as f64;
+        for g in s {
+            let d = g - m;
+            sxx += d.x * d.x;
+            sxz += d.x * d.z;
+            szz += d.z * d.z;
+            sxh += d.x * d.y;
+            szh += d.z * d.y;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return (0.0, 0.0);
+    }
+    let spread = SLOPE_MIN_SPREAD * SLOPE_MIN_SPREAD * n as f64;
+    match (sxx > spread, szz > spread) {
+        (true, true) => {
+            let det = sxx * szz - sxz * sxz;
+            if det.abs() < 1e-12 {
+                (0.0, 0.0)
+            } else {
+                ((szz * sxh - sxz * szh) / det, (sxx * szh - sxz * sxh) / det)
+            }
+        }
+        (true, false) => (sxh / sxx, 0.0),
+        (false, true) => (0.0, szh / szz),
+        (false, false) => (0.0, 0.0),
+    }
+}
+
+/// A point more than this below its contact level (m) draws a warning.
+pub const SINK_WARNING: f64 = 0.02;
+
+/// Least RMS spread of the dwell positions (m) for a slope along an axis.
+pub const SLOPE_MIN_SPREAD: f64 = 0.05;
+
+/// Height band above the common floor within which a point may dwell (m).
+pub const DWELL_BAND: f64 = 0.03;
+/// Largest vertical speed of a dwelling point (m/s).
+pub const DWELL_VERTICAL_SPEED: f64 = 0.05;
+/// Largest horizontal speed over the floor of a dwelling point (m/s).
+pub const DWELL_SLIP_SPEED: f64 = 0.15;
+/// Fewest frames a point must dwell for its own contact level.
+pub const DWELL_MIN_FRAMES: usize = 5;
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -215,24 +364,53 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 impl FootContactSet {
+    /// Height of the floor plane under point `p` at ground (x, z): its
+    /// contact level through its dwell position, with the floor's slope.
+    pub fn floor_height_under(&self, p: &FootPoint, x: f64, z: f64) -> f64 {
+        p.contact_level
+            + self.floor_slope.0 * (x - p.dwell_xz.0)
+            + self.floor_slope.1 * (z - p.dwell_xz.1)
+    }
+
+    /// Slope angles of the floor (degrees): about z (rise along +x) and
+    /// about x (rise along +z).
+    pub fn floor_tilt_degrees(&self) -> (f64, f64) {
+        (
+            self.floor_slope.0.atan().to_degrees(),
+            self.floor_slope.1.atan().to_degrees(),
+        )
+    }
+
+    /// Unit normal of the floor (ground frame), from its slope.
+    pub fn floor_normal(&self) -> Vector3<f64> {
+        Vector3::new(-self.floor_slope.0, 1.0, -self.floor_slope.1).normalize()
+    }
+
     /// The set as an OpenSim ForceSet document of PointOnPlaneContacts (a
     /// force-set file a setup can name).
     pub fn force_set_xml(&self) -> String {
         let p = &self.parameters;
-        let v = self.belt_velocity;
+        // The belt moves in the floor's plane.
+        let normal = self.floor_normal();
+        let v = self.belt_velocity - normal * self.belt_velocity.dot(&normal);
         let mut s = String::from(
             "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Foot contacts generated by statopt predict-grf from the model's feet and the motion (docs/grf_prediction.md). -->\n<OpenSimDocument Version=\"40000\">\n\t<ForceSet name=\"foot_contacts\">\n\t\t<objects>\n",
         );
         for pt in &self.points {
             s.push_str(&format!(
-                "\t\t\t<PointOnPlaneContact name=\"{}\">\n\t\t\t\t<point_body>{}</point_body>\n\t\t\t\t<point_location>{} {} {}</point_location>\n\t\t\t\t<plane_body>ground</plane_body>\n\t\t\t\t<plane_origin>0 {} 0</plane_origin>\n\t\t\t\t<plane_normal>0 1 0</plane_normal>\n\t\t\t\t<plane_velocity>{} 0 {}</plane_velocity>\n\t\t\t\t<static_friction>{}</static_friction>\n\t\t\t\t<kinetic_friction>{}</kinetic_friction>\n\t\t\t\t<contact_tolerance>{}</contact_tolerance>\n\t\t\t\t<contact_transition_zone>{}</contact_transition_zone>\n\t\t\t\t<v_trans>{}</v_trans>\n\t\t\t\t<speed_weight>{} {}</speed_weight>\n\t\t\t\t<optimal_force>{}</optimal_force>\n\t\t\t</PointOnPlaneContact>\n",
+                "\t\t\t<PointOnPlaneContact name=\"{}\">\n\t\t\t\t<point_body>{}</point_body>\n\t\t\t\t<point_location>{} {} {}</point_location>\n\t\t\t\t<plane_body>ground</plane_body>\n\t\t\t\t<plane_origin>{} {} {}</plane_origin>\n\t\t\t\t<plane_normal>{} 1 {}</plane_normal>\n\t\t\t\t<plane_velocity>{} {} {}</plane_velocity>\n\t\t\t\t<static_friction>{}</static_friction>\n\t\t\t\t<kinetic_friction>{}</kinetic_friction>\n\t\t\t\t<contact_tolerance>{}</contact_tolerance>\n\t\t\t\t<contact_transition_zone>{}</contact_transition_zone>\n\t\t\t\t<v_trans>{}</v_trans>\n\t\t\t\t<speed_weight>{} {}</speed_weight>\n\t\t\t\t<optimal_force>{}</optimal_force>\n\t\t\t</PointOnPlaneContact>\n",
                 pt.name,
                 pt.body_name,
                 pt.local.x,
                 pt.local.y,
                 pt.local.z,
-                self.floor_height,
+                pt.dwell_xz.0,
+                pt.contact_level,
+                pt.dwell_xz.1,
+                -self.floor_slope.0,
+                -self.floor_slope.1,
                 v.x,
+                v.y,
                 v.z,
                 p.static_friction,
                 p.kinetic_friction,
@@ -246,5 +424,58 @@ impl FootContactSet {
         }
         s.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two points dwelling on a floor that rises 3 % along x and falls 1 %
+    /// along z, at levels 1 cm apart and over different stretches: the slope
+    /// comes back exactly, whatever each point's own level.
+    #[test]
+    fn slope_of_a_tilted_floor_comes_back() {
+        let (gx, gz) = (0.03, -0.01);
+        let sample = |x: f64, z: f64, level: f64| Vector3::new(x, level + gx * x + gz * z, z);
+        let a: Vec<_> = (0..40)
+            .map(|i| sample(0.4 - 0.02 * i as f64, 0.1 + 0.003 * (i % 7) as f64 * 30.0, 0.0))
+            .collect();
+        let b: Vec<_> = (0..30)
+            .map(|i| sample(1.2 - 0.03 * i as f64, -0.2 + 0.01 * (i % 5) as f64 * 20.0, 0.01))
+            .collect();
+        let (sx, sz) = slope_of(&[a, b]);
+        assert!((sx - gx).abs() < 1e-12 && (sz - gz).abs() < 1e-12, "{sx} {sz}");
+    }
+
+    /// Samples that do not spread along an axis give no slope along it
+    /// (a point dwelling in place tells nothing of the floor's tilt).
+    #[test]
+    fn no_spread_no_slope() {
+        let a: Vec<_> = (0..20)
+            .map(|i| Vector3::new(0.5 + 0.001 * i as f64, 0.01 * i as f64, 0.0))
+            .collect();
+        assert_eq!(slope_of(&[a]), (0.0, 0.0));
+    }
+
+    /// A dwelling point: low, still vertically and moving with the belt;
+    /// a point sweeping past in swing or dropping onto the floor is not.
+    #[test]
+    fn dwell_samples_follow_the_belt() {
+        let belt = Vector3::new(-1.0, 0.0, 0.0);
+        let p = [
+            Vector3::new(0.3, 0.011, 0.0),
+            Vector3::new(0.3, 0.011, 0.0),
+            Vector3::new(0.3, 0.011, 0.0),
+            Vector3::new(0.3, 0.1, 0.0),
+        ];
+        let v = [
+            Vector3::new(-1.05, 0.01, 0.0), // with the belt: dwells
+            Vector3::new(0.0, 0.0, 0.0),    // still in the lab: slips on the belt
+            Vector3::new(-1.0, -0.3, 0.0),  // dropping
+            Vector3::new(-1.0, 0.0, 0.0),   // high
+        ];
+        let d = dwell_samples_of(&p, &v, 0.0, &belt);
+        assert_eq!(d.len(), 1);
     }
 }

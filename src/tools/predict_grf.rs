@@ -55,6 +55,9 @@ pub struct Prediction {
     /// Per foot: centre-of-pressure and event-timing errors over stance.
     pub stance: Vec<StanceMetrics>,
     pub body_weight: f64,
+    /// The w0 the prediction ran with ([`DEFAULT_CONTACT_WEIGHT`] unless
+    /// the setup gives one).
+    pub contact_weight: f64,
 }
 
 /// Stance: vertical force above this (N).
@@ -179,6 +182,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     }
     let mut setup = setup.clone();
     let measured_file = setup.external_loads_file.take();
+    let contact_weight = use_contact_weight(&mut setup);
     let am = loading::load_analysis_model(&setup)?;
     let model = am.model;
     let states = analyze::load_states(&setup, &model)?;
@@ -191,6 +195,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     setup.force_set_files = force_sets;
     setup.force_set_files.push(contacts_file.clone());
     let mut summary = analyze::run(&setup, opts)?;
+    summary.warnings.extend(contacts.warnings.iter().cloned());
     written.push(contacts_file);
     summary.files.extend(written);
     let (el, common) = setup
@@ -212,6 +217,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
         metrics: Vec::new(),
         stance: Vec::new(),
         body_weight,
+        contact_weight,
     };
     let out = dir.join(format!("{}_predicted_grf.sto", setup.name));
     write_foot_loads(&prediction.predicted, &out, &setup.setup_file)?;
@@ -251,6 +257,40 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     Ok(prediction)
 }
 
+/// w0 of the prediction when the setup's StaticOptimization gives none:
+/// with the foot contacts' optimal force of 100 N, a body weight spread over
+/// a dozen points costs about as much as the muscles' activations, so the
+/// contacts' weight w(d) and their sum of squares shape the split between
+/// the feet (with w0 = 1000 contacts are almost free and the optimiser
+/// squeezes the feet against each other in double support; see
+/// docs/grf_prediction.md).
+pub const DEFAULT_CONTACT_WEIGHT: f64 = 10.0;
+
+/// The setup's own `<contact_weight>` when its StaticOptimization has one;
+/// otherwise [`DEFAULT_CONTACT_WEIGHT`], written into the setup's analysis.
+fn use_contact_weight(setup: &mut AnalyzeSetup) -> f64 {
+    for a in setup.analyses.iter_mut() {
+        if let crate::parse::setup::Analysis::Other { element, .. } = a {
+            if element.name != "StaticOptimization" {
+                continue;
+            }
+            if let Some(w) = element.child("contact_weight").and_then(|w| w.numbers().ok()) {
+                if let Some(first) = w.first() {
+                    return *first;
+                }
+            }
+            let mut w = element.clone();
+            w.name = "contact_weight".to_string();
+            w.attrs.clear();
+            w.children.clear();
+            w.text = format!("{DEFAULT_CONTACT_WEIGHT}");
+            element.children.push(w);
+            return DEFAULT_CONTACT_WEIGHT;
+        }
+    }
+    DEFAULT_CONTACT_WEIGHT
+}
+
 /// Per-foot loads from the contact forces a static-optimization run wrote
 /// (`..._ContactExternalLoads.mot`: each contact's force on its point body
 /// at the point).
@@ -265,23 +305,27 @@ pub fn foot_loads_from_contacts(path: &std::path::Path, set: &FootContactSet) ->
         time: table.time.clone(),
         ..Default::default()
     };
-    let mut idx: [Vec<[usize; 6]>; 2] = [Vec::new(), Vec::new()];
+    let mut idx: [Vec<([usize; 6], &crate::contacts::feet::FootPoint)>; 2] = [Vec::new(), Vec::new()];
     for p in &set.points {
         let s = usize::from(p.side == 'l');
         let mut c = [0usize; 6];
         for (k, suffix) in ["vx", "vy", "vz", "px", "py", "pz"].iter().enumerate() {
             c[k] = col(&format!("{}_point_force_{suffix}", p.name))?;
         }
-        idx[s].push(c);
+        idx[s].push((c, p));
     }
     for row in &table.rows {
         for s in 0..2 {
             let mut f = Vector3::zeros();
             let mut moment_y = 0.0;
             let mut weighted = Vector3::zeros();
-            for c in &idx[s] {
+            for (c, p) in &idx[s] {
                 let fi = Vector3::new(row[c[0]], row[c[1]], row[c[2]]);
-                let pi = Vector3::new(row[c[3]], set.floor_height, row[c[5]]);
+                // The point's projection on its floor plane (level through
+                // its dwell position, the floor's slope).
+                let (x, z) = (row[c[3]], row[c[5]]);
+                let y = set.floor_height_under(p, x, z);
+                let pi = Vector3::new(x, y, z);
                 f += fi;
                 weighted += pi * fi.y;
                 // Moment about the vertical through the origin of the floor.
