@@ -34,6 +34,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
         ],
     ),
     ("InverseDynamicsTool", &["artifact_files"]),
+    ("JointReaction", &["knee_loads"]),
     (
         "StaticOptimization",
         &[

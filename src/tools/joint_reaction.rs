@@ -66,6 +66,10 @@ pub struct JointReactionSetup {
     pub joint_names: Vec<String>,
     pub apply_on_bodies: Vec<String>,
     pub express_in_frame: Vec<String>,
+    /// statopt `<knee_loads>`: also write `<prefix>KneeLoads.sto`
+    /// (`tools::knee_loads`) with each ReactionLoads table of a static
+    /// optimization run.
+    pub knee_loads: bool,
     /// The element, for located errors.
     pub element: Element,
 }
@@ -93,6 +97,7 @@ impl JointReactionSetup {
             joint_names: list("joint_names", "ALL"),
             apply_on_bodies: list("apply_on_bodies", "child"),
             express_in_frame: list("express_in_frame", "ground"),
+            knee_loads: el.child_bool_or("knee_loads", false)?,
             element: el.clone(),
         })
     }

@@ -7,6 +7,7 @@ pub mod check;
 pub mod interrupt;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
+pub mod knee_loads;
 pub mod loading;
 pub mod motion_gen;
 pub mod muscle_analysis;

@@ -986,6 +986,8 @@ pub fn run(
         jr_specs.push((jr.common.name.clone(), specs));
     }
     let mut prefixes = Vec::new();
+    let mut knee_states = None;
+    let mut knee_files = Vec::new();
     for &w0 in &weights {
         problem.w0 = w0;
         let prefix = if sweep {
@@ -1005,6 +1007,26 @@ pub fn run(
             .map(|(n, s)| (jr_prefix(n), s.as_slice()))
             .collect();
         let s = run_once(&problem, setup, step_interval, &dir, &prefix, &jr, opts)?;
+        let stopped = s.stopped.is_some();
+        if !stopped {
+            for (jr_setup, (p, _)) in reactions.iter().zip(&jr) {
+                if jr_setup.knee_loads {
+                    let states = match &knee_states {
+                        Some(s) => s,
+                        None => knee_states.insert(crate::tools::analyze::load_states(setup, &problem.model)?),
+                    };
+                    let table = dir.join(format!("{p}ReactionLoads.sto"));
+                    knee_files.push(crate::tools::knee_loads::write(
+                        &problem.model,
+                        states,
+                        &table,
+                        &crate::tools::knee_loads::output_path(&table),
+                        &setup.setup_file,
+                        opts.precision.unwrap_or(setup.output_precision),
+                    )?);
+                }
+            }
+        }
         let label = format!("w0 = {w0}");
         summary.absorb(s, sweep.then_some(label.as_str()));
         if summary.stopped.is_some() {
@@ -1039,6 +1061,25 @@ pub fn run(
                 precision,
             )?);
         }
+        for (jr_setup, (name, _)) in reactions.iter().zip(&jr_specs) {
+            if jr_setup.knee_loads {
+                let files: Vec<std::path::PathBuf> = weights
+                    .iter()
+                    .map(|w0| {
+                        dir.join(format!("{}_{name}_w0_{}_KneeLoads.sto", setup.name, w0_tag(*w0)))
+                    })
+                    .collect();
+                summary.files.extend(write_sweep_statistics(
+                    &setup.setup_file,
+                    &files,
+                    &dir,
+                    &format!("{}_{name}_w0_", setup.name),
+                    "KneeLoads",
+                    &weights,
+                    precision,
+                )?);
+            }
+        }
         for (name, _) in &jr_specs {
             let files: Vec<std::path::PathBuf> = weights
                 .iter()
@@ -1061,6 +1102,7 @@ pub fn run(
             )?);
         }
     }
+    summary.files.extend(knee_files);
     warnings.extend(summary.warnings);
     summary.warnings = warnings;
     Ok(summary)

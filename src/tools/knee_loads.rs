@@ -1,0 +1,184 @@
+//! Knee loads as a user of a knee study reads them (issue 15): from a
+//! joint-reaction table, per side, the knee flexion angle, tibiofemoral
+//! compression and shear, and patellofemoral compression, written as
+//! `<reaction table prefix>KneeLoads.sto`.
+//!
+//! **Frame and signs.** The tibiofemoral load is the reaction of the knee
+//! joint (the joint whose child is `tibia_<s>`) *on the tibia*, in the tibia
+//! body frame (the JointReaction must report it with `apply_on_bodies`
+//! child and `express_in_frame` child):
+//! - `tf_compression_<s>` = −F_y: along the tibia's long axis (its y axis,
+//!   ankle→knee in the gait2392 and Rajagopal models), positive when the
+//!   femur presses the tibia distally. The tibial plateau is not normal to
+//!   that axis (it slopes posteriorly by several degrees), so this is the
+//!   axial component, not the plateau-normal one.
+//! - `tf_shear_<s>` = +F_x: perpendicular to the long axis, in the tibia's
+//!   sagittal plane (its x axis, anterior). A positive value is the joint
+//!   pushing the tibia anteriorly, i.e. holding it against a *posterior*
+//!   drawer, the load the posterior cruciate ligament carries: **PCL-type
+//!   positive, ACL-type negative** (Escamilla et al. 1998's convention).
+//! - `pf_compression_<s>` = |F| of the reaction of the patellofemoral joint
+//!   (the joint whose child is `patella_<s>`) on the patella: the force
+//!   between femur and patella. Absent for a model without patella bodies
+//!   (gait2392: its quadriceps pull on the tibia directly).
+//! - `knee_flexion_<s>`: the angle (degrees) between the femur's and the
+//!   tibia's long axes (their y axes) in the femur's sagittal plane,
+//!   positive in flexion, whatever sign convention the model's knee
+//!   coordinate has (gait2392: negative in flexion; Rajagopal: positive).
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+
+use crate::dynamics::{kinematics, Data};
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::motion::states::States;
+use crate::storage::{self, StoWriter};
+
+/// Column labels of the table, per side r then l; `pf_compression_<s>`
+/// only with a patella.
+pub fn labels(patella: bool) -> Vec<String> {
+    let mut cols = vec!["knee_flexion", "tf_compression", "tf_shear"];
+    if patella {
+        cols.push("pf_compression");
+    }
+    ['r', 'l']
+        .iter()
+        .flat_map(|s| cols.iter().map(move |c| format!("{c}_{s}")))
+        .collect()
+}
+
+/// Header text of the table.
+pub const DESCRIPTION: &str = "Knee loads per side (statopt, docs/leg_extension_results.md): knee_flexion in degrees (flexion positive); tibiofemoral reaction on the tibia in the tibia frame: tf_compression = -Fy (along the tibial long axis, compression positive), tf_shear = +Fx (anterior, perpendicular to the long axis: PCL-type positive, ACL-type negative); pf_compression = magnitude of the patellofemoral reaction on the patella (absent without a patella body). Units N.";
+
+struct Side {
+    femur: usize,
+    tibia: usize,
+    /// Columns fx, fy of the knee reaction on the tibia in the tibia frame.
+    tf: [usize; 2],
+    /// Columns fx, fy, fz of the patellofemoral reaction on the patella.
+    pf: Option<[usize; 3]>,
+}
+
+fn side_columns(model: &Model, table: &storage::Storage, path: &Path, s: char) -> Result<Side> {
+    let body = |name: &str| {
+        model.body_index(name).ok_or_else(|| {
+            Error::msg(format!(
+                "knee loads: the model has no body {name} (they are reported for models with femur_<s>, tibia_<s> and optionally patella_<s> bodies, as gait2392 and Rajagopal have)"
+            ))
+        })
+    };
+    let (femur, tibia) = (body(&format!("femur_{s}"))?, body(&format!("tibia_{s}"))?);
+    let knee = &model.joints[tibia].name;
+    let tibia_name = &model.bodies[tibia].name;
+    let root = format!("{knee}_on_{tibia_name}_in_{tibia_name}");
+    let col = |suffix: &str| table.column_index(&format!("{root}_{suffix}"));
+    let (Some(fx), Some(fy)) = (col("fx"), col("fy")) else {
+        return Err(Error::msg(format!(
+            "knee loads: {} has no columns {root}_fx/_fy: the JointReaction must report joint {knee} on its child ({tibia_name}) in the child's frame (apply_on_bodies child, express_in_frame child)",
+            path.display()
+        )));
+    };
+    let pf = match model.body_index(&format!("patella_{s}")) {
+        None => None,
+        Some(p) => {
+            let joint = &model.joints[p].name;
+            let prefix = format!("{joint}_on_{}_in_", model.bodies[p].name);
+            let fx = table
+                .labels
+                .iter()
+                .position(|l| l.starts_with(&prefix) && l.ends_with("_fx"))
+                .ok_or_else(|| {
+                    Error::msg(format!(
+                        "knee loads: {} has no reaction of {joint} on {}: add {joint} to the JointReaction's joint_names with apply_on_bodies child",
+                        path.display(),
+                        model.bodies[p].name
+                    ))
+                })?;
+            let stem = &table.labels[fx][..table.labels[fx].len() - 3];
+            let c = |suffix: &str| {
+                table.column_index(&format!("{stem}_{suffix}")).ok_or_else(|| {
+                    Error::msg(format!("knee loads: {} lacks {stem}_{suffix}", path.display()))
+                })
+            };
+            Some([fx, c("fy")?, c("fz")?])
+        }
+    };
+    Ok(Side {
+        femur,
+        tibia,
+        tf: [fx, fy],
+        pf,
+    })
+}
+
+/// Knee flexion (degrees, flexion positive) from the femur's and the
+/// tibia's rotations: the angle from the femur's long axis to the tibia's,
+/// about the femur's z axis, with the sign of flexion (the tibia's long axis
+/// turning towards the femur's anterior x axis).
+pub fn flexion_degrees(data: &Data, femur: usize, tibia: usize) -> f64 {
+    let rf = data.rotation[femur];
+    let yt = rf.transpose() * (data.rotation[tibia] * Vector3::y());
+    // In the femur frame: straight leg yt = +y; flexion turns it towards +x.
+    yt.x.atan2(yt.y).to_degrees()
+}
+
+/// Write the knee loads of the reaction table `reactions` to `out`, knee
+/// angles from `states` at the table's times (each table time must be a
+/// state time).
+pub fn write(
+    model: &Model,
+    states: &States,
+    reactions: &Path,
+    out: &Path,
+    setup_file: &Path,
+    precision: usize,
+) -> Result<PathBuf> {
+    let table = storage::read(reactions)?;
+    let sides = [
+        side_columns(model, &table, reactions, 'r')?,
+        side_columns(model, &table, reactions, 'l')?,
+    ];
+    let patella = sides[0].pf.is_some() && sides[1].pf.is_some();
+    let mut w = StoWriter::create_for_setup(
+        setup_file,
+        out,
+        "Knee loads",
+        DESCRIPTION,
+        &labels(patella),
+        precision,
+        false,
+    )?;
+    let mut data = Data::new(model);
+    let mut row = Vec::with_capacity(8);
+    for (i, &t) in table.time.iter().enumerate() {
+        let k = crate::motion::coordinates::find_index(&states.time, t);
+        data.q.copy_from_slice(&states.q[k]);
+        data.u.iter_mut().for_each(|x| *x = 0.0);
+        kinematics::full(model, &mut data);
+        row.clear();
+        let r = &table.rows[i];
+        for s in &sides {
+            row.push(flexion_degrees(&data, s.femur, s.tibia));
+            row.push(-r[s.tf[1]]);
+            row.push(r[s.tf[0]]);
+            if patella {
+                if let Some([x, y, z]) = s.pf {
+                    row.push((r[x] * r[x] + r[y] * r[y] + r[z] * r[z]).sqrt());
+                }
+            }
+        }
+        w.write_row(t, &row)?;
+    }
+    w.finish()?;
+    Ok(out.to_path_buf())
+}
+
+/// `<prefix>ReactionLoads.sto` → `<prefix>KneeLoads.sto`.
+pub fn output_path(reactions: &Path) -> PathBuf {
+    let name = reactions
+        .file_name()
+        .map(|n| n.to_string_lossy().replace("ReactionLoads.sto", "KneeLoads.sto"))
+        .unwrap_or_else(|| "KneeLoads.sto".to_string());
+    reactions.with_file_name(name)
+}
