@@ -93,6 +93,11 @@ CONTACT = {
 }
 
 
+# The pad is a roller turning on an axle: along the shin it resists only by rolling resistance, a
+# few per cent of its load, not with the 0.8 of a pad the shin would slide on (which pushed 54-75 N
+# along the shin towards the knee and added 29 % to the knee compression at -95 deg).
+PAD_ROLLER = {"static_friction": "0.02", "kinetic_friction": "0.02"}
+
 # ---------------------------------------------------------------------------------------------
 # Small math helpers
 # ---------------------------------------------------------------------------------------------
@@ -537,7 +542,7 @@ def make_contacts(geo):
             "pelvis-seat (ischial tuberosity), torso-backrest (scapula). Points on the human bodies of "
             "human_seated.osim, planes on the machine bodies, normals from the plane towards the human; "
             "every point lies on its plane in the seated default pose. Kept out of the model files because "
-            "OpenSim 4.6 refuses unknown element types. v_trans 0.01 m/s: see models/leg_extension/README.md. "
+            "OpenSim 4.6 refuses unknown element types. The pad is a roller: friction 0.02 (rolling resistance), not the 0.8 of a pad the shin would slide on. v_trans 0.01 m/s: see models/leg_extension/README.md. "
         )
     )
     fs = sub_el(doc, "ForceSet", name="leg_extension_contacts")
@@ -551,13 +556,16 @@ def make_contacts(geo):
         rows.append((f"pelvis_seat_{side}", "pelvis", (ISCHIUM_X, HIP_IN_PELVIS["r"][1] - SEAT_BELOW_HIP, sign * ISCHIUM_Z), "seat", (0.0, 1.0, 0.0)))
         rows.append((f"torso_backrest_{side}", "torso", (SCAPULA_IN_TORSO[0], SCAPULA_IN_TORSO[1], sign * SCAPULA_IN_TORSO[2]), "backrest", (1.0, 0.0, 0.0)))
     for name, pb, p, plb, n in rows:
+        props = dict(CONTACT)
+        if name.startswith("tibia_pad_"):
+            props.update(PAD_ROLLER)
         e = sub_el(objs, "PointOnPlaneContact", name=name)
         sub_el(e, "point_body", pb)
         sub_el(e, "point_location", fmt(p))
         sub_el(e, "plane_body", plb)
         sub_el(e, "plane_origin", "0 0 0")
         sub_el(e, "plane_normal", fmt(n))
-        for k, v in CONTACT.items():
+        for k, v in props.items():
             sub_el(e, k, v)
     sub_el(fs, "groups")
     assert len(rows) == 10

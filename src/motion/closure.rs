@@ -76,8 +76,14 @@ pub fn close_contacts(
             1.0
         }
     };
-    for (_, c) in closures {
+    // Coordinates the table lacks start each row from the previous row's
+    // solution (the first from their default value): the closure follows
+    // the motion continuously instead of jumping to another root (a lever
+    // turned half a turn, its pad meeting the point from behind).
+    let mut continued = vec![false; closures.len()];
+    for (k, (_, c)) in closures.iter().enumerate() {
         if column_for(table, &model.coordinates[*c].name).is_none() {
+            continued[k] = true;
             let v = model.coordinates[*c].default_value / scale(*c);
             table.labels.push(model.coordinates[*c].name.clone());
             table.rows.iter_mut().for_each(|r| r.push(v));
@@ -98,7 +104,10 @@ pub fn close_contacts(
             };
         }
         let t = table.time[i];
-        for (contact, c) in closures {
+        for (k, (contact, c)) in closures.iter().enumerate() {
+            if continued[k] && i > 0 {
+                q[*c] = table.rows[i - 1][cols[*c].unwrap_or(0)] * scale(*c);
+            }
             close_contact(model, &mut data, contact, *c, &mut q, t)?;
             let j = cols[*c].unwrap_or(0);
             table.rows[i][j] = q[*c] / scale(*c);

@@ -20,8 +20,13 @@
 //! </OpenSimDocument>
 //! ```
 //! File paths are relative to the study file. Metrics (`max`, `min`,
-//! `absmax`, `integral` of the sum of the columns over time, `mean`) are
-//! written to `<name>_metrics.csv`; figures as PNG and SVG.
+//! `absmax`, `integral` of the sum of the columns over time, `mean`; and,
+//! with `where="COLUMN"` naming a column of the same file, `argmax`/`argmin`
+//! (that column at the maximum/minimum), `at` with `value="X"` (the value
+//! where that column first equals X, interpolated) and `crossing` (that
+//! column where the value first changes sign): e.g. the knee flexion angle
+//! at which the shear turns from PCL-type to ACL-type) are written to
+//! `<name>_metrics.csv`; figures as PNG and SVG.
 
 use std::path::{Path, PathBuf};
 
@@ -166,7 +171,15 @@ fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
         .attr("columns")
         .ok_or_else(|| el.error("missing attribute columns"))?;
     let (t, y) = table_column(el, dir, "file", columns)?;
-    let v = match el.attr("op").unwrap_or("max") {
+    // The column that locates a value (`where`): e.g. knee_flexion_r.
+    let located = || -> Result<Vec<f64>> {
+        let w = el
+            .attr("where")
+            .ok_or_else(|| el.error("this op needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"))?;
+        Ok(table_column(el, dir, "file", w)?.1)
+    };
+    let op = el.attr("op").unwrap_or("max");
+    let v = match op {
         "max" => y.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         "min" => y.iter().cloned().fold(f64::INFINITY, f64::min),
         "absmax" => y.iter().fold(0.0f64, |m, v| m.max(v.abs())),
@@ -176,13 +189,59 @@ fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
             .zip(y.windows(2))
             .map(|(t, y)| 0.5 * (y[0] + y[1]) * (t[1] - t[0]))
             .sum(),
+        "argmax" | "argmin" => {
+            let w = located()?;
+            let better = |a: f64, b: f64| if op == "argmax" { a > b } else { a < b };
+            let mut k = 0;
+            for i in 1..y.len() {
+                if better(y[i], y[k]) {
+                    k = i;
+                }
+            }
+            w.get(k).copied().unwrap_or(f64::NAN)
+        }
+        "at" => {
+            let w = located()?;
+            let x: f64 = el
+                .attr("value")
+                .and_then(|s| s.trim().parse().ok())
+                .ok_or_else(|| el.error("op at needs a numeric value attribute (the where column's value to read at)"))?;
+            crossing(&w, &y, |i| w[i] - x).unwrap_or(f64::NAN)
+        }
+        "crossing" => {
+            let w = located()?;
+            crossing(&y, &w, |i| y[i]).unwrap_or(f64::NAN)
+        }
         other => {
             return Err(el.error(format!(
-                "unknown op '{other}' (max, min, absmax, mean, integral)"
+                "unknown op '{other}' ({})",
+                METRIC_OPS.join(", ")
             )))
         }
     };
     Ok((name, v))
+}
+
+/// The operations a `<Metric>` knows.
+pub const METRIC_OPS: [&str; 9] = [
+    "max", "min", "absmax", "mean", "integral", "argmax", "argmin", "at", "crossing",
+];
+
+/// `out` linearly interpolated at the first sign change of `f(i)` (i over
+/// the rows of `key`); None when `f` keeps one sign.
+fn crossing(key: &[f64], out: &[f64], f: impl Fn(usize) -> f64) -> Option<f64> {
+    let _ = key;
+    (1..out.len()).find_map(|i| {
+        let (a, b) = (f(i - 1), f(i));
+        if a == 0.0 {
+            Some(out[i - 1])
+        } else if a * b < 0.0 || b == 0.0 {
+            let s = a / (a - b);
+            Some(out[i - 1] + s * (out[i] - out[i - 1]))
+        } else {
+            None
+        }
+    })
 }
 
 /// What the study knows of one of its setups before running it: where its
@@ -411,10 +470,19 @@ fn prepare(
     let expected = check_and_move_references(&mut elements, dir, &runs)?;
     for m in elements.iter().filter(|e| e.name == "Metric") {
         let op = m.attr("op").unwrap_or("max");
-        if !["max", "min", "absmax", "mean", "integral"].contains(&op) {
+        if !METRIC_OPS.contains(&op) {
             return Err(m.error(format!(
-                "unknown op '{op}' (max, min, absmax, mean, integral)"
+                "unknown op '{op}' ({})",
+                METRIC_OPS.join(", ")
             )));
+        }
+        if ["argmax", "argmin", "at", "crossing"].contains(&op) && m.attr("where").is_none() {
+            return Err(m.error(format!(
+                "op '{op}' needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"
+            )));
+        }
+        if op == "at" && m.attr("value").and_then(|v| v.trim().parse::<f64>().ok()).is_none() {
+            return Err(m.error("op 'at' needs a numeric value attribute"));
         }
     }
     Ok((runs, elements, expected))
