@@ -35,8 +35,9 @@ DEG = math.pi / 180.0
 
 # ---------------------------------------------------------------------------------------------
 # Seated posture. Sitting turns the pelvis backwards and flattens the lumbar spine compared with
-# standing (Lord et al. 1997, Spine 22:2571-2574: lumbar lordosis about half of standing in
-# upright sitting; the pelvis rotates posteriorly by roughly the same amount). Here: pelvis tilted
+# standing (Lord et al. 1997, Spine: lumbar lordosis markedly smaller in sitting than in standing,
+# with the pelvis rotated posteriorly; 15 deg is our choice within that picture, not a measured
+# value for this machine). Here: pelvis tilted
 # 15 deg posteriorly (pelvis_tilt +15 deg: its anterior axis turned up), the lumbar joint flexed by
 # the same 15 deg so that the trunk is upright against the vertical backrest, hips flexed 75 deg
 # relative to the pelvis so that the thighs are horizontal on the seat (90 deg between trunk and
