@@ -193,8 +193,8 @@ fn run_scene(setup: &std::path::Path, output: &std::path::Path) -> statopt::Resu
         ),
         Setup::InverseDynamics(s) => (s.model_file, s.artifact_files, Vec::new(), false),
     };
-    let scene = statopt::parse::scene::compose_scene(&model, &artifacts, &force_sets, replace)?;
-    statopt::parse::scene::write_document(&scene.document, output)?;
+    let scene = statopt::tools::scene::compose_scene(&model, &artifacts, &force_sets, replace)?;
+    statopt::tools::scene::write_document(&scene.document, output)?;
     for w in &scene.spec.warnings {
         eprintln!("warning: {w}");
     }

@@ -8,7 +8,11 @@
 //!   w(d), projection p*, slip velocity, friction regime), the generalized
 //!   force of each multiplier, and the contact forces for output;
 //! - [`feet`]: foot contact sets built from a model's feet and the motion,
-//!   for ground-reaction prediction.
+//!   for ground-reaction prediction;
+//! - [`closure`]: coordinates solved on every row of a motion so that a
+//!   contact stays closed (`<close_contacts>`: a machine's lever follows
+//!   the pad on the shin).
+pub mod closure;
 pub mod element;
 pub mod feet;
 pub mod kinematics;

@@ -1,6 +1,5 @@
 //! The motion: coordinate tables filtered and splined into per-frame q, u, u̇.
 pub mod checks;
-pub mod closure;
 pub mod coordinates;
 pub mod filter;
 pub mod states;

@@ -3,5 +3,4 @@ pub mod compose;
 pub mod known;
 mod known_properties;
 pub mod osim;
-pub mod scene;
 pub mod setup;

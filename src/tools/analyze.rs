@@ -287,7 +287,7 @@ fn close_setup_contacts(
             .ok_or_else(|| Error::input(at(), format!("no coordinate named '{coordinate}'")))?;
         closures.push((c, k));
     }
-    crate::motion::closure::close_contacts(model, table, &closures)
+    crate::contacts::closure::close_contacts(model, table, &closures)
         .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
 }
 

@@ -15,6 +15,7 @@ pub mod perturbation;
 pub mod predict_grf;
 pub mod progress;
 pub mod reduce;
+pub mod scene;
 pub mod static_optimization;
 pub mod study;
 

@@ -315,7 +315,7 @@ pub fn generate(
                 if let (Some(x), false) = (touch_start[k], links.iter().any(|(t, _, _)| t == i)) {
                     q[*i] = x;
                 }
-                crate::motion::closure::close_contact(model, &mut data, contact, *i, &mut q, t)?;
+                crate::contacts::closure::close_contact(model, &mut data, contact, *i, &mut q, t)?;
                 touch_start[k] = Some(q[*i]);
                 row[*i] = to_file(*i, q[*i]);
             }

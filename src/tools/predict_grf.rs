@@ -679,7 +679,7 @@ fn weak_root_residuals(
             "{}_force_set_{k}_without_root_residuals.xml",
             setup.name
         ));
-        std::fs::write(&out, crate::parse::scene::to_xml_string(&root))
+        std::fs::write(&out, crate::tools::scene::to_xml_string(&root))
             .map_err(|e| Error::io(&out, e))?;
         files.push(out.clone());
         written.push(out);
