@@ -236,3 +236,40 @@ fn predicted_loads_replace_the_measured_ones_in_inverse_dynamics() {
         "predicted loads leave {predicted} N on the pelvis"
     );
 }
+
+/// Without measured loads (a lab without force plates): no comparison, and
+/// the ExternalLoads pair has one ExternalForce per foot with OpenSim's
+/// usual names (right `ground_force_v*`, left `1_ground_force_v*`) on the
+/// calcanei, and its data file holds those columns.
+#[test]
+fn without_measured_loads_the_prediction_uses_opensims_usual_names() {
+    let Some(root) = common::validation_dir("predict_grf without plates") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    setup.external_loads_file = None;
+    let out = common::out_dir("predict_grf_no_plates");
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    assert!(p.measured.is_none() && p.metrics.is_empty());
+    assert!(!out.join(format!("{}_grf_comparison.csv", setup.name)).exists());
+    let xml = std::fs::read_to_string(out.join(format!("{}_predicted_grf.xml", setup.name))).unwrap();
+    for id in ["<force_identifier>ground_force_v</force_identifier>", "<force_identifier>1_ground_force_v</force_identifier>", "calcn_r", "calcn_l"] {
+        assert!(xml.contains(id), "{id} in {xml}");
+    }
+    let mot = statopt::storage::read(&out.join(format!("{}_predicted_grf.mot", setup.name))).unwrap();
+    for c in ["ground_force_vy", "1_ground_force_vy", "ground_force_px", "1_ground_torque_y"] {
+        assert!(mot.column_index(c).is_some(), "column {c}");
+    }
+    // The feet carry the body: mean total vertical force within 10 % of body weight.
+    let (r, l) = (mot.column(mot.column_index("ground_force_vy").unwrap()), mot.column(mot.column_index("1_ground_force_vy").unwrap()));
+    let mean = r.iter().zip(&l).map(|(a, b)| a + b).sum::<f64>() / r.len() as f64;
+    assert!((mean / p.body_weight - 1.0).abs() < 0.1, "mean vertical {mean} N, body weight {}", p.body_weight);
+}
