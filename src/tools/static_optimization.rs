@@ -811,9 +811,65 @@ impl SoProblem {
         data: &mut Data,
         mf: &mut MuscleFrame,
     ) -> FrameResult {
-        let (problem, scale, passive_values, states, m_r) =
+        self.solve_frame_weights(t, q, u, udot_target, data, mf, &[self.w0])
+            .pop()
+            .expect("one result per weight")
+    }
+
+    /// Solve one frame once for each contact weight w0 in `weights`: the
+    /// physics (kinematics, muscle paths and strength, contact geometry,
+    /// the equations of motion) is assembled once, and only the contacts'
+    /// objective weights 1/w0 change between the solves. With the run's own
+    /// w0 the result equals [`solve_frame`](Self::solve_frame)'s bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_frame_weights(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+        weights: &[f64],
+    ) -> Vec<FrameResult> {
+        let (mut problem, scale, passive_values, states, m_r) =
             self.frame_problem_scaled(t, q, u, udot_target, data, mf);
-        let solution = optimize::solve(&problem);
+        let nv = self.controls.len();
+        weights
+            .iter()
+            .map(|&w0| {
+                // Every variable after the controls is a contact multiplier.
+                problem.weights[nv..].iter_mut().for_each(|w| *w = 1.0 / w0);
+                let solution = optimize::solve(&problem);
+                self.frame_result(
+                    t,
+                    &problem,
+                    solution,
+                    &scale,
+                    &passive_values,
+                    &states,
+                    m_r.as_ref(),
+                    data,
+                    mf,
+                )
+            })
+            .collect()
+    }
+
+    /// The outputs of a solved frame problem.
+    #[allow(clippy::too_many_arguments)]
+    fn frame_result(
+        &self,
+        t: f64,
+        problem: &FrameProblem,
+        solution: optimize::FrameSolution,
+        scale: &[f64],
+        passive_values: &[f64],
+        states: &[ContactState],
+        m_r: Option<&DMatrix<f64>>,
+        data: &Data,
+        mf: &MuscleFrame,
+    ) -> FrameResult {
         let bmax = problem.b.amax();
         let relative_residual = if bmax > 0.0 {
             solution.eq_residual / bmax
@@ -823,7 +879,7 @@ impl SoProblem {
         let nv = self.controls.len();
         let forces: Vec<f64> = solution.x[..nv]
             .iter()
-            .zip(&scale)
+            .zip(scale)
             .map(|(x, f)| x * f)
             .collect();
         let friction_violation = problem
@@ -831,7 +887,7 @@ impl SoProblem {
             .iter()
             .map(|c| self.settings.friction.violation(c, &solution.x))
             .fold(0.0, f64::max);
-        let contacts = self.contact_outputs(&states, &solution.x[nv..], data);
+        let contacts = self.contact_outputs(states, &solution.x[nv..], data);
         // Generalized forces by source on each free coordinate (reduced rows):
         // required, muscles, other actuators, contacts. Perturbation rows are
         // accelerations: M_r turns them into generalized forces.
@@ -850,7 +906,7 @@ impl SoProblem {
             };
             parts[k].axpy(solution.x[v], &problem.a.column(v), 1.0);
         }
-        if let Some(m) = &m_r {
+        if let Some(m) = m_r {
             for p in parts.iter_mut() {
                 *p = m * &*p;
             }
@@ -872,7 +928,7 @@ impl SoProblem {
         let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
         let mut force_row = force_file_row(
             &forces,
-            &passive_values,
+            passive_values,
             &passive_sizes,
             &self.passive_after,
         );
@@ -988,28 +1044,37 @@ pub fn run(
     let mut prefixes = Vec::new();
     let mut knee_states = None;
     let mut knee_files = Vec::new();
-    for &w0 in &weights {
-        problem.w0 = w0;
-        let prefix = if sweep {
-            format!("{base}w0_{}_", w0_tag(w0))
-        } else {
-            base.clone()
-        };
-        let jr_prefix = |name: &str| {
-            if sweep {
-                format!("{}_{name}_w0_{}_", setup.name, w0_tag(w0))
+    let specs: Vec<RunSpec> = weights
+        .iter()
+        .map(|&w0| {
+            let prefix = if sweep {
+                format!("{base}w0_{}_", w0_tag(w0))
             } else {
-                format!("{}_{name}_", setup.name)
+                base.clone()
+            };
+            let jr_prefix = |name: &str| {
+                if sweep {
+                    format!("{}_{name}_w0_{}_", setup.name, w0_tag(w0))
+                } else {
+                    format!("{}_{name}_", setup.name)
+                }
+            };
+            RunSpec {
+                w0,
+                prefix,
+                reactions: jr_specs
+                    .iter()
+                    .map(|(n, s)| (jr_prefix(n), s.as_slice()))
+                    .collect(),
             }
-        };
-        let jr: Vec<(String, &[ReactionSpec])> = jr_specs
-            .iter()
-            .map(|(n, s)| (jr_prefix(n), s.as_slice()))
-            .collect();
-        let s = run_once(&problem, setup, step_interval, &dir, &prefix, &jr, opts)?;
+        })
+        .collect();
+    problem.w0 = weights[0];
+    let summaries = run_sweep(&problem, setup, step_interval, &dir, &specs, opts)?;
+    for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
         if !stopped {
-            for (jr_setup, (p, _)) in reactions.iter().zip(&jr) {
+            for (jr_setup, (p, _)) in reactions.iter().zip(&spec.reactions) {
                 if jr_setup.knee_loads {
                     let states = match &knee_states {
                         Some(s) => s,
@@ -1027,15 +1092,15 @@ pub fn run(
                 }
             }
         }
-        let label = format!("w0 = {w0}");
+        let label = format!("w0 = {}", spec.w0);
         summary.absorb(s, sweep.then_some(label.as_str()));
-        if summary.stopped.is_some() {
-            // The sweep's statistics need every w0: none are written.
-            warnings.extend(std::mem::take(&mut summary.warnings));
-            summary.warnings = warnings;
-            return Ok(summary);
-        }
-        prefixes.push(prefix);
+        prefixes.push(spec.prefix.clone());
+    }
+    if summary.stopped.is_some() {
+        // The sweep's statistics need every w0: none are written.
+        warnings.extend(std::mem::take(&mut summary.warnings));
+        summary.warnings = warnings;
+        return Ok(summary);
     }
     if sweep {
         let precision = opts.precision.unwrap_or(setup.output_precision);
@@ -1279,198 +1344,450 @@ fn resume_point(
     }))
 }
 
-fn run_once(
+/// One run of a sweep: its contact weight, the prefix of its tables and the
+/// prefixes of its joint-reaction tables.
+struct RunSpec<'a> {
+    w0: f64,
+    prefix: String,
+    reactions: Vec<(String, &'a [ReactionSpec])>,
+}
+
+/// The tables, log and running statistics of one run.
+struct RunWriters<'a> {
+    problem: &'a SoProblem,
+    prefix: String,
+    diag_path: std::path::PathBuf,
+    files: Vec<std::path::PathBuf>,
+    act_w: StoWriter,
+    force_w: StoWriter,
+    diag_w: StoWriter,
+    contact_w: Option<(StoWriter, StoWriter, StoWriter)>,
+    src_w: StoWriter,
+    power_w: StoWriter,
+    jr_w: Vec<StoWriter>,
+    log: FrameLog,
+    /// Frames a resumed run already holds (t <= this) are not written again.
+    skip_until: f64,
+    failures: Vec<String>,
+    reserve_vars: Vec<usize>,
+    reserve_peak: (f64, String),
+    worst_residual: f64,
+    root_rows: Vec<(usize, bool)>,
+    root_names: Vec<String>,
+    root_peaks: [Option<(f64, String)>; 2],
+    at_bound: Vec<(String, usize, f64)>,
+    last: Option<f64>,
+}
+
+impl<'a> RunWriters<'a> {
+    fn open(
+        problem: &'a SoProblem,
+        setup: &AnalyzeSetup,
+        dir: &std::path::Path,
+        spec: &RunSpec,
+        opts: &RunOptions,
+    ) -> Result<RunWriters<'a>> {
+        let prefix = spec.prefix.as_str();
+        let reactions = &spec.reactions;
+        let precision = opts.precision.unwrap_or(setup.output_precision);
+        let act_path = dir.join(format!("{prefix}activation.sto"));
+        let force_path = dir.join(format!("{prefix}force.sto"));
+        let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
+        let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
+        let resume = if opts.resume {
+            resume_point(dir, prefix, problem, reactions)?
+        } else {
+            None
+        };
+        // Each table is created, or, when resuming, reopened after its kept rows.
+        let open_table = |path: &std::path::Path,
+                          name: &str,
+                          desc: &str,
+                          labels: &[String],
+                          precision: usize|
+         -> Result<StoWriter> {
+            match &resume {
+                Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
+                None => StoWriter::create_for_setup(
+                    &setup.setup_file,
+                    path,
+                    name,
+                    desc,
+                    labels,
+                    precision,
+                    false,
+                ),
+            }
+        };
+        let act_w = open_table(
+            &act_path,
+            "Static Optimization",
+            "This file contains static optimization results.\n",
+            &problem.labels,
+            precision,
+        )?;
+        let force_w = open_table(
+            &force_path,
+            "ModelForces",
+            FORCE_DESCRIPTION,
+            &problem.force_labels,
+            precision,
+        )?;
+        let diag_labels: Vec<String> = DIAGNOSTICS_COLUMNS.iter().map(|s| s.to_string()).collect();
+        let diag_w = open_table(
+            &diag_path,
+            "Static Optimization Diagnostics",
+            DIAGNOSTICS_DESCRIPTION,
+            &diag_labels,
+            16,
+        )?;
+        let mut contact_w = None;
+        if !problem.contacts.is_empty() {
+            let cpath = dir.join(format!("{prefix}ContactForces.sto"));
+            let bpath = dir.join(format!("{prefix}ContactBodyForces.sto"));
+            let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
+            let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
+            let desc = format!(
+                "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
+                spec.w0, problem.settings.friction
+            );
+            let cw = open_table(
+                &cpath,
+                "Contact Forces",
+                &desc,
+                &problem.contact_labels(),
+                precision,
+            )?;
+            let bw = open_table(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision)?;
+            let mut load_labels = Vec::new();
+            for (_, _, id) in problem.contact_load_forces() {
+                load_labels.extend(
+                    [
+                        "force_vx", "force_vy", "force_vz", "force_px", "force_py", "force_pz",
+                    ]
+                    .map(|s| format!("{id}{s}")),
+                );
+            }
+            let lw = open_table(
+                &lpath,
+                "statopt contact forces",
+                "",
+                &load_labels,
+                precision,
+            )?;
+            let datafile = lpath
+                .file_name()
+                .map(|f| f.to_string_lossy().to_string())
+                .unwrap_or_default();
+            std::fs::write(&xpath, external_loads_xml(problem, &datafile))
+                .map_err(|e| Error::io(&xpath, e))?;
+            files.extend([cpath, bpath, lpath, xpath]);
+            contact_w = Some((cw, bw, lw));
+        }
+        let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
+        let src_w = open_table(
+            &src_path,
+            "Generalized Forces By Source",
+            "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
+            &problem.by_source_labels(),
+            precision,
+        )?;
+        let power_path = dir.join(format!("{prefix}MusclePower.sto"));
+        let power_w = open_table(
+            &power_path,
+            "Muscle Power",
+            "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
+            &problem.muscle_labels(),
+            precision,
+        )?;
+        files.extend([src_path, power_path]);
+        let mut jr_w = Vec::new();
+        for (p, specs) in reactions {
+            let path = dir.join(format!("{p}ReactionLoads.sto"));
+            jr_w.push(open_table(
+                &path,
+                "Joint Reaction Loads",
+                JR_DESCRIPTION,
+                &jr_column_labels(specs),
+                precision,
+            )?);
+            files.push(path);
+        }
+        let log_path = dir.join(format!("{prefix}log.mcap"));
+        let log_names = LogNames::new(problem, reactions.first().map(|(_, s)| *s));
+        let mut log = FrameLog::create(&log_path, &log_names)?;
+        if let Some(r) = &resume {
+            log.replay(&r.messages)?;
+        }
+        let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
+        files.push(log_path);
+        let reserve_vars: Vec<usize> = problem
+            .labels
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve"))
+            .map(|(i, _)| i)
+            .collect();
+        // Rows of the root joint's coordinates (a joint on ground with three or
+        // more coordinates: a person's pelvis, not a machine's lever), with
+        // whether they translate; what residual actuators supplied there.
+        let root_rows: Vec<(usize, bool)> = problem
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| problem.model.is_root_coordinate(c))
+            .map(|(k, &c)| {
+                (
+                    k,
+                    problem.model.coordinates[c].motion_type == crate::model::MotionType::Translational,
+                )
+            })
+            .collect();
+        let root_names: Vec<String> = root_rows
+            .iter()
+            .map(|&(k, _)| problem.model.coordinates[problem.rows[k]].name.clone())
+            .collect();
+        Ok(RunWriters {
+            problem,
+            prefix: prefix.to_string(),
+            diag_path,
+            files,
+            act_w,
+            force_w,
+            diag_w,
+            contact_w,
+            src_w,
+            power_w,
+            jr_w,
+            log,
+            skip_until,
+            failures: Vec::new(),
+            reserve_vars,
+            reserve_peak: (0.0, String::new()),
+            worst_residual: 0.0,
+            root_rows,
+            root_names,
+            root_peaks: [None, None],
+            at_bound: Vec::new(),
+            last: None,
+        })
+    }
+
+    /// Write one frame (in frame order).
+    fn write(&mut self, r: &FrameResult, jr_rows: &[Vec<f64>], messages: &FrameMessages) -> Result<()> {
+        let problem = self.problem;
+        if r.time <= self.skip_until {
+            return Ok(());
+        }
+        for (w, row) in self.jr_w.iter_mut().zip(jr_rows) {
+            w.write_row(r.time, row)?;
+        }
+        self.log.write(r.time, messages)?;
+        self.src_w.write_row(r.time, &r.by_source)?;
+        self.power_w.write_row(r.time, &r.muscle_power)?;
+        if !r.solution.status.is_ok() {
+            self.failures.push(format!(
+                "t={}: {:?}, equation residual {:.3e}",
+                r.time, r.solution.status, r.solution.eq_residual
+            ));
+        } else {
+            self.worst_residual = self.worst_residual.max(r.solution.eq_residual);
+        }
+        for (k, &(row, translational)) in self.root_rows.iter().enumerate() {
+            // by_source holds, per row: required, muscles, actuators, contacts.
+            let v = r.by_source[4 * row + 2].abs();
+            let peak = &mut self.root_peaks[usize::from(!translational)];
+            if v > peak.as_ref().map_or(0.0, |p| p.0) {
+                *peak = Some((v, format!("{} at t={}", self.root_names[k], r.time)));
+            }
+        }
+        let nv = problem.controls.len();
+        for v in 0..nv {
+            let up = problem.upper[v];
+            if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+                match self
+                    .at_bound
+                    .iter_mut()
+                    .find(|(n, _, _)| *n == problem.labels[v])
+                {
+                    Some(e) => e.1 += 1,
+                    None => self.at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                }
+            }
+        }
+        for &v in &self.reserve_vars {
+            if r.forces[v].abs() > self.reserve_peak.0 {
+                self.reserve_peak = (
+                    r.forces[v].abs(),
+                    format!("{} at t={}", problem.labels[v], r.time),
+                );
+            }
+        }
+        self.last = Some(r.time);
+        self.act_w.write_row(r.time, &r.solution.x[..nv])?;
+        self.force_w.write_row(r.time, &r.force_row)?;
+        self.diag_w.write_row(r.time, &diagnostics_row(r))?;
+        if let Some((cw, bw, lw)) = self.contact_w.as_mut() {
+            cw.write_row(r.time, &r.contacts.contact)?;
+            bw.write_row(r.time, &r.contacts.bodies)?;
+            lw.write_row(r.time, &r.contacts.loads)?;
+        }
+        Ok(())
+    }
+
+    fn finish(
+        self,
+        nframes: usize,
+        loop_seconds: f64,
+        completed: bool,
+        shared: usize,
+    ) -> Result<RunSummary> {
+        let problem = self.problem;
+        self.act_w.finish()?;
+        self.force_w.finish()?;
+        self.diag_w.finish()?;
+        self.log.finish()?;
+        self.src_w.finish()?;
+        self.power_w.finish()?;
+        for w in self.jr_w {
+            w.finish()?;
+        }
+        if let Some((cw, bw, lw)) = self.contact_w {
+            cw.finish()?;
+            bw.finish()?;
+            lw.finish()?;
+        }
+        let mut warnings = Vec::new();
+        let failures = self.failures;
+        if !failures.is_empty() {
+            warnings.push(format!(
+                "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
+                failures.len(),
+                nframes,
+                failures[0],
+                self.diag_path.display()
+            ));
+        }
+        if !self.at_bound.is_empty() {
+            let list: Vec<String> = self
+                .at_bound
+                .iter()
+                .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
+                .collect();
+            warnings.push(format!(
+                "activations at their upper bound: {}",
+                list.join(", ")
+            ));
+        }
+        // Residual forces on the root above a few % of body weight mean the
+        // motion and the model's forces do not balance: say so.
+        let root_body_weight = self.root_rows.first().map(|&(k, _)| {
+            let body = problem.model.coordinates[problem.rows[k]].body;
+            problem.model.subtree_mass(body) * problem.model.gravity.norm()
+        });
+        if let (Some(bw), Some((f, at))) = (root_body_weight, &self.root_peaks[0]) {
+            if bw > 0.0 && *f > ROOT_RESIDUAL_WARNING * bw {
+                warnings.push(format!(
+                    "residual actuators on the root joint carried up to {f:.1} N = {:.1} % of body weight ({at}; more than {:.0} %): the motion and the model's forces do not balance there, so muscle and contact forces near those frames are doubtful",
+                    100.0 * f / bw,
+                    100.0 * ROOT_RESIDUAL_WARNING
+                ));
+            }
+        }
+        let note = if shared > 1 {
+            format!(
+                "static optimization ({}): {} frames in {:.3} s, shared by the {} weights of the sweep (the physics assembled once per frame)",
+                self.prefix.trim_end_matches('_'),
+                nframes,
+                loop_seconds * shared as f64,
+                shared
+            )
+        } else {
+            format!(
+                "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
+                nframes,
+                loop_seconds,
+                nframes as f64 / loop_seconds.max(1e-12)
+            )
+        };
+        Ok(RunSummary {
+            frames: nframes,
+            files: self.files,
+            warnings,
+            loop_seconds,
+            solves: nframes,
+            failed: failures.len(),
+            first_failure: failures
+                .first()
+                .map(|f| format!("{f}; see {}", self.diag_path.display())),
+            worst_residual: self.worst_residual,
+            reserve_peak: (!self.reserve_vars.is_empty()).then_some(self.reserve_peak),
+            root_body_weight,
+            root_force_peak: self.root_peaks[0].clone(),
+            root_moment_peak: self.root_peaks[1].clone(),
+            notes: vec![note],
+            results_dirs: Vec::new(),
+            stopped: (!completed).then(|| (crate::tools::interrupt::requested().unwrap_or(130), self.last)),
+        })
+    }
+}
+
+/// Columns of the diagnostics table.
+const DIAGNOSTICS_COLUMNS: [&str; 7] = [
+    "status",
+    "iterations",
+    "objective",
+    "equation_residual",
+    "relative_residual",
+    "friction_violation",
+    "solve_time_ms",
+];
+
+const DIAGNOSTICS_DESCRIPTION: &str = "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n";
+
+fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
+    vec![
+        status_code(r.solution.status),
+        r.solution.iterations as f64,
+        r.solution.objective,
+        r.solution.eq_residual,
+        r.relative_residual,
+        r.friction_violation,
+        r.solution.solve_time.as_secs_f64() * 1e3,
+    ]
+}
+
+/// Static optimization over the motion for every run of `runs` (the
+/// weights of a w0 sweep): one pass over the frames; per frame the physics
+/// is assembled once and the problem solved once per weight
+/// ([`SoProblem::solve_frame_weights`]), each run's joint reactions and
+/// tables written from its own solution. One summary per run.
+fn run_sweep(
     problem: &SoProblem,
     setup: &AnalyzeSetup,
     step_interval: usize,
     dir: &std::path::Path,
-    prefix: &str,
-    reactions: &[(String, &[ReactionSpec])],
+    runs: &[RunSpec],
     opts: &RunOptions,
-) -> Result<RunSummary> {
-    let precision = opts.precision.unwrap_or(setup.output_precision);
-    let mut warnings = Vec::new();
-    let act_path = dir.join(format!("{prefix}activation.sto"));
-    let force_path = dir.join(format!("{prefix}force.sto"));
-    let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
-    let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
-    let resume = if opts.resume {
-        resume_point(dir, prefix, problem, reactions)?
-    } else {
-        None
-    };
-    // Each table is created, or, when resuming, reopened after its kept rows.
-    let open_table = |path: &std::path::Path,
-                      name: &str,
-                      desc: &str,
-                      labels: &[String],
-                      precision: usize|
-     -> Result<StoWriter> {
-        match &resume {
-            Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
-            None => StoWriter::create_for_setup(
-                &setup.setup_file,
-                path,
-                name,
-                desc,
-                labels,
-                precision,
-                false,
-            ),
-        }
-    };
-    let mut act_w = open_table(
-        &act_path,
-        "Static Optimization",
-        "This file contains static optimization results.\n",
-        &problem.labels,
-        precision,
-    )?;
-    let mut force_w = open_table(
-        &force_path,
-        "ModelForces",
-        FORCE_DESCRIPTION,
-        &problem.force_labels,
-        precision,
-    )?;
-    let diag_labels: Vec<String> = [
-        "status",
-        "iterations",
-        "objective",
-        "equation_residual",
-        "relative_residual",
-        "friction_violation",
-        "solve_time_ms",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let mut diag_w = open_table(
-        &diag_path,
-        "Static Optimization Diagnostics",
-        "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n",
-        &diag_labels,
-        16,
-    )?;
-    let mut contact_w = None;
-    if !problem.contacts.is_empty() {
-        let cpath = dir.join(format!("{prefix}ContactForces.sto"));
-        let bpath = dir.join(format!("{prefix}ContactBodyForces.sto"));
-        let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
-        let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
-        let desc = format!(
-            "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
-            problem.w0, problem.settings.friction
-        );
-        let cw = open_table(
-            &cpath,
-            "Contact Forces",
-            &desc,
-            &problem.contact_labels(),
-            precision,
-        )?;
-        let bw = open_table(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision)?;
-        let mut load_labels = Vec::new();
-        for (_, _, id) in problem.contact_load_forces() {
-            load_labels.extend(
-                [
-                    "force_vx", "force_vy", "force_vz", "force_px", "force_py", "force_pz",
-                ]
-                .map(|s| format!("{id}{s}")),
-            );
-        }
-        let lw = open_table(
-            &lpath,
-            "statopt contact forces",
-            "",
-            &load_labels,
-            precision,
-        )?;
-        let datafile = lpath
-            .file_name()
-            .map(|f| f.to_string_lossy().to_string())
-            .unwrap_or_default();
-        std::fs::write(&xpath, external_loads_xml(problem, &datafile))
-            .map_err(|e| Error::io(&xpath, e))?;
-        files.extend([cpath, bpath, lpath, xpath]);
-        contact_w = Some((cw, bw, lw));
-    }
-    let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
-    let mut src_w = open_table(
-        &src_path,
-        "Generalized Forces By Source",
-        "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
-        &problem.by_source_labels(),
-        precision,
-    )?;
-    let power_path = dir.join(format!("{prefix}MusclePower.sto"));
-    let mut power_w = open_table(
-        &power_path,
-        "Muscle Power",
-        "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
-        &problem.muscle_labels(),
-        precision,
-    )?;
-    files.extend([src_path, power_path]);
-    let mut jr_w = Vec::new();
-    for (p, specs) in reactions {
-        let path = dir.join(format!("{p}ReactionLoads.sto"));
-        jr_w.push(open_table(
-            &path,
-            "Joint Reaction Loads",
-            JR_DESCRIPTION,
-            &jr_column_labels(specs),
-            precision,
-        )?);
-        files.push(path);
-    }
-    let log_path = dir.join(format!("{prefix}log.mcap"));
-    let log_names = LogNames::new(problem, reactions.first().map(|(_, s)| *s));
-    let mut log = FrameLog::create(&log_path, &log_names)?;
-    if let Some(r) = &resume {
-        log.replay(&r.messages)?;
-    }
-    let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
-    files.push(log_path);
+) -> Result<Vec<RunSummary>> {
+    let mut writers = runs
+        .iter()
+        .map(|r| RunWriters::open(problem, setup, dir, r, opts))
+        .collect::<Result<Vec<_>>>()?;
+    let skip_until = writers
+        .iter()
+        .map(|w| w.skip_until)
+        .fold(f64::INFINITY, f64::min);
+    let weights: Vec<f64> = runs.iter().map(|r| r.w0).collect();
+    let log_names: Vec<LogNames> = runs
+        .iter()
+        .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
+        .collect();
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
     let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
-    let mut failures: Vec<String> = Vec::new();
-    let reserve_vars: Vec<usize> = problem
-        .labels
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve"))
-        .map(|(i, _)| i)
-        .collect();
-    let mut reserve_peak = (0.0f64, String::new());
-    let mut worst_residual = 0.0f64;
-    // Rows of the root joint's coordinates (a joint on ground with three or
-    // more coordinates: a person's pelvis, not a machine's lever), with
-    // whether they translate; what residual actuators supplied there.
-    let root_rows: Vec<(usize, bool)> = problem
-        .rows
-        .iter()
-        .enumerate()
-        .filter(|(_, &c)| problem.model.is_root_coordinate(c))
-        .map(|(k, &c)| {
-            (
-                k,
-                problem.model.coordinates[c].motion_type == crate::model::MotionType::Translational,
-            )
-        })
-        .collect();
-    let root_names: Vec<String> = root_rows
-        .iter()
-        .map(|&(k, _)| problem.model.coordinates[problem.rows[k]].name.clone())
-        .collect();
-    let mut root_peaks: [Option<(f64, String)>; 2] = [None, None];
-    let nv = problem.controls.len();
-    // Actuators saturated at a finite upper bound: reported, never silent.
-    let mut at_bound: Vec<(String, usize, f64)> = Vec::new();
     let start = Instant::now();
-    let mut last = None;
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
@@ -1486,181 +1803,64 @@ fn run_once(
             )
         },
         |(data, mf), block, i| {
-            // Frames a resumed run already holds are not computed again.
+            // Frames every resumed run already holds are not computed again.
             if block.time[i] <= skip_until {
                 return Ok(None);
             }
-            let r = problem.solve_frame(
+            let results = problem.solve_frame_weights(
                 block.time[i],
                 &block.q[i],
                 &block.u[i],
                 &block.udot[i],
                 data,
                 mf,
+                &weights,
             );
-            let mut rows = Vec::with_capacity(reactions.len());
-            for (_, specs) in reactions {
-                let mut out = vec![0.0; 9 * specs.len()];
-                static_optimization_reactions(
-                    problem,
-                    block.time[i],
-                    &block.q[i],
-                    &block.u[i],
-                    &r,
-                    data,
-                    mf,
-                    specs,
-                    &mut out,
-                )?;
-                rows.push(out);
+            let mut out = Vec::with_capacity(results.len());
+            for (r, (spec, names)) in results.into_iter().zip(runs.iter().zip(&log_names)) {
+                let mut rows = Vec::with_capacity(spec.reactions.len());
+                for (_, specs) in &spec.reactions {
+                    let mut row = vec![0.0; 9 * specs.len()];
+                    static_optimization_reactions(
+                        problem,
+                        block.time[i],
+                        &block.q[i],
+                        &block.u[i],
+                        &r,
+                        data,
+                        mf,
+                        specs,
+                        &mut row,
+                    )?;
+                    rows.push(row);
+                }
+                let messages = names.encode(problem, &r, &rows)?;
+                out.push((r, rows, messages));
             }
-            let messages = log_names.encode(problem, &r, &rows)?;
-            Ok(Some((r, rows, messages)))
+            Ok(Some(out))
         },
         |item| {
-            let Some((r, jr_rows, messages)) = item else {
+            let Some(results) = item else {
                 return Ok(());
             };
-            for (w, row) in jr_w.iter_mut().zip(&jr_rows) {
-                w.write_row(r.time, row)?;
-            }
-            log.write(r.time, &messages)?;
-            src_w.write_row(r.time, &r.by_source)?;
-            power_w.write_row(r.time, &r.muscle_power)?;
-            if !r.solution.status.is_ok() {
-                failures.push(format!(
-                    "t={}: {:?}, equation residual {:.3e}",
-                    r.time, r.solution.status, r.solution.eq_residual
-                ));
-            } else {
-                worst_residual = worst_residual.max(r.solution.eq_residual);
-            }
-            for (k, &(row, translational)) in root_rows.iter().enumerate() {
-                // by_source holds, per row: required, muscles, actuators, contacts.
-                let v = r.by_source[4 * row + 2].abs();
-                let peak = &mut root_peaks[usize::from(!translational)];
-                if v > peak.as_ref().map_or(0.0, |p| p.0) {
-                    *peak = Some((v, format!("{} at t={}", root_names[k], r.time)));
-                }
-            }
-            for v in 0..nv {
-                let up = problem.upper[v];
-                if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
-                    match at_bound
-                        .iter_mut()
-                        .find(|(n, _, _)| *n == problem.labels[v])
-                    {
-                        Some(e) => e.1 += 1,
-                        None => at_bound.push((problem.labels[v].clone(), 1, r.time)),
-                    }
-                }
-            }
-            for &v in &reserve_vars {
-                if r.forces[v].abs() > reserve_peak.0 {
-                    reserve_peak = (
-                        r.forces[v].abs(),
-                        format!("{} at t={}", problem.labels[v], r.time),
-                    );
-                }
-            }
-            last = Some(r.time);
-            act_w.write_row(r.time, &r.solution.x[..nv])?;
-            force_w.write_row(r.time, &r.force_row)?;
-            diag_w.write_row(
-                r.time,
-                &[
-                    status_code(r.solution.status),
-                    r.solution.iterations as f64,
-                    r.solution.objective,
-                    r.solution.eq_residual,
-                    r.relative_residual,
-                    r.friction_violation,
-                    r.solution.solve_time.as_secs_f64() * 1e3,
-                ],
-            )?;
-            if let Some((cw, bw, lw)) = contact_w.as_mut() {
-                cw.write_row(r.time, &r.contacts.contact)?;
-                bw.write_row(r.time, &r.contacts.bodies)?;
-                lw.write_row(r.time, &r.contacts.loads)?;
+            for (w, (r, rows, messages)) in writers.iter_mut().zip(&results) {
+                w.write(r, rows, messages)?;
             }
             progress.inc(1);
             Ok(())
         },
     )?;
     progress.finish_and_clear();
-    act_w.finish()?;
-    force_w.finish()?;
-    diag_w.finish()?;
-    log.finish()?;
-    src_w.finish()?;
-    power_w.finish()?;
-    for w in jr_w {
-        w.finish()?;
-    }
-    if let Some((cw, bw, lw)) = contact_w {
-        cw.finish()?;
-        bw.finish()?;
-        lw.finish()?;
-    }
-    let loop_seconds = start.elapsed().as_secs_f64();
-    if !failures.is_empty() {
-        warnings.push(format!(
-            "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
-            failures.len(),
-            nframes,
-            failures[0],
-            diag_path.display()
-        ));
-    }
-    if !at_bound.is_empty() {
-        let list: Vec<String> = at_bound
-            .iter()
-            .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
-            .collect();
-        warnings.push(format!(
-            "activations at their upper bound: {}",
-            list.join(", ")
-        ));
-    }
-    // Residual forces on the root above a few % of body weight mean the
-    // motion and the model's forces do not balance: say so.
-    let root_body_weight = root_rows.first().map(|&(k, _)| {
-        let body = problem.model.coordinates[problem.rows[k]].body;
-        problem.model.subtree_mass(body) * problem.model.gravity.norm()
-    });
-    if let (Some(bw), Some((f, at))) = (root_body_weight, &root_peaks[0]) {
-        if bw > 0.0 && *f > ROOT_RESIDUAL_WARNING * bw {
-            warnings.push(format!(
-                "residual actuators on the root joint carried up to {f:.1} N = {:.1} % of body weight ({at}; more than {:.0} %): the motion and the model's forces do not balance there, so muscle and contact forces near those frames are doubtful",
-                100.0 * f / bw,
-                100.0 * ROOT_RESIDUAL_WARNING
-            ));
-        }
-    }
-    Ok(RunSummary {
-        frames: nframes,
-        files,
-        warnings,
-        loop_seconds,
-        solves: nframes,
-        failed: failures.len(),
-        first_failure: failures
-            .first()
-            .map(|f| format!("{f}; see {}", diag_path.display())),
-        worst_residual,
-        reserve_peak: (!reserve_vars.is_empty()).then_some(reserve_peak),
-        root_body_weight,
-        root_force_peak: root_peaks[0].clone(),
-        root_moment_peak: root_peaks[1].clone(),
-        notes: vec![format!(
-            "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
-            nframes,
-            loop_seconds,
-            nframes as f64 / loop_seconds.max(1e-12)
-        )],
-        results_dirs: vec![dir.to_path_buf()],
-        stopped: (!completed).then(|| (crate::tools::interrupt::requested().unwrap_or(130), last)),
-    })
+    let shared = runs.len();
+    let loop_seconds = start.elapsed().as_secs_f64() / shared as f64;
+    writers
+        .into_iter()
+        .map(|w| {
+            let mut s = w.finish(nframes, loop_seconds, completed, shared)?;
+            s.results_dirs = vec![dir.to_path_buf()];
+            Ok(s)
+        })
+        .collect()
 }
 
 /// OpenSim's ForceReporter description.
