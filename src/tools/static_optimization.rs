@@ -1393,7 +1393,8 @@ fn run_once(
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
-    let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
+    let mut progress =
+        crate::tools::progress::bar(nframes as u64, opts, prefix.trim_end_matches('_'));
     let mut failures: Vec<String> = Vec::new();
     let reserve_vars: Vec<usize> = problem
         .labels
