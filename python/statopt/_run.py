@@ -1,0 +1,291 @@
+"""statopt.run: a setup run in-process, its tables as DataFrames."""
+
+from __future__ import annotations
+
+import csv
+import logging
+import os
+import re
+import shutil
+import tempfile
+import warnings
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Union
+
+import pandas as pd
+
+from . import _native
+from ._setup import edit_setup
+from ._tables import read_table
+
+log = logging.getLogger("statopt")
+
+_W0_KEY = re.compile(r"^(?P<prefix>.*)_w0_(?P<tag>[^_]+)_(?P<kind>[A-Za-z]+)$")
+_KEY = re.compile(r"^(?P<prefix>.*)_(?P<kind>[A-Za-z]+)$")
+_STATS = ("mean", "min", "max")
+
+
+class FramesFailedWarning(RuntimeWarning):
+    """Some frames could not be solved (the CLI's exit status 3); their rows
+    hold the solver's best point and the diagnostics table says which."""
+
+
+def _parse_key(key: str):
+    m = _W0_KEY.match(key)
+    if m:
+        return m["prefix"], m["tag"], m["kind"]
+    m = _KEY.match(key)
+    if m:
+        return m["prefix"], None, m["kind"]
+    return key, None, None
+
+
+def _w0_value(tag: str) -> Optional[float]:
+    try:
+        return float(tag)
+    except ValueError:
+        return None
+
+
+class Result:
+    """What a run produced.
+
+    Tables are DataFrames indexed by time with OpenSim's column names:
+    ``activations``, ``forces``, ``diagnostics``, ``contact_forces``,
+    ``contact_body_forces``, ``generalized_forces``, ``muscle_power``,
+    ``reactions``. A run of several contact weights gives each of these with
+    a (w0, time) MultiIndex; :meth:`table` picks one w0 or a statistic of
+    the sweep. ``tables`` holds every table by its file's stem, ``summary``
+    the run summary (frames, solves, failed, worst_residual, warnings, ...),
+    ``metrics`` the setup's ``<Metric>`` values, ``files`` the paths written
+    (empty unless ``results_dir`` was given).
+    """
+
+    def __init__(self, setup: str, summary: Dict[str, Any], tables: Dict[str, pd.DataFrame],
+                 metrics: Dict[str, float], files: List[str]):
+        self.setup = setup
+        self.summary = summary
+        self.tables = tables
+        self.metrics = metrics
+        self.files = files
+
+    # -- summary -------------------------------------------------------
+    @property
+    def frames(self) -> int:
+        return self.summary["frames"]
+
+    @property
+    def failed(self) -> int:
+        """Static-optimization frame problems that could not be solved."""
+        return self.summary["failed"]
+
+    @property
+    def ok(self) -> bool:
+        return self.summary["failed"] == 0
+
+    @property
+    def warnings(self) -> List[str]:
+        return self.summary["warnings"]
+
+    # -- tables --------------------------------------------------------
+    def table(self, kind: str, w0: Optional[float] = None, stat: Optional[str] = None) -> pd.DataFrame:
+        """The table of one kind (the end of its file name: ``activation``,
+        ``force``, ``ReactionLoads``, ...). ``w0`` picks one contact weight of
+        a sweep, ``stat`` one of its statistics (``mean``, ``min``, ``max``);
+        without either every w0 of a sweep comes in one DataFrame indexed by
+        (w0, time), and tables of several setups (a study) by (table, time).
+        """
+        found = []
+        for key, df in self.tables.items():
+            prefix, tag, k = _parse_key(key)
+            if k != kind:
+                continue
+            if stat is not None:
+                if tag == stat:
+                    found.append((key, prefix, tag, df))
+            elif w0 is not None:
+                if tag is not None and _w0_value(tag) == float(w0):
+                    found.append((key, prefix, tag, df))
+            elif tag not in _STATS:
+                found.append((key, prefix, tag, df))
+        if not found:
+            raise KeyError(
+                f"this run wrote no {kind} table"
+                + (f" for w0 = {w0}" if w0 is not None else "")
+                + (f" ({stat} over w0)" if stat else "")
+                + f"; its tables: {', '.join(self.tables) or 'none'}"
+            )
+        if len(found) == 1:
+            return found[0][3]
+        prefixes = {f[1] for f in found}
+        if len(prefixes) == 1 and all(f[2] is not None and _w0_value(f[2]) is not None for f in found):
+            found.sort(key=lambda f: _w0_value(f[2]))
+            return pd.concat([f[3] for f in found], keys=[_w0_value(f[2]) for f in found],
+                             names=["w0", "time"])
+        return pd.concat([f[3] for f in found], keys=[f[0] for f in found], names=["table", "time"])
+
+    activations = property(lambda self: self.table("activation"), doc="Muscle activations (and actuator controls).")
+    forces = property(lambda self: self.table("force"), doc="Actuator forces.")
+    diagnostics = property(lambda self: self.table("diagnostics"), doc="Solver diagnostics per frame.")
+    contact_forces = property(lambda self: self.table("ContactForces"), doc="Contact forces.")
+    contact_body_forces = property(lambda self: self.table("ContactBodyForces"), doc="Contact forces per body.")
+    generalized_forces = property(lambda self: self.table("GeneralizedForcesBySource"),
+                                  doc="Generalized forces by source (muscles, contacts, ...).")
+    muscle_power = property(lambda self: self.table("MusclePower"), doc="Muscle power.")
+    reactions = property(lambda self: self.table("ReactionLoads"), doc="Joint reaction loads.")
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (f"<statopt.Result {os.path.basename(self.setup)}: {s['frames']} frames, "
+                f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
+                f"{len(self.tables)} tables>")
+
+
+class _TqdmProgress:
+    """A tqdm bar per frame loop; shown once a loop has run ``delay`` s."""
+
+    def __init__(self, delay: float):
+        from tqdm.auto import tqdm  # noqa: F401 (fails early without tqdm)
+
+        self.delay = delay
+        self.bar = None
+        self.label = None
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        from tqdm.auto import tqdm
+
+        if self.bar is None or label != self.label:
+            self.close()
+            self.bar = tqdm(total=total, desc=label, unit="frame", delay=self.delay, leave=False)
+            self.label = label
+        self.bar.update(done - self.bar.n)
+        if done >= total:
+            self.close()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _progress_callback(progress) -> Optional[Callable]:
+    if progress is False:
+        return None
+    if callable(progress):
+        return progress
+    try:
+        return _TqdmProgress(delay=0.0 if progress is True else 1.0)
+    except ImportError:
+        if progress is True:
+            raise
+        return None
+
+
+def _read_results(files: List[str]) -> (Dict[str, pd.DataFrame], Dict[str, float]):
+    tables: Dict[str, pd.DataFrame] = {}
+    metrics: Dict[str, float] = {}
+    stems = [Path(f).stem for f in files]
+    for f, stem in zip(files, stems):
+        p = Path(f)
+        if p.suffix in (".sto", ".mot"):
+            key = stem if stems.count(stem) == 1 else f"{p.parent.name}/{stem}"
+            tables[key] = read_table(p)
+        elif p.name.endswith("_metrics.csv"):
+            with open(p, newline="") as fh:
+                for row in csv.DictReader(fh):
+                    metrics[row["metric"]] = float(row["value"])
+    return tables, metrics
+
+
+def run(
+    setup: Union[str, "os.PathLike[str]"],
+    results_dir: Union[str, "os.PathLike[str]", None] = None,
+    progress: Union[bool, None, Callable[[str, int, int], Any]] = None,
+    *,
+    threads: Optional[int] = None,
+    precision: Optional[int] = None,
+    reduce: bool = False,
+    resume: bool = False,
+    tables: bool = True,
+    **overrides: Any,
+) -> Result:
+    """Run a setup as ``statopt-tool SETUP`` does, in-process (the GIL is
+    released while the engine runs).
+
+    Any setup the CLI runs: an AnalyzeTool (StaticOptimization, JointReaction,
+    MuscleAnalysis), an InverseDynamicsTool or a study document. Nothing is
+    written unless ``results_dir`` is given (the engine then writes there
+    exactly what ``statopt-tool SETUP -o results_dir`` writes); otherwise the
+    tables go to a temporary folder that is read back and removed.
+
+    ``progress``: None shows a tqdm bar for frame loops that take longer
+    than a second, True always, False never; a callable is called as
+    ``progress(label, done, total)``.
+
+    Overrides of the setup, without editing its file:
+      ``contact_weight`` (w0: a number or a list), ``friction``
+      (``"cone"``, ``"pyramid4"``, ``"pyramid8"``), ``time_range``
+      (``(t0, t1)``), ``artifact_files`` (machine model file(s)),
+      ``model_properties`` (``{"component/property": value}`` set in the
+      model, artifact or force-set file that has it, e.g.
+      ``{"tibia_pad_r/plane_origin": [0, 0.1, 0]}``), ``motion`` (a
+      DataFrame, or a file, instead of the coordinates file; a DataFrame's
+      rotational columns are in degrees unless ``df.attrs["in_degrees"]`` is
+      False), and any other setup element by name (``step_interval=2``,
+      ``lowpass_cutoff_frequency_for_coordinates=6``, ...). Paths given here
+      are relative to the working directory; the setup's own paths still
+      resolve against its folder.
+
+    ``threads``, ``precision``, ``reduce``, ``resume`` are the CLI's ``-j``,
+    ``--precision``, ``--reduce`` and ``--resume``.
+
+    Raises :class:`statopt.InputError` (bad input; the CLI's message naming
+    the file, line and element) or :class:`statopt.StatoptError`. Frames
+    that could not be solved give a :class:`FramesFailedWarning` (the result
+    is complete; ``result.failed`` counts them).
+    """
+    setup = Path(setup)
+    scratch = Path(tempfile.mkdtemp(prefix="statopt-"))
+    try:
+        text = None
+        if overrides:
+            text = edit_setup(setup, overrides, scratch / "inputs")
+        out = Path(results_dir) if results_dir is not None else scratch / "results"
+        cb = _progress_callback(progress)
+        try:
+            summary = _native.run(
+                str(setup),
+                text=text,
+                results_dir=str(out),
+                precision=precision,
+                threads=threads,
+                reduce=reduce,
+                resume=resume,
+                progress=cb,
+            )
+        finally:
+            if isinstance(cb, _TqdmProgress):
+                cb.close()
+        seen = set()
+        for w in summary["warnings"]:
+            if w not in seen:
+                seen.add(w)
+                log.warning("%s", w)
+        if summary["failure_line"]:
+            warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=2)
+        tabs, metrics = _read_results(summary["files"]) if tables else ({}, {})
+        files = list(summary["files"]) if results_dir is not None else []
+        if results_dir is None:
+            summary["files"] = []
+            summary["results_dirs"] = []
+        return Result(str(setup), summary, tabs, metrics, files)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def check(setup: Union[str, "os.PathLike[str]"]) -> Dict[str, List[str]]:
+    """``statopt-tool --check SETUP``: read and compile everything the setup
+    (or study) names without running. Returns ``{"errors": [...],
+    "warnings": [...], "checked": [...]}``."""
+    errors, warns, checked = _native.check(os.fspath(setup))
+    return {"errors": errors, "warnings": warns, "checked": checked}
