@@ -184,9 +184,10 @@ def _progress_callback(progress) -> Optional[Callable]:
 def _read_results(files: List[str]) -> (Dict[str, pd.DataFrame], Dict[str, float]):
     tables: Dict[str, pd.DataFrame] = {}
     metrics: Dict[str, float] = {}
-    stems = [Path(f).stem for f in files]
-    for f, stem in zip(files, stems):
+    stems = [Path(f).stem for f in files if Path(f).suffix in (".sto", ".mot")]
+    for f in files:
         p = Path(f)
+        stem = p.stem
         if p.suffix in (".sto", ".mot"):
             key = stem if stems.count(stem) == 1 else f"{p.parent.name}/{stem}"
             tables[key] = read_table(p)

@@ -209,7 +209,7 @@ def _apply_model_properties(doc: SetupDocument, props: Dict[str, Any], workdir: 
         if not hits:
             raise _input_error(
                 f"model_properties: no component '{'/'.join(names)}' with a property <{prop}> in "
-                + ", ".join(str(t[0]) for t in trees.values()),
+                + ", ".join(os.path.normpath(t[0]) for t in trees.values()),
                 str(doc.path),
             )
         if len(hits) > 1:
