@@ -192,9 +192,13 @@ def _read_results(files: List[str]) -> (Dict[str, pd.DataFrame], Dict[str, float
             key = stem if stems.count(stem) == 1 else f"{p.parent.name}/{stem}"
             tables[key] = read_table(p)
         elif p.name.endswith("_metrics.csv"):
+            # One file per setup (a study writes several, and its own):
+            # then each metric is named after its file, '<name>.<metric>'.
+            several = sum(1 for g in files if g.endswith("_metrics.csv")) > 1
+            prefix = p.name[: -len("_metrics.csv")] + "." if several else ""
             with open(p, newline="") as fh:
                 for row in csv.DictReader(fh):
-                    metrics[row["metric"]] = float(row["value"])
+                    metrics[prefix + row["metric"]] = float(row["value"])
     return tables, metrics
 
 

@@ -243,3 +243,28 @@ def test_sweep_on_local_cluster_reports_failures(repo):
         assert "no_such.xml" in df2.error.iloc[2]
         assert df2.solved.iloc[0] == 303 and df2.failed.iloc[0] == 0
         assert df2["peak_knee_r_on_tibia_r_in_tibia_r_force_N"].iloc[0] > 500
+
+
+# -- studies, Ctrl-C ----------------------------------------------------------
+
+def test_study_and_ctrl_c(repo, tmp_path):
+    import os
+    import signal
+
+    study = repo / "setups" / "leg_extension_study.xml"
+    res = statopt.run(study, progress=False)
+    assert res.summary["solves"] == 606 and res.failed == 0
+    # metrics of each setup and of the study, named after their files
+    assert res.metrics["leg_extension.quadriceps_work_cam1_J"] == res.metrics["leg_extension_cam1.quadriceps_work_J"]
+    assert res.activations.index.names == ["table", "time"]
+
+    # Ctrl-C stops the engine cleanly: KeyboardInterrupt, tables closed
+    # with the frames solved, and the next run is not stopped.
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        statopt.run(study, results_dir=tmp_path / "stopped", progress=False)
+        time.sleep(5)  # (if the run ended before the signal)
+    timer.join()
+    res = statopt.run(repo / "setups" / "leg_extension_cam1.xml", contact_weight=1, progress=False)
+    assert res.frames == 101 and len(res.activations) == 101
