@@ -110,6 +110,9 @@ def test_overrides_model_properties_and_artifact(repo, cam1_py):
                         model_properties={"pelvis_seat_r/plane_origin": [0, 0.005, 0]})
     assert moved.contact_forces.shape == base.shape
     assert not np.array_equal(bits(moved.contact_forces), bits(base))
+    same = statopt.run(setup, contact_weight=1, progress=False,
+                       model_properties={"/forceset/pelvis_seat_r/plane_origin": [0, 0.005, 0]})
+    assert_same(same.contact_forces, moved.contact_forces)
     cam2 = statopt.run(setup, contact_weight=1, progress=False,
                        artifact_files=repo / "models" / "leg_extension" / "machine_cam2.osim")
     assert not np.array_equal(bits(cam2.forces), bits(cam1_py.table("force", w0=1)))
