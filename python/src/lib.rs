@@ -161,6 +161,47 @@ fn read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<TableParts<'py>> 
     Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
 }
 
+/// [`read_table`] for several files at once, read in parallel (the tables
+/// of a run, read back); the first error is raised.
+#[pyfunction]
+fn read_tables<'py>(py: Python<'py>, paths: Vec<PathBuf>) -> PyResult<Vec<TableParts<'py>>> {
+    let read: Vec<statopt::Result<Storage>> = py.allow_threads(|| {
+        let workers = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(paths.len())
+            .max(1);
+        let mut out: Vec<Option<statopt::Result<Storage>>> = Vec::new();
+        out.resize_with(paths.len(), || None);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let slots: Vec<Mutex<&mut Option<statopt::Result<Storage>>>> =
+            out.iter_mut().map(Mutex::new).collect();
+        std::thread::scope(|s| {
+            for _ in 0..workers {
+                s.spawn(|| loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if i >= paths.len() {
+                        break;
+                    }
+                    let r = storage::read(&paths[i]);
+                    **slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(r);
+                });
+            }
+        });
+        drop(slots);
+        out.into_iter()
+            .map(|r| r.unwrap_or_else(|| Err(statopt::Error::internal("table not read"))))
+            .collect()
+    });
+    read.into_iter()
+        .map(|r| {
+            let st = r.map_err(|e| to_py(py, e))?;
+            let time = f64_bytes(py, st.time.iter().copied());
+            let data = f64_bytes(py, st.rows.iter().flatten().copied());
+            Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
+        })
+        .collect()
+}
+
 fn f64s(b: &[u8], what: &str) -> PyResult<Vec<f64>> {
     if b.len() % 8 != 0 {
         return Err(StatoptError::new_err(format!(
@@ -237,6 +278,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_PRECISION", storage::DEFAULT_PRECISION)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
+    m.add_function(wrap_pyfunction!(read_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
     Ok(())

@@ -8,15 +8,17 @@ import os
 import re
 import shutil
 import tempfile
+import threading
 import warnings
+import weakref
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import pandas as pd
 
 from . import _native
 from ._setup import edit_setup
-from ._tables import read_table
+from ._tables import read_tables
 
 log = logging.getLogger("statopt")
 
@@ -58,16 +60,35 @@ class Result:
     the sweep. ``tables`` holds every table by its file's stem, ``summary``
     the run summary (frames, solves, failed, worst_residual, warnings, ...),
     ``metrics`` the setup's ``<Metric>`` values, ``files`` the paths written
-    (empty unless ``results_dir`` was given).
+    (empty unless ``results_dir`` was given). Tables are read when first used.
     """
 
-    def __init__(self, setup: str, summary: Dict[str, Any], tables: Dict[str, pd.DataFrame],
-                 metrics: Dict[str, float], files: List[str]):
+    def __init__(self, setup: str, summary: Dict[str, Any], table_files: List[Tuple[str, Path]],
+                 metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None):
         self.setup = setup
         self.summary = summary
-        self.tables = tables
         self.metrics = metrics
         self.files = files
+        self._table_files = table_files
+        self._tables: Optional[Dict[str, pd.DataFrame]] = None
+        self._lock = threading.Lock()
+        # The temporary results folder lives until the tables are read (or
+        # this result is dropped).
+        self._cleanup = weakref.finalize(self, shutil.rmtree, str(scratch), True) if scratch else None
+
+    @property
+    def tables(self) -> Dict[str, pd.DataFrame]:
+        """Every table of the run by its file's stem; read (in parallel, with
+        the crate's reader) when first used."""
+        with self._lock:
+            if self._tables is None:
+                try:
+                    dfs = read_tables([p for _, p in self._table_files]) if self._table_files else []
+                    self._tables = {k: df for (k, _), df in zip(self._table_files, dfs)}
+                finally:
+                    if self._cleanup is not None:
+                        self._cleanup()
+            return self._tables
 
     # -- summary -------------------------------------------------------
     @property
@@ -138,7 +159,7 @@ class Result:
         s = self.summary
         return (f"<statopt.Result {os.path.basename(self.setup)}: {s['frames']} frames, "
                 f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
-                f"{len(self.tables)} tables>")
+                f"{len(self._table_files)} tables>")
 
 
 class _TqdmProgress:
@@ -181,25 +202,25 @@ def _progress_callback(progress) -> Optional[Callable]:
         return None
 
 
-def _read_results(files: List[str]) -> (Dict[str, pd.DataFrame], Dict[str, float]):
-    tables: Dict[str, pd.DataFrame] = {}
+def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
+    """(key, path) of every table a run wrote: the file's stem, with its
+    folder in front when two folders hold the same name (a study)."""
+    paths = [Path(f) for f in files if Path(f).suffix in (".sto", ".mot")]
+    stems = [p.stem for p in paths]
+    return [(p.stem if stems.count(p.stem) == 1 else f"{p.parent.name}/{p.stem}", p) for p in paths]
+
+
+def _read_metrics(files: List[str]) -> Dict[str, float]:
     metrics: Dict[str, float] = {}
-    stems = [Path(f).stem for f in files if Path(f).suffix in (".sto", ".mot")]
-    for f in files:
-        p = Path(f)
-        stem = p.stem
-        if p.suffix in (".sto", ".mot"):
-            key = stem if stems.count(stem) == 1 else f"{p.parent.name}/{stem}"
-            tables[key] = read_table(p)
-        elif p.name.endswith("_metrics.csv"):
-            # One file per setup (a study writes several, and its own):
-            # then each metric is named after its file, '<name>.<metric>'.
-            several = sum(1 for g in files if g.endswith("_metrics.csv")) > 1
-            prefix = p.name[: -len("_metrics.csv")] + "." if several else ""
-            with open(p, newline="") as fh:
-                for row in csv.DictReader(fh):
-                    metrics[prefix + row["metric"]] = float(row["value"])
-    return tables, metrics
+    csvs = [Path(f) for f in files if f.endswith("_metrics.csv")]
+    for p in csvs:
+        # One file per setup (a study writes several, and its own): then
+        # each metric is named after its file, '<name>.<metric>'.
+        prefix = p.name[: -len("_metrics.csv")] + "." if len(csvs) > 1 else ""
+        with open(p, newline="") as fh:
+            for row in csv.DictReader(fh):
+                metrics[prefix + row["metric"]] = float(row["value"])
+    return metrics
 
 
 def run(
@@ -221,7 +242,9 @@ def run(
     MuscleAnalysis), an InverseDynamicsTool or a study document. Nothing is
     written unless ``results_dir`` is given (the engine then writes there
     exactly what ``statopt-tool SETUP -o results_dir`` writes); otherwise the
-    tables go to a temporary folder that is read back and removed.
+    tables go to a temporary folder, read back (with the crate's reader, in
+    parallel) when the result's tables are first used and then removed. With
+    ``results_dir`` the tables are read from its files when first used.
 
     ``progress``: None shows a tqdm bar for frame loops that take longer
     than a second, True always, False never; a callable is called as
@@ -250,12 +273,15 @@ def run(
     is complete; ``result.failed`` counts them).
     """
     setup = Path(setup)
-    scratch = Path(tempfile.mkdtemp(prefix="statopt-"))
+    inputs = None
+    out = Path(results_dir) if results_dir is not None else None
     try:
         text = None
         if overrides:
-            text = edit_setup(setup, overrides, scratch / "inputs")
-        out = Path(results_dir) if results_dir is not None else scratch / "results"
+            inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
+            text = edit_setup(setup, overrides, inputs)
+        if out is None:
+            out = Path(tempfile.mkdtemp(prefix="statopt-results-"))
         cb = _progress_callback(progress)
         try:
             summary = _native.run(
@@ -278,14 +304,21 @@ def run(
                 log.warning("%s", w)
         if summary["failure_line"]:
             warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=2)
-        tabs, metrics = _read_results(summary["files"]) if tables else ({}, {})
+        metrics = _read_metrics(summary["files"])
+        table_files = _table_files(summary["files"]) if tables else []
         files = list(summary["files"]) if results_dir is not None else []
+        scratch = None
         if results_dir is None:
             summary["files"] = []
             summary["results_dirs"] = []
-        return Result(str(setup), summary, tabs, metrics, files)
+            if table_files:
+                scratch, out = out, None  # the result removes it once read
+        return Result(str(setup), summary, table_files, metrics, files, scratch)
     finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+        if inputs is not None:
+            shutil.rmtree(inputs, ignore_errors=True)
+        if results_dir is None and out is not None:
+            shutil.rmtree(out, ignore_errors=True)
 
 
 def check(setup: Union[str, "os.PathLike[str]"]) -> Dict[str, List[str]]:

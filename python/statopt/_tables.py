@@ -22,7 +22,16 @@ def read_table(path: "os.PathLike[str] | str") -> pd.DataFrame:
     under ``header``). Raises :class:`statopt.InputError` naming the file and
     line when the table is malformed.
     """
-    name, labels, time_b, data_b, in_degrees, metadata = _native.read_table(os.fspath(path))
+    return _frame(_native.read_table(os.fspath(path)))
+
+
+def read_tables(paths) -> "list[pd.DataFrame]":
+    """:func:`read_table` for several files, read in parallel."""
+    return [_frame(parts) for parts in _native.read_tables([os.fspath(p) for p in paths])]
+
+
+def _frame(parts) -> pd.DataFrame:
+    name, labels, time_b, data_b, in_degrees, metadata = parts
     time = np.frombuffer(time_b, dtype=np.float64)
     values = np.frombuffer(data_b, dtype=np.float64).reshape(len(time), len(labels))
     df = pd.DataFrame(

@@ -271,3 +271,20 @@ def test_study_and_ctrl_c(repo, tmp_path):
     timer.join()
     res = statopt.run(repo / "setups" / "leg_extension_cam1.xml", contact_weight=1, progress=False)
     assert res.frames == 101 and len(res.activations) == 101
+
+
+def test_temporary_folders_removed(repo, tmp_path, monkeypatch):
+    import gc
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    res = statopt.run(setup, contact_weight=1, progress=False,
+                      model_properties={"pelvis_seat_r/plane_origin": [0, 0.005, 0]})
+    assert len(list(tmp_path.iterdir())) == 1  # the edited inputs are gone, the tables wait
+    assert len(res.activations) == 101
+    assert list(tmp_path.iterdir()) == []  # read, then removed
+    res = statopt.run(setup, contact_weight=1, progress=False)
+    del res
+    gc.collect()
+    assert list(tmp_path.iterdir()) == []  # never read: removed with the result
