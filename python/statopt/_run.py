@@ -157,9 +157,10 @@ class Result:
 
     def __repr__(self) -> str:
         s = self.summary
+        solved = (f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
+                  if s["solves"] else "")
         return (f"<statopt.Result {os.path.basename(self.setup)}: {s['frames']} frames, "
-                f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
-                f"{len(self._table_files)} tables>")
+                f"{solved}{len(self._table_files)} tables>")
 
 
 class _TqdmProgress:

@@ -282,8 +282,11 @@ def edit_setup(setup: Path, overrides: Dict[str, Any], workdir: Path) -> str:
             _set_child(so, "friction_cone", str(v))
     if "time_range" in overrides:
         t0, t1 = overrides.pop("time_range")
-        _set_child(doc.tool, "initial_time", _fmt(float(t0)))
-        _set_child(doc.tool, "final_time", _fmt(float(t1)))
+        if doc.kind == "InverseDynamicsTool":
+            _set_child(doc.tool, "time_range", f"{_fmt(float(t0))} {_fmt(float(t1))}")
+        else:
+            _set_child(doc.tool, "initial_time", _fmt(float(t0)))
+            _set_child(doc.tool, "final_time", _fmt(float(t1)))
     if "motion" in overrides:
         m = overrides.pop("motion")
         if isinstance(m, (str, os.PathLike)):

@@ -129,6 +129,8 @@ def test_inverse_dynamics_setup(repo, cli, tmp_path):
     res = statopt.run(setup, progress=False)
     (key, df), = res.tables.items()
     assert_same(df, statopt.read_table(tmp_path / (key + ".sto")))
+    part = statopt.run(setup, time_range=(0.5, 1.0), progress=False)
+    assert_same(part.tables[key], df.loc[0.5:1.0])
 
 
 # -- errors ------------------------------------------------------------------
