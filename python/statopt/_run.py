@@ -298,6 +298,13 @@ def run(
         finally:
             if isinstance(cb, _TqdmProgress):
                 cb.close()
+        if results_dir is None:
+            # Messages name tables by file; here they are res.tables' keys.
+            here = str(out) + os.sep
+            for k in ("warnings", "report"):
+                summary[k] = [w.replace(here, "") for w in summary[k]]
+            if summary["failure_line"]:
+                summary["failure_line"] = summary["failure_line"].replace(here, "")
         seen = set()
         for w in summary["warnings"]:
             if w not in seen:

@@ -119,7 +119,9 @@ class SetupDocument:
 
     def __init__(self, path: Path):
         self.path = path
-        self.dir = path.parent
+        # Absolute: paths written into the setup must not depend on where
+        # the engine resolves relative ones from.
+        self.dir = Path(os.path.abspath(path)).parent
         self.text = path.read_text(encoding="utf-8")
         self.prolog = self.text[: _prolog_end(self.text)]
         self.root = _parse(self.text)

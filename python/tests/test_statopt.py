@@ -213,10 +213,18 @@ def test_progress_callback_and_gil_released(repo):
     assert all(d == total == 101 for d, total in last.values())
 
 
-def test_progress_false_and_frames_failed_warning(repo):
+def test_frames_failed_warning_relative_setup_path(repo, monkeypatch):
+    monkeypatch.chdir(repo)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        statopt.run(repo / "setups" / "leg_extension_cam1.xml", contact_weight=1, progress=False)
+        statopt.run("setups/leg_extension_cam1.xml", contact_weight=1, progress=False)
+    # quadriceps of 1 N: no frame can be solved; the result is complete
+    weak = {f"{m}/max_isometric_force": 1.0 for m in ["vas_int_r", "vas_lat_r", "vas_med_r", "rect_fem_r"]}
+    with pytest.warns(statopt.FramesFailedWarning, match=r"could not solve 101 of 101 .*see leg_extension_cam1_SO_diagnostics.sto"):
+        res = statopt.run("setups/leg_extension_cam1.xml", contact_weight=1, progress=False,
+                          model_properties=weak)
+    assert res.failed == 101 and not res.ok
+    assert (res.diagnostics.status == -1).all() and len(res.activations) == 101
 
 
 # -- sweep -------------------------------------------------------------------
