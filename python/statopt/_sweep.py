@@ -120,6 +120,7 @@ def sweep(
     metrics: MetricsSpec = None,
     *,
     threads: Optional[int] = None,
+    progress: Optional[bool] = None,
     **fixed: Any,
 ) -> pd.DataFrame:
     """Run many variants of a setup as independent tasks on dask.distributed
@@ -144,6 +145,9 @@ def sweep(
 
     Columns: the parameters, the metrics, ``error`` (None, or what went
     wrong: a failing point is reported, never lost) and ``seconds``.
+
+    ``progress``: None shows a tqdm bar of the points done once the sweep
+    has run a second, True at once, False never.
     """
     points = _points(setup, grid)
     if not points:
@@ -164,13 +168,33 @@ def sweep(
             client.submit(_run_point, s, {**fixed, **ov}, metrics, threads, pure=False)
             for s, ov, _ in points
         ]
-        rows = []
-        for (s, ov, params), fut in zip(points, futures):
+        bar = None
+        if progress is not False:
             try:
-                r = fut.result()
-            except Exception as e:  # the task itself failed (a worker died, ...)
-                r = {"error": f"{type(e).__name__}: {e}"}
-            rows.append({**params, **r})
+                from tqdm.auto import tqdm
+
+                bar = tqdm(total=len(futures), desc="sweep", unit="point", leave=False,
+                           delay=0.0 if progress else 1.0)
+            except ImportError:
+                if progress:
+                    raise
+        results: Dict[int, Dict[str, Any]] = {}
+        try:
+            from dask.distributed import as_completed
+
+            index = {f.key: i for i, f in enumerate(futures)}
+            for fut in as_completed(futures):
+                try:
+                    r = fut.result()
+                except Exception as e:  # the task itself failed (a worker died, ...)
+                    r = {"error": f"{type(e).__name__}: {e}"}
+                results[index[fut.key]] = r
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            if bar is not None:
+                bar.close()
+        rows = [{**params, **results[i]} for i, (_, _, params) in enumerate(points)]
     finally:
         if own is not None:
             client.close()

@@ -298,3 +298,14 @@ def test_temporary_folders_removed(repo, tmp_path, monkeypatch):
     del res
     gc.collect()
     assert list(tmp_path.iterdir()) == []  # never read: removed with the result
+
+
+def test_check(repo, tmp_path):
+    ok = statopt.check(repo / "setups" / "leg_extension_cam1.xml")
+    assert ok["errors"] == [] and ok["checked"]
+    bad = tmp_path / "bad.xml"
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    text = text.replace("../models", str(repo / "models")).replace("../motions", str(repo / "motions"))
+    bad.write_text(text.replace("<friction_cone>cone</friction_cone>", "<friction_cone>round</friction_cone>"))
+    r = statopt.check(bad)
+    assert any("bad.xml" in e and "friction_cone" in e for e in r["errors"]), r
