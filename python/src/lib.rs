@@ -68,6 +68,40 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
+/// The progress hook of a run: calls `progress(label, done, total)` and
+/// checks for signals (Ctrl-C); an error of either stops the run as a signal
+/// stops the CLI and is kept in the returned slot, to be raised afterwards.
+fn progress_hook(progress: Option<PyObject>) -> (ProgressHook, Arc<Mutex<Option<PyErr>>>) {
+    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
+    let slot = pending.clone();
+    let hook = ProgressHook(Arc::new(move |label: &str, done: u64, total: u64| {
+        Python::with_gil(|py| {
+            let r = py.check_signals().and_then(|_| match &progress {
+                Some(cb) => cb.call1(py, (label, done, total)).map(|_| ()),
+                None => Ok(()),
+            });
+            if let Err(e) = r {
+                let mut p = slot.lock().unwrap_or_else(|p| p.into_inner());
+                if p.is_none() {
+                    *p = Some(e);
+                    tools::interrupt::request(tools::interrupt::EXIT_SIGINT);
+                }
+            }
+        })
+    }));
+    (hook, pending)
+}
+
+/// The error the progress hook kept, if any (the stop it asked for is
+/// cleared, so that the next run is not stopped).
+fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
+    let e = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
+    if e.is_some() {
+        tools::interrupt::request(0);
+    }
+    e
+}
+
 /// Run a setup (a study, an InverseDynamicsTool or an AnalyzeTool setup) as
 /// `statopt-tool SETUP` does; `text`, when given, is the setup document read
 /// as if it were the file `setup`. Returns the run summary as a dict. The
@@ -89,27 +123,7 @@ fn run<'py>(
     resume: bool,
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // An error of the progress callback or a pending signal (KeyboardInterrupt)
-    // stops the run as a signal stops the CLI; it is raised afterwards.
-    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
-    let hook = {
-        let pending = pending.clone();
-        ProgressHook(Arc::new(move |label: &str, done: u64, total: u64| {
-            Python::with_gil(|py| {
-                let r = py.check_signals().and_then(|_| match &progress {
-                    Some(cb) => cb.call1(py, (label, done, total)).map(|_| ()),
-                    None => Ok(()),
-                });
-                if let Err(e) = r {
-                    let mut p = pending.lock().unwrap_or_else(|p| p.into_inner());
-                    if p.is_none() {
-                        *p = Some(e);
-                        tools::interrupt::request(tools::interrupt::EXIT_SIGINT);
-                    }
-                }
-            })
-        }))
-    };
+    let (hook, pending) = progress_hook(progress);
     let opts = RunOptions {
         results_dir,
         precision,
@@ -123,15 +137,81 @@ fn run<'py>(
         Some(t) => tools::run_setup_text(&setup, t, &opts),
         None => tools::run_setup(&setup, &opts),
     });
-    let pending = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
-    if let Some(e) = pending {
-        tools::interrupt::request(0);
+    if let Some(e) = take_pending(&pending) {
         return Err(e);
     }
     match result {
         Ok(s) => summary_dict(py, &s),
         Err(e) => Err(to_py(py, e)),
     }
+}
+
+/// `statopt-tool predict-grf SETUP`: ground reactions from kinematics alone.
+/// Returns the run summary as a dict with the prediction under
+/// `"prediction"` (agreement with the measured loads per foot and axis,
+/// stance metrics, the foot contacts).
+#[pyfunction]
+#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None))]
+fn predict_grf<'py>(
+    py: Python<'py>,
+    setup: PathBuf,
+    text: Option<String>,
+    results_dir: Option<PathBuf>,
+    threads: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (hook, pending) = progress_hook(progress);
+    let opts = RunOptions {
+        results_dir,
+        verbose: false,
+        threads,
+        progress: Some(hook),
+        ..Default::default()
+    };
+    let result = py.allow_threads(|| tools::predict_grf::run_setup(&setup, text.as_deref(), &opts));
+    if let Some(e) = take_pending(&pending) {
+        return Err(e);
+    }
+    let p = result.map_err(|e| to_py(py, e))?;
+    let d = summary_dict(py, &p.summary)?;
+    let pred = PyDict::new(py);
+    let metrics = p
+        .metrics
+        .iter()
+        .map(|m| {
+            let x = PyDict::new(py);
+            x.set_item("side", m.side.to_string())?;
+            x.set_item("axis", m.axis.to_string())?;
+            x.set_item("rho", m.rho)?;
+            x.set_item("rmse_N", m.rmse_n)?;
+            x.set_item("rmse_BW_percent", m.rmse_bw)?;
+            x.set_item("peak_error_N", m.peak_error_n)?;
+            Ok(x)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let stance = p
+        .stance
+        .iter()
+        .map(|st| {
+            let x = PyDict::new(py);
+            x.set_item("side", st.side.to_string())?;
+            x.set_item("cop_error_mm", st.cop_error_mm)?;
+            x.set_item("heel_strike_error_ms", st.heel_strike_error_ms)?;
+            x.set_item("toe_off_error_ms", st.toe_off_error_ms)?;
+            Ok(x)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    pred.set_item("metrics", metrics)?;
+    pred.set_item("stance", stance)?;
+    pred.set_item("contact_points", p.contacts.points.len())?;
+    pred.set_item("floor_height", p.contacts.floor_height)?;
+    pred.set_item(
+        "belt_velocity",
+        (p.contacts.belt_velocity.x, p.contacts.belt_velocity.z),
+    )?;
+    pred.set_item("body_weight", p.body_weight)?;
+    d.set_item("prediction", pred)?;
+    Ok(d)
 }
 
 fn f64_bytes<'py>(py: Python<'py>, v: impl Iterator<Item = f64>) -> Bound<'py, PyBytes> {
@@ -277,6 +357,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_PRECISION", storage::DEFAULT_PRECISION)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(predict_grf, m)?)?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_function(wrap_pyfunction!(read_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;

@@ -12,12 +12,13 @@ See docs/python.md.
 """
 
 from ._native import InputError, StatoptError, __version__
-from ._run import FramesFailedWarning, Result, check, run
+from ._run import FramesFailedWarning, Result, check, predict_grf, run
 from ._sweep import summary_metrics, sweep
 from ._tables import read_table, write_table
 
 __all__ = [
     "run",
+    "predict_grf",
     "sweep",
     "check",
     "read_table",

@@ -25,6 +25,13 @@ def run(
     resume: bool = False,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Dict[str, Any]: ...
+def predict_grf(
+    setup: str,
+    text: Optional[str] = None,
+    results_dir: Optional[str] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Dict[str, Any]: ...
 def read_table(path: str) -> _TableParts: ...
 def read_tables(paths: List[str]) -> List[_TableParts]: ...
 def write_table(

@@ -33,6 +33,9 @@ class FramesFailedWarning(RuntimeWarning):
 
 
 def _parse_key(key: str):
+    for suffix in (".sto", ".mot"):
+        if key.endswith(suffix):
+            key = key[: -len(suffix)]
     m = _W0_KEY.match(key)
     if m:
         return m["prefix"], m["tag"], m["kind"]
@@ -155,6 +158,14 @@ class Result:
     muscle_power = property(lambda self: self.table("MusclePower"), doc="Muscle power.")
     reactions = property(lambda self: self.table("ReactionLoads"), doc="Joint reaction loads.")
 
+    @property
+    def predicted_grf(self) -> pd.DataFrame:
+        """Predicted ground reactions per foot (:func:`statopt.predict_grf`)."""
+        for key, df in self.tables.items():
+            if key.endswith("_predicted_grf") or key.endswith("_predicted_grf.sto"):
+                return df
+        raise KeyError(f"this run wrote no predicted_grf table; its tables: {', '.join(self.tables)}")
+
     def __repr__(self) -> str:
         s = self.summary
         solved = (f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
@@ -204,11 +215,22 @@ def _progress_callback(progress) -> Optional[Callable]:
 
 
 def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
-    """(key, path) of every table a run wrote: the file's stem, with its
-    folder in front when two folders hold the same name (a study)."""
+    """(key, path) of every table a run wrote: the file's stem; with its
+    folder in front when two folders hold the same name (a study); the file
+    name when one folder does (``x_predicted_grf.sto`` and ``.mot``)."""
     paths = [Path(f) for f in files if Path(f).suffix in (".sto", ".mot")]
     stems = [p.stem for p in paths]
-    return [(p.stem if stems.count(p.stem) == 1 else f"{p.parent.name}/{p.stem}", p) for p in paths]
+    in_dir = [(p.parent, p.stem) for p in paths]
+    out = []
+    for p in paths:
+        if stems.count(p.stem) == 1:
+            key = p.stem
+        elif in_dir.count((p.parent, p.stem)) == 1:
+            key = f"{p.parent.name}/{p.stem}"
+        else:
+            key = p.name
+        out.append((key, p))
+    return out
 
 
 def _read_metrics(files: List[str]) -> Dict[str, float]:
@@ -273,6 +295,44 @@ def run(
     that could not be solved give a :class:`FramesFailedWarning` (the result
     is complete; ``result.failed`` counts them).
     """
+    return _execute(_native.run, setup, results_dir, progress, tables, overrides,
+                    dict(precision=precision, threads=threads, reduce=reduce, resume=resume))
+
+
+def predict_grf(
+    setup: Union[str, "os.PathLike[str]"],
+    results_dir: Union[str, "os.PathLike[str]", None] = None,
+    progress: Union[bool, None, Callable[[str, int, int], Any]] = None,
+    *,
+    threads: Optional[int] = None,
+    tables: bool = True,
+    **overrides: Any,
+) -> Result:
+    """``statopt-tool predict-grf SETUP``: ground reactions from kinematics
+    alone (docs/grf_prediction.md), with :func:`run`'s ``results_dir``,
+    ``progress`` and overrides.
+
+    ``result.predicted_grf`` is the predicted force, centre of pressure and
+    free moment per foot; with measured loads in the setup ``result.metrics``
+    holds the agreement per foot and axis (``r_y_rho``, ``r_y_rmse_N``,
+    ``r_y_rmse_BW_percent``, ``r_y_peak_error_N``, ...) and over stance
+    (``r_cop_error_mm``, ``r_heel_strike_error_ms``, ``r_toe_off_error_ms``);
+    ``result.summary["prediction"]`` has them as lists, with the foot
+    contacts (points, floor height, belt velocity) and the body weight.
+    """
+    res = _execute(_native.predict_grf, setup, results_dir, progress, tables, overrides,
+                   dict(threads=threads))
+    pred = res.summary["prediction"]
+    for m in pred["metrics"]:
+        for k in ("rho", "rmse_N", "rmse_BW_percent", "peak_error_N"):
+            res.metrics[f"{m['side']}_{m['axis']}_{k}"] = m[k]
+    for st in pred["stance"]:
+        for k in ("cop_error_mm", "heel_strike_error_ms", "toe_off_error_ms"):
+            res.metrics[f"{st['side']}_{k}"] = st[k]
+    return res
+
+
+def _execute(native, setup, results_dir, progress, tables, overrides, options) -> Result:
     setup = Path(setup)
     inputs = None
     out = Path(results_dir) if results_dir is not None else None
@@ -285,16 +345,7 @@ def run(
             out = Path(tempfile.mkdtemp(prefix="statopt-results-"))
         cb = _progress_callback(progress)
         try:
-            summary = _native.run(
-                str(setup),
-                text=text,
-                results_dir=str(out),
-                precision=precision,
-                threads=threads,
-                reduce=reduce,
-                resume=resume,
-                progress=cb,
-            )
+            summary = native(str(setup), text=text, results_dir=str(out), progress=cb, **options)
         finally:
             if isinstance(cb, _TqdmProgress):
                 cb.close()
@@ -311,7 +362,7 @@ def run(
                 seen.add(w)
                 log.warning("%s", w)
         if summary["failure_line"]:
-            warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=2)
+            warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=3)
         metrics = _read_metrics(summary["files"])
         table_files = _table_files(summary["files"]) if tables else []
         files = list(summary["files"]) if results_dir is not None else []

@@ -309,3 +309,27 @@ def test_check(repo, tmp_path):
     bad.write_text(text.replace("<friction_cone>cone</friction_cone>", "<friction_cone>round</friction_cone>"))
     r = statopt.check(bad)
     assert any("bad.xml" in e and "friction_cone" in e for e in r["errors"]), r
+
+
+# -- predict-grf (reads ../shared in place; skipped without it) ---------------
+
+def test_predict_grf_equals_cli(repo, cli, tmp_path):
+    import csv
+
+    setup = repo.parent / "shared" / "models" / "gait2392" / "subject01_walk" / "setup_SO.xml"
+    if not setup.exists():
+        pytest.skip(f"SKIP {setup} is absent")
+    r = subprocess.run([str(cli), "predict-grf", str(setup), "-o", str(tmp_path), "-q"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    res = statopt.predict_grf(setup, progress=False)
+    assert_same(res.predicted_grf, statopt.read_table(tmp_path / "subject01_predicted_grf.sto"))
+    for key in ("subject01_StaticOptimization_activation", "subject01_StaticOptimization_ContactForces"):
+        assert_same(res.tables[key], statopt.read_table(tmp_path / (key + ".sto")))
+    with open(tmp_path / "subject01_grf_comparison.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            f, a = row["foot"], row["axis"]
+            assert f"{res.metrics[f'{f}_{a}_rho']:.4f}" == row["rho"]
+            assert f"{res.metrics[f'{f}_{a}_rmse_N']:.2f}" == row["rmse_N"]
+            assert f"{res.metrics[f'{f}_cop_error_mm']:.1f}" == row["cop_error_mm"]
+    assert res.summary["prediction"]["contact_points"] > 0

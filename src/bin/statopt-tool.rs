@@ -404,14 +404,7 @@ fn main() -> ExitCode {
                 verbose: !quiet,
                 ..Default::default()
             };
-            let run = match Setup::read(setup) {
-                Ok(Setup::Analyze(s)) => tools::predict_grf::run(&s, &opts),
-                Ok(_) => Err(statopt::Error::msg(
-                    "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
-                )),
-                Err(e) => Err(e),
-            };
-            match run {
+            match tools::predict_grf::run_setup(setup, None, &opts) {
                 Ok(p) => {
                     if !quiet {
                         let mut said = std::collections::HashSet::new();
