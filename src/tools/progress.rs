@@ -14,7 +14,10 @@ use crate::tools::RunOptions;
 /// 0 when a loop starts, at most every 0.1 s while it runs, and once with
 /// done = total when it ends.
 #[derive(Clone)]
-pub struct ProgressHook(pub Arc<dyn Fn(&str, u64, u64) + Send + Sync>);
+pub struct ProgressHook(pub Arc<ProgressFn>);
+
+/// What a [`ProgressHook`] calls: (label, frames done, frames of the loop).
+pub type ProgressFn = dyn Fn(&str, u64, u64) + Send + Sync;
 
 impl std::fmt::Debug for ProgressHook {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
