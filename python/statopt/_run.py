@@ -295,6 +295,8 @@ def run(
     that could not be solved give a :class:`FramesFailedWarning` (the result
     is complete; ``result.failed`` counts them).
     """
+    if resume and results_dir is None:
+        raise ValueError("resume=True continues the run in results_dir: give results_dir")
     return _execute(_native.run, setup, results_dir, progress, tables, overrides,
                     dict(precision=precision, threads=threads, reduce=reduce, resume=resume))
 
