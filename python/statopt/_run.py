@@ -22,8 +22,7 @@ from ._tables import read_tables
 
 log = logging.getLogger("statopt")
 
-_W0_KEY = re.compile(r"^(?P<prefix>.*)_w0_(?P<tag>[^_]+)_(?P<kind>[A-Za-z]+)$")
-_KEY = re.compile(r"^(?P<prefix>.*)_(?P<kind>[A-Za-z]+)$")
+_W0_PREFIX = re.compile(r"^(?P<prefix>.*)_w0_(?P<tag>[^_]+)$")
 _STATS = ("mean", "min", "max")
 
 
@@ -32,17 +31,19 @@ class FramesFailedWarning(RuntimeWarning):
     hold the solver's best point and the diagnostics table says which."""
 
 
-def _parse_key(key: str):
+def _split_key(key: str, kind: str):
+    """(prefix, w0 tag or None) when the table ``key`` is of ``kind`` (its
+    file name ends in ``_<kind>``), else None."""
     for suffix in (".sto", ".mot"):
         if key.endswith(suffix):
             key = key[: -len(suffix)]
-    m = _W0_KEY.match(key)
+    if not key.endswith("_" + kind):
+        return None
+    prefix = key[: -len(kind) - 1]
+    m = _W0_PREFIX.match(prefix)
     if m:
-        return m["prefix"], m["tag"], m["kind"]
-    m = _KEY.match(key)
-    if m:
-        return m["prefix"], None, m["kind"]
-    return key, None, None
+        return m["prefix"], m["tag"]
+    return prefix, None
 
 
 def _w0_value(tag: str) -> Optional[float]:
@@ -114,16 +115,17 @@ class Result:
     # -- tables --------------------------------------------------------
     def table(self, kind: str, w0: Optional[float] = None, stat: Optional[str] = None) -> pd.DataFrame:
         """The table of one kind (the end of its file name: ``activation``,
-        ``force``, ``ReactionLoads``, ...). ``w0`` picks one contact weight of
+        ``force``, ``ReactionLoads``, ``MomentArm_knee_angle_r``, ...). ``w0`` picks one contact weight of
         a sweep, ``stat`` one of its statistics (``mean``, ``min``, ``max``);
         without either every w0 of a sweep comes in one DataFrame indexed by
         (w0, time), and tables of several setups (a study) by (table, time).
         """
         found = []
         for key, df in self.tables.items():
-            prefix, tag, k = _parse_key(key)
-            if k != kind:
+            split = _split_key(key, kind)
+            if split is None:
                 continue
+            prefix, tag = split
             if stat is not None:
                 if tag == stat:
                     found.append((key, prefix, tag, df))

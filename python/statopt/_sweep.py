@@ -13,7 +13,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
 import numpy as np
 import pandas as pd
 
-from ._run import Result, _parse_key, run
+from ._run import Result, _split_key, run
 from ._setup import is_study
 
 MetricsSpec = Union[None, Callable[[Result], Mapping[str, Any]], Mapping[str, Callable[[Result], Any]]]
@@ -33,12 +33,10 @@ def summary_metrics(res: Result) -> Dict[str, Any]:
     objectives = []
     peaks: Dict[str, float] = {}
     for key, df in res.tables.items():
-        _, tag, kind = _parse_key(key)
-        if tag in ("mean", "min", "max"):
-            continue
-        if kind == "diagnostics" and "objective" in df.columns:
+        diag, loads = _split_key(key, "diagnostics"), _split_key(key, "ReactionLoads")
+        if diag is not None and "objective" in df.columns:
             objectives.append(df["objective"].to_numpy())
-        if kind == "ReactionLoads":
+        if loads is not None and loads[1] not in ("mean", "min", "max"):
             for c in df.columns:
                 if c.endswith("_fx"):
                     base = c[:-3]
