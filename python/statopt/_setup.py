@@ -250,7 +250,17 @@ def _apply_model_properties(doc: SetupDocument, props: Dict[str, Any], workdir: 
 
 def edit_setup(setup: Path, overrides: Dict[str, Any], workdir: Path) -> str:
     """The setup's text with ``overrides`` applied (see :func:`statopt.run`)."""
-    doc = SetupDocument(setup)
+    try:
+        doc = SetupDocument(setup)
+    except OSError as e:
+        raise _input_error(f"cannot read or write file: {e.strerror or e}", str(setup)) from None
+    except ET.ParseError as e:
+        line = e.position[0] if getattr(e, "position", None) else None
+        err = _input_error(f"not well-formed XML: {e}", str(setup))
+        if line:
+            err = _native.InputError(f"{setup}, line {line}: not well-formed XML: {e}")
+            err.file, err.line, err.element, err.reason = str(setup), line, None, f"not well-formed XML: {e}"
+        raise err from None
     if doc.kind not in _TOOLS:
         raise ValueError(
             f"{setup}: overrides apply to AnalyzeTool and InverseDynamicsTool setups, not to "

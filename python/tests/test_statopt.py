@@ -162,6 +162,11 @@ def test_input_error_names_file_line_element_like_cli(repo, cli, tmp_path):
         statopt.run(broken)
     with pytest.raises(statopt.InputError, match="missing.xml"):
         statopt.run(tmp_path / "missing.xml")
+    # ... with overrides too (the setup is read in Python first)
+    with pytest.raises(statopt.InputError, match="missing.xml"):
+        statopt.run(tmp_path / "missing.xml", contact_weight=1)
+    with pytest.raises(statopt.InputError, match=r"broken.xml, line 1: not well-formed"):
+        statopt.run(broken, contact_weight=1)
 
 
 # -- tables ------------------------------------------------------------------
