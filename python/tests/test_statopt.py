@@ -338,3 +338,12 @@ def test_predict_grf_equals_cli(repo, cli, tmp_path):
             assert f"{res.metrics[f'{f}_{a}_rmse_N']:.2f}" == row["rmse_N"]
             assert f"{res.metrics[f'{f}_cop_error_mm']:.1f}" == row["cop_error_mm"]
     assert res.summary["prediction"]["contact_points"] > 0
+
+
+def test_sweep_own_local_cluster_of_processes(repo):
+    # no client: a LocalCluster of worker processes is started and closed
+    df = statopt.sweep(repo / "setups" / "leg_extension_cam1.xml", {"contact_weight": [1, 500]},
+                       progress=False)
+    assert df.error.isna().all(), df.error.tolist()
+    assert df.contact_weight.tolist() == [1, 500] and (df.failed == 0).all()
+    assert df.quadriceps_work_J.iloc[0] != df.quadriceps_work_J.iloc[1]
