@@ -294,21 +294,14 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         verbose: !a.quiet,
         threads: a.threads.map(usize::from),
         resume: a.resume,
+        reduce: a.reduce,
+        progress: None,
     };
     let setup = a
         .setup
         .as_ref()
         .ok_or_else(|| statopt::Error::msg("no setup file given"))?;
-    if tools::study::is_study(setup) {
-        return tools::study::run(setup, &opts);
-    }
-    match Setup::read(setup)? {
-        Setup::InverseDynamics(s) => tools::inverse_dynamics::run(&s, &opts),
-        Setup::Analyze(mut s) => {
-            s.reduce_model |= a.reduce;
-            tools::analyze::run(&s, &opts)
-        }
-    }
+    tools::run_setup(setup, &opts)
 }
 
 fn fail(e: statopt::Error) -> ExitCode {
@@ -411,14 +404,7 @@ fn main() -> ExitCode {
                 verbose: !quiet,
                 ..Default::default()
             };
-            let run = match Setup::read(setup) {
-                Ok(Setup::Analyze(s)) => tools::predict_grf::run(&s, &opts),
-                Ok(_) => Err(statopt::Error::msg(
-                    "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
-                )),
-                Err(e) => Err(e),
-            };
-            match run {
+            match tools::predict_grf::run_setup(setup, None, &opts) {
                 Ok(p) => {
                     if !quiet {
                         let mut said = std::collections::HashSet::new();

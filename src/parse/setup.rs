@@ -225,8 +225,18 @@ fn opt_text(el: &Element, name: &str) -> Option<String> {
 
 impl Setup {
     pub fn read(path: &Path) -> Result<Setup> {
-        let root = xml::parse_file(path)?;
-        let tool = tool_element(&root)?;
+        Self::from_document(&xml::parse_file(path)?, path)
+    }
+
+    /// A setup document given as text, read as if it were the file `path`:
+    /// relative paths resolve against `path`'s folder and messages name
+    /// `path` (callers that edit a setup in memory, e.g. the Python package).
+    pub fn parse(text: &str, path: &Path) -> Result<Setup> {
+        Self::from_document(&xml::parse_str(text, path)?, path)
+    }
+
+    fn from_document(root: &Element, path: &Path) -> Result<Setup> {
+        let tool = tool_element(root)?;
         let dir = setup_dir(path);
         if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {
             check_inputs_exist(tool, &dir)?;

@@ -348,7 +348,7 @@ fn run_choice(
         threads: Some(choice.threads.max(1)),
         verbose: false,
         precision: Some(16),
-        resume: false,
+        ..Default::default()
     };
     let mut best = f64::INFINITY;
     let mut frames = 0;

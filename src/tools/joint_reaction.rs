@@ -717,7 +717,11 @@ pub fn run(
         precision,
         false,
     )?;
-    let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
+    let mut progress = crate::tools::progress::bar(
+        nframes as u64,
+        opts,
+        &format!("{}_{}", setup.name, jr.common.name),
+    );
     let start = std::time::Instant::now();
     let mut last = None;
     let completed = for_each_frame(

@@ -36,6 +36,42 @@ pub struct RunOptions {
     /// Continue static-optimization runs from the last frame their tables
     /// and log hold completely (`--resume`).
     pub resume: bool,
+    /// Run static optimization on the model reduced to what the motion
+    /// needs, whatever the setup's `<reduce_model>` says (`--reduce`;
+    /// AnalyzeTool setups).
+    pub reduce: bool,
+    /// Told how frame loops advance (embedding callers; see [`progress`]).
+    pub progress: Option<progress::ProgressHook>,
+}
+
+/// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
+/// study document, an InverseDynamicsTool or an AnalyzeTool setup.
+pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
+    if study::is_study(setup) {
+        return study::run(setup, opts);
+    }
+    run_parsed(crate::parse::setup::Setup::read(setup)?, opts)
+}
+
+/// [`run_setup`] for a tool setup (not a study) given as text, read as if it
+/// were the file `setup` (see `Setup::parse`).
+pub fn run_setup_text(
+    setup: &std::path::Path,
+    text: &str,
+    opts: &RunOptions,
+) -> crate::Result<RunSummary> {
+    run_parsed(crate::parse::setup::Setup::parse(text, setup)?, opts)
+}
+
+fn run_parsed(setup: crate::parse::setup::Setup, opts: &RunOptions) -> crate::Result<RunSummary> {
+    use crate::parse::setup::Setup;
+    match setup {
+        Setup::InverseDynamics(s) => inverse_dynamics::run(&s, opts),
+        Setup::Analyze(mut s) => {
+            s.reduce_model |= opts.reduce;
+            analyze::run(&s, opts)
+        }
+    }
 }
 
 /// What a run produced.

@@ -172,6 +172,27 @@ fn draw_comparison(
     crate::plots::write_panels(&panels, stem, Layout::row(3))
 }
 
+/// `statopt-tool predict-grf SETUP`: read the setup file (or take it as
+/// `text`, read as if it were that file; see `Setup::parse`) and run the
+/// prediction.
+pub fn run_setup(
+    setup: &std::path::Path,
+    text: Option<&str>,
+    opts: &RunOptions,
+) -> Result<Prediction> {
+    use crate::parse::setup::Setup;
+    let read = match text {
+        Some(t) => Setup::parse(t, setup)?,
+        None => Setup::read(setup)?,
+    };
+    match read {
+        Setup::Analyze(s) => run(&s, opts),
+        _ => Err(Error::msg(
+            "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
+        )),
+    }
+}
+
 /// Run the prediction for an AnalyzeTool setup with a StaticOptimization.
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     if setup.analysis_element("StaticOptimization").is_none() {

@@ -1,19 +1,84 @@
-//! Progress bars for long runs: shown on a terminal, silent otherwise.
+//! Progress of long runs: a bar on stderr when it is a terminal, and a hook
+//! an embedding caller (the Python package) can pass in [`RunOptions`].
 
 use std::io::IsTerminal;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// A frame counter on stderr when it is a terminal and `verbose`; hidden otherwise.
-pub fn bar(len: u64, verbose: bool) -> ProgressBar {
-    if !verbose || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
+use crate::tools::RunOptions;
+
+/// Called with a label (the table prefix of the frame loop, e.g.
+/// `walk_SO_w0_500`), the frames done and the frames of that loop: once with
+/// 0 when a loop starts, at most every 0.1 s while it runs, and once with
+/// done = total when it ends.
+#[derive(Clone)]
+pub struct ProgressHook(pub Arc<ProgressFn>);
+
+/// What a [`ProgressHook`] calls: (label, frames done, frames of the loop).
+pub type ProgressFn = dyn Fn(&str, u64, u64) + Send + Sync;
+
+impl std::fmt::Debug for ProgressHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ProgressHook")
     }
-    let pb = ProgressBar::new(len);
-    if let Ok(style) =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
-    {
-        pb.set_style(style);
+}
+
+/// The progress of one frame loop.
+pub struct Progress {
+    bar: ProgressBar,
+    hook: Option<(ProgressHook, String)>,
+    done: u64,
+    total: u64,
+    last: Instant,
+}
+
+const HOOK_INTERVAL: Duration = Duration::from_millis(100);
+
+impl Progress {
+    pub fn inc(&mut self, n: u64) {
+        self.bar.inc(n);
+        self.done += n;
+        if let Some((h, label)) = &self.hook {
+            if self.last.elapsed() >= HOOK_INTERVAL {
+                (h.0)(label, self.done, self.total);
+                self.last = Instant::now();
+            }
+        }
     }
-    pb
+
+    pub fn finish_and_clear(&mut self) {
+        self.bar.finish_and_clear();
+        if let Some((h, label)) = &self.hook {
+            (h.0)(label, self.done, self.total);
+        }
+    }
+}
+
+/// A frame counter for a loop of `len` frames: a bar on stderr when it is a
+/// terminal and `opts.verbose`, and `opts.progress` called as it advances.
+pub fn bar(len: u64, opts: &RunOptions, label: &str) -> Progress {
+    let bar = if !opts.verbose || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let pb = ProgressBar::new(len);
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
+        {
+            pb.set_style(style);
+        }
+        pb
+    };
+    let hook = opts.progress.clone().map(|h| (h, label.to_string()));
+    if let Some((h, label)) = &hook {
+        (h.0)(label, 0, len);
+    }
+    Progress {
+        bar,
+        hook,
+        done: 0,
+        total: len,
+        last: Instant::now(),
+    }
 }

@@ -1786,7 +1786,11 @@ fn run_sweep(
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
-    let progress = crate::tools::progress::bar(nframes as u64, opts.verbose);
+    let label = runs
+        .first()
+        .map(|r| r.prefix.trim_end_matches('_').to_string())
+        .unwrap_or_default();
+    let mut progress = crate::tools::progress::bar(nframes as u64, opts, &label);
     let start = Instant::now();
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays

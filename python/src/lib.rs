@@ -1,0 +1,366 @@
+//! `statopt._native`: the statopt engine in-process, for the pure-Python
+//! package `statopt` (python/statopt/). Runs release the GIL; errors map to
+//! `statopt.InputError` (bad input: the CLI's file/line/element message,
+//! exit status 2) and `statopt.StatoptError` (anything else).
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use statopt::storage::{self, Storage};
+use statopt::tools::{self, progress::ProgressHook, RunOptions, RunSummary};
+
+create_exception!(
+    statopt,
+    StatoptError,
+    PyException,
+    "A statopt run failed (the CLI's exit status 1)."
+);
+create_exception!(
+    statopt,
+    InputError,
+    StatoptError,
+    "The input is wrong: a setup, model, table or option. The message names the file, line and element, as the CLI's does (exit status 2); the attributes file, line, element and reason hold them apart."
+);
+
+fn to_py(py: Python<'_>, e: statopt::Error) -> PyErr {
+    let text = e.to_string();
+    match e {
+        statopt::Error::Input { loc, msg } => {
+            let err = InputError::new_err(text);
+            let v = err.value(py);
+            let file = loc.file.as_ref().map(|f| f.display().to_string());
+            let _ = v.setattr("file", file);
+            let _ = v.setattr("line", loc.line);
+            let _ = v.setattr("element", loc.element.clone());
+            let _ = v.setattr("reason", msg);
+            err
+        }
+        statopt::Error::Internal(_) => StatoptError::new_err(text),
+    }
+}
+
+fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let paths =
+        |v: &[PathBuf]| -> Vec<String> { v.iter().map(|p| p.display().to_string()).collect() };
+    d.set_item("frames", s.frames)?;
+    d.set_item("solves", s.solves)?;
+    d.set_item("failed", s.failed)?;
+    d.set_item("first_failure", s.first_failure.clone())?;
+    d.set_item("worst_residual", s.worst_residual)?;
+    d.set_item("reserve_peak", s.reserve_peak.clone())?;
+    d.set_item("root_force_peak", s.root_force_peak.clone())?;
+    d.set_item("root_moment_peak", s.root_moment_peak.clone())?;
+    d.set_item("root_body_weight", s.root_body_weight)?;
+    d.set_item("loop_seconds", s.loop_seconds)?;
+    d.set_item("warnings", s.warnings.clone())?;
+    d.set_item("notes", s.notes.clone())?;
+    d.set_item("files", paths(&s.files))?;
+    d.set_item("results_dirs", paths(&s.results_dirs))?;
+    d.set_item("report", s.report())?;
+    d.set_item("failure_line", s.failure_line())?;
+    d.set_item("stopped", s.stopped_line())?;
+    Ok(d)
+}
+
+/// The progress hook of a run: calls `progress(label, done, total)` and
+/// checks for signals (Ctrl-C); an error of either stops the run as a signal
+/// stops the CLI and is kept in the returned slot, to be raised afterwards.
+fn progress_hook(progress: Option<PyObject>) -> (ProgressHook, Arc<Mutex<Option<PyErr>>>) {
+    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
+    let slot = pending.clone();
+    let hook = ProgressHook(Arc::new(move |label: &str, done: u64, total: u64| {
+        Python::with_gil(|py| {
+            let r = py.check_signals().and_then(|_| match &progress {
+                Some(cb) => cb.call1(py, (label, done, total)).map(|_| ()),
+                None => Ok(()),
+            });
+            if let Err(e) = r {
+                let mut p = slot.lock().unwrap_or_else(|p| p.into_inner());
+                if p.is_none() {
+                    *p = Some(e);
+                    tools::interrupt::request(tools::interrupt::EXIT_SIGINT);
+                }
+            }
+        })
+    }));
+    (hook, pending)
+}
+
+/// The error the progress hook kept, if any (the stop it asked for is
+/// cleared, so that the next run is not stopped).
+fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
+    let e = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
+    if e.is_some() {
+        tools::interrupt::request(0);
+    }
+    e
+}
+
+/// Run a setup (a study, an InverseDynamicsTool or an AnalyzeTool setup) as
+/// `statopt-tool SETUP` does; `text`, when given, is the setup document read
+/// as if it were the file `setup`. Returns the run summary as a dict. The
+/// GIL is released while the engine runs; `progress(label, done, total)` is
+/// called as frame loops advance (at most every 0.1 s), and Ctrl-C stops the
+/// run cleanly (the tables keep the frames solved) and raises
+/// KeyboardInterrupt.
+#[pyfunction]
+#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn run<'py>(
+    py: Python<'py>,
+    setup: PathBuf,
+    text: Option<String>,
+    results_dir: Option<PathBuf>,
+    precision: Option<usize>,
+    threads: Option<usize>,
+    reduce: bool,
+    resume: bool,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (hook, pending) = progress_hook(progress);
+    let opts = RunOptions {
+        results_dir,
+        precision,
+        verbose: false,
+        threads,
+        resume,
+        reduce,
+        progress: Some(hook),
+    };
+    let result = py.allow_threads(|| match &text {
+        Some(t) => tools::run_setup_text(&setup, t, &opts),
+        None => tools::run_setup(&setup, &opts),
+    });
+    if let Some(e) = take_pending(&pending) {
+        return Err(e);
+    }
+    match result {
+        Ok(s) => summary_dict(py, &s),
+        Err(e) => Err(to_py(py, e)),
+    }
+}
+
+/// `statopt-tool predict-grf SETUP`: ground reactions from kinematics alone.
+/// Returns the run summary as a dict with the prediction under
+/// `"prediction"` (agreement with the measured loads per foot and axis,
+/// stance metrics, the foot contacts).
+#[pyfunction]
+#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None))]
+fn predict_grf<'py>(
+    py: Python<'py>,
+    setup: PathBuf,
+    text: Option<String>,
+    results_dir: Option<PathBuf>,
+    threads: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (hook, pending) = progress_hook(progress);
+    let opts = RunOptions {
+        results_dir,
+        verbose: false,
+        threads,
+        progress: Some(hook),
+        ..Default::default()
+    };
+    let result = py.allow_threads(|| tools::predict_grf::run_setup(&setup, text.as_deref(), &opts));
+    if let Some(e) = take_pending(&pending) {
+        return Err(e);
+    }
+    let p = result.map_err(|e| to_py(py, e))?;
+    let d = summary_dict(py, &p.summary)?;
+    let pred = PyDict::new(py);
+    let metrics = p
+        .metrics
+        .iter()
+        .map(|m| {
+            let x = PyDict::new(py);
+            x.set_item("side", m.side.to_string())?;
+            x.set_item("axis", m.axis.to_string())?;
+            x.set_item("rho", m.rho)?;
+            x.set_item("rmse_N", m.rmse_n)?;
+            x.set_item("rmse_BW_percent", m.rmse_bw)?;
+            x.set_item("peak_error_N", m.peak_error_n)?;
+            Ok(x)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let stance = p
+        .stance
+        .iter()
+        .map(|st| {
+            let x = PyDict::new(py);
+            x.set_item("side", st.side.to_string())?;
+            x.set_item("cop_error_mm", st.cop_error_mm)?;
+            x.set_item("heel_strike_error_ms", st.heel_strike_error_ms)?;
+            x.set_item("toe_off_error_ms", st.toe_off_error_ms)?;
+            Ok(x)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    pred.set_item("metrics", metrics)?;
+    pred.set_item("stance", stance)?;
+    pred.set_item("contact_points", p.contacts.points.len())?;
+    pred.set_item("floor_height", p.contacts.floor_height)?;
+    pred.set_item(
+        "belt_velocity",
+        (p.contacts.belt_velocity.x, p.contacts.belt_velocity.z),
+    )?;
+    pred.set_item("body_weight", p.body_weight)?;
+    d.set_item("prediction", pred)?;
+    Ok(d)
+}
+
+fn f64_bytes<'py>(py: Python<'py>, v: impl Iterator<Item = f64>) -> Bound<'py, PyBytes> {
+    let bytes: Vec<u8> = v.flat_map(|x| x.to_ne_bytes()).collect();
+    PyBytes::new(py, &bytes)
+}
+
+type TableParts<'py> = (
+    String,
+    Vec<String>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    bool,
+    Vec<(String, String)>,
+);
+
+/// Read a .sto/.mot table with the engine's reader: (name, labels, time as
+/// native-endian f64 bytes, values row by row as f64 bytes, inDegrees,
+/// metadata pairs).
+#[pyfunction]
+fn read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<TableParts<'py>> {
+    let st = py
+        .allow_threads(|| storage::read(&path))
+        .map_err(|e| to_py(py, e))?;
+    let time = f64_bytes(py, st.time.iter().copied());
+    let data = f64_bytes(py, st.rows.iter().flatten().copied());
+    Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
+}
+
+/// [`read_table`] for several files at once, read in parallel (the tables
+/// of a run, read back); the first error is raised.
+#[pyfunction]
+fn read_tables<'py>(py: Python<'py>, paths: Vec<PathBuf>) -> PyResult<Vec<TableParts<'py>>> {
+    let read: Vec<statopt::Result<Storage>> = py.allow_threads(|| {
+        let workers = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(paths.len())
+            .max(1);
+        let mut out: Vec<Option<statopt::Result<Storage>>> = Vec::new();
+        out.resize_with(paths.len(), || None);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let slots: Vec<Mutex<&mut Option<statopt::Result<Storage>>>> =
+            out.iter_mut().map(Mutex::new).collect();
+        std::thread::scope(|s| {
+            for _ in 0..workers {
+                s.spawn(|| loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if i >= paths.len() {
+                        break;
+                    }
+                    let r = storage::read(&paths[i]);
+                    **slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(r);
+                });
+            }
+        });
+        drop(slots);
+        out.into_iter()
+            .map(|r| r.unwrap_or_else(|| Err(statopt::Error::internal("table not read"))))
+            .collect()
+    });
+    read.into_iter()
+        .map(|r| {
+            let st = r.map_err(|e| to_py(py, e))?;
+            let time = f64_bytes(py, st.time.iter().copied());
+            let data = f64_bytes(py, st.rows.iter().flatten().copied());
+            Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
+        })
+        .collect()
+}
+
+fn f64s(b: &[u8], what: &str) -> PyResult<Vec<f64>> {
+    if b.len() % 8 != 0 {
+        return Err(StatoptError::new_err(format!(
+            "{what}: {} bytes is not a whole number of f64",
+            b.len()
+        )));
+    }
+    Ok(b.chunks_exact(8)
+        .map(|c| f64::from_ne_bytes(c.try_into().expect("8 bytes")))
+        .collect())
+}
+
+/// Write a table in OpenSim's legacy .sto format with the engine's writer
+/// (as `statopt-tool` writes its results).
+#[pyfunction]
+#[pyo3(signature = (path, name, labels, time, data, in_degrees, metadata, precision))]
+#[allow(clippy::too_many_arguments)]
+fn write_table(
+    py: Python<'_>,
+    path: PathBuf,
+    name: String,
+    labels: Vec<String>,
+    time: &[u8],
+    data: &[u8],
+    in_degrees: bool,
+    metadata: Vec<(String, String)>,
+    precision: usize,
+) -> PyResult<()> {
+    let time = f64s(time, "time")?;
+    let data = f64s(data, "data")?;
+    let n = labels.len();
+    if data.len() != n * time.len() {
+        return Err(StatoptError::new_err(format!(
+            "{} values for {} rows of {n} columns",
+            data.len(),
+            time.len()
+        )));
+    }
+    let rows = if n == 0 {
+        vec![Vec::new(); time.len()]
+    } else {
+        data.chunks_exact(n).map(<[f64]>::to_vec).collect()
+    };
+    let st = Storage {
+        name,
+        labels,
+        time,
+        rows,
+        in_degrees,
+        metadata,
+    };
+    py.allow_threads(|| storage::write(&path, &st, precision))
+        .map_err(|e| to_py(py, e))
+}
+
+/// `statopt-tool --check SETUP`: read and compile everything the setup names
+/// without running; returns (errors, warnings, files checked).
+#[pyfunction]
+fn check(py: Python<'_>, setup: PathBuf) -> (Vec<String>, Vec<String>, Vec<String>) {
+    let r = py.allow_threads(|| tools::check::run(&setup));
+    (
+        r.errors.iter().map(|e| e.to_string()).collect(),
+        r.warnings,
+        r.checked,
+    )
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("StatoptError", py.get_type::<StatoptError>())?;
+    m.add("InputError", py.get_type::<InputError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("DEFAULT_PRECISION", storage::DEFAULT_PRECISION)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(predict_grf, m)?)?;
+    m.add_function(wrap_pyfunction!(read_table, m)?)?;
+    m.add_function(wrap_pyfunction!(read_tables, m)?)?;
+    m.add_function(wrap_pyfunction!(write_table, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,47 @@
+"""Type stubs of the native module (python/src/lib.rs)."""
+
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+__version__: str
+DEFAULT_PRECISION: int
+
+class StatoptError(Exception): ...
+
+class InputError(StatoptError):
+    file: Optional[str]
+    line: Optional[int]
+    element: Optional[str]
+    reason: str
+
+_TableParts = Tuple[str, List[str], bytes, bytes, bool, List[Tuple[str, str]]]
+
+def run(
+    setup: str,
+    text: Optional[str] = None,
+    results_dir: Optional[str] = None,
+    precision: Optional[int] = None,
+    threads: Optional[int] = None,
+    reduce: bool = False,
+    resume: bool = False,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Dict[str, Any]: ...
+def predict_grf(
+    setup: str,
+    text: Optional[str] = None,
+    results_dir: Optional[str] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Dict[str, Any]: ...
+def read_table(path: str) -> _TableParts: ...
+def read_tables(paths: List[str]) -> List[_TableParts]: ...
+def write_table(
+    path: str,
+    name: str,
+    labels: List[str],
+    time: bytes,
+    data: bytes,
+    in_degrees: bool,
+    metadata: List[Tuple[str, str]],
+    precision: int,
+) -> None: ...
+def check(setup: str) -> Tuple[List[str], List[str], List[str]]: ...

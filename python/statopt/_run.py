@@ -1,0 +1,392 @@
+"""statopt.run: a setup run in-process, its tables as DataFrames."""
+
+from __future__ import annotations
+
+import csv
+import logging
+import os
+import re
+import shutil
+import tempfile
+import threading
+import warnings
+import weakref
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+
+import pandas as pd
+
+from . import _native
+from ._setup import edit_setup
+from ._tables import read_tables
+
+log = logging.getLogger("statopt")
+
+_W0_PREFIX = re.compile(r"^(?P<prefix>.*)_w0_(?P<tag>[^_]+)$")
+_STATS = ("mean", "min", "max")
+
+
+class FramesFailedWarning(RuntimeWarning):
+    """Some frames could not be solved (the CLI's exit status 3); their rows
+    hold the solver's best point and the diagnostics table says which."""
+
+
+def _split_key(key: str, kind: str):
+    """(prefix, w0 tag or None) when the table ``key`` is of ``kind`` (its
+    file name ends in ``_<kind>``), else None."""
+    for suffix in (".sto", ".mot"):
+        if key.endswith(suffix):
+            key = key[: -len(suffix)]
+    if not key.endswith("_" + kind):
+        return None
+    prefix = key[: -len(kind) - 1]
+    m = _W0_PREFIX.match(prefix)
+    if m:
+        return m["prefix"], m["tag"]
+    return prefix, None
+
+
+def _w0_value(tag: str) -> Optional[float]:
+    try:
+        return float(tag)
+    except ValueError:
+        return None
+
+
+class Result:
+    """What a run produced.
+
+    Tables are DataFrames indexed by time with OpenSim's column names:
+    ``activations``, ``forces``, ``diagnostics``, ``contact_forces``,
+    ``contact_body_forces``, ``generalized_forces``, ``muscle_power``,
+    ``reactions``. A run of several contact weights gives each of these with
+    a (w0, time) MultiIndex; :meth:`table` picks one w0 or a statistic of
+    the sweep. ``tables`` holds every table by its file's stem, ``summary``
+    the run summary (frames, solves, failed, worst_residual, warnings, ...),
+    ``metrics`` the setup's ``<Metric>`` values, ``files`` the paths written
+    (empty unless ``results_dir`` was given). Tables are read when first used.
+    """
+
+    def __init__(self, setup: str, summary: Dict[str, Any], table_files: List[Tuple[str, Path]],
+                 metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None):
+        self.setup = setup
+        self.summary = summary
+        self.metrics = metrics
+        self.files = files
+        self._table_files = table_files
+        self._tables: Optional[Dict[str, pd.DataFrame]] = None
+        self._lock = threading.Lock()
+        # The temporary results folder lives until the tables are read (or
+        # this result is dropped).
+        self._cleanup = weakref.finalize(self, shutil.rmtree, str(scratch), True) if scratch else None
+
+    @property
+    def tables(self) -> Dict[str, pd.DataFrame]:
+        """Every table of the run by its file's stem; read (in parallel, with
+        the crate's reader) when first used."""
+        with self._lock:
+            if self._tables is None:
+                try:
+                    dfs = read_tables([p for _, p in self._table_files]) if self._table_files else []
+                    self._tables = {k: df for (k, _), df in zip(self._table_files, dfs)}
+                finally:
+                    if self._cleanup is not None:
+                        self._cleanup()
+            return self._tables
+
+    # -- summary -------------------------------------------------------
+    @property
+    def frames(self) -> int:
+        return self.summary["frames"]
+
+    @property
+    def failed(self) -> int:
+        """Static-optimization frame problems that could not be solved."""
+        return self.summary["failed"]
+
+    @property
+    def ok(self) -> bool:
+        return self.summary["failed"] == 0
+
+    @property
+    def warnings(self) -> List[str]:
+        return self.summary["warnings"]
+
+    # -- tables --------------------------------------------------------
+    def table(self, kind: str, w0: Optional[float] = None, stat: Optional[str] = None) -> pd.DataFrame:
+        """The table of one kind (the end of its file name: ``activation``,
+        ``force``, ``ReactionLoads``, ``MomentArm_knee_angle_r``, ...). ``w0`` picks one contact weight of
+        a sweep, ``stat`` one of its statistics (``mean``, ``min``, ``max``);
+        without either every w0 of a sweep comes in one DataFrame indexed by
+        (w0, time), and tables of several setups (a study) by (table, time).
+        """
+        found = []
+        for key, df in self.tables.items():
+            split = _split_key(key, kind)
+            if split is None:
+                continue
+            prefix, tag = split
+            if stat is not None:
+                if tag == stat:
+                    found.append((key, prefix, tag, df))
+            elif w0 is not None:
+                if tag is not None and _w0_value(tag) == float(w0):
+                    found.append((key, prefix, tag, df))
+            elif tag not in _STATS:
+                found.append((key, prefix, tag, df))
+        if not found:
+            raise KeyError(
+                f"this run wrote no {kind} table"
+                + (f" for w0 = {w0}" if w0 is not None else "")
+                + (f" ({stat} over w0)" if stat else "")
+                + f"; its tables: {', '.join(self.tables) or 'none'}"
+            )
+        if len(found) == 1:
+            return found[0][3]
+        prefixes = {f[1] for f in found}
+        if len(prefixes) == 1 and all(f[2] is not None and _w0_value(f[2]) is not None for f in found):
+            found.sort(key=lambda f: _w0_value(f[2]))
+            return pd.concat([f[3] for f in found], keys=[_w0_value(f[2]) for f in found],
+                             names=["w0", "time"])
+        return pd.concat([f[3] for f in found], keys=[f[0] for f in found], names=["table", "time"])
+
+    activations = property(lambda self: self.table("activation"), doc="Muscle activations (and actuator controls).")
+    forces = property(lambda self: self.table("force"), doc="Actuator forces.")
+    diagnostics = property(lambda self: self.table("diagnostics"), doc="Solver diagnostics per frame.")
+    contact_forces = property(lambda self: self.table("ContactForces"), doc="Contact forces.")
+    contact_body_forces = property(lambda self: self.table("ContactBodyForces"), doc="Contact forces per body.")
+    generalized_forces = property(lambda self: self.table("GeneralizedForcesBySource"),
+                                  doc="Generalized forces by source (muscles, contacts, ...).")
+    muscle_power = property(lambda self: self.table("MusclePower"), doc="Muscle power.")
+    reactions = property(lambda self: self.table("ReactionLoads"), doc="Joint reaction loads.")
+
+    @property
+    def predicted_grf(self) -> pd.DataFrame:
+        """Predicted ground reactions per foot (:func:`statopt.predict_grf`)."""
+        for key, df in self.tables.items():
+            if key.endswith("_predicted_grf") or key.endswith("_predicted_grf.sto"):
+                return df
+        raise KeyError(f"this run wrote no predicted_grf table; its tables: {', '.join(self.tables)}")
+
+    def __repr__(self) -> str:
+        s = self.summary
+        solved = (f"{s['solves'] - s['failed']}/{s['solves']} frame problems solved, "
+                  if s["solves"] else "")
+        return (f"<statopt.Result {os.path.basename(self.setup)}: {s['frames']} frames, "
+                f"{solved}{len(self._table_files)} tables>")
+
+
+class _TqdmProgress:
+    """A tqdm bar per frame loop; shown once a loop has run ``delay`` s."""
+
+    def __init__(self, delay: float):
+        from tqdm.auto import tqdm  # noqa: F401 (fails early without tqdm)
+
+        self.delay = delay
+        self.bar = None
+        self.label = None
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        from tqdm.auto import tqdm
+
+        if self.bar is None or label != self.label:
+            self.close()
+            self.bar = tqdm(total=total, desc=label, unit="frame", delay=self.delay, leave=False)
+            self.label = label
+        self.bar.update(done - self.bar.n)
+        if done >= total:
+            self.close()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _progress_callback(progress) -> Optional[Callable]:
+    if progress is False:
+        return None
+    if callable(progress):
+        return progress
+    try:
+        return _TqdmProgress(delay=0.0 if progress is True else 1.0)
+    except ImportError:
+        if progress is True:
+            raise
+        return None
+
+
+def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
+    """(key, path) of every table a run wrote: the file's stem; with its
+    folder in front when two folders hold the same name (a study); the file
+    name when one folder does (``x_predicted_grf.sto`` and ``.mot``)."""
+    paths = [Path(f) for f in files if Path(f).suffix in (".sto", ".mot")]
+    stems = [p.stem for p in paths]
+    in_dir = [(p.parent, p.stem) for p in paths]
+    out = []
+    for p in paths:
+        if stems.count(p.stem) == 1:
+            key = p.stem
+        elif in_dir.count((p.parent, p.stem)) == 1:
+            key = f"{p.parent.name}/{p.stem}"
+        else:
+            key = p.name
+        out.append((key, p))
+    return out
+
+
+def _read_metrics(files: List[str]) -> Dict[str, float]:
+    metrics: Dict[str, float] = {}
+    csvs = [Path(f) for f in files if f.endswith("_metrics.csv")]
+    for p in csvs:
+        # One file per setup (a study writes several, and its own): then
+        # each metric is named after its file, '<name>.<metric>'.
+        prefix = p.name[: -len("_metrics.csv")] + "." if len(csvs) > 1 else ""
+        with open(p, newline="") as fh:
+            for row in csv.DictReader(fh):
+                metrics[prefix + row["metric"]] = float(row["value"])
+    return metrics
+
+
+def run(
+    setup: Union[str, "os.PathLike[str]"],
+    results_dir: Union[str, "os.PathLike[str]", None] = None,
+    progress: Union[bool, None, Callable[[str, int, int], Any]] = None,
+    *,
+    threads: Optional[int] = None,
+    precision: Optional[int] = None,
+    reduce: bool = False,
+    resume: bool = False,
+    tables: bool = True,
+    **overrides: Any,
+) -> Result:
+    """Run a setup as ``statopt-tool SETUP`` does, in-process (the GIL is
+    released while the engine runs).
+
+    Any setup the CLI runs: an AnalyzeTool (StaticOptimization, JointReaction,
+    MuscleAnalysis), an InverseDynamicsTool or a study document. Nothing is
+    written unless ``results_dir`` is given (the engine then writes there
+    exactly what ``statopt-tool SETUP -o results_dir`` writes); otherwise the
+    tables go to a temporary folder, read back (with the crate's reader, in
+    parallel) when the result's tables are first used and then removed. With
+    ``results_dir`` the tables are read from its files when first used.
+
+    ``progress``: None shows a tqdm bar for frame loops that take longer
+    than a second, True always, False never; a callable is called as
+    ``progress(label, done, total)``.
+
+    Overrides of the setup, without editing its file:
+      ``contact_weight`` (w0: a number or a list), ``friction``
+      (``"cone"``, ``"pyramid4"``, ``"pyramid8"``), ``time_range``
+      (``(t0, t1)``), ``artifact_files`` (machine model file(s)),
+      ``model_properties`` (``{"component/property": value}`` set in the
+      model, artifact or force-set file that has it, e.g.
+      ``{"tibia_pad_r/plane_origin": [0, 0.1, 0]}``), ``motion`` (a
+      DataFrame, or a file, instead of the coordinates file; a DataFrame's
+      rotational columns are in degrees unless ``df.attrs["in_degrees"]`` is
+      False), and any other setup element by name (``step_interval=2``,
+      ``lowpass_cutoff_frequency_for_coordinates=6``, ...). Paths given here
+      are relative to the working directory; the setup's own paths still
+      resolve against its folder.
+
+    ``threads``, ``precision``, ``reduce``, ``resume`` are the CLI's ``-j``,
+    ``--precision``, ``--reduce`` and ``--resume``.
+
+    Raises :class:`statopt.InputError` (bad input; the CLI's message naming
+    the file, line and element) or :class:`statopt.StatoptError`. Frames
+    that could not be solved give a :class:`FramesFailedWarning` (the result
+    is complete; ``result.failed`` counts them).
+    """
+    if resume and results_dir is None:
+        raise ValueError("resume=True continues the run in results_dir: give results_dir")
+    return _execute(_native.run, setup, results_dir, progress, tables, overrides,
+                    dict(precision=precision, threads=threads, reduce=reduce, resume=resume))
+
+
+def predict_grf(
+    setup: Union[str, "os.PathLike[str]"],
+    results_dir: Union[str, "os.PathLike[str]", None] = None,
+    progress: Union[bool, None, Callable[[str, int, int], Any]] = None,
+    *,
+    threads: Optional[int] = None,
+    tables: bool = True,
+    **overrides: Any,
+) -> Result:
+    """``statopt-tool predict-grf SETUP``: ground reactions from kinematics
+    alone (docs/grf_prediction.md), with :func:`run`'s ``results_dir``,
+    ``progress`` and overrides.
+
+    ``result.predicted_grf`` is the predicted force, centre of pressure and
+    free moment per foot; with measured loads in the setup ``result.metrics``
+    holds the agreement per foot and axis (``r_y_rho``, ``r_y_rmse_N``,
+    ``r_y_rmse_BW_percent``, ``r_y_peak_error_N``, ...) and over stance
+    (``r_cop_error_mm``, ``r_heel_strike_error_ms``, ``r_toe_off_error_ms``);
+    ``result.summary["prediction"]`` has them as lists, with the foot
+    contacts (points, floor height, belt velocity) and the body weight.
+    """
+    res = _execute(_native.predict_grf, setup, results_dir, progress, tables, overrides,
+                   dict(threads=threads))
+    pred = res.summary["prediction"]
+    for m in pred["metrics"]:
+        for k in ("rho", "rmse_N", "rmse_BW_percent", "peak_error_N"):
+            res.metrics[f"{m['side']}_{m['axis']}_{k}"] = m[k]
+    for st in pred["stance"]:
+        for k in ("cop_error_mm", "heel_strike_error_ms", "toe_off_error_ms"):
+            res.metrics[f"{st['side']}_{k}"] = st[k]
+    return res
+
+
+def _execute(native, setup, results_dir, progress, tables, overrides, options) -> Result:
+    setup = Path(setup)
+    inputs = None
+    out = Path(results_dir) if results_dir is not None else None
+    try:
+        text = None
+        if overrides:
+            inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
+            text = edit_setup(setup, overrides, inputs)
+        if out is None:
+            out = Path(tempfile.mkdtemp(prefix="statopt-results-"))
+        cb = _progress_callback(progress)
+        try:
+            summary = native(str(setup), text=text, results_dir=str(out), progress=cb, **options)
+        finally:
+            if isinstance(cb, _TqdmProgress):
+                cb.close()
+        if results_dir is None:
+            # Messages name tables by file; here they are res.tables' keys.
+            here = str(out) + os.sep
+            for k in ("warnings", "report"):
+                summary[k] = [w.replace(here, "") for w in summary[k]]
+            if summary["failure_line"]:
+                summary["failure_line"] = summary["failure_line"].replace(here, "")
+        seen = set()
+        for w in summary["warnings"]:
+            if w not in seen:
+                seen.add(w)
+                log.warning("%s", w)
+        if summary["failure_line"]:
+            warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=3)
+        metrics = _read_metrics(summary["files"])
+        table_files = _table_files(summary["files"]) if tables else []
+        files = list(summary["files"]) if results_dir is not None else []
+        scratch = None
+        if results_dir is None:
+            summary["files"] = []
+            summary["results_dirs"] = []
+            if table_files:
+                scratch, out = out, None  # the result removes it once read
+        return Result(str(setup), summary, table_files, metrics, files, scratch)
+    finally:
+        if inputs is not None:
+            shutil.rmtree(inputs, ignore_errors=True)
+        if results_dir is None and out is not None:
+            shutil.rmtree(out, ignore_errors=True)
+
+
+def check(setup: Union[str, "os.PathLike[str]"]) -> Dict[str, List[str]]:
+    """``statopt-tool --check SETUP``: read and compile everything the setup
+    (or study) names without running. Returns ``{"errors": [...],
+    "warnings": [...], "checked": [...]}``."""
+    errors, warns, checked = _native.check(os.fspath(setup))
+    return {"errors": errors, "warnings": warns, "checked": checked}

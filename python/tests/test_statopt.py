@@ -1,0 +1,349 @@
+"""The statopt Python package against the CLI (bit for bit), its errors,
+tables, overrides and sweeps."""
+
+import subprocess
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import statopt
+
+# Columns that are timings, not results.
+TIMING = {"solve_time_ms"}
+
+
+def bits(df: pd.DataFrame) -> np.ndarray:
+    """The values as raw bits: equality is bit for bit (NaN and -0 too)."""
+    return np.ascontiguousarray(df.to_numpy(dtype=np.float64)).view(np.int64)
+
+
+def assert_same(a: pd.DataFrame, b: pd.DataFrame):
+    a = a.drop(columns=[c for c in a.columns if c in TIMING])
+    b = b.drop(columns=[c for c in b.columns if c in TIMING])
+    assert list(a.columns) == list(b.columns)
+    assert np.array_equal(a.index.to_numpy().view(np.int64), b.index.to_numpy().view(np.int64))
+    assert np.array_equal(bits(a), bits(b))
+
+
+def parse_sto(path: Path) -> pd.DataFrame:
+    """An independent reader (Python's correctly rounded float())."""
+    lines = path.read_text().splitlines()
+    k = lines.index("endheader")
+    labels = lines[k + 1].split("\t")
+    rows = [[float(x) for x in line.split()] for line in lines[k + 2:] if line.strip()]
+    a = np.array(rows, dtype=np.float64).reshape(len(rows), len(labels))
+    return pd.DataFrame(a[:, 1:], index=pd.Index(a[:, 0], name="time"), columns=labels[1:])
+
+
+# -- run() against the CLI ---------------------------------------------------
+
+def test_run_tables_equal_cli_bit_for_bit(cam1_py, cam1_cli):
+    cli_tables = {p.stem: p for p in cam1_cli.iterdir() if p.suffix in (".sto", ".mot")}
+    assert set(cam1_py.tables) == set(cli_tables)
+    for key, df in cam1_py.tables.items():
+        assert_same(df, statopt.read_table(cli_tables[key]))
+    # ... and with a reader that is not the crate's
+    for key in ["leg_extension_cam1_SO_w0_500_activation", "leg_extension_cam1_JR_w0_mean_ReactionLoads",
+                "leg_extension_cam1_SO_w0_1_ContactForces"]:
+        assert_same(cam1_py.tables[key], parse_sto(cli_tables[key]))
+    assert cam1_py.frames == 101 and cam1_py.failed == 0 and cam1_py.ok
+    assert cam1_py.files == []  # nothing written without results_dir
+    assert cam1_py.metrics["quadriceps_work_J"] == pytest.approx(113.234417)
+
+
+def test_named_tables(cam1_py):
+    a = cam1_py.activations
+    assert a.index.names == ["w0", "time"]
+    assert sorted(set(a.index.get_level_values("w0"))) == [1.0, 500.0, 1000.0]
+    assert_same(a.xs(500.0, level="w0"), cam1_py.table("activation", w0=500))
+    assert "knee_r_on_tibia_r_in_tibia_r_fx" in cam1_py.reactions.columns
+    assert cam1_py.table("ReactionLoads", stat="mean").shape == (101, 18)
+    for name in ["forces", "diagnostics", "contact_forces", "contact_body_forces",
+                 "generalized_forces", "muscle_power"]:
+        assert len(getattr(cam1_py, name)) == 3 * 101
+    with pytest.raises(KeyError, match="no Length table"):
+        cam1_py.table("Length")
+
+
+def test_results_dir_files_equal_cli(repo, cam1_cli, tmp_path):
+    out = tmp_path / "py"
+    res = statopt.run(str(repo / "setups" / "leg_extension_cam1.xml"), results_dir=out, progress=False)
+    assert sorted(Path(f).name for f in res.files) == sorted(p.name for p in cam1_cli.iterdir())
+    assert all(Path(f).parent == out for f in res.files)
+    for p in cam1_cli.glob("*.sto"):
+        if "diagnostics" in p.name:  # solve times differ
+            continue
+        assert (out / p.name).read_bytes() == p.read_bytes(), p.name
+
+
+def test_overrides_single_w0_equals_sweep_member(repo, cam1_py):
+    res = statopt.run(repo / "setups" / "leg_extension_cam1.xml", contact_weight=500, progress=False)
+    assert "leg_extension_cam1_SO_activation" in res.tables
+    assert res.activations.index.name == "time"
+    assert_same(res.activations, cam1_py.table("activation", w0=500))
+    assert_same(res.reactions, cam1_py.table("ReactionLoads", w0=500))
+    # the setup's metrics follow the single-w0 table names
+    assert set(res.metrics) == set(cam1_py.metrics)
+
+
+def test_overrides_time_range_friction_motion(repo, cam1_py):
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    res = statopt.run(setup, contact_weight=1, time_range=(1.0, 2.0), friction="pyramid8", progress=False)
+    a = res.activations
+    assert a.index[0] == 1.0 and a.index[-1] == 2.0 and len(a) == 21
+    motion = statopt.read_table(repo / "motions" / "leg_extension.mot")
+    res2 = statopt.run(setup, contact_weight=1, motion=motion, progress=False)
+    assert_same(res2.activations, cam1_py.table("activation", w0=1))
+    res3 = statopt.run(setup, contact_weight=1, motion=motion.iloc[:50], progress=False)
+    assert len(res3.activations) == 50
+
+
+def test_overrides_model_properties_and_artifact(repo, cam1_py):
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    base = cam1_py.table("ContactForces", w0=1)
+    moved = statopt.run(setup, contact_weight=1, progress=False,
+                        model_properties={"pelvis_seat_r/plane_origin": [0, 0.005, 0]})
+    assert moved.contact_forces.shape == base.shape
+    assert not np.array_equal(bits(moved.contact_forces), bits(base))
+    same = statopt.run(setup, contact_weight=1, progress=False,
+                       model_properties={"/forceset/pelvis_seat_r/plane_origin": [0, 0.005, 0]})
+    assert_same(same.contact_forces, moved.contact_forces)
+    cam2 = statopt.run(setup, contact_weight=1, progress=False,
+                       artifact_files=repo / "models" / "leg_extension" / "machine_cam2.osim")
+    assert not np.array_equal(bits(cam2.forces), bits(cam1_py.table("force", w0=1)))
+    with pytest.raises(statopt.InputError, match="no component 'nope'"):
+        statopt.run(setup, model_properties={"nope/plane_origin": [0, 0, 0]})
+    with pytest.raises(TypeError, match="unknown override 'no_such_thing'"):
+        statopt.run(setup, no_such_thing=3)
+
+
+def test_inverse_dynamics_setup(repo, cli, tmp_path):
+    setup = repo / "setups" / "double_pendulum_ID.xml"
+    r = subprocess.run([str(cli), str(setup), "-o", str(tmp_path), "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    res = statopt.run(setup, progress=False)
+    (key, df), = res.tables.items()
+    assert_same(df, statopt.read_table(tmp_path / (key + ".sto")))
+    part = statopt.run(setup, time_range=(0.5, 1.0), progress=False)
+    assert_same(part.tables[key], df.loc[0.5:1.0])
+
+
+# -- errors ------------------------------------------------------------------
+
+def test_input_error_names_file_line_element_like_cli(repo, cli, tmp_path):
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    text = text.replace("../models", str(repo / "models")).replace("../motions", str(repo / "motions"))
+    bad = tmp_path / "bad_setup.xml"
+    bad.write_text(text.replace("<contact_weight>1 500 1000</contact_weight>",
+                                "<contact_weight>-1</contact_weight>"))
+    r = subprocess.run([str(cli), str(bad)], capture_output=True, text=True)
+    assert r.returncode == 2
+    with pytest.raises(statopt.InputError) as e:
+        statopt.run(bad)
+    assert isinstance(e.value, statopt.StatoptError)
+    assert r.stderr.strip() == f"error: {e.value}"
+    assert str(bad) in str(e.value)
+    assert e.value.file == str(bad) and e.value.element == "<contact_weight>"
+    assert e.value.line == 25
+    # an override is checked as the file would be, and the message names the file
+    with pytest.raises(statopt.InputError, match=r"leg_extension_cam1.xml, line \d+, <friction_cone>"):
+        statopt.run(repo / "setups" / "leg_extension_cam1.xml", friction="round")
+    # nothing was written next to the setup
+    assert not (tmp_path.parent / "output").exists()
+    # not XML at all, and a missing file
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<OpenSimDocument><AnalyzeTool>")
+    with pytest.raises(statopt.InputError, match="broken.xml"):
+        statopt.run(broken)
+    with pytest.raises(statopt.InputError, match="missing.xml"):
+        statopt.run(tmp_path / "missing.xml")
+    # ... with overrides too (the setup is read in Python first)
+    with pytest.raises(statopt.InputError, match="missing.xml"):
+        statopt.run(tmp_path / "missing.xml", contact_weight=1)
+    with pytest.raises(statopt.InputError, match=r"broken.xml, line 1: not well-formed"):
+        statopt.run(broken, contact_weight=1)
+
+
+# -- tables ------------------------------------------------------------------
+
+def test_read_write_table_round_trip(cam1_cli, tmp_path):
+    src = cam1_cli / "leg_extension_cam1_SO_w0_500_activation.sto"
+    df = statopt.read_table(src)
+    assert df.index.name == "time" and df.attrs["in_degrees"] is False
+    out = tmp_path / "copy.sto"
+    statopt.write_table(df, out)
+    back = statopt.read_table(out)
+    assert_same(df, back)
+    assert back.attrs == df.attrs
+    # the engine's writer: the same bytes as the CLI's file
+    assert out.read_bytes() == src.read_bytes()
+    # a plain DataFrame, 16 digits: exact
+    plain = pd.DataFrame({"time": [0.0, 0.1, 0.2], "a": [1.0, -2.5e-3, np.pi], "b": [0.0, 1e6, -7.0]})
+    statopt.write_table(plain, tmp_path / "plain.mot", precision=16, in_degrees=True)
+    got = statopt.read_table(tmp_path / "plain.mot")
+    assert got.attrs["in_degrees"] is True and got.attrs["name"] == "plain"
+    assert np.array_equal(got.to_numpy(), plain[["a", "b"]].to_numpy())
+    with pytest.raises(statopt.InputError, match="nope.sto"):
+        statopt.read_table(tmp_path / "nope.sto")
+
+
+# -- progress, GIL -----------------------------------------------------------
+
+def test_progress_callback_and_gil_released(repo):
+    calls = []
+    ticks = 0
+    done = threading.Event()
+
+    def work():
+        statopt.run(repo / "setups" / "leg_extension_cam1.xml", progress=lambda *a: calls.append(a))
+        done.set()
+
+    t = threading.Thread(target=work)
+    t.start()
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    t.join()
+    assert ticks > 50  # the main thread ran while the engine did
+    labels = [c[0] for c in calls]
+    assert "leg_extension_cam1_SO_w0_500" in labels
+    last = {}
+    for label, d, total in calls:
+        last[label] = (d, total)
+    assert all(d == total == 101 for d, total in last.values())
+
+
+def test_frames_failed_warning_relative_setup_path(repo, monkeypatch):
+    monkeypatch.chdir(repo)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        statopt.run("setups/leg_extension_cam1.xml", contact_weight=1, progress=False)
+    # quadriceps of 1 N: no frame can be solved; the result is complete
+    weak = {f"{m}/max_isometric_force": 1.0 for m in ["vas_int_r", "vas_lat_r", "vas_med_r", "rect_fem_r"]}
+    with pytest.warns(statopt.FramesFailedWarning, match=r"could not solve 101 of 101 .*see leg_extension_cam1_SO_diagnostics.sto"):
+        res = statopt.run("setups/leg_extension_cam1.xml", contact_weight=1, progress=False,
+                          model_properties=weak)
+    assert res.failed == 101 and not res.ok
+    assert (res.diagnostics.status == -1).all() and len(res.activations) == 101
+
+
+# -- sweep -------------------------------------------------------------------
+
+def test_sweep_on_local_cluster_reports_failures(repo):
+    from dask.distributed import Client, LocalCluster
+
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        df = statopt.sweep(setup, {"contact_weight": [1, 500], "friction": ["cone", "round"]}, client=client)
+        assert len(df) == 4
+        assert list(df.columns[:2]) == ["contact_weight", "friction"]
+        ok = df[df.error.isna()]
+        bad = df[df.error.notna()]
+        assert list(ok.friction) == ["cone", "cone"] and list(bad.friction) == ["round", "round"]
+        assert all("InputError" in e and "friction_cone" in e for e in bad.error)
+        # the setup's <Metric>s, from single-w0 tables
+        single = statopt.run(setup, contact_weight=500, progress=False)
+        row = ok[ok.contact_weight == 500].iloc[0]
+        assert row["quadriceps_work_J"] == single.metrics["quadriceps_work_J"]
+        assert row["failed"] == 0
+
+        # setups as points, the summary metrics
+        df2 = statopt.sweep(None, [setup, repo / "setups" / "double_pendulum_ID.xml", repo / "no_such.xml"],
+                            client=client, metrics=statopt.summary_metrics)
+        assert len(df2) == 3 and df2.columns[0] == "setup"
+        assert df2.error.isna().tolist() == [True, True, False]
+        assert "no_such.xml" in df2.error.iloc[2]
+        assert df2.solved.iloc[0] == 303 and df2.failed.iloc[0] == 0
+        assert df2["peak_knee_r_on_tibia_r_in_tibia_r_force_N"].iloc[0] > 500
+
+
+# -- studies, Ctrl-C ----------------------------------------------------------
+
+def test_study_and_ctrl_c(repo, tmp_path):
+    import os
+    import signal
+
+    study = repo / "setups" / "leg_extension_study.xml"
+    res = statopt.run(study, progress=False)
+    assert res.summary["solves"] == 606 and res.failed == 0
+    # metrics of each setup and of the study, named after their files
+    assert res.metrics["leg_extension.quadriceps_work_cam1_J"] == res.metrics["leg_extension_cam1.quadriceps_work_J"]
+    assert res.activations.index.names == ["table", "time"]
+
+    # Ctrl-C stops the engine cleanly: KeyboardInterrupt, tables closed
+    # with the frames solved, and the next run is not stopped.
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        statopt.run(study, results_dir=tmp_path / "stopped", progress=False)
+        time.sleep(5)  # (if the run ended before the signal)
+    timer.join()
+    res = statopt.run(repo / "setups" / "leg_extension_cam1.xml", contact_weight=1, progress=False)
+    assert res.frames == 101 and len(res.activations) == 101
+
+
+def test_temporary_folders_removed(repo, tmp_path, monkeypatch):
+    import gc
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    res = statopt.run(setup, contact_weight=1, progress=False,
+                      model_properties={"pelvis_seat_r/plane_origin": [0, 0.005, 0]})
+    assert len(list(tmp_path.iterdir())) == 1  # the edited inputs are gone, the tables wait
+    assert len(res.activations) == 101
+    assert list(tmp_path.iterdir()) == []  # read, then removed
+    res = statopt.run(setup, contact_weight=1, progress=False)
+    del res
+    gc.collect()
+    assert list(tmp_path.iterdir()) == []  # never read: removed with the result
+
+
+def test_check(repo, tmp_path):
+    ok = statopt.check(repo / "setups" / "leg_extension_cam1.xml")
+    assert ok["errors"] == [] and ok["checked"]
+    bad = tmp_path / "bad.xml"
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    text = text.replace("../models", str(repo / "models")).replace("../motions", str(repo / "motions"))
+    bad.write_text(text.replace("<friction_cone>cone</friction_cone>", "<friction_cone>round</friction_cone>"))
+    r = statopt.check(bad)
+    assert any("bad.xml" in e and "friction_cone" in e for e in r["errors"]), r
+
+
+# -- predict-grf (reads ../shared in place; skipped without it) ---------------
+
+def test_predict_grf_equals_cli(repo, cli, tmp_path):
+    import csv
+
+    setup = repo.parent / "shared" / "models" / "gait2392" / "subject01_walk" / "setup_SO.xml"
+    if not setup.exists():
+        pytest.skip(f"SKIP {setup} is absent")
+    r = subprocess.run([str(cli), "predict-grf", str(setup), "-o", str(tmp_path), "-q"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    res = statopt.predict_grf(setup, progress=False)
+    assert_same(res.predicted_grf, statopt.read_table(tmp_path / "subject01_predicted_grf.sto"))
+    for key in ("subject01_StaticOptimization_activation", "subject01_StaticOptimization_ContactForces"):
+        assert_same(res.tables[key], statopt.read_table(tmp_path / (key + ".sto")))
+    with open(tmp_path / "subject01_grf_comparison.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            f, a = row["foot"], row["axis"]
+            assert f"{res.metrics[f'{f}_{a}_rho']:.4f}" == row["rho"]
+            assert f"{res.metrics[f'{f}_{a}_rmse_N']:.2f}" == row["rmse_N"]
+            assert f"{res.metrics[f'{f}_cop_error_mm']:.1f}" == row["cop_error_mm"]
+    assert res.summary["prediction"]["contact_points"] > 0
+
+
+def test_sweep_own_local_cluster_of_processes(repo):
+    # no client: a LocalCluster of worker processes is started and closed
+    df = statopt.sweep(repo / "setups" / "leg_extension_cam1.xml", {"contact_weight": [1, 500]},
+                       progress=False)
+    assert df.error.isna().all(), df.error.tolist()
+    assert df.contact_weight.tolist() == [1, 500] and (df.failed == 0).all()
+    assert df.quadriceps_work_J.iloc[0] != df.quadriceps_work_J.iloc[1]
