@@ -1070,7 +1070,15 @@ pub fn run(
         })
         .collect();
     problem.w0 = weights[0];
-    let summaries = run_sweep(&problem, setup, step_interval, &dir, &specs, opts)?;
+    let summaries = run_sweep(
+        &problem,
+        setup,
+        step_interval,
+        &dir,
+        &specs,
+        opts,
+        base.trim_end_matches('_'),
+    )?;
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
         if !stopped {
@@ -1762,6 +1770,8 @@ fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
 /// is assembled once and the problem solved once per weight
 /// ([`SoProblem::solve_frame_weights`]), each run's joint reactions and
 /// tables written from its own solution. One summary per run.
+/// `label` names the pass in progress reports (`<setup>_<analysis>`: one
+/// pass serves every w0).
 fn run_sweep(
     problem: &SoProblem,
     setup: &AnalyzeSetup,
@@ -1769,6 +1779,7 @@ fn run_sweep(
     dir: &std::path::Path,
     runs: &[RunSpec],
     opts: &RunOptions,
+    label: &str,
 ) -> Result<Vec<RunSummary>> {
     let mut writers = runs
         .iter()
@@ -1786,11 +1797,7 @@ fn run_sweep(
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
-    let label = runs
-        .first()
-        .map(|r| r.prefix.trim_end_matches('_').to_string())
-        .unwrap_or_default();
-    let mut progress = crate::tools::progress::bar(nframes as u64, opts, &label);
+    let mut progress = crate::tools::progress::bar(nframes as u64, opts, label);
     let start = Instant::now();
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
