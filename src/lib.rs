@@ -1,12 +1,15 @@
 //! statopt: static optimization of muscle and frictional contact forces for
 //! OpenSim models, after Krueger & Wartzack (2017).
 //!
-//! The pipeline, one module per stage: [`parse`] (XML documents) →
-//! [`model`] (compiled, immutable model) → [`motion`] (coordinates filtered
-//! and splined into per-frame q, u, u̇) → per frame: [`dynamics`]
-//! (kinematics, inverse dynamics) → [`paths`] and [`muscles`] (muscle
-//! geometry and strength) → [`tools`] (the analyses users run) →
-//! [`storage`] (OpenSim `.sto` tables).
+//! The pipeline, one module per stage (docs/architecture.md): [`parse`]
+//! (XML documents) → [`model`] (compiled once, immutable) → [`motion`]
+//! (coordinates filtered and splined into per-frame q, u, u̇) → per frame,
+//! over a per-thread workspace: [`dynamics`] (kinematics, inverse dynamics)
+//! → [`paths`] and [`muscles`] (muscle geometry and strength) → [`forces`]
+//! (known forces) → [`contacts`] (contact geometry and friction) →
+//! [`optimize`] (the per-frame convex program) → [`tools`] (the drivers a
+//! setup names, joint reactions) → [`storage`], [`output`], [`plots`]
+//! (tables, logs, figures). A module imports only from earlier stages.
 pub mod contacts;
 pub mod dynamics;
 pub mod error;
