@@ -273,3 +273,27 @@ fn without_measured_loads_the_prediction_uses_opensims_usual_names() {
     let mean = r.iter().zip(&l).map(|(a, b)| a + b).sum::<f64>() / r.len() as f64;
     assert!((mean / p.body_weight - 1.0).abs() < 0.1, "mean vertical {mean} N, body weight {}", p.body_weight);
 }
+
+/// A floor height the user gives is used as it is: every point's contact
+/// plane is that level floor (no resting heights or tilt fitted).
+#[test]
+fn a_given_floor_height_is_used_as_given() {
+    let Some(root) = common::validation_dir("predict_grf given floor") else {
+        return;
+    };
+    let setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_given_floor")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run_with_floor(&setup, &opts, Some(0.04)).unwrap();
+    assert_eq!(p.contacts.floor_height, 0.04);
+    assert_eq!(p.contacts.floor_slope, (0.0, 0.0));
+    assert!(p.contacts.points.iter().all(|q| q.contact_level == 0.04));
+    assert_eq!(p.summary.failed, 0);
+    assert!(predict_grf::run_with_floor(&setup, &opts, Some(f64::NAN)).is_err());
+}

@@ -123,6 +123,10 @@ enum Command {
         /// Write results here instead of the setup's <results_directory>.
         #[arg(short = 'o', long = "results-dir", value_name = "DIR")]
         results_dir: Option<PathBuf>,
+        /// The floor's height (ground y, m), level: instead of finding the floor, each foot
+        /// point's resting height and the floor's tilt from the motion.
+        #[arg(long, value_name = "Y", allow_negative_numbers = true)]
+        floor_height: Option<f64>,
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
@@ -397,6 +401,7 @@ fn main() -> ExitCode {
         Some(Command::PredictGrf {
             setup,
             results_dir,
+            floor_height,
             quiet,
         }) => {
             let opts = RunOptions {
@@ -404,7 +409,19 @@ fn main() -> ExitCode {
                 verbose: !quiet,
                 ..Default::default()
             };
-            match tools::predict_grf::run_setup(setup, None, &opts) {
+            let run = match floor_height {
+                None => tools::predict_grf::run_setup(setup, None, &opts),
+                Some(f) => match statopt::parse::setup::Setup::read(setup) {
+                    Ok(statopt::parse::setup::Setup::Analyze(s)) => {
+                        tools::predict_grf::run_with_floor(&s, &opts, Some(*f))
+                    }
+                    Ok(_) => Err(statopt::Error::msg(
+                        "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
+                    )),
+                    Err(e) => Err(e),
+                },
+            };
+            match run {
                 Ok(p) => {
                     if !quiet {
                         let mut said = std::collections::HashSet::new();

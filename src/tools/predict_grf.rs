@@ -193,8 +193,25 @@ pub fn run_setup(
     }
 }
 
-/// Run the prediction for an AnalyzeTool setup with a StaticOptimization.
+/// Run the prediction for an AnalyzeTool setup with a StaticOptimization;
+/// the floor is found from the motion.
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
+    run_with_floor(setup, opts, None)
+}
+
+/// [`run`] with the floor's height given (ground y, m; level, at rest):
+/// every foot point's contact plane is that floor, and no contact levels or
+/// slope are fitted (`statopt-tool predict-grf --floor-height Y`).
+pub fn run_with_floor(
+    setup: &AnalyzeSetup,
+    opts: &RunOptions,
+    floor_height: Option<f64>,
+) -> Result<Prediction> {
+    if let Some(f) = floor_height {
+        if !f.is_finite() {
+            return Err(Error::msg(format!("the floor height must be a finite number, found {f}")));
+        }
+    }
     if setup.analysis_element("StaticOptimization").is_none() {
         return Err(Error::input(
             Location::file(&setup.setup_file).with_element("<AnalysisSet>"),
@@ -207,7 +224,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<Prediction> {
     let am = loading::load_analysis_model(&setup)?;
     let model = am.model;
     let states = analyze::load_states(&setup, &model)?;
-    let contacts = feet::build(&model, &states, None, FootContactParameters::default())?;
+    let contacts = feet::build(&model, &states, floor_height, FootContactParameters::default())?;
     let dir = analyze::results_dir(&setup, opts)?;
     let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
     std::fs::write(&contacts_file, contacts.force_set_xml())
