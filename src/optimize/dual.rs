@@ -1,0 +1,584 @@
+//! Dual semismooth Newton method for the quadratic frame problem (p = 2).
+//!
+//! The problem of a frame is
+//!
+//! ```text
+//! minimise Σ_i w_i x_i²  subject to  A x = b,  x ∈ C
+//! ```
+//!
+//! where C is a product of intervals [lower_i, upper_i] (independent
+//! variables) and, per static contact with μ > 0, the friction cone
+//! K_μ = {(λn, λs1, λs2): ‖(λs1, λs2)‖ ≤ μ λn} (FrictionModel::Cone).
+//! Its Lagrangian dual function, one multiplier y_r per equation, is
+//!
+//! ```text
+//! g(y) = min_{x ∈ C} Σ_i w_i x_i² − yᵀ(A x − b)
+//! ```
+//!
+//! Because every block of C (a variable, or the three variables of a contact,
+//! which share one weight) has a single weight w, the inner minimiser is a
+//! Euclidean projection, x(y) = Proj_C(Aᵀy / 2w) block by block: a clip to
+//! [lower, upper], or the closed-form projection onto K_μ ([`project_cone`]).
+//! g is concave and piecewise quadratic with gradient ∇g(y) = b − A x(y), so
+//! the dual optimum is a root of the piecewise-linear map F(y) = b − A x(y).
+//! Semismooth Newton solves it: the generalized Jacobian of F is
+//! −A D Aᵀ with D block-diagonal, D = J / 2w, J the (Clarke) derivative of
+//! the projection (1 or 0 for a clip; I, 0 or a rank-2 matrix for the cone,
+//! [`cone_jacobian_factors`]); each step solves (A D Aᵀ + εI) d = F(y) by
+//! Cholesky, ε = s·(1e-12 + ν·min(1, ‖F‖∞/max(1, ‖b‖∞))) with s the
+//! largest diagonal entry of A W⁻¹ Aᵀ/2 (Levenberg–Marquardt-like: A D Aᵀ
+//! is singular when all variables of an equation sit at bounds or a contact
+//! lies on the cone's surface; ν starts at 1e-6, falls tenfold after a full
+//! step and rises tenfold after a step shorter than ¼), and takes y + t d
+//! with the largest t ∈ {1, ½, ¼, …} that raises g by the Armijo fraction
+//! 1e-4·t·Fᵀd (or, where g's gain drowns in rounding, shrinks ‖F‖₂ by
+//! 1 − 1e-4·t without lowering g beyond rounding). The iterate x(y) is feasible
+//! for the bounds and friction cones by construction, and it is the exact
+//! minimiser of the problem with right-hand side A x(y); the method stops when
+//! ‖A x − b‖∞ ≤ [`RESIDUAL_TOLERANCE`]·max(1, ‖b‖∞).
+//!
+//! Starting point: the multipliers of the unconstrained problem (every
+//! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
+//! static optimization solves every frame from this cold start, so a frame's
+//! answer never depends on which frames were solved before it or on which
+//! thread (results are bit-identical for any thread count and when a run is
+//! resumed).
+//!
+//! Block splitting: equations that share no free variable (a contact's three
+//! variables count as one) are independent; they are grouped by union-find
+//! and each group is solved on its own (gait2392's 23 equations fall apart
+//! into 4 blocks: pelvis and lumbar residuals, each leg, ...). Fixed
+//! variables (lower == upper, and the shear multipliers of a contact with
+//! μ = 0) move to the right-hand side; variables that appear in no equation
+//! take their projection of 0.
+//!
+//! Not handled (the caller falls back to Clarabel, [`super::solve()`]):
+//! exponents other than 2, free variables of weight 0, pyramid friction
+//! models with μ > 0, contacts whose three variables do not share one
+//! positive weight or carry bounds other than λn ≥ 0 (or none). When Newton
+//! has not converged within [`MAX_NEWTON_STEPS`] steps per block, the line
+//! search stalls, or an equation without free variables has a nonzero
+//! right-hand side, the caller falls back too: Clarabel certifies
+//! infeasibility and computes the elastic solution.
+use nalgebra::{DMatrix, DVector};
+
+use super::friction::FrictionModel;
+use super::problem::FrameProblem;
+
+/// Convergence test: ‖A x − b‖∞ ≤ this · max(1, ‖b‖∞).
+pub const RESIDUAL_TOLERANCE: f64 = 1e-10;
+/// Newton steps allowed per block before giving up.
+pub const MAX_NEWTON_STEPS: u32 = 50;
+/// Step halvings of one line search before giving up.
+const MAX_HALVINGS: u32 = 60;
+/// Armijo fraction.
+const SIGMA: f64 = 1e-4;
+
+/// The dual Newton answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DualSolution {
+    /// The primal variables (within bounds and friction cones).
+    pub x: Vec<f64>,
+    /// One multiplier per equation (0 for equations with no free variable):
+    /// 2 w x = Aᵀy up to the bound and cone multipliers.
+    pub y: Vec<f64>,
+    /// Linear solves, summed over the blocks (the starting point's solve
+    /// included).
+    pub iterations: u32,
+    /// Number of independent blocks of equations.
+    pub blocks: usize,
+}
+
+/// Why [`solve_dual`] gave no answer.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DualFailure {
+    /// The problem lies outside what the method handles (see the module
+    /// documentation); the reason says what.
+    NotHandled(&'static str),
+    /// Not converged (step limit, stalled line search, an inconsistent
+    /// equation): possibly infeasible. `iterations` as in [`DualSolution`].
+    NotConverged {
+        iterations: u32,
+        reason: &'static str,
+    },
+}
+
+impl DualFailure {
+    /// Newton iterations spent before failing (0 when not handled).
+    pub fn iterations(&self) -> u32 {
+        match self {
+            DualFailure::NotHandled(_) => 0,
+            DualFailure::NotConverged { iterations, .. } => *iterations,
+        }
+    }
+}
+
+/// A block of the feasible set C.
+#[derive(Debug, Clone, Copy)]
+enum Set {
+    /// One variable in [lo, hi].
+    Interval { lo: f64, hi: f64 },
+    /// (λn, λs1, λs2) in the friction cone of coefficient mu > 0.
+    Cone { mu: f64 },
+}
+
+/// A block of variables: its set, weight and global variable indices
+/// (1 or 3, normal first).
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    set: Set,
+    w: f64,
+    vars: [usize; 3],
+}
+
+impl Group {
+    fn len(&self) -> usize {
+        match self.set {
+            Set::Interval { .. } => 1,
+            Set::Cone { .. } => 3,
+        }
+    }
+
+    /// Projection of 0: the group's value when no equation involves it.
+    fn at_zero(&self) -> [f64; 3] {
+        match self.set {
+            Set::Interval { lo, hi } => [0.0f64.clamp(lo, hi), 0.0, 0.0],
+            Set::Cone { .. } => [0.0; 3],
+        }
+    }
+}
+
+/// Euclidean projection of (n, s1, s2) onto {‖(s1, s2)‖ ≤ mu n}, mu > 0.
+/// Returns the projection and which piece applied (0 interior, 1 boundary,
+/// 2 polar cone).
+pub fn project_cone(v: [f64; 3], mu: f64) -> ([f64; 3], u8) {
+    let [n, s1, s2] = v;
+    let r = s1.hypot(s2);
+    if r <= mu * n {
+        return (v, 0);
+    }
+    if n + mu * r <= 0.0 {
+        return ([0.0; 3], 2);
+    }
+    // Onto the ray (1, mu u), u = s / r (r > 0 here).
+    let alpha = (n + mu * r) / (1.0 + mu * mu);
+    let k = mu * alpha / r;
+    ([alpha, k * s1, k * s2], 1)
+}
+
+/// The derivative J of [`project_cone`] at v as at most three columns c_k
+/// with J = Σ c_k c_kᵀ: I (interior), nothing (polar), or, on the boundary
+/// piece, q/√(1+μ²) with q = (1, μu) and √(μα/r)·(0, u⊥).
+fn cone_jacobian_factors(v: [f64; 3], mu: f64, piece: u8) -> [[f64; 3]; 3] {
+    match piece {
+        0 => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        2 => [[0.0; 3]; 3],
+        _ => {
+            let [n, s1, s2] = v;
+            let r = s1.hypot(s2);
+            let (u1, u2) = (s1 / r, s2 / r);
+            let alpha = (n + mu * r) / (1.0 + mu * mu);
+            let c = 1.0 / (1.0 + mu * mu).sqrt();
+            let e = (mu * alpha / r).max(0.0).sqrt();
+            [
+                [c, c * mu * u1, c * mu * u2],
+                [0.0, -e * u2, e * u1],
+                [0.0; 3],
+            ]
+        }
+    }
+}
+
+/// Union-find with path halving.
+fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// One independent block: its equations (global rows), its groups, the
+/// dense submatrix (columns in group order) and the right-hand side with the
+/// fixed variables moved over.
+struct Block {
+    rows: Vec<usize>,
+    groups: Vec<Group>,
+    m: DMatrix<f64>,
+    b: DVector<f64>,
+}
+
+/// State of a block at a multiplier vector.
+struct Eval {
+    x: DVector<f64>,
+    /// F = b − M x = ∇g.
+    f: DVector<f64>,
+    g: f64,
+}
+
+impl Block {
+    fn n_cols(&self) -> usize {
+        self.m.ncols()
+    }
+
+    /// Projected point x(y), gradient F and dual value g at y. With
+    /// `factor`, also fills L (rows × cols) with H = L Lᵀ = M D Mᵀ.
+    fn eval(&self, y: &DVector<f64>, mut factor: Option<&mut DMatrix<f64>>) -> Eval {
+        let aty = self.m.tr_mul(y);
+        let mut x = DVector::zeros(self.n_cols());
+        let mut obj = 0.0;
+        let mut c = 0;
+        for gr in &self.groups {
+            let inv2w = 0.5 / gr.w;
+            match gr.set {
+                Set::Interval { lo, hi } => {
+                    let v = aty[c] * inv2w;
+                    let xc = v.clamp(lo, hi);
+                    x[c] = xc;
+                    obj += gr.w * xc * xc;
+                    if let Some(l) = factor.as_deref_mut() {
+                        let d = if v > lo && v < hi { inv2w.sqrt() } else { 0.0 };
+                        for r in 0..self.m.nrows() {
+                            l[(r, c)] = d * self.m[(r, c)];
+                        }
+                    }
+                }
+                Set::Cone { mu } => {
+                    let v = [aty[c] * inv2w, aty[c + 1] * inv2w, aty[c + 2] * inv2w];
+                    let (p, piece) = project_cone(v, mu);
+                    for k in 0..3 {
+                        x[c + k] = p[k];
+                        obj += gr.w * p[k] * p[k];
+                    }
+                    if let Some(l) = factor.as_deref_mut() {
+                        let cols = cone_jacobian_factors(v, mu, piece);
+                        let s = inv2w.sqrt();
+                        for (k, col) in cols.iter().enumerate() {
+                            for r in 0..self.m.nrows() {
+                                l[(r, c + k)] = s
+                                    * (self.m[(r, c)] * col[0]
+                                        + self.m[(r, c + 1)] * col[1]
+                                        + self.m[(r, c + 2)] * col[2]);
+                            }
+                        }
+                    }
+                }
+            }
+            c += gr.len();
+        }
+        let f = &self.b - &self.m * &x;
+        // g(y) = Σ w x² − yᵀ(M x − b) at the minimiser x(y).
+        let g = obj + y.dot(&f);
+        Eval { x, f, g }
+    }
+
+    /// Newton from `y`; returns (x, y, linear solves) or the failure.
+    fn solve(
+        &self,
+        y0: Option<DVector<f64>>,
+        tol: f64,
+    ) -> Result<(DVector<f64>, DVector<f64>, u32), (u32, &'static str)> {
+        let nr = self.rows.len();
+        let nc = self.n_cols();
+        // L_free: every variable free (D = 1/2w).
+        let mut l = DMatrix::zeros(nr, nc);
+        let mut c = 0;
+        for gr in &self.groups {
+            let s = (0.5 / gr.w).sqrt();
+            for k in 0..gr.len() {
+                for r in 0..nr {
+                    l[(r, c + k)] = s * self.m[(r, c + k)];
+                }
+            }
+            c += gr.len();
+        }
+        let h_free = &l * l.transpose();
+        let scale = (0..nr).map(|r| h_free[(r, r)]).fold(0.0, f64::max);
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err((0, "degenerate equations"));
+        }
+        let eps0 = 1e-12 * scale;
+        let bscale = tol / RESIDUAL_TOLERANCE;
+        let mut nu = 1e-6;
+        let mut solves = 0u32;
+        let mut y = match y0 {
+            Some(y) => y,
+            None => {
+                solves += 1;
+                match regularised_solve(h_free, &self.b, eps0) {
+                    Some(y) => y,
+                    None => return Err((solves, "singular start")),
+                }
+            }
+        };
+        let mut cur = self.eval(&y, Some(&mut l));
+        for _ in 0..MAX_NEWTON_STEPS {
+            if cur.f.amax() <= tol {
+                return Ok((cur.x, y, solves));
+            }
+            let h = &l * l.transpose();
+            solves += 1;
+            // Levenberg–Marquardt-like damping, proportional to the residual
+            // (bounded steps where A D Aᵀ is singular: a row all of whose
+            // variables sit at bounds, a contact on the cone's surface;
+            // vanishing as it converges), with a factor ν lowered after full
+            // steps and raised after short ones.
+            let eps = eps0 + nu * scale * (cur.f.amax() / bscale).min(1.0);
+            let Some(d) = regularised_solve(h, &cur.f, eps) else {
+                return Err((solves, "Newton system not solvable"));
+            };
+            let slope = cur.f.dot(&d);
+            let fnorm = cur.f.norm();
+            let mut t = 1.0;
+            let mut next = None;
+            for _ in 0..MAX_HALVINGS {
+                let yt = &y + &d * t;
+                let e = self.eval(&yt, None);
+                // Armijo on the concave g; near convergence, where g's gain
+                // drowns in its rounding, a shrinking residual with g not
+                // lower beyond rounding.
+                if e.g >= cur.g + SIGMA * t * slope
+                    || (e.g >= cur.g - 1e-13 * cur.g.abs()
+                        && e.f.norm() <= (1.0 - SIGMA * t) * fnorm)
+                {
+                    next = Some((yt, e));
+                    break;
+                }
+                t *= 0.5;
+            }
+            let Some((yt, _)) = next else {
+                return Err((solves, "line search stalled"));
+            };
+            if t == 1.0 {
+                nu = (nu * 0.1).max(1e-12);
+            } else if t < 0.25 {
+                nu = (nu * 10.0).min(1.0);
+            }
+            y = yt;
+            cur = self.eval(&y, Some(&mut l));
+        }
+        if cur.f.amax() <= tol {
+            return Ok((cur.x, y, solves));
+        }
+        Err((solves, "step limit"))
+    }
+}
+
+/// Cholesky solve of (h + eps I) z = rhs, raising eps by 1e3 up to four
+/// times when the factorisation fails.
+fn regularised_solve(mut h: DMatrix<f64>, rhs: &DVector<f64>, eps: f64) -> Option<DVector<f64>> {
+    let n = h.nrows();
+    let mut added = 0.0;
+    let mut e = eps;
+    for _ in 0..5 {
+        for i in 0..n {
+            h[(i, i)] += e - added;
+        }
+        added = e;
+        if let Some(ch) = h.clone().cholesky() {
+            let z = ch.solve(rhs);
+            if z.iter().all(|v| v.is_finite()) {
+                return Some(z);
+            }
+        }
+        e *= 1e3;
+    }
+    None
+}
+
+/// Solves a valid problem (see [`FrameProblem::validate`]) by dual Newton,
+/// optionally from multipliers `y0` (one per equation). See the module
+/// documentation for what is handled.
+pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, DualFailure> {
+    use DualFailure::NotHandled;
+    if p.exponent != 2.0 {
+        return Err(NotHandled("activation exponent other than 2"));
+    }
+    let n = p.n_var();
+    let m = p.n_eq();
+    if y0.is_some_and(|y| y.len() != m) {
+        return Err(NotHandled("warm start of the wrong length"));
+    }
+    // Partition the variables: fixed values, groups.
+    let mut fixed: Vec<Option<f64>> = vec![None; n];
+    let mut in_contact = vec![false; n];
+    let mut groups: Vec<Group> = Vec::with_capacity(n);
+    for c in &p.static_contacts {
+        for s in c.shear {
+            in_contact[s] = true;
+        }
+        if c.mu == 0.0 {
+            // Shear is 0 in every friction model; the normal is an ordinary
+            // bounded variable (handled below).
+            for s in c.shear {
+                if !(p.lower[s] <= 0.0 && p.upper[s] >= 0.0) {
+                    return Err(NotHandled(
+                        "frictionless contact with shear bounds excluding 0",
+                    ));
+                }
+                fixed[s] = Some(0.0);
+            }
+            continue;
+        }
+        if p.friction != FrictionModel::Cone {
+            return Err(NotHandled("pyramid friction model"));
+        }
+        in_contact[c.normal] = true;
+        let w = p.weights[c.normal];
+        let vars = [c.normal, c.shear[0], c.shear[1]];
+        if !(w > 0.0) || vars.iter().any(|&v| p.weights[v] != w) {
+            return Err(NotHandled("contact variables of unequal or zero weight"));
+        }
+        if c.shear
+            .iter()
+            .any(|&s| p.lower[s] != f64::NEG_INFINITY || p.upper[s] != f64::INFINITY)
+            || p.lower[c.normal] > 0.0
+            || p.upper[c.normal] != f64::INFINITY
+        {
+            return Err(NotHandled("contact with bounds other than the cone's"));
+        }
+        groups.push(Group {
+            set: Set::Cone { mu: c.mu },
+            w,
+            vars,
+        });
+    }
+    for j in 0..n {
+        if in_contact[j] {
+            continue;
+        }
+        let (lo, hi, w) = (p.lower[j], p.upper[j], p.weights[j]);
+        if lo == hi {
+            fixed[j] = Some(lo);
+        } else if w > 0.0 {
+            groups.push(Group {
+                set: Set::Interval { lo, hi },
+                w,
+                vars: [j, usize::MAX, usize::MAX],
+            });
+        } else {
+            return Err(NotHandled("free variable of weight 0"));
+        }
+    }
+
+    let bmax = p.b.amax();
+    let tol = RESIDUAL_TOLERANCE * bmax.max(1.0);
+    // Right-hand side with the fixed variables moved over.
+    let mut b = p.b.clone();
+    for (j, v) in fixed.iter().enumerate() {
+        if let Some(v) = *v {
+            if v != 0.0 {
+                b.axpy(-v, &p.a.column(j), 1.0);
+            }
+        }
+    }
+
+    // Union-find over equations; the first row each group touches.
+    let mut parent: Vec<usize> = (0..m).collect();
+    let mut first_row = vec![usize::MAX; groups.len()];
+    for (gi, gr) in groups.iter().enumerate() {
+        for &v in &gr.vars[..gr.len()] {
+            for r in 0..m {
+                if p.a[(r, v)] != 0.0 {
+                    if first_row[gi] == usize::MAX {
+                        first_row[gi] = r;
+                    } else {
+                        let (a, bb) = (find(&mut parent, first_row[gi]), find(&mut parent, r));
+                        parent[a] = bb;
+                    }
+                }
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    let mut y = vec![0.0; m];
+    for (j, v) in fixed.iter().enumerate() {
+        if let Some(v) = *v {
+            x[j] = v;
+        }
+    }
+    // Blocks keyed by root row.
+    let mut block_of_root = vec![usize::MAX; m];
+    let mut blocks: Vec<(Vec<usize>, Vec<Group>)> = Vec::new();
+    for (gi, gr) in groups.iter().enumerate() {
+        if first_row[gi] == usize::MAX {
+            let v = gr.at_zero();
+            for k in 0..gr.len() {
+                x[gr.vars[k]] = v[k];
+            }
+            continue;
+        }
+        let root = find(&mut parent, first_row[gi]);
+        if block_of_root[root] == usize::MAX {
+            block_of_root[root] = blocks.len();
+            blocks.push((Vec::new(), Vec::new()));
+        }
+        blocks[block_of_root[root]].1.push(*gr);
+    }
+    for r in 0..m {
+        let root = find(&mut parent, r);
+        match block_of_root[root] {
+            usize::MAX => {
+                // No free variable in this equation.
+                if b[r].abs() > tol {
+                    return Err(DualFailure::NotConverged {
+                        iterations: 0,
+                        reason: "an equation without free variables does not hold",
+                    });
+                }
+            }
+            k => blocks[k].0.push(r),
+        }
+    }
+
+    let mut iterations = 0u32;
+    let n_blocks = blocks.len();
+    for (rows, groups) in blocks {
+        let cols: Vec<usize> = groups
+            .iter()
+            .flat_map(|g| g.vars[..g.len()].iter().copied())
+            .collect();
+        let block = Block {
+            m: DMatrix::from_fn(rows.len(), cols.len(), |i, k| p.a[(rows[i], cols[k])]),
+            b: DVector::from_iterator(rows.len(), rows.iter().map(|&r| b[r])),
+            rows,
+            groups,
+        };
+        let start = y0
+            .map(|y0| DVector::from_iterator(block.rows.len(), block.rows.iter().map(|&r| y0[r])));
+        match block.solve(start, tol) {
+            Ok((xb, yb, it)) => {
+                iterations += it;
+                for (k, &j) in cols.iter().enumerate() {
+                    x[j] = xb[k];
+                }
+                for (k, &r) in block.rows.iter().enumerate() {
+                    y[r] = yb[k];
+                }
+            }
+            Err((it, reason)) => {
+                return Err(DualFailure::NotConverged {
+                    iterations: iterations + it,
+                    reason,
+                })
+            }
+        }
+    }
+    // Safety net: the whole system, with the original matrix.
+    if !(p.eq_residual(&x) <= tol) {
+        return Err(DualFailure::NotConverged {
+            iterations,
+            reason: "residual of the assembled solution",
+        });
+    }
+    Ok(DualSolution {
+        x,
+        y,
+        iterations,
+        blocks: n_blocks,
+    })
+}
+
+#[cfg(test)]
+#[path = "dual_tests.rs"]
+mod tests;
