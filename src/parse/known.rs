@@ -43,6 +43,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "passive_fiber_forces",
             "constraint_matrix",
             "solver_tolerance",
+            "solver",
         ],
     ),
 ];

@@ -24,7 +24,8 @@ use crate::model::Model;
 use crate::motion::states::assemble;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::optimize::{
-    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, StaticContact,
+    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, SolverChoice,
+    StaticContact,
 };
 use crate::output::mcap_log;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
@@ -69,7 +70,12 @@ pub struct StaticOptimizationSetup {
     pub constraint_matrix: ConstraintMatrix,
     /// statopt: Clarabel's tolerance exactly (`<solver_tolerance>`), looser or
     /// tighter than [`DEFAULT_TOLERANCE`]; unset: the convergence-criterion rule.
+    /// (The dual Newton solver always solves to 1e-10 relative.)
     pub solver_tolerance: Option<f64>,
+    /// statopt: `<solver>auto|newton|clarabel</solver>`: the dual Newton
+    /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
+    /// on every frame.
+    pub solver: SolverChoice,
 }
 
 /// How a frame's equality constraints are built.
@@ -157,6 +163,14 @@ impl StaticOptimizationSetup {
                     Some(v)
                 }
                 _ => None,
+            },
+            solver: match el.child("solver") {
+                Some(f) if !f.text().trim().is_empty() => match f.text().trim().to_ascii_lowercase().as_str() {
+                    "auto" | "newton" => SolverChoice::Auto,
+                    "clarabel" => SolverChoice::Clarabel,
+                    other => return Err(f.error(format!("solver must be 'auto' (or 'newton': the dual Newton solver, Clarabel where it does not apply or converge) or 'clarabel', found '{other}'"))),
+                },
+                _ => SolverChoice::Auto,
             },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {
@@ -680,7 +694,7 @@ impl SoProblem {
                     .solver_tolerance
                     .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
                 max_iter: self.settings.max_iterations.max(100),
-                ..SolveSettings::default()
+                solver: self.settings.solver,
             },
         };
         let m_r = fd.map(|fd| fd.finish(model, data));
@@ -1299,6 +1313,7 @@ fn run_once(
         "relative_residual",
         "friction_violation",
         "solve_time_ms",
+        "solver",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -1306,7 +1321,7 @@ fn run_once(
     let mut diag_w = open_table(
         &diag_path,
         "Static Optimization Diagnostics",
-        "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n",
+        "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met);\nsolver 0 = dual Newton, 1 = Clarabel (iterations: Newton linear solves, or Clarabel iterations plus a failed Newton attempt's solves).\n",
         &diag_labels,
         16,
     )?;
@@ -1534,6 +1549,7 @@ fn run_once(
                     r.relative_residual,
                     r.friction_violation,
                     r.solution.solve_time.as_secs_f64() * 1e3,
+                    r.solution.solver.code(),
                 ],
             )?;
             if let Some((cw, bw, lw)) = contact_w.as_mut() {
