@@ -30,10 +30,13 @@
 //! is singular when all variables of an equation sit at bounds or a contact
 //! lies on the cone's surface; ν starts at 1e-6, falls tenfold after a full
 //! step and rises tenfold after a step shorter than ¼), and takes y + t d
-//! with the largest t ∈ {1, ½, ¼, …} that raises g by the Armijo fraction
-//! 1e-4·t·Fᵀd (or, where g's gain drowns in rounding, shrinks ‖F‖₂ by
-//! 1 − 1e-4·t without lowering g beyond rounding). The iterate x(y) is feasible
-//! for the bounds and friction cones by construction, and it is the exact
+//! with the first t of the sequence 1, t₁, t₂, … that raises g by the Armijo
+//! fraction 1e-4·t·Fᵀd (or, where g's gain drowns in rounding, shrinks ‖F‖₂
+//! by 1 − 1e-4·t without lowering g beyond rounding); each next t is the
+//! zero of the secant of the (piecewise-linear, decreasing) directional
+//! derivative φ'(t) = F(y + t d)ᵀd, kept within [0.1, 0.5] of the last.
+//! The iterate x(y) is feasible for the bounds and friction cones by
+//! construction, and it is the exact
 //! minimiser of the problem with right-hand side A x(y); the method stops when
 //! ‖A x − b‖∞ ≤ [`TARGET_TOLERANCE`]·max(1, ‖b‖∞) (1e-12), and accepts
 //! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there.
@@ -47,11 +50,13 @@
 //!
 //! Block splitting: equations that share no free variable (a contact's three
 //! variables count as one) are independent; they are grouped by union-find
-//! and each group is solved on its own (gait2392's 23 equations fall apart
-//! into 4 blocks: pelvis and lumbar residuals, each leg, ...). Fixed
-//! variables (lower == upper, and the shear multipliers of a contact with
-//! μ = 0) move to the right-hand side; variables that appear in no equation
-//! take their projection of 0.
+//! and each group is solved on its own, with its own line search. (In the
+//! analytic force-space rows a muscle crossing the hip also loads the pelvis
+//! coordinates, so gait2392's 23 equations form a single block; the split
+//! pays off for models whose parts do not interact.) Fixed variables
+//! (lower == upper, and the shear multipliers of a contact with μ = 0) move
+//! to the right-hand side; variables that appear in no equation take their
+//! projection of 0.
 //!
 //! Not handled (the caller falls back to Clarabel, [`super::solve()`]):
 //! exponents other than 2, free variables of weight 0, pyramid friction
@@ -207,12 +212,17 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
 }
 
 /// One independent block: its equations (global rows), its groups, the
-/// dense submatrix (columns in group order) and the right-hand side with the
-/// fixed variables moved over.
+/// submatrix (columns in group order, stored by column with the nonzero
+/// entries only: a muscle spans a few joints) and the right-hand side with
+/// the fixed variables moved over.
 struct Block {
     rows: Vec<usize>,
     groups: Vec<Group>,
-    m: DMatrix<f64>,
+    /// Column c holds entries col_ptr[c]..col_ptr[c + 1] of row_idx (local
+    /// rows) and val.
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    val: Vec<f64>,
     b: DVector<f64>,
 }
 
@@ -224,57 +234,121 @@ struct Eval {
     g: f64,
 }
 
+/// Which derivative [`Block::eval`] accumulates into H = M D Mᵀ.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Hessian {
+    /// The projection's derivative at the point.
+    AtPoint,
+    /// Every bound and cone inactive (D = W⁻¹/2), for the starting point.
+    Free,
+}
+
 impl Block {
     fn n_cols(&self) -> usize {
-        self.m.ncols()
+        self.col_ptr.len() - 1
     }
 
-    /// Projected point x(y), gradient F and dual value g at y. With
-    /// `factor`, also fills L (rows × cols) with H = L Lᵀ = M D Mᵀ.
-    fn eval(&self, y: &DVector<f64>, mut factor: Option<&mut DMatrix<f64>>) -> Eval {
-        let aty = self.m.tr_mul(y);
+    fn col(&self, c: usize) -> (&[usize], &[f64]) {
+        let r = self.col_ptr[c]..self.col_ptr[c + 1];
+        (&self.row_idx[r.clone()], &self.val[r])
+    }
+
+    /// (M_c)ᵀ y.
+    fn dot(&self, c: usize, y: &DVector<f64>) -> f64 {
+        let (ri, v) = self.col(c);
+        ri.iter().zip(v).map(|(&r, a)| a * y[r]).sum()
+    }
+
+    /// h += s · u uᵀ for u = Σ_k coef_k M_(c+k) (k < coef.len()); `u` is
+    /// scratch of the block's row count.
+    fn add_outer(&self, h: &mut DMatrix<f64>, c: usize, coef: &[f64], s: f64, u: &mut [f64]) {
+        if coef.len() == 1 {
+            let (ri, v) = self.col(c);
+            let k = s * coef[0] * coef[0];
+            for (&r1, a1) in ri.iter().zip(v) {
+                for (&r2, a2) in ri.iter().zip(v) {
+                    h[(r1, r2)] += k * a1 * a2;
+                }
+            }
+            return;
+        }
+        u.iter_mut().for_each(|e| *e = 0.0);
+        for (k, &ck) in coef.iter().enumerate() {
+            if ck != 0.0 {
+                let (ri, v) = self.col(c + k);
+                for (&r, a) in ri.iter().zip(v) {
+                    u[r] += ck * a;
+                }
+            }
+        }
+        for r1 in 0..u.len() {
+            if u[r1] != 0.0 {
+                let k = s * u[r1];
+                for r2 in 0..u.len() {
+                    h[(r1, r2)] += k * u[r2];
+                }
+            }
+        }
+    }
+
+    /// Projected point x(y), gradient F and dual value g at y; with `hess`,
+    /// also H = M D Mᵀ (overwritten).
+    fn eval(&self, y: &DVector<f64>, mut hess: Option<(&mut DMatrix<f64>, Hessian)>) -> Eval {
+        let nr = self.rows.len();
         let mut x = DVector::zeros(self.n_cols());
+        let mut f = self.b.clone();
         let mut obj = 0.0;
+        let mut u = vec![0.0; nr];
+        if let Some((h, _)) = hess.as_mut() {
+            h.fill(0.0);
+        }
         let mut c = 0;
         for gr in &self.groups {
             let inv2w = 0.5 / gr.w;
             match gr.set {
                 Set::Interval { lo, hi } => {
-                    let v = aty[c] * inv2w;
+                    let v = self.dot(c, y) * inv2w;
                     let xc = v.clamp(lo, hi);
                     x[c] = xc;
                     obj += gr.w * xc * xc;
-                    if let Some(l) = factor.as_deref_mut() {
-                        let d = if v > lo && v < hi { inv2w.sqrt() } else { 0.0 };
-                        for r in 0..self.m.nrows() {
-                            l[(r, c)] = d * self.m[(r, c)];
+                    if let Some((h, kind)) = hess.as_mut() {
+                        if *kind == Hessian::Free || (v > lo && v < hi) {
+                            self.add_outer(h, c, &[1.0], inv2w, &mut u);
                         }
                     }
                 }
                 Set::Cone { mu } => {
-                    let v = [aty[c] * inv2w, aty[c + 1] * inv2w, aty[c + 2] * inv2w];
+                    let v = [
+                        self.dot(c, y) * inv2w,
+                        self.dot(c + 1, y) * inv2w,
+                        self.dot(c + 2, y) * inv2w,
+                    ];
                     let (p, piece) = project_cone(v, mu);
                     for k in 0..3 {
                         x[c + k] = p[k];
                         obj += gr.w * p[k] * p[k];
                     }
-                    if let Some(l) = factor.as_deref_mut() {
-                        let cols = cone_jacobian_factors(v, mu, piece);
-                        let s = inv2w.sqrt();
-                        for (k, col) in cols.iter().enumerate() {
-                            for r in 0..self.m.nrows() {
-                                l[(r, c + k)] = s
-                                    * (self.m[(r, c)] * col[0]
-                                        + self.m[(r, c + 1)] * col[1]
-                                        + self.m[(r, c + 2)] * col[2]);
+                    if let Some((h, kind)) = hess.as_mut() {
+                        let piece = if *kind == Hessian::Free { 0 } else { piece };
+                        for fac in cone_jacobian_factors(v, mu, piece) {
+                            if fac.iter().any(|e| *e != 0.0) {
+                                self.add_outer(h, c, &fac, inv2w, &mut u);
                             }
                         }
                     }
                 }
             }
+            for k in 0..gr.len() {
+                let xk = x[c + k];
+                if xk != 0.0 {
+                    let (ri, v) = self.col(c + k);
+                    for (&r, a) in ri.iter().zip(v) {
+                        f[r] -= a * xk;
+                    }
+                }
+            }
             c += gr.len();
         }
-        let f = &self.b - &self.m * &x;
         // g(y) = Σ w x² − yᵀ(M x − b) at the minimiser x(y).
         let g = obj + y.dot(&f);
         Eval { x, f, g }
@@ -288,20 +362,9 @@ impl Block {
         accept: f64,
     ) -> Result<(DVector<f64>, DVector<f64>, u32), (u32, &'static str)> {
         let nr = self.rows.len();
-        let nc = self.n_cols();
-        // L_free: every variable free (D = 1/2w).
-        let mut l = DMatrix::zeros(nr, nc);
-        let mut c = 0;
-        for gr in &self.groups {
-            let s = (0.5 / gr.w).sqrt();
-            for k in 0..gr.len() {
-                for r in 0..nr {
-                    l[(r, c + k)] = s * self.m[(r, c + k)];
-                }
-            }
-            c += gr.len();
-        }
-        let h_free = &l * l.transpose();
+        let mut h = DMatrix::zeros(nr, nr);
+        let mut h_free = DMatrix::zeros(nr, nr);
+        self.eval(&DVector::zeros(nr), Some((&mut h_free, Hessian::Free)));
         let scale = (0..nr).map(|r| h_free[(r, r)]).fold(0.0, f64::max);
         if !(scale > 0.0 && scale.is_finite()) {
             return Err((0, "degenerate equations"));
@@ -320,7 +383,7 @@ impl Block {
                 }
             }
         };
-        let mut cur = self.eval(&y, Some(&mut l));
+        let mut cur = self.eval(&y, Some((&mut h, Hessian::AtPoint)));
         // Stopping short of the target: accepted if within `accept`.
         let give_up = |cur: Eval, y: DVector<f64>, solves: u32, why: &'static str| {
             if cur.f.amax() <= accept {
@@ -333,7 +396,6 @@ impl Block {
             if cur.f.amax() <= target {
                 return Ok((cur.x, y, solves));
             }
-            let h = &l * l.transpose();
             solves += 1;
             // Levenberg–Marquardt-like damping, proportional to the residual
             // (bounded steps where A D Aᵀ is singular: a row all of whose
@@ -341,7 +403,7 @@ impl Block {
             // vanishing as it converges), with a factor ν lowered after full
             // steps and raised after short ones.
             let eps = eps0 + nu * scale * (cur.f.amax() / bscale).min(1.0);
-            let Some(d) = regularised_solve(h, &cur.f, eps) else {
+            let Some(d) = regularised_solve(h.clone(), &cur.f, eps) else {
                 return give_up(cur, y, solves, "Newton system not solvable");
             };
             let slope = cur.f.dot(&d);
@@ -361,7 +423,16 @@ impl Block {
                     next = Some((yt, e));
                     break;
                 }
-                t *= 0.5;
+                // Next trial: the zero of the secant of φ'(s) = Fᵀd along
+                // the step (φ' is piecewise linear and decreasing, φ'(0) =
+                // slope), kept within [0.1 t, 0.5 t].
+                let dphi = e.f.dot(&d);
+                let secant = if slope - dphi > 0.0 {
+                    t * slope / (slope - dphi)
+                } else {
+                    0.5 * t
+                };
+                t = secant.clamp(0.1 * t, 0.5 * t);
             }
             let Some((yt, _)) = next else {
                 return give_up(cur, y, solves, "line search stalled");
@@ -372,7 +443,7 @@ impl Block {
                 nu = (nu * 10.0).min(1.0);
             }
             y = yt;
-            cur = self.eval(&y, Some(&mut l));
+            cur = self.eval(&y, Some((&mut h, Hessian::AtPoint)));
         }
         give_up(cur, y, solves, "step limit")
     }
@@ -552,8 +623,27 @@ pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, 
             .iter()
             .flat_map(|g| g.vars[..g.len()].iter().copied())
             .collect();
+        let mut local = vec![usize::MAX; m];
+        for (k, &r) in rows.iter().enumerate() {
+            local[r] = k;
+        }
+        let mut col_ptr = Vec::with_capacity(cols.len() + 1);
+        let (mut row_idx, mut val) = (Vec::new(), Vec::new());
+        col_ptr.push(0);
+        for &j in &cols {
+            for &r in &rows {
+                let v = p.a[(r, j)];
+                if v != 0.0 {
+                    row_idx.push(local[r]);
+                    val.push(v);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
         let block = Block {
-            m: DMatrix::from_fn(rows.len(), cols.len(), |i, k| p.a[(rows[i], cols[k])]),
+            col_ptr,
+            row_idx,
+            val,
             b: DVector::from_iterator(rows.len(), rows.iter().map(|&r| b[r])),
             rows,
             groups,
