@@ -2,7 +2,11 @@
 //! controls x minimising Σ x_i^p subject to the equations of motion,
 //! built analytically — one inverse-dynamics pass for the generalized forces
 //! the actuators must supply, and the actuators' unit generalized forces
-//! (muscle moment arms × strength) — and solved with Clarabel.
+//! (muscle moment arms × strength) — and solved by `optimize::solve` (the
+//! dual Newton solver, Clarabel as fallback or with `<solver>clarabel`).
+//! Every frame is solved from a cold start (no warm start from the previous
+//! frame), so results do not depend on how frames are spread over threads
+//! or on where a resumed run starts.
 //!
 //! The equations are written in force space and reduced to the independent,
 //! unconstrained coordinates with the coupling vectors C_k:
