@@ -185,10 +185,10 @@ fn compare_case(name: &str, setup_file: &Path, stats: &mut Stats) {
                 ));
             }
             // Clarabel at 1e-10, then the tightest tolerance it solves at.
-            let mut diff = |r: &FrameSolution,
-                            tol: f64,
-                            worst: &mut (f64, f64),
-                            failures: &mut Vec<String>| {
+            let diff = |r: &FrameSolution,
+                        tol: f64,
+                        worst: &mut (f64, f64),
+                        failures: &mut Vec<String>| {
                 // Force scale of the frame: the largest actuator force or
                 // contact multiplier of the reference.
                 let force = |x: &[f64], k: usize| if k < nv { x[k] * scale[k] } else { x[k] };
@@ -207,7 +207,7 @@ fn compare_case(name: &str, setup_file: &Path, stats: &mut Stats) {
                     } else {
                         worst.1 = worst.1.max(d);
                     }
-                    if !(d <= tol) {
+                    if d.is_nan() || d > tol {
                         let label = problem
                             .labels
                             .get(k)

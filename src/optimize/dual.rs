@@ -226,6 +226,9 @@ struct Block {
     b: DVector<f64>,
 }
 
+/// A block's (x, y, linear solves), or (linear solves, why it failed).
+type BlockResult = Result<(DVector<f64>, DVector<f64>, u32), (u32, &'static str)>;
+
 /// State of a block at a multiplier vector.
 struct Eval {
     x: DVector<f64>,
@@ -355,12 +358,7 @@ impl Block {
     }
 
     /// Newton from `y`; returns (x, y, linear solves) or the failure.
-    fn solve(
-        &self,
-        y0: Option<DVector<f64>>,
-        target: f64,
-        accept: f64,
-    ) -> Result<(DVector<f64>, DVector<f64>, u32), (u32, &'static str)> {
+    fn solve(&self, y0: Option<DVector<f64>>, target: f64, accept: f64) -> BlockResult {
         let nr = self.rows.len();
         let mut h = DMatrix::zeros(nr, nr);
         let mut h_free = DMatrix::zeros(nr, nr);
@@ -511,7 +509,7 @@ pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, 
         in_contact[c.normal] = true;
         let w = p.weights[c.normal];
         let vars = [c.normal, c.shear[0], c.shear[1]];
-        if !(w > 0.0) || vars.iter().any(|&v| p.weights[v] != w) {
+        if w <= 0.0 || vars.iter().any(|&v| p.weights[v] != w) {
             return Err(NotHandled("contact variables of unequal or zero weight"));
         }
         if c.shear
@@ -669,7 +667,8 @@ pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, 
         }
     }
     // Safety net: the whole system, with the original matrix.
-    if !(p.eq_residual(&x) <= tol) {
+    let residual = p.eq_residual(&x);
+    if residual.is_nan() || residual > tol {
         return Err(DualFailure::NotConverged {
             iterations,
             reason: "residual of the assembled solution",
