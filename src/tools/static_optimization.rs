@@ -1755,6 +1755,7 @@ impl LogNames {
             mcap_log::SOLVER,
             mcap_log::solver_message(
                 &status,
+                r.solution.solver.name(),
                 r.solution.iterations,
                 r.solution.objective,
                 r.solution.eq_residual,
