@@ -1,7 +1,8 @@
 //! The dual Newton solver against Clarabel on every frame of the shipped
 //! static-optimization cases: the validation cases (arm26, leg6dof9musc,
 //! gait10dof18musc), gait2392 (23 equations, 98 variables) and the leg
-//! extension study (contacts, w0 = 1, 500, 1000). On every frame:
+//! extension study (contacts, w0 = 1, 500, 1000; cam 1 also with the
+//! four- and eight-sided friction pyramids). On every frame:
 //!
 //! * `optimize::solve` answers with Newton (no fallback to Clarabel);
 //! * Newton's x satisfies the optimality conditions with its multipliers y,
@@ -25,7 +26,7 @@ use nalgebra::DVector;
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
 use statopt::optimize::{
-    self, dual, FrameProblem, FrameSolution, SolveStatus, SolverChoice, SolverKind,
+    self, dual, FrameProblem, FrameSolution, FrictionModel, SolveStatus, SolverChoice, SolverKind,
 };
 use statopt::parse::setup::Setup;
 use statopt::tools::analyze;
@@ -103,7 +104,7 @@ fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
     worst
 }
 
-fn compare_case(name: &str, setup_file: &Path, stats: &mut Stats) {
+fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, stats: &mut Stats) {
     let setup = match Setup::read(setup_file).unwrap() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
@@ -112,7 +113,10 @@ fn compare_case(name: &str, setup_file: &Path, stats: &mut Stats) {
         .analysis_element("StaticOptimization")
         .map(|(e, c)| (e.clone(), c.clone()))
         .unwrap();
-    let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    let mut so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    if let Some(f) = friction {
+        so.friction = f;
+    }
     let (mut problem, _) = SoProblem::build(&setup, &so).unwrap();
     let states = analyze::load_states(&setup, &problem.model).unwrap();
     let udot = states
@@ -267,10 +271,14 @@ fn report(name: &str, s: &Stats) {
 }
 
 fn check(cases: &[(&str, PathBuf)]) {
+    check_with(cases, None)
+}
+
+fn check_with(cases: &[(&str, PathBuf)], friction: Option<FrictionModel>) {
     let mut failures = Vec::new();
     for (name, file) in cases {
         let mut s = Stats::default();
-        compare_case(name, file, &mut s);
+        compare_case(name, file, friction, &mut s);
         report(name, &s);
         failures.extend(s.failures);
     }
@@ -317,4 +325,15 @@ fn newton_matches_clarabel_on_the_leg_extension_study() {
         .map(|v| (*v, root.join(format!("leg_extension_{v}.xml"))))
         .collect();
     check(&cases);
+}
+
+/// The leg extension (cam 1) with the circumscribed pyramids instead of the
+/// cone: the Newton solver projects onto them as well.
+#[test]
+fn newton_matches_clarabel_with_friction_pyramids() {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("setups/leg_extension_cam1.xml");
+    for model in [FrictionModel::Pyramid4, FrictionModel::Pyramid8] {
+        println!("{model:?}:");
+        check_with(&[("cam1", file.clone())], Some(model));
+    }
 }

@@ -8,7 +8,8 @@
 //!
 //! where C is a product of intervals [lower_i, upper_i] (independent
 //! variables) and, per static contact with μ > 0, the friction cone
-//! K_μ = {(λn, λs1, λs2): ‖(λs1, λs2)‖ ≤ μ λn} (FrictionModel::Cone).
+//! K_μ = {(λn, λs1, λs2): ‖(λs1, λs2)‖ ≤ μ λn} (FrictionModel::Cone) or one
+//! of the circumscribed pyramids.
 //! Its Lagrangian dual function, one multiplier y_r per equation, is
 //!
 //! ```text
@@ -18,13 +19,16 @@
 //! Because every block of C (a variable, or the three variables of a contact,
 //! which share one weight) has a single weight w, the inner minimiser is a
 //! Euclidean projection, x(y) = Proj_C(Aᵀy / 2w) block by block: a clip to
-//! [lower, upper], or the closed-form projection onto K_μ ([`project_cone`]).
+//! [lower, upper], or the closed-form projection onto K_μ ([`project_cone`]),
+//! or onto a circumscribed pyramid (`FrictionModel::Pyramid4`/`Pyramid8`:
+//! inside, a face, an edge or the apex, [`project_pyramid`]).
 //! g is concave and piecewise quadratic with gradient ∇g(y) = b − A x(y), so
 //! the dual optimum is a root of the piecewise-linear map F(y) = b − A x(y).
 //! Semismooth Newton solves it: the generalized Jacobian of F is
 //! −A D Aᵀ with D block-diagonal, D = J / 2w, J the (Clarke) derivative of
 //! the projection (1 or 0 for a clip; I, 0 or a rank-2 matrix for the cone,
-//! [`cone_jacobian_factors`]); each step solves (A D Aᵀ + εI) d = F(y) by
+//! [`cone_jacobian_factors`]; I, the projector onto a face's plane, onto an
+//! edge, or 0 for a pyramid); each step solves (A D Aᵀ + εI) d = F(y) by
 //! Cholesky, ε = s·(1e-12 + ν·min(1, ‖F‖∞/max(1, ‖b‖∞))) with s the
 //! largest diagonal entry of A W⁻¹ Aᵀ/2 (Levenberg–Marquardt-like: A D Aᵀ
 //! is singular when all variables of an equation sit at bounds or a contact
@@ -59,8 +63,8 @@
 //! projection of 0.
 //!
 //! Not handled (the caller falls back to Clarabel, [`super::solve()`]):
-//! exponents other than 2, free variables of weight 0, pyramid friction
-//! models with μ > 0, contacts whose three variables do not share one
+//! exponents other than 2, free variables of weight 0, contacts whose three
+//! variables do not share one
 //! positive weight or carry bounds other than λn ≥ 0 (or none). When Newton
 //! has not converged within [`MAX_NEWTON_STEPS`] steps per block, the line
 //! search stalls, or an equation without free variables has a nonzero
@@ -131,8 +135,9 @@ impl DualFailure {
 enum Set {
     /// One variable in [lo, hi].
     Interval { lo: f64, hi: f64 },
-    /// (λn, λs1, λs2) in the friction cone of coefficient mu > 0.
-    Cone { mu: f64 },
+    /// (λn, λs1, λs2) in the friction cone or pyramid (`model`) of
+    /// coefficient mu > 0.
+    Cone { mu: f64, model: FrictionModel },
 }
 
 /// A block of variables: its set, weight and global variable indices
@@ -177,6 +182,138 @@ pub fn project_cone(v: [f64; 3], mu: f64) -> ([f64; 3], u8) {
     let alpha = (n + mu * r) / (1.0 + mu * mu);
     let k = mu * alpha / r;
     ([alpha, k * s1, k * s2], 1)
+}
+
+const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// Projection onto the friction set of `model` and its derivative as
+/// factors (J = Σ c cᵀ over the three returned vectors).
+fn project_friction(v: [f64; 3], mu: f64, model: FrictionModel) -> ([f64; 3], [[f64; 3]; 3]) {
+    match model {
+        FrictionModel::Cone => {
+            let (p, piece) = project_cone(v, mu);
+            (p, cone_jacobian_factors(v, mu, piece))
+        }
+        _ => {
+            let (p, piece) = project_pyramid(v, mu, model);
+            (p, pyramid_jacobian_factors(piece))
+        }
+    }
+}
+
+/// Corners of the base polygon of a circumscribed pyramid for μ = 1 (in the
+/// shear plane; the polygon for μ is μ times it): where adjacent faces
+/// c·s ≤ 1 of [`FrictionModel::facets`] meet.
+fn unit_corners(model: FrictionModel) -> &'static [(f64, f64)] {
+    const T: f64 = std::f64::consts::SQRT_2 - 1.0; // tan(π/8)
+    const P4: [(f64, f64); 4] = [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)];
+    const P8: [(f64, f64); 8] = [
+        (1.0, T),
+        (1.0, -T),
+        (-1.0, T),
+        (-1.0, -T),
+        (T, 1.0),
+        (-T, 1.0),
+        (T, -1.0),
+        (-T, -1.0),
+    ];
+    match model {
+        FrictionModel::Pyramid4 => &P4,
+        FrictionModel::Pyramid8 => &P8,
+        FrictionModel::Cone => &[],
+    }
+}
+
+/// Where [`project_pyramid`] landed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PyramidPiece {
+    /// Inside: the point itself.
+    Interior,
+    /// On a face; its unit normal in (n, s1, s2).
+    Face([f64; 3]),
+    /// On an edge; its unit direction.
+    Edge([f64; 3]),
+    /// At the apex.
+    Origin,
+}
+
+/// Euclidean projection of (n, s1, s2) onto the circumscribed pyramid
+/// {c·s ≤ mu n for every face normal c} of `model` (mu > 0). The projection
+/// lies inside, in the relative interior of a face (the projection onto
+/// that face's plane, when it satisfies the other faces), on an edge (the
+/// projection onto its ray) or at the apex: the closest of these
+/// candidates.
+pub fn project_pyramid(v: [f64; 3], mu: f64, model: FrictionModel) -> ([f64; 3], PyramidPiece) {
+    let faces = model.facets();
+    let viol = |x: &[f64; 3], c: &(f64, f64)| c.0 * x[1] + c.1 * x[2] - mu * x[0];
+    if faces.iter().all(|c| viol(&v, c) <= 0.0) {
+        return (v, PyramidPiece::Interior);
+    }
+    let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let tol = 1e-12 * vv.sqrt() * (1.0 + mu);
+    let mut best = ([0.0; 3], PyramidPiece::Origin, vv);
+    for c in faces {
+        let e = viol(&v, c);
+        if e <= 0.0 {
+            continue;
+        }
+        // g = (−μ, c1, c2), |g|² = μ² + 1.
+        let g2 = mu * mu + 1.0;
+        let k = e / g2;
+        let p = [v[0] + k * mu, v[1] - k * c.0, v[2] - k * c.1];
+        let d2 = e * e / g2;
+        if d2 < best.2 && faces.iter().all(|c2| viol(&p, c2) <= tol) {
+            let gn = g2.sqrt();
+            best = (p, PyramidPiece::Face([-mu / gn, c.0 / gn, c.1 / gn]), d2);
+        }
+    }
+    for &(a, b) in unit_corners(model) {
+        let r = [1.0, mu * a, mu * b];
+        let rn = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        let r = [r[0] / rn, r[1] / rn, r[2] / rn];
+        let t = v[0] * r[0] + v[1] * r[1] + v[2] * r[2];
+        if t > 0.0 && vv - t * t < best.2 {
+            best = (
+                [t * r[0], t * r[1], t * r[2]],
+                PyramidPiece::Edge(r),
+                vv - t * t,
+            );
+        }
+    }
+    (best.0, best.1)
+}
+
+/// The derivative of [`project_pyramid`] on its piece as factors: I
+/// (inside), an orthonormal basis of the face's plane, the edge's direction,
+/// nothing at the apex.
+fn pyramid_jacobian_factors(piece: PyramidPiece) -> [[f64; 3]; 3] {
+    match piece {
+        PyramidPiece::Interior => IDENTITY,
+        PyramidPiece::Origin => [[0.0; 3]; 3],
+        PyramidPiece::Edge(r) => [r, [0.0; 3], [0.0; 3]],
+        PyramidPiece::Face(g) => {
+            // e1 ⟂ g from the axis least aligned with g, e2 = g × e1.
+            let k = (0..3)
+                .min_by(|&i, &j| g[i].abs().total_cmp(&g[j].abs()))
+                .unwrap_or(0);
+            let mut e1 = [0.0; 3];
+            e1[k] = 1.0;
+            let d = g[k];
+            for i in 0..3 {
+                e1[i] -= d * g[i];
+            }
+            let n1 = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
+            for e in e1.iter_mut() {
+                *e /= n1;
+            }
+            let e2 = [
+                g[1] * e1[2] - g[2] * e1[1],
+                g[2] * e1[0] - g[0] * e1[2],
+                g[0] * e1[1] - g[1] * e1[0],
+            ];
+            [e1, e2, [0.0; 3]]
+        }
+    }
 }
 
 /// The derivative J of [`project_cone`] at v as at most three columns c_k
@@ -320,20 +457,24 @@ impl Block {
                         }
                     }
                 }
-                Set::Cone { mu } => {
+                Set::Cone { mu, model } => {
                     let v = [
                         self.dot(c, y) * inv2w,
                         self.dot(c + 1, y) * inv2w,
                         self.dot(c + 2, y) * inv2w,
                     ];
-                    let (p, piece) = project_cone(v, mu);
+                    let (p, factors) = project_friction(v, mu, model);
                     for k in 0..3 {
                         x[c + k] = p[k];
                         obj += gr.w * p[k] * p[k];
                     }
                     if let Some((h, kind)) = hess.as_mut() {
-                        let piece = if *kind == Hessian::Free { 0 } else { piece };
-                        for fac in cone_jacobian_factors(v, mu, piece) {
+                        let factors = if *kind == Hessian::Free {
+                            IDENTITY
+                        } else {
+                            factors
+                        };
+                        for fac in factors {
                             if fac.iter().any(|e| *e != 0.0) {
                                 self.add_outer(h, c, &fac, inv2w, &mut u);
                             }
@@ -503,9 +644,6 @@ pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, 
             }
             continue;
         }
-        if p.friction != FrictionModel::Cone {
-            return Err(NotHandled("pyramid friction model"));
-        }
         in_contact[c.normal] = true;
         let w = p.weights[c.normal];
         let vars = [c.normal, c.shear[0], c.shear[1]];
@@ -521,7 +659,10 @@ pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, 
             return Err(NotHandled("contact with bounds other than the cone's"));
         }
         groups.push(Group {
-            set: Set::Cone { mu: c.mu },
+            set: Set::Cone {
+                mu: c.mu,
+                model: p.friction,
+            },
             w,
             vars,
         });

@@ -11,6 +11,11 @@ use crate::optimize::{
 };
 
 const INF: f64 = f64::INFINITY;
+const MODELS: [FrictionModel; 3] = [
+    FrictionModel::Cone,
+    FrictionModel::Pyramid4,
+    FrictionModel::Pyramid8,
+];
 
 fn problem(a: DMatrix<f64>, b: Vec<f64>, w: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>) -> FrameProblem {
     FrameProblem {
@@ -96,6 +101,76 @@ fn cone_projection_is_the_euclidean_projection() {
         }
     }
     assert!(pieces.iter().all(|&c| c > 100), "pieces {pieces:?}");
+}
+
+#[test]
+fn pyramid_projection_is_the_euclidean_projection() {
+    // As for the cone: x in P, v − x in the polar cone (zᵀr ≤ 0 for every
+    // edge r), xᵀ(v − x) = 0; and the derivative against differences.
+    let mut s = 11u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    for model in [FrictionModel::Pyramid4, FrictionModel::Pyramid8] {
+        let mut pieces = [0; 4];
+        for _ in 0..4000 {
+            let mu = 0.05 + 2.0 * rnd().abs();
+            let v = [3.0 * rnd(), 3.0 * rnd(), 3.0 * rnd()];
+            let (x, piece) = project_pyramid(v, mu, model);
+            pieces[match piece {
+                PyramidPiece::Interior => 0,
+                PyramidPiece::Face(_) => 1,
+                PyramidPiece::Edge(_) => 2,
+                PyramidPiece::Origin => 3,
+            }] += 1;
+            let z = [v[0] - x[0], v[1] - x[1], v[2] - x[2]];
+            let c = StaticContact {
+                normal: 0,
+                shear: [1, 2],
+                mu,
+            };
+            assert!(model.violation(&c, &x) <= 1e-12, "{v:?} -> {x:?}");
+            for &(a, b) in unit_corners(model) {
+                assert!(z[0] + mu * (a * z[1] + b * z[2]) <= 1e-12, "{v:?}: {z:?}");
+            }
+            assert!((x[0] * z[0] + x[1] * z[1] + x[2] * z[2]).abs() <= 1e-12);
+            let cols = pyramid_jacobian_factors(piece);
+            let h = 1e-6;
+            for k in 0..3 {
+                let (mut vp, mut vm) = (v, v);
+                vp[k] += h;
+                vm[k] -= h;
+                let (xp, pp) = project_pyramid(vp, mu, model);
+                let (xm, pm) = project_pyramid(vm, mu, model);
+                let same = |q: PyramidPiece| {
+                    std::mem::discriminant(&q) == std::mem::discriminant(&piece)
+                        && match (q, piece) {
+                            (PyramidPiece::Face(a), PyramidPiece::Face(b))
+                            | (PyramidPiece::Edge(a), PyramidPiece::Edge(b)) => a == b,
+                            _ => true,
+                        }
+                };
+                if !same(pp) || !same(pm) {
+                    continue;
+                }
+                for i in 0..3 {
+                    let fd = (xp[i] - xm[i]) / (2.0 * h);
+                    let j: f64 = cols.iter().map(|c| c[i] * c[k]).sum();
+                    assert!(
+                        (fd - j).abs() <= 1e-6,
+                        "{model:?} J[{i}][{k}] = {j}, differences {fd}"
+                    );
+                }
+            }
+        }
+        assert!(
+            pieces.iter().all(|&c| c > 100),
+            "{model:?}: pieces {pieces:?}"
+        );
+    }
 }
 
 /// A random feasible problem: `m` equations, `nb` bounded variables (some
@@ -186,9 +261,9 @@ fn random_problem(
 /// Largest violation of the optimality conditions of `x` with multipliers
 /// `y`, computed from the problem data alone: for an interval variable,
 /// g = 2 w x − (Aᵀy) must vanish inside the bounds, be ≥ 0 at a lower and
-/// ≤ 0 at an upper bound; for a cone contact z = (Aᵀy) − 2 w x must lie in
-/// the polar cone {z_n + μ‖z_s‖ ≤ 0} and be orthogonal to x (normal cone of
-/// K_μ at x). Relative to the size of the terms. With A x = b, x in the set
+/// ≤ 0 at an upper bound; for a contact z = (Aᵀy) − 2 w x must lie in the
+/// polar cone ({z_n + μ‖z_s‖ ≤ 0} for the cone, zᵀr ≤ 0 for every edge r
+/// of a pyramid) and be orthogonal to x (normal cone of the set at x). Relative to the size of the terms. With A x = b, x in the set
 /// (checked separately), these conditions certify x as the optimum.
 fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
     let aty = p.a.tr_mul(&DVector::from_column_slice(y));
@@ -202,7 +277,16 @@ fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
             .iter()
             .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
             .fold(1e-300, f64::max);
-        worst = worst.max((z[0] + c.mu * z[1].hypot(z[2])).max(0.0) / scale);
+        // Polar of the cone: z_n + μ‖z_s‖ ≤ 0; of a pyramid: zᵀr ≤ 0 for
+        // every edge direction r = (1, μ·corner).
+        let polar = match p.friction {
+            FrictionModel::Cone => z[0] + c.mu * z[1].hypot(z[2]),
+            model => unit_corners(model)
+                .iter()
+                .map(|&(a, b)| (z[0] + c.mu * (a * z[1] + b * z[2])) / (1.0 + c.mu))
+                .fold(f64::NEG_INFINITY, f64::max),
+        };
+        worst = worst.max(polar.max(0.0) / scale);
         let xs = v.iter().map(|&j| x[j].abs()).fold(1e-300, f64::max);
         let dot: f64 = v.iter().zip(&z).map(|(&j, zj)| x[j] * zj).sum();
         worst = worst.max(dot.abs() / (scale * xs));
@@ -261,7 +345,7 @@ fn compare(p: &FrameProblem) -> f64 {
         );
     }
     for ct in &p.static_contacts {
-        assert!(FrictionModel::Cone.violation(ct, &d.x) <= 1e-12);
+        assert!(p.friction.violation(ct, &d.x) <= 1e-12);
     }
     let kkt = kkt_violation(p, &d.x, &d.y);
     assert!(kkt <= 1e-12, "optimality conditions violated by {kkt:.3e}");
@@ -279,7 +363,7 @@ fn compare(p: &FrameProblem) -> f64 {
     let mut xc = c.x.clone();
     for ct in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
         let v = [xc[ct.normal], xc[ct.shear[0]], xc[ct.shear[1]]];
-        let (q, _) = project_cone(v, ct.mu);
+        let (q, _) = project_friction(v, ct.mu, p.friction);
         (xc[ct.normal], xc[ct.shear[0]], xc[ct.shear[1]]) = (q[0], q[1], q[2]);
     }
     let lag = |x: &[f64]| {
@@ -317,9 +401,11 @@ proptest! {
         nb in 0usize..25,
         nc in 0usize..5,
         zero in 0.0f64..0.8,
+        model in 0usize..3,
     ) {
         prop_assume!(nb + 3 * nc >= m);
-        let (p, _) = random_problem(seed, m, nb, nc, zero);
+        let (mut p, _) = random_problem(seed, m, nb, nc, zero);
+        p.friction = MODELS[model];
         compare(&p);
     }
 }
@@ -329,7 +415,8 @@ fn forty_by_hundred_random_problems_match_clarabel() {
     let mut worst = 0.0f64;
     let mut it = 0;
     for seed in 0..40 {
-        let (p, _) = random_problem(seed, 40, 70, 10, 0.0);
+        let (mut p, _) = random_problem(seed, 40, 70, 10, 0.0);
+        p.friction = MODELS[seed as usize % 3];
         worst = worst.max(compare(&p));
         it += solve_dual(&p, None).unwrap().iterations;
     }
@@ -567,18 +654,18 @@ fn problems_outside_the_method_go_to_clarabel() {
         ..base
     };
     assert_eq!(solve(&base).solver, SolverKind::Newton);
+    for friction in MODELS {
+        let p = FrameProblem {
+            friction,
+            ..base.clone()
+        };
+        assert_eq!(solve(&p).solver, SolverKind::Newton, "{friction:?}");
+    }
     let cases: Vec<(&str, FrameProblem)> = vec![
         (
             "exponent 3",
             FrameProblem {
                 exponent: 3.0,
-                ..base.clone()
-            },
-        ),
-        (
-            "pyramid",
-            FrameProblem {
-                friction: FrictionModel::Pyramid4,
                 ..base.clone()
             },
         ),
@@ -642,7 +729,8 @@ fn newton_converges_on_every_random_feasible_problem() {
             continue;
         }
         let zero = (seed % 8) as f64 / 10.0;
-        let (p, _) = random_problem(seed, m, nb, nc, zero);
+        let (mut p, _) = random_problem(seed, m, nb, nc, zero);
+        p.friction = MODELS[(seed / 3 % 3) as usize];
         match solve_dual(&p, None) {
             Ok(d) => {
                 maxit = maxit.max(d.iterations);
