@@ -185,8 +185,16 @@ fn grid_errors_on_a_contact_case() {
             ],
         ),
         Choice::so_options("pyramid4", 1, &[("friction_cone", "pyramid4")]),
-        Choice::so_options("tol 1e-2", 1, &[("solver_tolerance", "1e-2")]),
-        Choice::so_options("tol 1e-9", 1, &[("solver_tolerance", "1e-9")]),
+        Choice::so_options(
+            "tol 1e-2",
+            1,
+            &[("solver", "clarabel"), ("solver_tolerance", "1e-2")],
+        ),
+        Choice::so_options(
+            "tol 1e-9",
+            1,
+            &[("solver", "clarabel"), ("solver_tolerance", "1e-9")],
+        ),
         Choice::new("threads 2", 2, |_| Ok(())),
     ];
     let opts = GridOptions {
@@ -248,8 +256,8 @@ fn grid_command_writes_table_and_chart() {
         "cubic spline",
         "filter 6 Hz",
         "threads 2",
-        "tol 1e-3",
-        "tol 1e-10",
+        "clarabel tol 1e-3",
+        "clarabel tol 1e-10",
     ] {
         row(&rows, name);
     }

@@ -767,11 +767,28 @@ fn defaults_block_and_statopt_setup_options_draw_no_warning() {
     f.replace(
         "setup.xml",
         "<activation_exponent>2</activation_exponent>",
-        "<activation_exponent>2</activation_exponent><constraint_matrix>analytic</constraint_matrix><solver_tolerance>1e-8</solver_tolerance>",
+        "<activation_exponent>2</activation_exponent><constraint_matrix>analytic</constraint_matrix><solver_tolerance>1e-8</solver_tolerance><solver>clarabel</solver>",
     );
     let (code, err) = run("defaults_block", &f, "setup.xml");
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("unknown property"), "{err}");
+}
+
+/// An unknown `<solver>` is an input error naming the file, the element and
+/// the value.
+#[test]
+fn unknown_solver_is_refused() {
+    let mut f = Files::analyze();
+    f.replace(
+        "setup.xml",
+        "<activation_exponent>2</activation_exponent>",
+        "<activation_exponent>2</activation_exponent><solver>ipopt</solver>",
+    );
+    expect_input_error(
+        "unknown_solver",
+        run("unknown_solver", &f, "setup.xml"),
+        &["setup.xml", "solver", "'ipopt'", "clarabel"],
+    );
 }
 
 /// A Body without `<mass>` is refused, as OpenSim 4.6 refuses it

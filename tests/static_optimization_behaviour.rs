@@ -105,6 +105,12 @@ fn weak_muscles_fail_frames_are_reported_and_reserves_carry_the_deficit() {
     let si = diag.column_index("status").unwrap();
     let failed = diag.rows.iter().filter(|r| r[si] < 0.0).count();
     assert!(failed > 0, "expected failed frames at 2% strength");
+    // Infeasible frames are handed to Clarabel (solver 1), which certifies
+    // them; the others are Newton's (solver 0).
+    let vi = diag.column_index("solver").unwrap();
+    for r in &diag.rows {
+        assert_eq!(r[vi], if r[si] < 0.0 { 1.0 } else { 0.0 }, "{r:?}");
+    }
     assert_eq!(diag.time.len(), 121, "every frame has a row, failed or not");
     let act = storage::read(&out.join("arm26_StaticOptimization_activation.sto")).unwrap();
     assert_eq!(act.time.len(), 121);
@@ -155,4 +161,44 @@ fn weak_muscles_fail_frames_are_reported_and_reserves_carry_the_deficit() {
         "reported {reported} vs table {all_reserves}"
     );
     assert_eq!((s.solves, s.failed), (121, 0));
+}
+
+/// `<solver>`: by default (auto) the dual Newton solver answers every arm26
+/// frame (diagnostics column `solver` 0); with `<solver>clarabel</solver>`
+/// Clarabel answers every frame (1), and the activations agree to
+/// Clarabel's accuracy at its default tolerance.
+#[test]
+fn solver_choice_is_honoured_and_reported() {
+    let Some(root) = common::validation_dir("solver_choice_is_honoured_and_reported") else {
+        return;
+    };
+    let mut tables = Vec::new();
+    for (choice, code) in [
+        ("", 0.0),
+        ("<solver>newton</solver>", 0.0),
+        ("<solver>Clarabel</solver>", 1.0),
+    ] {
+        let out = common::out_dir(&format!("so_solver_{code}_{}", choice.len()));
+        let setup = arm26_setup(&root, &out, 1.0, choice);
+        run(&setup, &out, None);
+        let diag = storage::read(&out.join("arm26_StaticOptimization_diagnostics.sto")).unwrap();
+        let vi = diag.column_index("solver").unwrap();
+        assert!(
+            diag.rows.iter().all(|r| r[vi] == code),
+            "{choice}: solver column"
+        );
+        tables.push(storage::read(&out.join("arm26_StaticOptimization_activation.sto")).unwrap());
+    }
+    let worst = tables[0]
+        .rows
+        .iter()
+        .zip(&tables[2].rows)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max);
+    assert!(
+        tables[0].rows == tables[1].rows,
+        "auto and newton are the same"
+    );
+    assert!(worst < 1e-5, "Newton vs Clarabel: {worst:e}");
+    println!("arm26 activations, Newton vs Clarabel (default tolerance): {worst:.2e}");
 }

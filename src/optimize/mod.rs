@@ -12,19 +12,27 @@
 //!            friction constraints of every contact in the static regime
 //! ```
 //!
-//! with the conic interior-point solver Clarabel ([`solve()`]). For p = 2 the
-//! program is a QP; for other p ≥ 1 each weighted variable gets an epigraph
+//! [`solve()`] dispatches: for p = 2 (the default) a dedicated dual
+//! semismooth Newton method ([`dual`]) answers when it applies and converges;
+//! otherwise, and with `SolverChoice::Clarabel`, the conic interior-point
+//! solver Clarabel ([`solve_clarabel()`]) does. For p = 2 the program is a
+//! QP; for other p ≥ 1 Clarabel gives each weighted variable an epigraph
 //! variable t_i ≥ |x_i|^p expressed with a 3-D power cone.
 //!
 //! Files: [`problem`] (data types and validation), [`friction`] (contact
-//! constraint geometry), [`solve`](mod@solve) (Clarabel formulation).
+//! constraint geometry), [`dual`] (dual Newton), [`solve`](mod@solve)
+//! (dispatch and Clarabel formulation).
+pub mod dual;
 pub mod friction;
 pub mod problem;
 pub mod solve;
 
 pub use friction::FrictionModel;
-pub use problem::{FrameProblem, FrameSolution, SolveSettings, SolveStatus, StaticContact};
-pub use solve::solve;
+pub use problem::{
+    FrameProblem, FrameSolution, SolveSettings, SolveStatus, SolverChoice, SolverKind,
+    StaticContact,
+};
+pub use solve::{solve, solve_clarabel};
 
 #[cfg(test)]
 mod tests;

@@ -19,6 +19,49 @@ pub struct SolveSettings {
     /// Maximum number of interior-point iterations (OpenSim's
     /// `optimizer_max_iterations`, default 100).
     pub max_iter: u32,
+    /// Which solver [`super::solve()`] uses.
+    pub solver: SolverChoice,
+}
+
+/// Solver selection of [`SolveSettings`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolverChoice {
+    /// The dual semismooth Newton method ([`super::dual`]) where it applies
+    /// and converges (to ‖A x − b‖∞ ≤ 1e-12·max(1, ‖b‖∞), accepting 1e-10,
+    /// whatever `tolerance` says), Clarabel otherwise (other exponents,
+    /// free variables of weight 0, contacts with bounds beyond λn ≥ 0 or
+    /// unequal weights, possibly infeasible frames).
+    #[default]
+    Auto,
+    /// Clarabel on every frame.
+    Clarabel,
+}
+
+/// The solver that produced a [`FrameSolution`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolverKind {
+    /// Dual semismooth Newton ([`super::dual`]).
+    Newton,
+    /// Clarabel interior point ([`super::solve_clarabel`]).
+    Clarabel,
+}
+
+impl SolverKind {
+    /// "newton" or "clarabel".
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Newton => "newton",
+            SolverKind::Clarabel => "clarabel",
+        }
+    }
+
+    /// Numeric code for tables: 0 newton, 1 clarabel.
+    pub fn code(self) -> f64 {
+        match self {
+            SolverKind::Newton => 0.0,
+            SolverKind::Clarabel => 1.0,
+        }
+    }
 }
 
 impl Default for SolveSettings {
@@ -26,6 +69,7 @@ impl Default for SolveSettings {
         SolveSettings {
             tolerance: 1e-8,
             max_iter: 100,
+            solver: SolverChoice::Auto,
         }
     }
 }
@@ -54,7 +98,8 @@ pub struct FrameProblem {
     pub settings: SolveSettings,
 }
 
-/// Outcome of a solve, mapped from Clarabel's `SolverStatus`.
+/// Outcome of a solve, mapped from Clarabel's `SolverStatus` (the Newton
+/// solver reports only `Solved`; it leaves every other case to Clarabel).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SolveStatus {
     /// Clarabel `Solved`: optimal to the requested tolerance.
@@ -95,15 +140,19 @@ pub struct FrameSolution {
     /// The variables; always finite and of length n_var.
     pub x: Vec<f64>,
     pub status: SolveStatus,
-    /// Clarabel iterations (including those of the elastic re-solve of an
-    /// infeasible frame).
+    /// Newton: linear solves summed over the independent blocks. Clarabel:
+    /// its iterations (including those of the elastic re-solve of an
+    /// infeasible frame), plus the Newton solves spent before falling back.
     pub iterations: u32,
     /// Σ weight_i |x_i|^p evaluated at `x`.
     pub objective: f64,
     /// max_j |(A x − b)_j| at `x` (0 when there are no equalities).
     pub eq_residual: f64,
-    /// Wall-clock time of the whole call (validation, assembly, solve).
+    /// Wall-clock time of the whole call (validation, assembly, solve;
+    /// a failed Newton attempt included).
     pub solve_time: Duration,
+    /// Which solver answered.
+    pub solver: SolverKind,
 }
 
 impl FrameProblem {

@@ -1,4 +1,5 @@
-//! Conic formulation of a [`FrameProblem`] for Clarabel.
+//! Dispatch between the solvers ([`solve`]) and the conic formulation of a
+//! [`FrameProblem`] for Clarabel ([`solve_clarabel`]).
 //!
 //! Clarabel solves  min ½ zᵀPz + qᵀz  s.t.  M z + s = h, s ∈ K  (its own
 //! names are P, q, A, b; here M and h to avoid a clash with the problem's
@@ -33,8 +34,9 @@ use std::time::Instant;
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 
+use super::dual;
 use super::friction::FrictionModel;
-use super::problem::{FrameProblem, FrameSolution, SolveStatus};
+use super::problem::{FrameProblem, FrameSolution, SolveStatus, SolverChoice, SolverKind};
 
 /// Weight of ‖A x − b‖² in the elastic problem solved when a frame is
 /// infeasible, relative to the objective normalised as described at `objective_scale`
@@ -48,6 +50,41 @@ const NONE: usize = usize::MAX;
 
 /// Solves one frame. Never panics.
 ///
+/// With `SolverChoice::Auto` (the default) a valid problem goes to the dual
+/// Newton method ([`dual::solve_dual`], cold start); its answer has status
+/// `Solved` and `solver` [`SolverKind::Newton`]. When that method does not
+/// handle the problem or does not converge, and with
+/// `SolverChoice::Clarabel`, [`solve_clarabel`] answers.
+pub fn solve(p: &FrameProblem) -> FrameSolution {
+    if p.settings.solver == SolverChoice::Clarabel || p.validate().is_err() {
+        return solve_clarabel(p);
+    }
+    let start = Instant::now();
+    let newton =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dual::solve_dual(p, None)));
+    let spent = match newton {
+        Ok(Ok(d)) => {
+            return FrameSolution {
+                objective: p.objective(&d.x),
+                eq_residual: p.eq_residual(&d.x),
+                x: d.x,
+                status: SolveStatus::Solved,
+                iterations: d.iterations,
+                solve_time: start.elapsed(),
+                solver: SolverKind::Newton,
+            }
+        }
+        Ok(Err(f)) => f.iterations(),
+        Err(_) => 0,
+    };
+    let mut sol = solve_clarabel(p);
+    sol.iterations += spent;
+    sol.solve_time = start.elapsed();
+    sol
+}
+
+/// Solves one frame with Clarabel. Never panics.
+///
 /// On `Solved`/`AlmostSolved` x is Clarabel's optimum. When Clarabel
 /// certifies the problem infeasible (status [`SolveStatus::Infeasible`]) its
 /// primal vector is an infeasibility certificate, not a candidate, so the
@@ -60,7 +97,7 @@ const NONE: usize = usize::MAX;
 /// serves the same purpose (a best-effort row) deterministically. On other
 /// failures x is Clarabel's last iterate. In every case x is finite and
 /// clamped into [lower, upper].
-pub fn solve(p: &FrameProblem) -> FrameSolution {
+pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
     let start = Instant::now();
     let n = p.n_var();
     if p.validate().is_err() {
@@ -84,6 +121,7 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
             objective: f64::NAN,
             eq_residual: f64::NAN,
             solve_time: start.elapsed(),
+            solver: SolverKind::Clarabel,
         };
     }
 
@@ -133,6 +171,7 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         status,
         iterations,
         solve_time: start.elapsed(),
+        solver: SolverKind::Clarabel,
     }
 }
 

@@ -44,6 +44,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "passive_fiber_forces",
             "constraint_matrix",
             "solver_tolerance",
+            "solver",
         ],
     ),
 ];

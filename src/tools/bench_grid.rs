@@ -7,7 +7,7 @@
 //! AnalyzeTool such as `<coordinate_spline>` or the low-pass cut-off) — and
 //! each run's time per frame (the whole per-frame loop, best of the repeats)
 //! is set against its error relative to a reference run of the same frames
-//! ([`reference_choice`]: exact friction cone, solver tolerance 1e-10,
+//! ([`reference_choice`]: exact friction cone, the dual Newton solver,
 //! analytic constraint matrix, OpenSim's quintic spline, the setup's
 //! filtering). [`run_grid`] takes any list of choices, so other options (a
 //! reduced model, …) are one more [`Choice`]; [`default_choices`] is the
@@ -167,20 +167,22 @@ pub fn set_so_option(setup: &mut AnalyzeSetup, name: &str, text: &str) -> Result
     Ok(())
 }
 
-/// The reference: exact friction cone, solver tolerance 1e-10, analytic
-/// matrix, OpenSim's quintic spline, the setup's filtering, one thread.
+/// The reference: exact friction cone, the dual Newton solver (solver
+/// tolerance 1e-10 for Clarabel where it falls back), analytic matrix,
+/// OpenSim's quintic spline, the setup's filtering, one thread.
 pub fn reference_choice() -> Choice {
     Choice::new("reference", 1, |s| {
         s.coordinate_spline = 5;
         set_so_option(s, "friction_cone", "cone")?;
+        set_so_option(s, "solver", "auto")?;
         set_so_option(s, "solver_tolerance", "1e-10")?;
         set_so_option(s, "constraint_matrix", "analytic")
     })
 }
 
 /// The default grid: the setup as it is (one thread), then one factor at a
-/// time — constraint matrix, friction model (with contacts), solver
-/// tolerance, spline, filter, threads — and a few combinations.
+/// time — constraint matrix, friction model (with contacts), Clarabel and
+/// its tolerance, spline, filter, threads — and a few combinations.
 pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> {
     let mut v = vec![Choice::new("default", 1, |_| Ok(()))];
     v.push(Choice::so_options(
@@ -193,11 +195,14 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
             v.push(Choice::so_options(f, 1, &[("friction_cone", f)]));
         }
     }
+    // Clarabel instead of the dual Newton solver, at several tolerances
+    // (the Newton solver always solves to 1e-12 relative).
+    v.push(Choice::so_options("clarabel", 1, &[("solver", "clarabel")]));
     for tol in ["1e-3", "1e-4", "1e-5", "1e-6", "1e-8", "1e-10"] {
         v.push(Choice::so_options(
-            format!("tol {tol}"),
+            format!("clarabel tol {tol}"),
             1,
-            &[("solver_tolerance", tol)],
+            &[("solver", "clarabel"), ("solver_tolerance", tol)],
         ));
     }
     v.push(Choice::new("cubic spline", 1, |s| {
@@ -226,27 +231,28 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
     }
     // Combinations.
     v.push(Choice::so_options(
-        "perturbation, tol 1e-4 (OpenSim-like)",
+        "perturbation, clarabel tol 1e-4 (OpenSim-like)",
         1,
         &[
             ("constraint_matrix", "perturbation"),
+            ("solver", "clarabel"),
             ("solver_tolerance", "1e-4"),
         ],
     ));
-    let mut fast = vec![("solver_tolerance", "1e-4")];
+    let mut fast = vec![("solver", "clarabel"), ("solver_tolerance", "1e-4")];
     if has_contacts {
         fast.push(("friction_cone", "pyramid4"));
     }
     let name = if has_contacts {
-        "fast: tol 1e-4, pyramid4, 2 threads"
+        "clarabel tol 1e-4, pyramid4, 2 threads"
     } else {
-        "fast: tol 1e-4, 2 threads"
+        "clarabel tol 1e-4, 2 threads"
     };
     v.push(Choice::so_options(name, 2, &fast));
     v.push(Choice::so_options(
-        "cubic, tol 1e-6, 2 threads",
+        "cubic, clarabel tol 1e-6, 2 threads",
         2,
-        &[("solver_tolerance", "1e-6")],
+        &[("solver", "clarabel"), ("solver_tolerance", "1e-6")],
     ));
     if let Some(c) = v.last_mut() {
         let so = c.edit.clone();

@@ -2,7 +2,11 @@
 //! controls x minimising Σ x_i^p subject to the equations of motion,
 //! built analytically — one inverse-dynamics pass for the generalized forces
 //! the actuators must supply, and the actuators' unit generalized forces
-//! (muscle moment arms × strength) — and solved with Clarabel.
+//! (muscle moment arms × strength) — and solved by `optimize::solve` (the
+//! dual Newton solver, Clarabel as fallback or with `<solver>clarabel`).
+//! Every frame is solved from a cold start (no warm start from the previous
+//! frame), so results do not depend on how frames are spread over threads
+//! or on where a resumed run starts.
 //!
 //! The equations are written in force space and reduced to the independent,
 //! unconstrained coordinates with the coupling vectors C_k:
@@ -24,7 +28,8 @@ use crate::model::Model;
 use crate::motion::states::assemble;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::optimize::{
-    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, StaticContact,
+    self, FrameProblem, FrameSolution, FrictionModel, SolveSettings, SolveStatus, SolverChoice,
+    StaticContact,
 };
 use crate::output::mcap_log;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
@@ -69,7 +74,12 @@ pub struct StaticOptimizationSetup {
     pub constraint_matrix: ConstraintMatrix,
     /// statopt: Clarabel's tolerance exactly (`<solver_tolerance>`), looser or
     /// tighter than [`DEFAULT_TOLERANCE`]; unset: the convergence-criterion rule.
+    /// (The dual Newton solver always solves to 1e-10 relative.)
     pub solver_tolerance: Option<f64>,
+    /// statopt: `<solver>auto|newton|clarabel</solver>`: the dual Newton
+    /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
+    /// on every frame.
+    pub solver: SolverChoice,
 }
 
 /// How a frame's equality constraints are built.
@@ -157,6 +167,14 @@ impl StaticOptimizationSetup {
                     Some(v)
                 }
                 _ => None,
+            },
+            solver: match el.child("solver") {
+                Some(f) if !f.text().trim().is_empty() => match f.text().trim().to_ascii_lowercase().as_str() {
+                    "auto" | "newton" => SolverChoice::Auto,
+                    "clarabel" => SolverChoice::Clarabel,
+                    other => return Err(f.error(format!("solver must be 'auto' (or 'newton': the dual Newton solver, Clarabel where it does not apply or converge) or 'clarabel', found '{other}'"))),
+                },
+                _ => SolverChoice::Auto,
             },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {
@@ -680,7 +698,7 @@ impl SoProblem {
                     .solver_tolerance
                     .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
                 max_iter: self.settings.max_iterations.max(100),
-                ..SolveSettings::default()
+                solver: self.settings.solver,
             },
         };
         let m_r = fd.map(|fd| fd.finish(model, data));
@@ -1741,7 +1759,7 @@ impl<'a> RunWriters<'a> {
 }
 
 /// Columns of the diagnostics table.
-const DIAGNOSTICS_COLUMNS: [&str; 7] = [
+const DIAGNOSTICS_COLUMNS: [&str; 8] = [
     "status",
     "iterations",
     "objective",
@@ -1749,9 +1767,10 @@ const DIAGNOSTICS_COLUMNS: [&str; 7] = [
     "relative_residual",
     "friction_violation",
     "solve_time_ms",
+    "solver",
 ];
 
-const DIAGNOSTICS_DESCRIPTION: &str = "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met).\n";
+const DIAGNOSTICS_DESCRIPTION: &str = "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met);\nsolver 0 = dual Newton, 1 = Clarabel (iterations: Newton linear solves, or Clarabel iterations plus a failed Newton attempt's solves).\n";
 
 fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
     vec![
@@ -1762,6 +1781,7 @@ fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
         r.relative_residual,
         r.friction_violation,
         r.solution.solve_time.as_secs_f64() * 1e3,
+        r.solution.solver.code(),
     ]
 }
 
@@ -1988,6 +2008,7 @@ impl LogNames {
             mcap_log::SOLVER,
             mcap_log::solver_message(
                 &status,
+                r.solution.solver.name(),
                 r.solution.iterations,
                 r.solution.objective,
                 r.solution.eq_residual,

@@ -114,6 +114,7 @@ fn frame_messages(layout: &StatoptChannels, k: usize) -> Vec<(usize, Value)> {
                 } else {
                     "Solved"
                 },
+                if k % 7 == 2 { "clarabel" } else { "newton" },
                 (k % 17) as u32,
                 x * x,
                 1e-13 * x,
@@ -539,7 +540,7 @@ fn mcaplog_errors_name_the_file() {
     assert!(McapLog::create(&path, &dup).is_err());
 
     let mut log = McapLog::create(&path, &specs).expect("create");
-    let msg = solver_message("Solved", 1, 0.0, 0.0, Duration::ZERO);
+    let msg = solver_message("Solved", "newton", 1, 0.0, 0.0, Duration::ZERO);
     log.log(0, 1.0, &msg).expect("first");
     let e = log.log(0, 0.5, &msg).err().expect("before t0");
     assert!(e.to_string().contains("errors.mcap"), "{e}");

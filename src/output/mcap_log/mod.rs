@@ -624,7 +624,7 @@ pub fn joint_reactions_channel(joints: &[&str]) -> Result<ChannelSpec> {
     })
 }
 
-/// `/solver`: `{"time", "status", "iterations", "objective", "residual", "solve_time_ms"}`.
+/// `/solver`: `{"time", "status", "solver", "iterations", "objective", "residual", "solve_time_ms"}`.
 pub fn solver_channel() -> ChannelSpec {
     let fields = [
         (
@@ -632,8 +632,12 @@ pub fn solver_channel() -> ChannelSpec {
             json!({"type": "string", "description": "solver status"}),
         ),
         (
+            "solver",
+            json!({"type": "string", "enum": ["newton", "clarabel"], "description": "the solver that answered: the dual Newton method or Clarabel"}),
+        ),
+        (
             "iterations",
-            json!({"type": "integer", "minimum": 0, "description": "interior-point iterations"}),
+            json!({"type": "integer", "minimum": 0, "description": "Newton linear solves, or Clarabel's interior-point iterations (plus the solves of a failed Newton attempt)"}),
         ),
         (
             "objective",
@@ -815,13 +819,15 @@ pub fn joint_reactions_message(joints: &[&str], samples: &[JointReactionSample])
 /// Message of [`solver_channel`].
 pub fn solver_message(
     status: &str,
+    solver: &str,
     iterations: u32,
     objective: f64,
     residual: f64,
     solve_time: Duration,
 ) -> Value {
-    let mut msg = Map::with_capacity(5);
+    let mut msg = Map::with_capacity(6);
     msg.insert("status".into(), Value::from(status));
+    msg.insert("solver".into(), Value::from(solver));
     msg.insert("iterations".into(), Value::from(iterations));
     put(&mut msg, "objective", objective);
     put(&mut msg, "residual", residual);

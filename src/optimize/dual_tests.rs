@@ -1,0 +1,751 @@
+//! Tests of the dual Newton solver: closed-form pieces (cone projection and
+//! its derivative), random feasible problems against Clarabel at 1e-10,
+//! and the cases it must hand over to Clarabel.
+#![allow(clippy::needless_range_loop)]
+use nalgebra::{DMatrix, DVector};
+use proptest::prelude::*;
+
+use super::*;
+use crate::optimize::{
+    solve, solve_clarabel, SolveSettings, SolveStatus, SolverChoice, SolverKind, StaticContact,
+};
+
+const INF: f64 = f64::INFINITY;
+const MODELS: [FrictionModel; 3] = [
+    FrictionModel::Cone,
+    FrictionModel::Pyramid4,
+    FrictionModel::Pyramid8,
+];
+
+fn problem(a: DMatrix<f64>, b: Vec<f64>, w: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>) -> FrameProblem {
+    FrameProblem {
+        b: DVector::from_vec(b),
+        a,
+        weights: w,
+        exponent: 2.0,
+        lower: lo,
+        upper: hi,
+        static_contacts: Vec::new(),
+        friction: FrictionModel::Cone,
+        settings: SolveSettings {
+            tolerance: 1e-10,
+            ..SolveSettings::default()
+        },
+    }
+}
+
+fn assert_near(x: &[f64], want: &[f64]) {
+    assert_eq!(x.len(), want.len());
+    for (a, b) in x.iter().zip(want) {
+        assert!((a - b).abs() <= 1e-10, "{x:?} vs {want:?}");
+    }
+}
+
+fn clarabel(p: &FrameProblem) -> crate::optimize::FrameSolution {
+    let mut q = p.clone();
+    q.settings.solver = SolverChoice::Clarabel;
+    q.settings.tolerance = 1e-10;
+    solve_clarabel(&q)
+}
+
+#[test]
+fn cone_projection_is_the_euclidean_projection() {
+    // Moreau: v = P_K(v) + P_K°(v) with the two parts orthogonal, P_K(v) in
+    // K and v − P_K(v) in the polar cone {n + mu ‖s‖ ≤ 0}.
+    let mut s = 7u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let mut pieces = [0; 3];
+    for _ in 0..2000 {
+        let mu = 0.05 + 2.0 * rnd().abs();
+        let v = [3.0 * rnd(), 3.0 * rnd(), 3.0 * rnd()];
+        let (x, piece) = project_cone(v, mu);
+        pieces[piece as usize] += 1;
+        let z = [v[0] - x[0], v[1] - x[1], v[2] - x[2]];
+        assert!(
+            x[1].hypot(x[2]) <= mu * x[0] * (1.0 + 1e-12) + 1e-14,
+            "{v:?} -> {x:?}"
+        );
+        assert!(
+            z[0] + mu * z[1].hypot(z[2]) <= 1e-12,
+            "{v:?}: v - x = {z:?}"
+        );
+        assert!(
+            (x[0] * z[0] + x[1] * z[1] + x[2] * z[2]).abs() <= 1e-12,
+            "{v:?}"
+        );
+        // Derivative against central differences (away from the kinks).
+        let cols = cone_jacobian_factors(v, mu, piece);
+        let h = 1e-6;
+        for k in 0..3 {
+            let (mut vp, mut vm) = (v, v);
+            vp[k] += h;
+            vm[k] -= h;
+            let (xp, pp) = project_cone(vp, mu);
+            let (xm, pm) = project_cone(vm, mu);
+            if pp != piece || pm != piece {
+                continue;
+            }
+            for i in 0..3 {
+                let fd = (xp[i] - xm[i]) / (2.0 * h);
+                let j: f64 = cols.iter().map(|c| c[i] * c[k]).sum();
+                assert!(
+                    (fd - j).abs() <= 1e-6,
+                    "J[{i}][{k}] = {j}, differences {fd}"
+                );
+            }
+        }
+    }
+    assert!(pieces.iter().all(|&c| c > 100), "pieces {pieces:?}");
+}
+
+#[test]
+fn pyramid_projection_is_the_euclidean_projection() {
+    // As for the cone: x in P, v − x in the polar cone (zᵀr ≤ 0 for every
+    // edge r), xᵀ(v − x) = 0; and the derivative against differences.
+    let mut s = 11u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    for model in [FrictionModel::Pyramid4, FrictionModel::Pyramid8] {
+        let mut pieces = [0; 4];
+        for _ in 0..4000 {
+            let mu = 0.05 + 2.0 * rnd().abs();
+            let v = [3.0 * rnd(), 3.0 * rnd(), 3.0 * rnd()];
+            let (x, piece) = project_pyramid(v, mu, model);
+            pieces[match piece {
+                PyramidPiece::Interior => 0,
+                PyramidPiece::Face(_) => 1,
+                PyramidPiece::Edge(_) => 2,
+                PyramidPiece::Origin => 3,
+            }] += 1;
+            let z = [v[0] - x[0], v[1] - x[1], v[2] - x[2]];
+            let c = StaticContact {
+                normal: 0,
+                shear: [1, 2],
+                mu,
+            };
+            assert!(model.violation(&c, &x) <= 1e-12, "{v:?} -> {x:?}");
+            for &(a, b) in unit_corners(model) {
+                assert!(z[0] + mu * (a * z[1] + b * z[2]) <= 1e-12, "{v:?}: {z:?}");
+            }
+            assert!((x[0] * z[0] + x[1] * z[1] + x[2] * z[2]).abs() <= 1e-12);
+            let cols = pyramid_jacobian_factors(piece);
+            let h = 1e-6;
+            for k in 0..3 {
+                let (mut vp, mut vm) = (v, v);
+                vp[k] += h;
+                vm[k] -= h;
+                let (xp, pp) = project_pyramid(vp, mu, model);
+                let (xm, pm) = project_pyramid(vm, mu, model);
+                let same = |q: PyramidPiece| {
+                    std::mem::discriminant(&q) == std::mem::discriminant(&piece)
+                        && match (q, piece) {
+                            (PyramidPiece::Face(a), PyramidPiece::Face(b))
+                            | (PyramidPiece::Edge(a), PyramidPiece::Edge(b)) => a == b,
+                            _ => true,
+                        }
+                };
+                if !same(pp) || !same(pm) {
+                    continue;
+                }
+                for i in 0..3 {
+                    let fd = (xp[i] - xm[i]) / (2.0 * h);
+                    let j: f64 = cols.iter().map(|c| c[i] * c[k]).sum();
+                    assert!(
+                        (fd - j).abs() <= 1e-6,
+                        "{model:?} J[{i}][{k}] = {j}, differences {fd}"
+                    );
+                }
+            }
+        }
+        assert!(
+            pieces.iter().all(|&c| c > 100),
+            "{model:?}: pieces {pieces:?}"
+        );
+    }
+}
+
+/// A random feasible problem: `m` equations, `nb` bounded variables (some
+/// fixed, some one-sided or free), `nc` cone contacts (μ = 0 allowed),
+/// entries of A zero with probability `zero`; b = A x for a point x inside
+/// the set.
+#[allow(clippy::too_many_arguments)]
+fn random_problem(
+    seed: u64,
+    m: usize,
+    nb: usize,
+    nc: usize,
+    zero: f64,
+) -> (FrameProblem, Vec<f64>) {
+    let mut s = seed
+        .wrapping_mul(2862933555777941757)
+        .wrapping_add(3037000493);
+    let mut u = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64)
+    };
+    let n = nb + 3 * nc;
+    let mut a = DMatrix::zeros(m, n);
+    for j in 0..n {
+        for i in 0..m {
+            if u() >= zero {
+                a[(i, j)] = 2.0 * u() - 1.0;
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    let (mut w, mut lo, mut hi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for j in 0..nb {
+        w[j] = 0.1 + 10.0 * u();
+        let kind = u();
+        if kind < 0.1 {
+            // fixed
+            lo[j] = 2.0 * u() - 1.0;
+            hi[j] = lo[j];
+            x[j] = lo[j];
+        } else if kind < 0.7 {
+            lo[j] = 0.01;
+            hi[j] = 1.0;
+            x[j] = 0.01 + 0.99 * u();
+        } else if kind < 0.85 {
+            lo[j] = -INF;
+            hi[j] = INF;
+            x[j] = 4.0 * u() - 2.0;
+        } else {
+            lo[j] = -0.5;
+            hi[j] = INF;
+            x[j] = -0.5 + 2.0 * u();
+        }
+    }
+    let mut contacts = Vec::new();
+    for k in 0..nc {
+        let base = nb + 3 * k;
+        let mu = if u() < 0.2 { 0.0 } else { 0.1 + 1.4 * u() };
+        let wc = 0.01 + 2.0 * u();
+        let ang = std::f64::consts::TAU * u();
+        let nrm = 2.0 * u();
+        let r = mu * nrm * u();
+        x[base] = nrm;
+        x[base + 1] = r * ang.cos();
+        x[base + 2] = r * ang.sin();
+        for j in 0..3 {
+            w[base + j] = wc;
+            lo[base + j] = if j == 0 { 0.0 } else { -INF };
+            hi[base + j] = INF;
+        }
+        contacts.push(StaticContact {
+            normal: base,
+            shear: [base + 1, base + 2],
+            mu,
+        });
+    }
+    let b = (&a * DVector::from_column_slice(&x))
+        .iter()
+        .copied()
+        .collect();
+    let mut p = problem(a, b, w, lo, hi);
+    p.static_contacts = contacts;
+    (p, x)
+}
+
+/// Largest violation of the optimality conditions of `x` with multipliers
+/// `y`, computed from the problem data alone: for an interval variable,
+/// g = 2 w x − (Aᵀy) must vanish inside the bounds, be ≥ 0 at a lower and
+/// ≤ 0 at an upper bound; for a contact z = (Aᵀy) − 2 w x must lie in the
+/// polar cone ({z_n + μ‖z_s‖ ≤ 0} for the cone, zᵀr ≤ 0 for every edge r
+/// of a pyramid) and be orthogonal to x (normal cone of the set at x). Relative to the size of the terms. With A x = b, x in the set
+/// (checked separately), these conditions certify x as the optimum.
+fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
+    let aty = p.a.tr_mul(&DVector::from_column_slice(y));
+    let mut worst = 0.0f64;
+    let mut in_cone = vec![false; p.n_var()];
+    for c in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
+        let v = [c.normal, c.shear[0], c.shear[1]];
+        let w = p.weights[c.normal];
+        let z: Vec<f64> = v.iter().map(|&j| aty[j] - 2.0 * w * x[j]).collect();
+        let scale = v
+            .iter()
+            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
+            .fold(1e-300, f64::max);
+        // Polar of the cone: z_n + μ‖z_s‖ ≤ 0; of a pyramid: zᵀr ≤ 0 for
+        // every edge direction r = (1, μ·corner).
+        let polar = match p.friction {
+            FrictionModel::Cone => z[0] + c.mu * z[1].hypot(z[2]),
+            model => unit_corners(model)
+                .iter()
+                .map(|&(a, b)| (z[0] + c.mu * (a * z[1] + b * z[2])) / (1.0 + c.mu))
+                .fold(f64::NEG_INFINITY, f64::max),
+        };
+        worst = worst.max(polar.max(0.0) / scale);
+        let xs = v.iter().map(|&j| x[j].abs()).fold(1e-300, f64::max);
+        let dot: f64 = v.iter().zip(&z).map(|(&j, zj)| x[j] * zj).sum();
+        worst = worst.max(dot.abs() / (scale * xs));
+        for j in v {
+            in_cone[j] = true;
+        }
+    }
+    for c in p.static_contacts.iter().filter(|c| c.mu == 0.0) {
+        for s in c.shear {
+            assert_eq!(x[s], 0.0);
+            in_cone[s] = true;
+        }
+    }
+    for j in 0..p.n_var() {
+        if in_cone[j] || p.lower[j] == p.upper[j] {
+            continue;
+        }
+        let g = 2.0 * p.weights[j] * x[j] - aty[j];
+        let scale = aty[j]
+            .abs()
+            .max(2.0 * p.weights[j] * x[j].abs())
+            .max(1e-300);
+        let v = if x[j] == p.lower[j] {
+            (-g).max(0.0)
+        } else if x[j] == p.upper[j] {
+            g.max(0.0)
+        } else {
+            g.abs()
+        };
+        worst = worst.max(v / scale);
+    }
+    worst
+}
+
+/// Newton (no fallback): feasible, residual within tolerance and the
+/// optimality conditions to rounding; and against Clarabel at 1e-10: the
+/// same objective (relative 1e-8), and Clarabel's distance from Newton's x
+/// wholly explained by its suboptimality: with L(x) = Σ w x² − yᵀ(A x − b)
+/// at Newton's y, any x' in the set has Σ w (x' − x)² ≤ L(x') − L(x)
+/// (strong convexity, x minimising L over the set). An interior point stops
+/// short of weakly active bounds by ~√gap, so Clarabel's x is off by up to
+/// ~1e-5 on these problems, and the direct comparison only asks 1e-4.
+/// Returns the largest |x difference| relative to max(1, ‖x‖∞).
+fn compare(p: &FrameProblem) -> f64 {
+    let d = solve_dual(p, None).unwrap_or_else(|e| panic!("Newton failed: {e:?}"));
+    let tol = RESIDUAL_TOLERANCE * p.b.amax().max(1.0);
+    assert!(
+        p.eq_residual(&d.x) <= tol,
+        "residual {}",
+        p.eq_residual(&d.x)
+    );
+    for j in 0..p.n_var() {
+        assert!(
+            d.x[j] >= p.lower[j] && d.x[j] <= p.upper[j],
+            "bounds of {j}"
+        );
+    }
+    for ct in &p.static_contacts {
+        assert!(p.friction.violation(ct, &d.x) <= 1e-12);
+    }
+    let kkt = kkt_violation(p, &d.x, &d.y);
+    assert!(kkt <= 1e-12, "optimality conditions violated by {kkt:.3e}");
+    let c = clarabel(p);
+    if c.status != SolveStatus::Solved {
+        // Clarabel short of its tolerance: nothing to compare with.
+        return 0.0;
+    }
+    let (on, oc) = (p.objective(&d.x), c.objective);
+    assert!(
+        (on - oc).abs() <= 1e-8 * oc.max(1.0),
+        "Newton {on} vs Clarabel {oc}"
+    );
+    // Clarabel's x, moved into the set (it meets the cones to its tolerance).
+    let mut xc = c.x.clone();
+    for ct in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
+        let v = [xc[ct.normal], xc[ct.shear[0]], xc[ct.shear[1]]];
+        let (q, _) = project_friction(v, ct.mu, p.friction);
+        (xc[ct.normal], xc[ct.shear[0]], xc[ct.shear[1]]) = (q[0], q[1], q[2]);
+    }
+    let lag = |x: &[f64]| {
+        let r = &p.a * DVector::from_column_slice(x) - &p.b;
+        p.objective(x) - DVector::from_column_slice(&d.y).dot(&r)
+    };
+    let gap = lag(&xc) - lag(&d.x);
+    let dist2: f64 = (0..p.n_var())
+        .map(|j| p.weights[j] * (xc[j] - d.x[j]).powi(2))
+        .sum();
+    // Rounding of the two Lagrangians: their terms are the objective and
+    // yᵀ(A x − b) with A x as large as b.
+    let ynorm: f64 = d.y.iter().map(|v| v.abs()).sum();
+    let slack = 1e-12 * (oc.abs().max(1.0) + ynorm * p.b.amax().max(1.0));
+    assert!(
+        dist2 <= gap + slack,
+        "Σ w (x_clarabel - x_newton)² = {dist2:.3e} exceeds Clarabel's Lagrangian gap {gap:.3e}"
+    );
+    let scale = d.x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    let diff =
+        d.x.iter()
+            .zip(&c.x)
+            .map(|(a, b)| (a - b).abs() / scale)
+            .fold(0.0, f64::max);
+    assert!(diff <= 1e-4, "max |x_newton - x_clarabel| = {diff:.3e}");
+    diff
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+    #[test]
+    fn newton_matches_clarabel_on_random_feasible_problems(
+        seed in any::<u64>(),
+        m in 1usize..10,
+        nb in 0usize..25,
+        nc in 0usize..5,
+        zero in 0.0f64..0.8,
+        model in 0usize..3,
+    ) {
+        prop_assume!(nb + 3 * nc >= m);
+        let (mut p, _) = random_problem(seed, m, nb, nc, zero);
+        p.friction = MODELS[model];
+        compare(&p);
+    }
+}
+
+#[test]
+fn forty_by_hundred_random_problems_match_clarabel() {
+    let mut worst = 0.0f64;
+    let mut it = 0;
+    for seed in 0..40 {
+        let (mut p, _) = random_problem(seed, 40, 70, 10, 0.0);
+        p.friction = MODELS[seed as usize % 3];
+        worst = worst.max(compare(&p));
+        it += solve_dual(&p, None).unwrap().iterations;
+    }
+    println!(
+        "40x100 dense: worst x difference {worst:.2e}, mean {:.1} solves",
+        it as f64 / 40.0
+    );
+}
+
+#[test]
+fn independent_equations_are_split_into_blocks() {
+    // Rows 0 and 1 share x1; row 2 uses only x3 and the contact; row 3 only
+    // x4: three blocks.
+    let a = DMatrix::from_row_slice(
+        4,
+        8,
+        &[
+            1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, //
+            0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, //
+            0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.5, 0.0, //
+            0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, //
+        ],
+    );
+    let mut p = problem(
+        a,
+        vec![1.0, 0.5, 2.0, 0.3],
+        vec![1.0; 8],
+        vec![-INF, -INF, -INF, -INF, -INF, 0.0, -INF, -INF],
+        vec![INF; 8],
+    );
+    p.static_contacts.push(StaticContact {
+        normal: 5,
+        shear: [6, 7],
+        mu: 0.4,
+    });
+    let d = solve_dual(&p, None).unwrap();
+    assert_eq!(d.blocks, 3);
+    compare(&p);
+    // x4 alone: x4 = 0.3; the contact's second shear appears nowhere: 0.
+    assert!((d.x[4] - 0.3).abs() <= 1e-12);
+    assert_eq!(d.x[7], 0.0);
+}
+
+#[test]
+fn fixed_variables_move_to_the_right_hand_side() {
+    // x0 fixed at 0.25: min x0² + x1² + x2² s.t. x0 + x1 + x2 = 1 gives
+    // x1 = x2 = 0.375 exactly.
+    let p = problem(
+        DMatrix::from_row_slice(1, 3, &[1.0, 1.0, 1.0]),
+        vec![1.0],
+        vec![1.0; 3],
+        vec![0.25, 0.0, 0.0],
+        vec![0.25, 1.0, 1.0],
+    );
+    let s = solve(&p);
+    assert_eq!(s.solver, SolverKind::Newton);
+    assert_eq!(s.status, SolveStatus::Solved);
+    assert_eq!(s.x[0], 0.25);
+    assert!((s.x[1] - 0.375).abs() <= 1e-12 && (s.x[2] - 0.375).abs() <= 1e-12);
+}
+
+#[test]
+fn frictionless_contact_carries_no_shear() {
+    // Block pushed along the plane by a muscle of capacity 1 (x0 ≤ 1):
+    // equations x0 + s1 = 1.5 (along), n = 2 (normal), s2 = 0 (across).
+    // With μ = 0 the shear is 0, so 1.5 cannot be balanced: infeasible, and
+    // Newton hands over to Clarabel. With demand 0.5 the muscle takes it all.
+    let a = DMatrix::from_row_slice(
+        3,
+        4,
+        &[
+            1.0, 0.0, 1.0, 0.0, //
+            0.0, 1.0, 0.0, 0.0, //
+            0.0, 0.0, 0.0, 1.0,
+        ],
+    );
+    let mut p = problem(
+        a,
+        vec![0.5, 2.0, 0.0],
+        vec![1.0, 0.1, 0.1, 0.1],
+        vec![0.0, 0.0, -INF, -INF],
+        vec![1.0, INF, INF, INF],
+    );
+    p.static_contacts.push(StaticContact {
+        normal: 1,
+        shear: [2, 3],
+        mu: 0.0,
+    });
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Newton, SolveStatus::Solved)
+    );
+    assert_near(&s.x, &[0.5, 2.0, 0.0, 0.0]);
+    // With μ = 0.5 the contact shares the load: min x0² + 0.1 s1², x0 + s1 =
+    // 0.5 → x0 = 0.5·0.1/1.1 (|s1| = 0.4545 ≤ μ n = 1, cone inactive).
+    p.static_contacts[0].mu = 0.5;
+    let s = solve(&p);
+    assert_eq!(s.solver, SolverKind::Newton);
+    assert!((s.x[0] - 0.05 / 1.1).abs() <= 1e-12, "{:?}", s.x);
+    // Infeasible with μ = 0 and demand 1.5.
+    p.static_contacts[0].mu = 0.0;
+    p.b[0] = 1.5;
+    assert!(solve_dual(&p, None).is_err());
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Clarabel, SolveStatus::Infeasible)
+    );
+    assert_eq!(s.x, clarabel(&p).x);
+}
+
+#[test]
+fn friction_limit_binds_like_clarabel() {
+    // The incline of Krüger & Wartzack with a weak muscle: the cone binds.
+    // along: a + λs1 = 1, normal: λn = 1, across: λs2 = 0.2, μ = 0.3,
+    // contact weight 1/1000 (cheap), so the contact wants all it can get.
+    let a = DMatrix::from_row_slice(
+        3,
+        4,
+        &[
+            1.0, 0.0, 1.0, 0.0, //
+            0.0, 1.0, 0.0, 0.0, //
+            0.0, 0.0, 0.0, 1.0,
+        ],
+    );
+    let mut p = problem(
+        a,
+        vec![1.0, 1.0, 0.2],
+        vec![1.0, 1e-3, 1e-3, 1e-3],
+        vec![0.01, 0.0, -INF, -INF],
+        vec![1.0, INF, INF, INF],
+    );
+    p.static_contacts.push(StaticContact {
+        normal: 1,
+        shear: [2, 3],
+        mu: 0.3,
+    });
+    let d = solve_dual(&p, None).unwrap();
+    // ‖s‖ = 0.3 with s2 = 0.2: s1 = √(0.09 − 0.04), muscle the rest.
+    let s1 = (0.09f64 - 0.04).sqrt();
+    assert!((d.x[2] - s1).abs() <= 1e-10, "{:?}", d.x);
+    assert!((d.x[0] - (1.0 - s1)).abs() <= 1e-10);
+    compare(&p);
+}
+
+#[test]
+fn infeasible_problems_fall_back_and_report_infeasible() {
+    // Σ r_i a_i = 200 with a_i ≤ 1, Σ r_i = 120.
+    let p = problem(
+        DMatrix::from_row_slice(1, 4, &[20.0, 35.0, 15.0, 50.0]),
+        vec![200.0],
+        vec![1.0; 4],
+        vec![0.01; 4],
+        vec![1.0; 4],
+    );
+    match solve_dual(&p, None) {
+        Err(DualFailure::NotConverged { .. }) => {}
+        other => panic!("{other:?}"),
+    }
+    let s = solve(&p);
+    let c = clarabel(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Clarabel, SolveStatus::Infeasible)
+    );
+    assert_eq!(s.x, c.x);
+    assert!(s.iterations > c.iterations, "Newton's attempt is counted");
+    // Contradictory equations x = 1, x = 2.
+    let p = problem(
+        DMatrix::from_row_slice(2, 1, &[1.0, 1.0]),
+        vec![1.0, 2.0],
+        vec![1.0],
+        vec![-INF],
+        vec![INF],
+    );
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Clarabel, SolveStatus::Infeasible)
+    );
+    assert!((s.x[0] - 1.5).abs() <= 1e-5);
+}
+
+#[test]
+fn empty_equations() {
+    // 0·x = 0 holds: Newton answers (x1 + x2 = 1 → 0.5 each).
+    let a = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 1.0, 1.0]);
+    let p = problem(
+        a.clone(),
+        vec![0.0, 1.0],
+        vec![1.0; 2],
+        vec![-INF; 2],
+        vec![INF; 2],
+    );
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Newton, SolveStatus::Solved)
+    );
+    assert_near(&s.x, &[0.5, 0.5]);
+    // 0·x = 1 does not: Clarabel certifies it.
+    let p = problem(a, vec![1.0, 1.0], vec![1.0; 2], vec![-INF; 2], vec![INF; 2]);
+    assert!(solve_dual(&p, None).is_err());
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Clarabel, SolveStatus::Infeasible)
+    );
+    // No equations at all: every variable at its projection of 0.
+    let p = problem(
+        DMatrix::zeros(0, 3),
+        vec![],
+        vec![1.0; 3],
+        vec![0.01, -1.0, -INF],
+        vec![1.0, 1.0, -2.0],
+    );
+    let s = solve(&p);
+    assert_eq!(
+        (s.solver, s.status),
+        (SolverKind::Newton, SolveStatus::Solved)
+    );
+    assert_eq!(s.x, vec![0.01, 0.0, -2.0]);
+}
+
+#[test]
+fn problems_outside_the_method_go_to_clarabel() {
+    let (base, _) = random_problem(3, 5, 12, 2, 0.0);
+    let base = FrameProblem {
+        static_contacts: base
+            .static_contacts
+            .iter()
+            .map(|c| StaticContact { mu: 0.5, ..*c })
+            .collect(),
+        ..base
+    };
+    assert_eq!(solve(&base).solver, SolverKind::Newton);
+    for friction in MODELS {
+        let p = FrameProblem {
+            friction,
+            ..base.clone()
+        };
+        assert_eq!(solve(&p).solver, SolverKind::Newton, "{friction:?}");
+    }
+    let cases: Vec<(&str, FrameProblem)> = vec![
+        (
+            "exponent 3",
+            FrameProblem {
+                exponent: 3.0,
+                ..base.clone()
+            },
+        ),
+        ("weight 0", {
+            let mut p = base.clone();
+            p.weights[0] = 0.0;
+            p.lower[0] = -INF;
+            p
+        }),
+        ("unequal contact weights", {
+            let mut p = base.clone();
+            p.weights[13] *= 2.0;
+            p
+        }),
+        ("Clarabel chosen", {
+            let mut p = base.clone();
+            p.settings.solver = SolverChoice::Clarabel;
+            p
+        }),
+    ];
+    for (what, p) in cases {
+        if what != "Clarabel chosen" {
+            assert!(
+                matches!(solve_dual(&p, None), Err(DualFailure::NotHandled(_))),
+                "{what}"
+            );
+        }
+        let s = solve(&p);
+        assert_eq!(s.solver, SolverKind::Clarabel, "{what}");
+        assert!(s.status.is_ok(), "{what}: {:?}", s.status);
+    }
+}
+
+#[test]
+fn warm_start_gives_the_same_answer_in_fewer_solves() {
+    let (p, _) = random_problem(11, 30, 60, 8, 0.3);
+    let cold = solve_dual(&p, None).unwrap();
+    let warm = solve_dual(&p, Some(&cold.y)).unwrap();
+    assert!(warm.iterations <= 1, "{} solves", warm.iterations);
+    for (a, b) in cold.x.iter().zip(&warm.x) {
+        assert!((a - b).abs() <= 1e-9);
+    }
+    assert!(matches!(
+        solve_dual(&p, Some(&cold.y[1..])),
+        Err(DualFailure::NotHandled(_))
+    ));
+}
+
+/// Newton converges (no fallback) on 3000 random feasible problems of every
+/// shape: 1–9 equations, up to 24 bounded variables and 4 contacts, A up to
+/// 70 % sparse.
+#[test]
+fn newton_converges_on_every_random_feasible_problem() {
+    let mut fails = 0;
+    let (mut maxit, mut tot, mut cnt) = (0, 0u64, 0u64);
+    for seed in 0..3000u64 {
+        let m = 1 + (seed % 9) as usize;
+        let nb = (seed / 9 % 25) as usize;
+        let nc = (seed / 7 % 5) as usize;
+        if nb + 3 * nc < m {
+            continue;
+        }
+        let zero = (seed % 8) as f64 / 10.0;
+        let (mut p, _) = random_problem(seed, m, nb, nc, zero);
+        p.friction = MODELS[(seed / 3 % 3) as usize];
+        match solve_dual(&p, None) {
+            Ok(d) => {
+                maxit = maxit.max(d.iterations);
+                tot += d.iterations as u64;
+                cnt += 1;
+            }
+            Err(e) => {
+                fails += 1;
+                println!("seed {seed} m {m} nb {nb} nc {nc} zero {zero}: {e:?}");
+            }
+        }
+    }
+    println!(
+        "{cnt} problems: {fails} not converged; linear solves max {maxit}, mean {:.2}",
+        tot as f64 / cnt as f64
+    );
+    assert_eq!(fails, 0);
+}
