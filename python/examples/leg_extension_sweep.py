@@ -4,6 +4,9 @@ tasks on dask (a LocalCluster here; pass a Client for a real scheduler),
 and one matplotlib figure of what the cam changes.
 
     python python/examples/leg_extension_sweep.py [OUT.png] [--scheduler tcp://host:8786]
+
+Writes the figure OUT.png (default output/python/leg_extension_sweep.png) and
+the sweep's table beside it (OUT.csv).
 """
 
 import argparse
@@ -25,11 +28,11 @@ CAMS = {
 W0 = [0.1, 1, 10, 100, 500, 1000, 5000]
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("out", nargs="?", default=str(REPO / "output" / "python" / "leg_extension_sweep.png"))
     ap.add_argument("--scheduler", help="a dask scheduler address (default: a LocalCluster)")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     client = None
     if a.scheduler:
         from dask.distributed import Client
@@ -65,7 +68,10 @@ def main():
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
-    print(f"wrote {out}")
+    plt.close(fig)
+    df.drop(columns=["artifact_files"]).to_csv(out.with_suffix(".csv"), index=False)
+    print(f"wrote {out} and {out.with_suffix('.csv')}")
+    return df
 
 
 if __name__ == "__main__":

@@ -122,6 +122,22 @@ def test_overrides_model_properties_and_artifact(repo, cam1_py):
         statopt.run(setup, no_such_thing=3)
 
 
+def test_overrides_expression_in_artifact_file(repo):
+    # cam 2's elliptical cam torque turned into cam 1's constant one: the same
+    # forces as the cam 1 machine, bit for bit (the files differ only there)
+    cam2 = repo / "setups" / "leg_extension_rajagopal_cam2.xml"
+    cam1 = repo / "setups" / "leg_extension_rajagopal_cam1.xml"
+    flat = statopt.run(cam2, contact_weight=500, progress=False,
+                       model_properties={"cam_torque/expression": "-50"})
+    assert (flat.forces["cam_torque"] == -50).all()
+    assert_same(flat.forces, statopt.run(cam1, contact_weight=500, progress=False).forces)
+    assert flat.metrics["quadriceps_work_J"] > statopt.run(cam2, contact_weight=500, progress=False,
+                                                           tables=False).metrics["quadriceps_work_J"]
+    with pytest.raises(statopt.InputError, match="cam_torque"):
+        statopt.run(cam2, contact_weight=500, progress=False,
+                    model_properties={"cam_torque/expression": "-50*sqrt(1-0.75*sin(q"})
+
+
 def test_inverse_dynamics_setup(repo, cli, tmp_path):
     setup = repo / "setups" / "double_pendulum_ID.xml"
     r = subprocess.run([str(cli), str(setup), "-o", str(tmp_path), "-q"], capture_output=True, text=True)
