@@ -35,9 +35,9 @@
 
 use std::path::PathBuf;
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
-use crate::dynamics::{kinematics, mass_matrix, rnea, BodyForce, Data};
+use crate::dynamics::{forward, kinematics, rnea, BodyForce, Data};
 use crate::error::{Error, Location, Result};
 use crate::forces::actuators::Actuator;
 use crate::forces::external_loads::ExternalLoads;
@@ -255,18 +255,8 @@ pub fn column_labels(specs: &[ReactionSpec]) -> Vec<String> {
 pub fn forward_dynamics(model: &Model, data: &mut Data, t: f64) -> Result<()> {
     let nq = model.nq();
     // d: accelerations with every independent acceleration zero.
-    data.udot.iter_mut().for_each(|x| *x = 0.0);
-    for (c, coord) in model.coordinates.iter().enumerate() {
-        if let Some(f) = &coord.prescribed {
-            data.udot[c] = f.derivative(t, 2);
-        }
-    }
-    for cp in &model.couplers {
-        if let Some(&i) = cp.independent.first() {
-            let (_, d1, d2) = cp.function.eval2(data.q[i]);
-            data.udot[cp.dependent] = cp.scale * (d2 * data.u[i] * data.u[i] + d1 * data.udot[i]);
-        }
-    }
+    let (q, u) = (data.q.clone(), data.u.clone());
+    forward::constrained_accelerations(model, &q, &u, t, &mut data.udot);
     kinematics::full(model, data);
     rnea::inverse_dynamics_after_kinematics(model, data, true);
     let rows: Vec<usize> = (0..nq)
@@ -282,18 +272,11 @@ pub fn forward_dynamics(model: &Model, data: &mut Data, t: f64) -> Result<()> {
             cm[(i, r)] += c;
         }
     }
-    let m = mass_matrix::mass_matrix(model, data);
-    let a = cm.transpose() * m * &cm;
-    let tau: DVector<f64> = DVector::from_column_slice(&data.tau);
-    let b = -(cm.transpose() * tau);
-    let y = match a.clone().cholesky() {
-        Some(ch) => ch.solve(&b),
-        None => a.lu().solve(&b).ok_or_else(|| {
-            Error::msg(format!(
-                "forward dynamics at t = {t}: the mass matrix is singular (a body chain without mass or inertia?)"
-            ))
-        })?,
-    };
+    let y = forward::free_accelerations(model, data, &cm).0.ok_or_else(|| {
+        Error::msg(format!(
+            "forward dynamics at t = {t}: the mass matrix is singular (a body chain without mass or inertia?)"
+        ))
+    })?;
     let du = &cm * y;
     for c in 0..nq {
         data.udot[c] += du[c];

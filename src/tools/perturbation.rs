@@ -25,7 +25,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::dynamics::{kinematics, mass_matrix::mass_matrix, rnea, Data};
+use crate::dynamics::{kinematics, rnea, Data};
 use crate::model::Model;
 use crate::muscles::set::MuscleFrame;
 use crate::tools::static_optimization::SoProblem;
@@ -60,16 +60,7 @@ impl Perturbation {
         let nq = model.nq();
         let target = data.udot.clone();
         let mut udot_c = vec![0.0; nq];
-        for cp in &model.couplers {
-            let i = cp.independent[0];
-            let (_, _, d2) = cp.function.eval2(data.q[i]);
-            udot_c[cp.dependent] = cp.scale * d2 * data.u[i] * data.u[i];
-        }
-        for (k, coord) in model.coordinates.iter().enumerate() {
-            if let Some(f) = &coord.prescribed {
-                udot_c[k] = f.derivative(t, 2);
-            }
-        }
+        crate::dynamics::forward::constrained_accelerations(model, &data.q, &data.u, t, &mut udot_c);
         let mut c = DMatrix::zeros(nq, couplings.len());
         for (r, cv) in couplings.iter().enumerate() {
             for &(i, v) in cv {
@@ -144,19 +135,10 @@ impl Perturbation {
         }
         // τ_0 = M ċ + bias − loads − scale·gen.
         rnea::inverse_dynamics_after_kinematics(model, data, true);
-        let m = mass_matrix(model, data);
-        let m_r = self.c.transpose() * m * &self.c;
-        let rhs = -(self.c.transpose() * DVector::from_column_slice(&data.tau));
-        let udot = match m_r.clone().cholesky() {
-            Some(ch) => ch.solve(&rhs),
-            // Not positive definite (e.g. massless chains): LU, or NaN so
-            // that the solver reports the frame as failed.
-            None => m_r
-                .clone()
-                .lu()
-                .solve(&rhs)
-                .unwrap_or_else(|| DVector::from_element(rhs.len(), f64::NAN)),
-        };
+        let (y, m_r) = crate::dynamics::forward::free_accelerations(model, data, &self.c);
+        // Singular M_r (e.g. massless chains): NaN, so that the solver
+        // reports the frame as failed.
+        let udot = y.unwrap_or_else(|| DVector::from_element(self.c.ncols(), f64::NAN));
         (udot, m_r)
     }
 

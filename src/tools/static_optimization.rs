@@ -539,23 +539,8 @@ impl SoProblem {
         assemble(model, t, &mut data.q, &mut data.u);
         // Accelerations: targets for the unconstrained coordinates; the
         // constrained ones follow from their constraints.
-        for c in 0..nq {
-            data.udot[c] = if model.coordinates[c].is_constrained() {
-                0.0
-            } else {
-                udot_target[c]
-            };
-        }
-        for cp in &model.couplers {
-            let i = cp.independent[0];
-            let (_, d1, d2) = cp.function.eval2(data.q[i]);
-            data.udot[cp.dependent] = cp.scale * (d2 * data.u[i] * data.u[i] + d1 * data.udot[i]);
-        }
-        for (c, coord) in model.coordinates.iter().enumerate() {
-            if let Some(f) = &coord.prescribed {
-                data.udot[c] = f.derivative(t, 2);
-            }
-        }
+        data.udot.copy_from_slice(udot_target);
+        crate::dynamics::forward::complete_accelerations(model, &data.q, &data.u, t, &mut data.udot);
         kinematics::full(model, data);
         data.clear_applied();
         if let Some(l) = &self.loads {
