@@ -540,7 +540,13 @@ impl SoProblem {
         // Accelerations: targets for the unconstrained coordinates; the
         // constrained ones follow from their constraints.
         data.udot.copy_from_slice(udot_target);
-        crate::dynamics::forward::complete_accelerations(model, &data.q, &data.u, t, &mut data.udot);
+        crate::dynamics::forward::complete_accelerations(
+            model,
+            &data.q,
+            &data.u,
+            t,
+            &mut data.udot,
+        );
         kinematics::full(model, data);
         data.clear_applied();
         if let Some(l) = &self.loads {
@@ -929,12 +935,8 @@ impl SoProblem {
             })
             .collect();
         let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
-        let mut force_row = force_file_row(
-            &forces,
-            passive_values,
-            &passive_sizes,
-            &self.passive_after,
-        );
+        let mut force_row =
+            force_file_row(&forces, passive_values, &passive_sizes, &self.passive_after);
         if let Some(l) = &self.loads {
             for ef in &l.forces {
                 let (f, p, tq) = ef.evaluate(t, data);
@@ -1089,7 +1091,8 @@ pub fn run(
                 if jr_setup.knee_loads {
                     let states = match &knee_states {
                         Some(s) => s,
-                        None => knee_states.insert(crate::tools::analyze::load_states(setup, &problem.model)?),
+                        None => knee_states
+                            .insert(crate::tools::analyze::load_states(setup, &problem.model)?),
                     };
                     let table = dir.join(format!("{p}ReactionLoads.sto"));
                     knee_files.push(crate::tools::knee_loads::write(
@@ -1142,7 +1145,11 @@ pub fn run(
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
                     .map(|w0| {
-                        dir.join(format!("{}_{name}_w0_{}_KneeLoads.sto", setup.name, w0_tag(*w0)))
+                        dir.join(format!(
+                            "{}_{name}_w0_{}_KneeLoads.sto",
+                            setup.name,
+                            w0_tag(*w0)
+                        ))
                     })
                     .collect();
                 summary.files.extend(write_sweep_statistics(
@@ -1355,6 +1362,10 @@ fn resume_point(
     }))
 }
 
+/// One run's outputs of a frame: the solution, its joint-reaction rows and
+/// its log messages.
+type FrameOutput = (FrameResult, Vec<Vec<f64>>, FrameMessages);
+
 /// One run of a sweep: its contact weight, the prefix of its tables and the
 /// prefixes of its joint-reaction tables.
 struct RunSpec<'a> {
@@ -1536,7 +1547,9 @@ impl<'a> RunWriters<'a> {
             .labels
             .iter()
             .enumerate()
-            .filter(|(_, l)| problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve"))
+            .filter(|(_, l)| {
+                problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve")
+            })
             .map(|(i, _)| i)
             .collect();
         // Rows of the root joint's coordinates (a joint on ground with three or
@@ -1550,7 +1563,8 @@ impl<'a> RunWriters<'a> {
             .map(|(k, &c)| {
                 (
                     k,
-                    problem.model.coordinates[c].motion_type == crate::model::MotionType::Translational,
+                    problem.model.coordinates[c].motion_type
+                        == crate::model::MotionType::Translational,
                 )
             })
             .collect();
@@ -1585,7 +1599,12 @@ impl<'a> RunWriters<'a> {
     }
 
     /// Write one frame (in frame order).
-    fn write(&mut self, r: &FrameResult, jr_rows: &[Vec<f64>], messages: &FrameMessages) -> Result<()> {
+    fn write(
+        &mut self,
+        r: &FrameResult,
+        jr_rows: &[Vec<f64>],
+        messages: &FrameMessages,
+    ) -> Result<()> {
         let problem = self.problem;
         if r.time <= self.skip_until {
             return Ok(());
@@ -1738,7 +1757,12 @@ impl<'a> RunWriters<'a> {
             root_moment_peak: self.root_peaks[1].clone(),
             notes: vec![note],
             results_dirs: Vec::new(),
-            stopped: (!completed).then(|| (crate::tools::interrupt::requested().unwrap_or(130), self.last)),
+            stopped: (!completed).then(|| {
+                (
+                    crate::tools::interrupt::requested().unwrap_or(130),
+                    self.last,
+                )
+            }),
         })
     }
 }
@@ -1786,7 +1810,7 @@ fn run_sweep(
     opts: &RunOptions,
     label: &str,
 ) -> Result<Vec<RunSummary>> {
-    let mut writers = runs
+    let writers = runs
         .iter()
         .map(|r| RunWriters::open(problem, setup, dir, r, opts))
         .collect::<Result<Vec<_>>>()?;
@@ -1807,65 +1831,89 @@ fn run_sweep(
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
-    let completed = for_each_frame(
-        &mut stream,
-        i0,
-        i1,
-        step_interval,
-        || {
-            (
-                Data::new(&problem.model),
-                MuscleFrame::new(&problem.muscles, &problem.model),
-            )
-        },
-        |(data, mf), block, i| {
-            // Frames every resumed run already holds are not computed again.
-            if block.time[i] <= skip_until {
-                return Ok(None);
-            }
-            let results = problem.solve_frame_weights(
-                block.time[i],
-                &block.q[i],
-                &block.u[i],
-                &block.udot[i],
-                data,
-                mf,
-                &weights,
-            );
-            let mut out = Vec::with_capacity(results.len());
-            for (r, (spec, names)) in results.into_iter().zip(runs.iter().zip(&log_names)) {
-                let mut rows = Vec::with_capacity(spec.reactions.len());
-                for (_, specs) in &spec.reactions {
-                    let mut row = vec![0.0; 9 * specs.len()];
-                    static_optimization_reactions(
-                        problem,
-                        block.time[i],
-                        &block.q[i],
-                        &block.u[i],
-                        &r,
-                        data,
-                        mf,
-                        specs,
-                        &mut row,
-                    )?;
-                    rows.push(row);
+    // Tables are formatted and written off the solving threads: a writer
+    // thread owns them and takes each frame's results in order, while the
+    // next chunk of frames is solved.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<FrameOutput>>(FRAMES_IN_FLIGHT);
+    let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
+        let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
+            let mut writers = writers;
+            for results in rx {
+                for (w, (r, rows, messages)) in writers.iter_mut().zip(&results) {
+                    w.write(r, rows, messages)?;
                 }
-                let messages = names.encode(problem, &r, &rows)?;
-                out.push((r, rows, messages));
             }
-            Ok(Some(out))
-        },
-        |item| {
-            let Some(results) = item else {
-                return Ok(());
-            };
-            for (w, (r, rows, messages)) in writers.iter_mut().zip(&results) {
-                w.write(r, rows, messages)?;
-            }
-            progress.inc(1);
-            Ok(())
-        },
-    )?;
+            Ok(writers)
+        });
+        let completed = for_each_frame(
+            &mut stream,
+            i0,
+            i1,
+            step_interval,
+            || {
+                (
+                    Data::new(&problem.model),
+                    MuscleFrame::new(&problem.muscles, &problem.model),
+                )
+            },
+            |(data, mf), block, i| {
+                // Frames every resumed run already holds are not computed again.
+                if block.time[i] <= skip_until {
+                    return Ok(None);
+                }
+                let results = problem.solve_frame_weights(
+                    block.time[i],
+                    &block.q[i],
+                    &block.u[i],
+                    &block.udot[i],
+                    data,
+                    mf,
+                    &weights,
+                );
+                let mut out = Vec::with_capacity(results.len());
+                for (r, (spec, names)) in results.into_iter().zip(runs.iter().zip(&log_names)) {
+                    let mut rows = Vec::with_capacity(spec.reactions.len());
+                    for (_, specs) in &spec.reactions {
+                        let mut row = vec![0.0; 9 * specs.len()];
+                        static_optimization_reactions(
+                            problem,
+                            block.time[i],
+                            &block.q[i],
+                            &block.u[i],
+                            &r,
+                            data,
+                            mf,
+                            specs,
+                            &mut row,
+                        )?;
+                        rows.push(row);
+                    }
+                    let messages = names.encode(problem, &r, &rows)?;
+                    out.push((r, rows, messages));
+                }
+                Ok(Some(out))
+            },
+            |item| {
+                let Some(results) = item else {
+                    return Ok(());
+                };
+                // The writer thread formats and writes in frame order; a closed
+                // channel means it stopped on an error, reported below.
+                if tx.send(results).is_err() {
+                    return Err(Error::internal("the table writer stopped"));
+                }
+                progress.inc(1);
+                Ok(())
+            },
+        );
+        drop(tx);
+        let written = writer
+            .join()
+            .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
+        // The writer's own error says more than the loop's closed channel.
+        let writers = written?;
+        Ok((completed?, writers))
+    })?;
     progress.finish_and_clear();
     let shared = runs.len();
     let loop_seconds = start.elapsed().as_secs_f64() / shared as f64;
@@ -1878,6 +1926,11 @@ fn run_sweep(
         })
         .collect()
 }
+
+/// Frames handed to the table writer and not yet written, at most: the
+/// solving threads run ahead of the formatting by this much (memory stays
+/// bounded).
+const FRAMES_IN_FLIGHT: usize = 512;
 
 /// OpenSim's ForceReporter description.
 pub const FORCE_DESCRIPTION: &str = "\nThis file contains the forces exerted on a model during a simulation.\n\nA force is a generalized force, meaning that it can be either a force (N) or a torque (Nm).\n\nUnits are S.I. units (second, meters, Newtons, ...)\nIf the header above contains a line with 'inDegrees', this indicates whether rotational values are in degrees (yes) or radians (no).\n\n";
