@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
-use crate::tools::analyze::{is_frame, open_state_stream, results_dir};
+use crate::tools::analyze::{for_each_frame, open_state_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 
@@ -125,51 +125,55 @@ pub fn run(
         )?);
     }
     let (i0, i1, step) = (stream.first_row, stream.last_row, ma.common.step_interval);
-    let mut data = Data::new(&model);
-    let mut frame = MuscleFrame::new(&set, &model);
-    let mut row = vec![0.0; muscles.len()];
     let mut nframes = 0;
-    let mut stopped = None;
     let mut last_t = None;
-    'blocks: while let Some(block) = stream.next_block()? {
-        for b in 0..block.time.len() {
-            if !is_frame(block.first + b, i0, i1, step) {
-                continue;
-            }
-            if let Some(code) = crate::tools::interrupt::requested() {
-                stopped = Some((code, last_t));
-                break 'blocks;
-            }
-            nframes += 1;
+    // The frame driver of every analysis (analyze::for_each_frame): frames
+    // in parallel chunks over per-thread workspaces, written in order.
+    let completed = for_each_frame(
+        &mut stream,
+        i0,
+        i1,
+        step,
+        || (Data::new(&model), MuscleFrame::new(&set, &model)),
+        |(data, frame), block, b| {
             data.q.copy_from_slice(&block.q[b]);
             data.u.copy_from_slice(&block.u[b]);
             data.udot.iter_mut().for_each(|x| *x = 0.0);
-            kinematics::full(&model, &mut data);
-            frame.evaluate(&set, &model, &data);
-            let t = block.time[b];
-            for (w, values) in [
+            kinematics::full(&model, data);
+            frame.evaluate(&set, &model, data);
+            let mut rows: Vec<Vec<f64>> = [
                 &frame.length,
                 &frame.speed,
                 &frame.max_active_force,
                 &frame.passive_force,
             ]
             .into_iter()
-            .enumerate()
-            {
-                for (k, &m) in muscles.iter().enumerate() {
-                    row[k] = values[m];
-                }
-                writers[w].0.write_row(t, &row)?;
+            .map(|values| muscles.iter().map(|&m| values[m]).collect())
+            .collect();
+            for &c in &coords {
+                rows.push(
+                    muscles
+                        .iter()
+                        .map(|&m| frame.moment_arm(&model, &data.q, m, c))
+                        .collect(),
+                );
             }
-            for (j, &c) in coords.iter().enumerate() {
-                for (k, &m) in muscles.iter().enumerate() {
-                    row[k] = frame.moment_arm(&model, &data.q, m, c);
-                }
-                writers[4 + j].0.write_row(t, &row)?;
+            Ok((block.time[b], rows))
+        },
+        |(t, rows)| {
+            for (w, row) in writers.iter_mut().zip(&rows) {
+                w.0.write_row(t, row)?;
             }
+            nframes += 1;
             last_t = Some(t);
-        }
-    }
+            Ok(())
+        },
+    )?;
+    let stopped = if completed {
+        None
+    } else {
+        Some((crate::tools::interrupt::requested().unwrap_or(130), last_t))
+    };
     let mut files = Vec::new();
     for (w, p) in writers {
         w.finish()?;
