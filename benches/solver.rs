@@ -41,11 +41,21 @@ fn bench(c: &mut Criterion) {
         .iter()
         .map(|&i| {
             problem
-                .frame_problem(states.time[i], &states.q[i], &states.u[i], &udot[i], &mut data, &mut mf)
+                .frame_problem(
+                    states.time[i],
+                    &states.q[i],
+                    &states.u[i],
+                    &udot[i],
+                    &mut data,
+                    &mut mf,
+                )
                 .0
         })
         .collect();
-    for (label, choice) in [("newton", SolverChoice::Auto), ("clarabel", SolverChoice::Clarabel)] {
+    for (label, choice) in [
+        ("newton", SolverChoice::Auto),
+        ("clarabel", SolverChoice::Clarabel),
+    ] {
         let frames: Vec<FrameProblem> = frames
             .iter()
             .cloned()

@@ -19,10 +19,10 @@ use statopt::model::compile;
 use statopt::motion::coordinates::{CoordinateSplines, MissingCoordinate};
 use statopt::parse::compose::read_composed;
 use statopt::parse::osim::ModelSpec;
-use statopt::tools::scene::{compose_scene, write_document};
 use statopt::parse::setup::Setup;
 use statopt::storage::{self, Storage};
 use statopt::tools::motion_gen::{generate, parse_link, MinJerkMotion};
+use statopt::tools::scene::{compose_scene, write_document};
 use statopt::tools::{analyze, inverse_dynamics, RunOptions};
 
 const G: f64 = 9.80665;

@@ -50,7 +50,13 @@ fn every_frame_of_every_study_run_is_physically_consistent() {
     // rajagopal_*: before the closure followed the motion continuously, the
     // lever jumped half a turn at 10 deg of knee flexion (another root of
     // the pad's closure) and 21 frames of each run were infeasible.
-    for variant in ["cam1", "cam2", "cam1_axis_offset", "rajagopal_cam1", "rajagopal_cam2"] {
+    for variant in [
+        "cam1",
+        "cam2",
+        "cam1_axis_offset",
+        "rajagopal_cam1",
+        "rajagopal_cam2",
+    ] {
         let (out, warnings) = run(variant);
         let bound_warning = warnings
             .iter()
@@ -148,29 +154,49 @@ fn study_document_draws_figures_and_metrics() {
     // The paper's qualitative findings, for both humans: cam 2 lowers the
     // peak (PCL-type) shear and the quadriceps work.
     for m in ["rajagopal", "gait2392"] {
-        assert!(get(&format!("{m}_cam2_peak_pcl_shear_N")) < get(&format!("{m}_cam1_peak_pcl_shear_N")), "{m}");
-        assert!(get(&format!("{m}_cam2_quadriceps_work_J")) < get(&format!("{m}_cam1_quadriceps_work_J")), "{m}");
+        assert!(
+            get(&format!("{m}_cam2_peak_pcl_shear_N")) < get(&format!("{m}_cam1_peak_pcl_shear_N")),
+            "{m}"
+        );
+        assert!(
+            get(&format!("{m}_cam2_quadriceps_work_J"))
+                < get(&format!("{m}_cam1_quadriceps_work_J")),
+            "{m}"
+        );
     }
     // The Rajagopal knee has the measured shape (Wilk et al. 1996, Escamilla
     // et al. 1998): PCL-type shear in deep flexion, one sign change, ACL-type
     // only near extension; compression above 1 kN in deep flexion under cam 1.
     for cam in ["cam1", "cam2"] {
         let g = |k: &str| get(&format!("rajagopal_{cam}_{k}"));
-        assert!(g("peak_pcl_shear_N") > 100.0 && g("peak_pcl_shear_flexion_deg") > 80.0, "{cam}");
-        assert!(g("peak_acl_shear_N") < -50.0 && g("peak_acl_shear_flexion_deg") < 20.0, "{cam}");
+        assert!(
+            g("peak_pcl_shear_N") > 100.0 && g("peak_pcl_shear_flexion_deg") > 80.0,
+            "{cam}"
+        );
+        assert!(
+            g("peak_acl_shear_N") < -50.0 && g("peak_acl_shear_flexion_deg") < 20.0,
+            "{cam}"
+        );
         let change = g("shear_sign_change_flexion_deg");
-        assert!((15.0..50.0).contains(&change), "{cam}: sign change at {change} deg");
+        assert!(
+            (15.0..50.0).contains(&change),
+            "{cam}: sign change at {change} deg"
+        );
         assert!(g("peak_pf_compression_N") > 500.0, "{cam}");
     }
     assert!(get("rajagopal_cam1_tf_compression_at_90deg_N") > 1000.0);
     // gait2392 has no patella: its shear keeps the PCL sign throughout and
     // its deep-flexion compression is a fraction of the Rajagopal knee's.
     assert!(get("gait2392_cam1_shear_sign_change_flexion_deg").is_nan());
-    assert!(get("gait2392_cam1_tf_compression_at_90deg_N") < 0.5 * get("rajagopal_cam1_tf_compression_at_90deg_N"));
+    assert!(
+        get("gait2392_cam1_tf_compression_at_90deg_N")
+            < 0.5 * get("rajagopal_cam1_tf_compression_at_90deg_N")
+    );
     // With hand grips the person can hold themselves: w0 decides how much
     // of the hip flexion moment the muscles carry (more at low w0).
     assert!(
-        get("rajagopal_hip_flexion_muscles_mean_w0_1_Nm") > 1.5 * get("rajagopal_hip_flexion_muscles_mean_w0_1000_Nm")
+        get("rajagopal_hip_flexion_muscles_mean_w0_1_Nm")
+            > 1.5 * get("rajagopal_hip_flexion_muscles_mean_w0_1000_Nm")
     );
     assert!(s
         .files
@@ -185,23 +211,44 @@ fn study_document_draws_figures_and_metrics() {
 fn knee_loads_tables_are_written_per_run() {
     for (variant, patella) in [("cam1", false), ("rajagopal_cam1", true)] {
         let (out, _) = run_into(variant, "knee_loads");
-        let t = storage::read(&out.join(format!("leg_extension_{variant}_JR_w0_mean_KneeLoads.sto"))).unwrap();
+        let t =
+            storage::read(&out.join(format!("leg_extension_{variant}_JR_w0_mean_KneeLoads.sto")))
+                .unwrap();
         let flex = col(&t, "knee_flexion_r");
-        assert!((flex[0] - 95.0).abs() < 1.5 && (flex[flex.len() - 1] - 5.0).abs() < 1.5, "{variant}: {} .. {}", flex[0], flex[flex.len() - 1]);
+        assert!(
+            (flex[0] - 95.0).abs() < 1.5 && (flex[flex.len() - 1] - 5.0).abs() < 1.5,
+            "{variant}: {} .. {}",
+            flex[0],
+            flex[flex.len() - 1]
+        );
         assert_eq!(col(&t, "knee_flexion_l")[0], flex[0]);
-        assert_eq!(t.column_index("pf_compression_r").is_some(), patella, "{variant}");
+        assert_eq!(
+            t.column_index("pf_compression_r").is_some(),
+            patella,
+            "{variant}"
+        );
         for w0 in ["1", "500", "1000", "min", "max"] {
-            assert!(out.join(format!("leg_extension_{variant}_JR_w0_{w0}_KneeLoads.sto")).is_file());
+            assert!(out
+                .join(format!("leg_extension_{variant}_JR_w0_{w0}_KneeLoads.sto"))
+                .is_file());
         }
         // tf_compression is -Fy and tf_shear +Fx of the knee reaction on the tibia.
-        let jr = storage::read(&out.join(format!("leg_extension_{variant}_JR_w0_500_ReactionLoads.sto"))).unwrap();
-        let kl = storage::read(&out.join(format!("leg_extension_{variant}_JR_w0_500_KneeLoads.sto"))).unwrap();
+        let jr = storage::read(&out.join(format!(
+            "leg_extension_{variant}_JR_w0_500_ReactionLoads.sto"
+        )))
+        .unwrap();
+        let kl =
+            storage::read(&out.join(format!("leg_extension_{variant}_JR_w0_500_KneeLoads.sto")))
+                .unwrap();
         let knee = if patella { "walker_knee_r" } else { "knee_r" };
         let fx = col(&jr, &format!("{knee}_on_tibia_r_in_tibia_r_fx"));
         let fy = col(&jr, &format!("{knee}_on_tibia_r_in_tibia_r_fy"));
         let (c, s) = (col(&kl, "tf_compression_r"), col(&kl, "tf_shear_r"));
         for i in 0..fx.len() {
-            assert!((c[i] + fy[i]).abs() < 1e-6 && (s[i] - fx[i]).abs() < 1e-6, "{variant} row {i}");
+            assert!(
+                (c[i] + fy[i]).abs() < 1e-6 && (s[i] - fx[i]).abs() < 1e-6,
+                "{variant} row {i}"
+            );
         }
     }
 }

@@ -125,7 +125,10 @@ fn gait2392_walk_not_used_for_tuning_meets_the_bars() {
     };
     let setup_file = root.join("../models/gait2392/subject01_walk/setup_SO.xml");
     if !setup_file.is_file() {
-        println!("SKIP gait2392 prediction: {} is absent", setup_file.display());
+        println!(
+            "SKIP gait2392 prediction: {} is absent",
+            setup_file.display()
+        );
         return;
     }
     let setup = match Setup::read(&setup_file).unwrap() {
@@ -144,10 +147,19 @@ fn gait2392_walk_not_used_for_tuning_meets_the_bars() {
     let (rho_ml, rmse_ml) = mean(&p.metrics, 'z');
     println!("gait2392 subject01: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; ML {rho_ml:.3} / {rmse_ml:.1} % BW");
     assert!(rho_v >= 0.97 && rmse_v <= 8.0, "vertical {rho_v} {rmse_v}");
-    assert!(rho_ap >= 0.90 && rmse_ap <= 5.0, "anteroposterior {rho_ap} {rmse_ap}");
-    assert!(rho_ml >= 0.70 && rmse_ml <= 3.0, "mediolateral {rho_ml} {rmse_ml}");
     assert!(
-        p.summary.warnings.iter().any(|w| w.starts_with("foot r:") && w.contains("sink")),
+        rho_ap >= 0.90 && rmse_ap <= 5.0,
+        "anteroposterior {rho_ap} {rmse_ap}"
+    );
+    assert!(
+        rho_ml >= 0.70 && rmse_ml <= 3.0,
+        "mediolateral {rho_ml} {rmse_ml}"
+    );
+    assert!(
+        p.summary
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("foot r:") && w.contains("sink")),
         "the sinking right foot at the end is reported: {:?}",
         p.summary.warnings
     );
@@ -259,19 +271,40 @@ fn without_measured_loads_the_prediction_uses_opensims_usual_names() {
     };
     let p = predict_grf::run(&setup, &opts).unwrap();
     assert!(p.measured.is_none() && p.metrics.is_empty());
-    assert!(!out.join(format!("{}_grf_comparison.csv", setup.name)).exists());
-    let xml = std::fs::read_to_string(out.join(format!("{}_predicted_grf.xml", setup.name))).unwrap();
-    for id in ["<force_identifier>ground_force_v</force_identifier>", "<force_identifier>1_ground_force_v</force_identifier>", "calcn_r", "calcn_l"] {
+    assert!(!out
+        .join(format!("{}_grf_comparison.csv", setup.name))
+        .exists());
+    let xml =
+        std::fs::read_to_string(out.join(format!("{}_predicted_grf.xml", setup.name))).unwrap();
+    for id in [
+        "<force_identifier>ground_force_v</force_identifier>",
+        "<force_identifier>1_ground_force_v</force_identifier>",
+        "calcn_r",
+        "calcn_l",
+    ] {
         assert!(xml.contains(id), "{id} in {xml}");
     }
-    let mot = statopt::storage::read(&out.join(format!("{}_predicted_grf.mot", setup.name))).unwrap();
-    for c in ["ground_force_vy", "1_ground_force_vy", "ground_force_px", "1_ground_torque_y"] {
+    let mot =
+        statopt::storage::read(&out.join(format!("{}_predicted_grf.mot", setup.name))).unwrap();
+    for c in [
+        "ground_force_vy",
+        "1_ground_force_vy",
+        "ground_force_px",
+        "1_ground_torque_y",
+    ] {
         assert!(mot.column_index(c).is_some(), "column {c}");
     }
     // The feet carry the body: mean total vertical force within 10 % of body weight.
-    let (r, l) = (mot.column(mot.column_index("ground_force_vy").unwrap()), mot.column(mot.column_index("1_ground_force_vy").unwrap()));
+    let (r, l) = (
+        mot.column(mot.column_index("ground_force_vy").unwrap()),
+        mot.column(mot.column_index("1_ground_force_vy").unwrap()),
+    );
     let mean = r.iter().zip(&l).map(|(a, b)| a + b).sum::<f64>() / r.len() as f64;
-    assert!((mean / p.body_weight - 1.0).abs() < 0.1, "mean vertical {mean} N, body weight {}", p.body_weight);
+    assert!(
+        (mean / p.body_weight - 1.0).abs() < 0.1,
+        "mean vertical {mean} N, body weight {}",
+        p.body_weight
+    );
 }
 
 /// A floor height the user gives is used as it is: every point's contact

@@ -241,15 +241,25 @@ pub fn build(
             .enumerate()
             .filter(|(_, p)| p.side == side)
             .map(|(k, p)| {
-                positions[k].iter().enumerate().fold((k, 0.0f64, 0usize), |acc, (i, g)| {
-                    let s = p.contact_level - g.y;
-                    if s > acc.1 { (k, s, i) } else { acc }
-                })
+                positions[k]
+                    .iter()
+                    .enumerate()
+                    .fold((k, 0.0f64, 0usize), |acc, (i, g)| {
+                        let s = p.contact_level - g.y;
+                        if s > acc.1 {
+                            (k, s, i)
+                        } else {
+                            acc
+                        }
+                    })
             })
             .collect();
         let sunk: Vec<&(usize, f64, usize)> = sinks.iter().filter(|s| s.1 > SINK_WARNING).collect();
         if sunk.len() * 2 > sinks.len() {
-            let worst = sunk.iter().max_by(|a, b| a.1.total_cmp(&b.1)).expect("not empty");
+            let worst = sunk
+                .iter()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("not empty");
             warnings.push(format!(
                 "foot {side}: {} of its {} contact points sink more than {:.0} cm below their contact levels (up to {:.1} cm, at t = {:.3} s): the motion's vertical position drifts there, or the floor is not flat; the predicted forces there are uncertain",
                 sunk.len(), sinks.len(), 100.0 * SINK_WARNING, 100.0 * worst.1, states.time[worst.2]
@@ -439,13 +449,28 @@ mod tests {
         let (gx, gz) = (0.03, -0.01);
         let sample = |x: f64, z: f64, level: f64| Vector3::new(x, level + gx * x + gz * z, z);
         let a: Vec<_> = (0..40)
-            .map(|i| sample(0.4 - 0.02 * i as f64, 0.1 + 0.003 * (i % 7) as f64 * 30.0, 0.0))
+            .map(|i| {
+                sample(
+                    0.4 - 0.02 * i as f64,
+                    0.1 + 0.003 * (i % 7) as f64 * 30.0,
+                    0.0,
+                )
+            })
             .collect();
         let b: Vec<_> = (0..30)
-            .map(|i| sample(1.2 - 0.03 * i as f64, -0.2 + 0.01 * (i % 5) as f64 * 20.0, 0.01))
+            .map(|i| {
+                sample(
+                    1.2 - 0.03 * i as f64,
+                    -0.2 + 0.01 * (i % 5) as f64 * 20.0,
+                    0.01,
+                )
+            })
             .collect();
         let (sx, sz) = slope_of(&[a, b]);
-        assert!((sx - gx).abs() < 1e-12 && (sz - gz).abs() < 1e-12, "{sx} {sz}");
+        assert!(
+            (sx - gx).abs() < 1e-12 && (sz - gz).abs() < 1e-12,
+            "{sx} {sz}"
+        );
     }
 
     /// Samples that do not spread along an axis give no slope along it

@@ -97,9 +97,14 @@ fn side_columns(model: &Model, table: &storage::Storage, path: &Path, s: char) -
                 })?;
             let stem = &table.labels[fx][..table.labels[fx].len() - 3];
             let c = |suffix: &str| {
-                table.column_index(&format!("{stem}_{suffix}")).ok_or_else(|| {
-                    Error::msg(format!("knee loads: {} lacks {stem}_{suffix}", path.display()))
-                })
+                table
+                    .column_index(&format!("{stem}_{suffix}"))
+                    .ok_or_else(|| {
+                        Error::msg(format!(
+                            "knee loads: {} lacks {stem}_{suffix}",
+                            path.display()
+                        ))
+                    })
             };
             Some([fx, c("fy")?, c("fz")?])
         }
@@ -178,7 +183,10 @@ pub fn write(
 pub fn output_path(reactions: &Path) -> PathBuf {
     let name = reactions
         .file_name()
-        .map(|n| n.to_string_lossy().replace("ReactionLoads.sto", "KneeLoads.sto"))
+        .map(|n| {
+            n.to_string_lossy()
+                .replace("ReactionLoads.sto", "KneeLoads.sto")
+        })
         .unwrap_or_else(|| "KneeLoads.sto".to_string());
     reactions.with_file_name(name)
 }

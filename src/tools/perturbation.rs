@@ -60,7 +60,13 @@ impl Perturbation {
         let nq = model.nq();
         let target = data.udot.clone();
         let mut udot_c = vec![0.0; nq];
-        crate::dynamics::forward::constrained_accelerations(model, &data.q, &data.u, t, &mut udot_c);
+        crate::dynamics::forward::constrained_accelerations(
+            model,
+            &data.q,
+            &data.u,
+            t,
+            &mut udot_c,
+        );
         let mut c = DMatrix::zeros(nq, couplings.len());
         for (r, cv) in couplings.iter().enumerate() {
             for &(i, v) in cv {

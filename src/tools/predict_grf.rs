@@ -209,7 +209,9 @@ pub fn run_with_floor(
 ) -> Result<Prediction> {
     if let Some(f) = floor_height {
         if !f.is_finite() {
-            return Err(Error::msg(format!("the floor height must be a finite number, found {f}")));
+            return Err(Error::msg(format!(
+                "the floor height must be a finite number, found {f}"
+            )));
         }
     }
     if setup.analysis_element("StaticOptimization").is_none() {
@@ -224,7 +226,12 @@ pub fn run_with_floor(
     let am = loading::load_analysis_model(&setup)?;
     let model = am.model;
     let states = analyze::load_states(&setup, &model)?;
-    let contacts = feet::build(&model, &states, floor_height, FootContactParameters::default())?;
+    let contacts = feet::build(
+        &model,
+        &states,
+        floor_height,
+        FootContactParameters::default(),
+    )?;
     let dir = analyze::results_dir(&setup, opts)?;
     let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
     std::fs::write(&contacts_file, contacts.force_set_xml())
@@ -312,7 +319,10 @@ fn use_contact_weight(setup: &mut AnalyzeSetup) -> f64 {
             if element.name != "StaticOptimization" {
                 continue;
             }
-            if let Some(w) = element.child("contact_weight").and_then(|w| w.numbers().ok()) {
+            if let Some(w) = element
+                .child("contact_weight")
+                .and_then(|w| w.numbers().ok())
+            {
                 if let Some(first) = w.first() {
                     return *first;
                 }
@@ -343,7 +353,8 @@ pub fn foot_loads_from_contacts(path: &std::path::Path, set: &FootContactSet) ->
         time: table.time.clone(),
         ..Default::default()
     };
-    let mut idx: [Vec<([usize; 6], &crate::contacts::feet::FootPoint)>; 2] = [Vec::new(), Vec::new()];
+    let mut idx: [Vec<([usize; 6], &crate::contacts::feet::FootPoint)>; 2] =
+        [Vec::new(), Vec::new()];
     for p in &set.points {
         let s = usize::from(p.side == 'l');
         let mut c = [0usize; 6];

@@ -212,12 +212,7 @@ fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
             let w = located()?;
             crossing(&y, &w, |i| y[i]).unwrap_or(f64::NAN)
         }
-        other => {
-            return Err(el.error(format!(
-                "unknown op '{other}' ({})",
-                METRIC_OPS.join(", ")
-            )))
-        }
+        other => return Err(el.error(format!("unknown op '{other}' ({})", METRIC_OPS.join(", ")))),
     };
     Ok((name, v))
 }
@@ -471,17 +466,18 @@ fn prepare(
     for m in elements.iter().filter(|e| e.name == "Metric") {
         let op = m.attr("op").unwrap_or("max");
         if !METRIC_OPS.contains(&op) {
-            return Err(m.error(format!(
-                "unknown op '{op}' ({})",
-                METRIC_OPS.join(", ")
-            )));
+            return Err(m.error(format!("unknown op '{op}' ({})", METRIC_OPS.join(", "))));
         }
         if ["argmax", "argmin", "at", "crossing"].contains(&op) && m.attr("where").is_none() {
             return Err(m.error(format!(
                 "op '{op}' needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"
             )));
         }
-        if op == "at" && m.attr("value").and_then(|v| v.trim().parse::<f64>().ok()).is_none() {
+        if op == "at"
+            && m.attr("value")
+                .and_then(|v| v.trim().parse::<f64>().ok())
+                .is_none()
+        {
             return Err(m.error("op 'at' needs a numeric value attribute"));
         }
     }
