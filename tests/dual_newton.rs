@@ -6,7 +6,7 @@
 //!
 //! * `optimize::solve` answers with Newton (no fallback to Clarabel);
 //! * Newton's x satisfies the optimality conditions with its multipliers y,
-//!   checked from the problem data alone (`kkt_violation`, ≤ 1e-9), the
+//!   checked from the problem data alone (`optimize::dual::optimality_violation`, ≤ 1e-9), the
 //!   equations to 1e-10·max(1, ‖b‖∞), bounds and cones exactly;
 //! * Clarabel at 1e-10 agrees to 1e-5 (activations absolute, other
 //!   variables relative to the frame's force scale). That is Clarabel's own
@@ -22,11 +22,10 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use nalgebra::DVector;
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
 use statopt::optimize::{
-    self, dual, FrameProblem, FrameSolution, FrictionModel, SolveStatus, SolverChoice, SolverKind,
+    self, dual, FrameSolution, FrictionModel, SolveStatus, SolverChoice, SolverKind,
 };
 use statopt::parse::setup::Setup;
 use statopt::tools::analyze;
@@ -49,59 +48,6 @@ struct Stats {
     /// Frames where Clarabel at 1e-10 did not report Solved.
     reference_unsolved: usize,
     failures: Vec<String>,
-}
-
-/// Largest violation of the optimality conditions of x with multipliers y
-/// (the same conditions as in the unit tests of `optimize::dual`): for an
-/// interval variable g = 2 w x − (Aᵀy) vanishes inside the bounds, is ≥ 0 at
-/// a lower and ≤ 0 at an upper bound; for a cone contact z = (Aᵀy) − 2 w x
-/// lies in the polar cone and is orthogonal to x. Relative to the terms.
-fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
-    let aty = p.a.tr_mul(&DVector::from_column_slice(y));
-    let mut worst = 0.0f64;
-    let mut in_cone = vec![false; p.n_var()];
-    for c in &p.static_contacts {
-        if c.mu == 0.0 {
-            for s in c.shear {
-                assert_eq!(x[s], 0.0);
-                in_cone[s] = true;
-            }
-            continue;
-        }
-        let v = [c.normal, c.shear[0], c.shear[1]];
-        let w = p.weights[c.normal];
-        let z: Vec<f64> = v.iter().map(|&j| aty[j] - 2.0 * w * x[j]).collect();
-        let scale = v
-            .iter()
-            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
-            .fold(1e-300, f64::max);
-        worst = worst.max((z[0] + c.mu * z[1].hypot(z[2])).max(0.0) / scale);
-        let xs = v.iter().map(|&j| x[j].abs()).fold(1e-300, f64::max);
-        let dot: f64 = v.iter().zip(&z).map(|(&j, zj)| x[j] * zj).sum();
-        worst = worst.max(dot.abs() / (scale * xs));
-        for j in v {
-            in_cone[j] = true;
-        }
-    }
-    for j in 0..p.n_var() {
-        if in_cone[j] || p.lower[j] == p.upper[j] {
-            continue;
-        }
-        let g = 2.0 * p.weights[j] * x[j] - aty[j];
-        let scale = aty[j]
-            .abs()
-            .max(2.0 * p.weights[j] * x[j].abs())
-            .max(1e-300);
-        let v = if x[j] == p.lower[j] {
-            (-g).max(0.0)
-        } else if x[j] == p.upper[j] {
-            g.max(0.0)
-        } else {
-            g.abs()
-        };
-        worst = worst.max(v / scale);
-    }
-    worst
 }
 
 fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, stats: &mut Stats) {
@@ -174,7 +120,7 @@ fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, 
             // The certificate.
             let d = dual::solve_dual(&fp, None).unwrap();
             assert_eq!(d.x, auto.x, "{at}: solve() and solve_dual() differ");
-            let kkt = kkt_violation(&fp, &d.x, &d.y);
+            let kkt = dual::optimality_violation(&fp, &d.x, &d.y);
             stats.worst_kkt = stats.worst_kkt.max(kkt);
             let res_tol = dual::RESIDUAL_TOLERANCE * fp.b.amax().max(1.0);
             let inside = (0..fp.n_var()).all(|k| d.x[k] >= fp.lower[k] && d.x[k] <= fp.upper[k])

@@ -258,69 +258,6 @@ fn random_problem(
     (p, x)
 }
 
-/// Largest violation of the optimality conditions of `x` with multipliers
-/// `y`, computed from the problem data alone: for an interval variable,
-/// g = 2 w x − (Aᵀy) must vanish inside the bounds, be ≥ 0 at a lower and
-/// ≤ 0 at an upper bound; for a contact z = (Aᵀy) − 2 w x must lie in the
-/// polar cone ({z_n + μ‖z_s‖ ≤ 0} for the cone, zᵀr ≤ 0 for every edge r
-/// of a pyramid) and be orthogonal to x (normal cone of the set at x). Relative to the size of the terms. With A x = b, x in the set
-/// (checked separately), these conditions certify x as the optimum.
-fn kkt_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
-    let aty = p.a.tr_mul(&DVector::from_column_slice(y));
-    let mut worst = 0.0f64;
-    let mut in_cone = vec![false; p.n_var()];
-    for c in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
-        let v = [c.normal, c.shear[0], c.shear[1]];
-        let w = p.weights[c.normal];
-        let z: Vec<f64> = v.iter().map(|&j| aty[j] - 2.0 * w * x[j]).collect();
-        let scale = v
-            .iter()
-            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
-            .fold(1e-300, f64::max);
-        // Polar of the cone: z_n + μ‖z_s‖ ≤ 0; of a pyramid: zᵀr ≤ 0 for
-        // every edge direction r = (1, μ·corner).
-        let polar = match p.friction {
-            FrictionModel::Cone => z[0] + c.mu * z[1].hypot(z[2]),
-            model => unit_corners(model)
-                .iter()
-                .map(|&(a, b)| (z[0] + c.mu * (a * z[1] + b * z[2])) / (1.0 + c.mu))
-                .fold(f64::NEG_INFINITY, f64::max),
-        };
-        worst = worst.max(polar.max(0.0) / scale);
-        let xs = v.iter().map(|&j| x[j].abs()).fold(1e-300, f64::max);
-        let dot: f64 = v.iter().zip(&z).map(|(&j, zj)| x[j] * zj).sum();
-        worst = worst.max(dot.abs() / (scale * xs));
-        for j in v {
-            in_cone[j] = true;
-        }
-    }
-    for c in p.static_contacts.iter().filter(|c| c.mu == 0.0) {
-        for s in c.shear {
-            assert_eq!(x[s], 0.0);
-            in_cone[s] = true;
-        }
-    }
-    for j in 0..p.n_var() {
-        if in_cone[j] || p.lower[j] == p.upper[j] {
-            continue;
-        }
-        let g = 2.0 * p.weights[j] * x[j] - aty[j];
-        let scale = aty[j]
-            .abs()
-            .max(2.0 * p.weights[j] * x[j].abs())
-            .max(1e-300);
-        let v = if x[j] == p.lower[j] {
-            (-g).max(0.0)
-        } else if x[j] == p.upper[j] {
-            g.max(0.0)
-        } else {
-            g.abs()
-        };
-        worst = worst.max(v / scale);
-    }
-    worst
-}
-
 /// Newton (no fallback): feasible, residual within tolerance and the
 /// optimality conditions to rounding; and against Clarabel at 1e-10: the
 /// same objective (relative 1e-8), and Clarabel's distance from Newton's x
@@ -347,7 +284,7 @@ fn compare(p: &FrameProblem) -> f64 {
     for ct in &p.static_contacts {
         assert!(p.friction.violation(ct, &d.x) <= 1e-12);
     }
-    let kkt = kkt_violation(p, &d.x, &d.y);
+    let kkt = optimality_violation(p, &d.x, &d.y);
     // Rounding: a seed reached 1.03e-12 (kept in proptest-regressions/).
     assert!(kkt <= 1e-11, "optimality conditions violated by {kkt:.3e}");
     let c = clarabel(p);
