@@ -169,8 +169,6 @@ pub fn build(
     let points = foot_points(model)?;
     let mut data = Data::new(model);
     let n = states.time.len();
-    let mut lowest = vec![f64::INFINITY; points.len()];
-    let mut heights = vec![Vec::with_capacity(n); points.len()];
     let mut velocities = vec![Vec::with_capacity(n); points.len()];
     let mut positions = vec![Vec::with_capacity(n); points.len()];
     for i in 0..n {
@@ -181,21 +179,25 @@ pub fn build(
         for (k, p) in points.iter().enumerate() {
             let g = data.station_position(p.body, &p.local);
             let v = data.station_velocity(p.body, &p.local);
-            lowest[k] = lowest[k].min(g.y);
-            heights[k].push(g.y);
             velocities[k].push(v);
             positions[k].push(g);
         }
     }
     let floor_height = match floor {
         Some(f) => f,
-        None => median(&mut lowest.clone()),
+        None => {
+            let mut lowest: Vec<f64> = positions
+                .iter()
+                .map(|p| p.iter().map(|g| g.y).fold(f64::INFINITY, f64::min))
+                .collect();
+            median(&mut lowest)
+        }
     };
     let mut stance_vx = Vec::new();
     let mut stance_vz = Vec::new();
     for k in 0..points.len() {
         for i in 0..n {
-            if heights[k][i] < floor_height + 0.01 {
+            if positions[k][i].y < floor_height + 0.01 {
                 stance_vx.push(velocities[k][i].x);
                 stance_vz.push(velocities[k][i].z);
             }

@@ -327,11 +327,14 @@ fn use_contact_weight(setup: &mut AnalyzeSetup) -> f64 {
                     return *first;
                 }
             }
-            let mut w = element.clone();
-            w.name = "contact_weight".to_string();
-            w.attrs.clear();
-            w.children.clear();
-            w.text = format!("{DEFAULT_CONTACT_WEIGHT}");
+            let w = crate::xml::Element {
+                name: "contact_weight".to_string(),
+                attrs: Vec::new(),
+                children: Vec::new(),
+                text: format!("{DEFAULT_CONTACT_WEIGHT}"),
+                line: element.line,
+                file: element.file.clone(),
+            };
             element.children.push(w);
             return DEFAULT_CONTACT_WEIGHT;
         }

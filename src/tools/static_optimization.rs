@@ -1141,12 +1141,17 @@ pub fn run(
             )?);
         }
         for (jr_setup, (name, _)) in reactions.iter().zip(&jr_specs) {
-            if jr_setup.knee_loads {
+            let kinds: &[&str] = if jr_setup.knee_loads {
+                &["ReactionLoads", "KneeLoads"]
+            } else {
+                &["ReactionLoads"]
+            };
+            for kind in kinds {
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
                     .map(|w0| {
                         dir.join(format!(
-                            "{}_{name}_w0_{}_KneeLoads.sto",
+                            "{}_{name}_w0_{}_{kind}.sto",
                             setup.name,
                             w0_tag(*w0)
                         ))
@@ -1157,32 +1162,11 @@ pub fn run(
                     &files,
                     &dir,
                     &format!("{}_{name}_w0_", setup.name),
-                    "KneeLoads",
+                    kind,
                     &weights,
                     precision,
                 )?);
             }
-        }
-        for (name, _) in &jr_specs {
-            let files: Vec<std::path::PathBuf> = weights
-                .iter()
-                .map(|w0| {
-                    dir.join(format!(
-                        "{}_{name}_w0_{}_ReactionLoads.sto",
-                        setup.name,
-                        w0_tag(*w0)
-                    ))
-                })
-                .collect();
-            summary.files.extend(write_sweep_statistics(
-                &setup.setup_file,
-                &files,
-                &dir,
-                &format!("{}_{name}_w0_", setup.name),
-                "ReactionLoads",
-                &weights,
-                precision,
-            )?);
         }
     }
     summary.files.extend(knee_files);
@@ -1407,6 +1391,7 @@ impl<'a> RunWriters<'a> {
         setup: &AnalyzeSetup,
         dir: &std::path::Path,
         spec: &RunSpec,
+        log_names: &LogNames,
         opts: &RunOptions,
     ) -> Result<RunWriters<'a>> {
         let prefix = spec.prefix.as_str();
@@ -1536,8 +1521,7 @@ impl<'a> RunWriters<'a> {
             files.push(path);
         }
         let log_path = dir.join(format!("{prefix}log.mcap"));
-        let log_names = LogNames::new(problem, reactions.first().map(|(_, s)| *s));
-        let mut log = FrameLog::create(&log_path, &log_names)?;
+        let mut log = FrameLog::create(&log_path, log_names)?;
         if let Some(r) = &resume {
             log.replay(&r.messages)?;
         }
@@ -1810,19 +1794,20 @@ fn run_sweep(
     opts: &RunOptions,
     label: &str,
 ) -> Result<Vec<RunSummary>> {
+    let log_names: Vec<LogNames> = runs
+        .iter()
+        .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
+        .collect();
     let writers = runs
         .iter()
-        .map(|r| RunWriters::open(problem, setup, dir, r, opts))
+        .zip(&log_names)
+        .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))
         .collect::<Result<Vec<_>>>()?;
     let skip_until = writers
         .iter()
         .map(|w| w.skip_until)
         .fold(f64::INFINITY, f64::min);
     let weights: Vec<f64> = runs.iter().map(|r| r.w0).collect();
-    let log_names: Vec<LogNames> = runs
-        .iter()
-        .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
-        .collect();
     let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
