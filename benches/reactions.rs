@@ -6,8 +6,7 @@
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use statopt::dynamics::Data;
-use statopt::muscles::set::MuscleFrame;
+use statopt::frame::Workspace;
 use statopt::parse::setup::{Analysis, Setup};
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::joint_reaction::{JointReactionProblem, JointReactionSetup};
@@ -38,8 +37,7 @@ fn bench(c: &mut Criterion) {
         let (problem, _) = JointReactionProblem::build(&setup, &jr).unwrap();
         let states = load_states(&setup, &problem.model).unwrap();
         let rows = frame_rows(&states.time, setup.initial_time, setup.final_time, 1);
-        let mut data = Data::new(&problem.model);
-        let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
+        let mut ws = Workspace::new(&problem.model, &problem.muscles);
         let mut k = 0;
         c.bench_function(
             &format!(
@@ -51,13 +49,7 @@ fn bench(c: &mut Criterion) {
                     let i = rows[k % rows.len()];
                     k += 1;
                     problem
-                        .frame(
-                            states.time[i],
-                            &states.q[i],
-                            &states.u[i],
-                            &mut data,
-                            &mut mf,
-                        )
+                        .frame(states.time[i], &states.q[i], &states.u[i], &mut ws)
                         .unwrap()[0]
                 })
             },

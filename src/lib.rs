@@ -4,16 +4,21 @@
 //! The pipeline, one module per stage (docs/architecture.md): [`parse`]
 //! (XML documents) → [`model`] (compiled once, immutable) → [`motion`]
 //! (coordinates filtered and splined into per-frame q, u, u̇) → per frame,
-//! over a per-thread workspace: [`dynamics`] (kinematics, inverse dynamics)
-//! → [`paths`] and [`muscles`] (muscle geometry and strength) → [`forces`]
-//! (known forces) → [`contacts`] (contact geometry and friction) →
-//! [`optimize`] (the per-frame convex program) → [`tools`] (the drivers a
-//! setup names, joint reactions) → [`storage`], [`output`], [`plots`]
-//! (tables, logs, figures). A module imports only from earlier stages.
+//! over a per-thread workspace ([`frame::Workspace`]): [`dynamics`]
+//! (kinematics, inverse and forward dynamics) → [`paths`] and [`muscles`]
+//! (muscle geometry and strength) → [`forces`] (known forces) → [`contacts`]
+//! (contact geometry and friction) → [`optimize`] (the per-frame convex
+//! program) → [`frame`] (one frame of static optimization assembled from the
+//! stages before, solved and turned into outputs; the frame driver) →
+//! [`reactions`] (joint reactions from the frame's forces) → [`tools`] (thin
+//! drivers: the analyses a setup names, studies, predict-grf, bench) →
+//! [`storage`], [`output`], [`plots`] (tables, logs, figures). A module
+//! imports only from earlier stages.
 pub mod contacts;
 pub mod dynamics;
 pub mod error;
 pub mod forces;
+pub mod frame;
 pub mod functions;
 pub mod model;
 pub mod motion;
@@ -23,6 +28,7 @@ pub mod output;
 pub mod parse;
 pub mod paths;
 pub mod plots;
+pub mod reactions;
 pub mod storage;
 pub mod tools;
 pub mod wrapping;

@@ -130,8 +130,7 @@ fn missing_actuator_forces_are_reported() {
 /// same reactions as a JointReaction run reading those forces from a file.
 #[test]
 fn static_optimization_frames_give_the_reactions_of_their_force_file() {
-    use statopt::dynamics::Data;
-    use statopt::muscles::set::MuscleFrame;
+    use statopt::frame::Workspace;
     use statopt::parse::setup::Analysis;
     use statopt::tools::analyze::{frame_rows, load_states};
     use statopt::tools::joint_reaction::{
@@ -171,8 +170,7 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
         let (jr_el, jr_common) = other(&jr_setup);
         let jr = JointReactionSetup::from_xml(&jr_el, jr_common, &dir).unwrap();
         let (specs, _) = resolve_reactions(&problem.model, &jr).unwrap();
-        let mut data = Data::new(&problem.model);
-        let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
+        let mut ws = Workspace::new(&problem.model, &problem.muscles);
         let mut forces = storage::Storage {
             name: "forces".into(),
             labels: problem.labels.clone(),
@@ -181,12 +179,21 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
         let mut direct = Vec::new();
         for &i in &rows {
             let (t, q, u) = (states.time[i], &states.q[i], &states.u[i]);
-            let r = problem.solve_frame(t, q, u, &udot[i], &mut data, &mut mf);
+            let r = problem.solve_frame(t, q, u, &udot[i], &mut ws.data, &mut ws.muscles);
             let mut o = vec![0.0; 9 * specs.len()];
-            static_optimization_reactions(
-                &problem, t, q, u, &r, &mut data, &mut mf, &specs, &mut o,
-            )
-            .unwrap();
+            static_optimization_reactions(&problem, t, &r, &mut ws, &specs, &mut o).unwrap();
+            // Reusing the frame's kinematics and muscle paths from the
+            // workspace it was solved in gives what a fresh workspace, which
+            // recomputes them, gives: bit for bit.
+            let mut fresh = Workspace::new(&problem.model, &problem.muscles);
+            let mut again = vec![0.0; o.len()];
+            static_optimization_reactions(&problem, t, &r, &mut fresh, &specs, &mut again).unwrap();
+            assert!(
+                o.iter()
+                    .zip(&again)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{case} t = {t}: reactions from the reused workspace differ from a fresh one"
+            );
             forces.time.push(t);
             forces.rows.push(r.forces.clone());
             direct.push(o);

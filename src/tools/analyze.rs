@@ -3,23 +3,12 @@
 //! and run each analysis of the setup on them.
 
 use crate::error::{Error, Location, Result};
-use crate::motion::coordinates::find_index;
+pub use crate::frame::driver::{for_each_frame, frame_rows, is_frame};
 use crate::motion::states::States;
 use crate::motion::stream::StateStream;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
 use crate::tools::loading::load_coordinates;
 use crate::tools::{joint_reaction, muscle_analysis, static_optimization, RunOptions, RunSummary};
-
-/// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
-/// t <= final_time; a row is recorded when it is the first, the last, or its
-/// absolute index is a multiple of `step_interval`.
-pub fn frame_rows(time: &[f64], initial: f64, final_: f64, step_interval: usize) -> Vec<usize> {
-    let i0 = find_index(time, initial);
-    let i1 = find_index(time, final_);
-    (i0..=i1)
-        .filter(|&i| i == i0 || i == i1 || i % step_interval.max(1) == 0)
-        .collect()
-}
 
 /// The setup's coordinates file, refusing states and speeds files.
 fn coordinates_file(setup: &AnalyzeSetup) -> Result<&std::path::Path> {
@@ -127,11 +116,6 @@ pub fn open_state_stream<'m>(
     );
     stream.warnings.extend(range);
     Ok(stream)
-}
-
-/// Whether row `i` is a frame: `frame_rows`' rule for rows `i0..=i1`.
-pub fn is_frame(i: usize, i0: usize, i1: usize, step_interval: usize) -> bool {
-    i >= i0 && i <= i1 && (i == i0 || i == i1 || i % step_interval.max(1) == 0)
 }
 
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
@@ -289,43 +273,4 @@ fn close_setup_contacts(
     }
     crate::contacts::closure::close_contacts(model, table, &closures)
         .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
-}
-
-/// Run `work` on every analysed frame of `stream` (rows `i0..=i1`, honouring
-/// `step_interval`), in parallel chunks of 256 with a per-thread workspace
-/// from `init`, and hand each result to `sink` in frame order — so tables
-/// hold every finished frame and memory stays bounded by the block.
-/// Returns false when a stop was requested ([`crate::tools::interrupt`]):
-/// the frames handed to `sink` so far are complete, no later one is.
-pub fn for_each_frame<W, T>(
-    stream: &mut crate::motion::stream::StateStream,
-    i0: usize,
-    i1: usize,
-    step_interval: usize,
-    init: impl Fn() -> W + Sync + Send,
-    work: impl Fn(&mut W, &crate::motion::stream::StateBlock, usize) -> Result<T> + Sync + Send,
-    mut sink: impl FnMut(T) -> Result<()>,
-) -> Result<bool>
-where
-    T: Send,
-{
-    use rayon::prelude::*;
-    while let Some(block) = stream.next_block()? {
-        let sel: Vec<usize> = (0..block.time.len())
-            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
-            .collect();
-        for chunk in sel.chunks(256) {
-            if crate::tools::interrupt::requested().is_some() {
-                return Ok(false);
-            }
-            let results: Vec<Result<T>> = chunk
-                .par_iter()
-                .map_init(&init, |w, &i| work(w, &block, i))
-                .collect();
-            for r in results {
-                sink(r?)?;
-            }
-        }
-    }
-    Ok(true)
 }

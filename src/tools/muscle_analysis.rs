@@ -6,9 +6,10 @@
 //! `_PassiveFiberForceRigidTendon.sto`. Moment arms are analytic (path
 //! Jacobians through the coupling vectors), not perturbations.
 
-use crate::dynamics::{kinematics, Data};
+use crate::dynamics::kinematics;
 use crate::error::Result;
-use crate::muscles::set::{MuscleFrame, MuscleSet};
+use crate::frame::workspace::Workspace;
+use crate::muscles::set::MuscleSet;
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
 use crate::tools::analyze::{for_each_frame, open_state_stream, results_dir};
@@ -134,8 +135,9 @@ pub fn run(
         i0,
         i1,
         step,
-        || (Data::new(&model), MuscleFrame::new(&set, &model)),
-        |(data, frame), block, b| {
+        || Workspace::new(&model, &set),
+        |ws, block, b| {
+            let (data, frame) = (&mut ws.data, &mut ws.muscles);
             data.q.copy_from_slice(&block.q[b]);
             data.u.copy_from_slice(&block.u[b]);
             data.udot.iter_mut().for_each(|x| *x = 0.0);

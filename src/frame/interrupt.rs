@@ -1,7 +1,7 @@
 //! Stopping a run cleanly on SIGINT (Ctrl-C) or SIGTERM.
 //!
 //! The binary calls [`install`] once. A signal only raises a flag; the frame
-//! loop ([`crate::tools::analyze::for_each_frame`]) looks at it between
+//! loop ([`crate::frame::driver::for_each_frame`]) looks at it between
 //! chunks of frames, stops there, and the analyses then close every table
 //! and the MCAP log as at the end of a run: what was solved is kept whole.
 //! A second Ctrl-C while stopping ends the process at once (as a plain

@@ -26,9 +26,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::{kinematics, rnea, Data};
+use crate::frame::problem::SoProblem;
 use crate::model::Model;
 use crate::muscles::set::MuscleFrame;
-use crate::tools::static_optimization::SoProblem;
 
 /// One frame's forward-dynamics state: the target and zero-variable
 /// accelerations and the constraint basis.

@@ -1,0 +1,64 @@
+//! The frame driver: every analysis that works frame by frame (static
+//! optimization, joint reactions, muscle analysis, predict-grf) hands it a
+//! per-thread workspace and the work of one frame. Frames run in parallel
+//! chunks; results come back in frame order, so tables hold every finished
+//! frame and memory stays bounded by the stream's block.
+
+use crate::error::Result;
+use crate::motion::coordinates::find_index;
+use crate::motion::stream::{StateBlock, StateStream};
+
+/// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
+/// t <= final_time; a row is recorded when it is the first, the last, or its
+/// absolute index is a multiple of `step_interval`.
+pub fn frame_rows(time: &[f64], initial: f64, final_: f64, step_interval: usize) -> Vec<usize> {
+    let i0 = find_index(time, initial);
+    let i1 = find_index(time, final_);
+    (i0..=i1)
+        .filter(|&i| i == i0 || i == i1 || i % step_interval.max(1) == 0)
+        .collect()
+}
+
+/// Whether row `i` is a frame: `frame_rows`' rule for rows `i0..=i1`.
+pub fn is_frame(i: usize, i0: usize, i1: usize, step_interval: usize) -> bool {
+    i >= i0 && i <= i1 && (i == i0 || i == i1 || i % step_interval.max(1) == 0)
+}
+
+/// Run `work` on every analysed frame of `stream` (rows `i0..=i1`, honouring
+/// `step_interval`), in parallel chunks of 256 with a per-thread workspace
+/// from `init`, and hand each result to `sink` in frame order — so tables
+/// hold every finished frame and memory stays bounded by the block.
+/// Returns false when a stop was requested ([`crate::frame::interrupt`]):
+/// the frames handed to `sink` so far are complete, no later one is.
+pub fn for_each_frame<W, T>(
+    stream: &mut StateStream,
+    i0: usize,
+    i1: usize,
+    step_interval: usize,
+    init: impl Fn() -> W + Sync + Send,
+    work: impl Fn(&mut W, &StateBlock, usize) -> Result<T> + Sync + Send,
+    mut sink: impl FnMut(T) -> Result<()>,
+) -> Result<bool>
+where
+    T: Send,
+{
+    use rayon::prelude::*;
+    while let Some(block) = stream.next_block()? {
+        let sel: Vec<usize> = (0..block.time.len())
+            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
+            .collect();
+        for chunk in sel.chunks(256) {
+            if crate::frame::interrupt::requested().is_some() {
+                return Ok(false);
+            }
+            let results: Vec<Result<T>> = chunk
+                .par_iter()
+                .map_init(&init, |w, &i| work(w, &block, i))
+                .collect();
+            for r in results {
+                sink(r?)?;
+            }
+        }
+    }
+    Ok(true)
+}

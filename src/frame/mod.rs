@@ -1,0 +1,20 @@
+//! Stage: one frame of static optimization, and the driver that runs frames.
+//!
+//! - [`settings`]: the StaticOptimization element, compiled.
+//! - [`problem`]: [`SoProblem`], compiled once per run, and per frame its
+//!   convex program (kinematics → muscle paths and strength → contacts → the
+//!   equations of motion) and outputs ([`FrameResult`]).
+//! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
+//! - [`workspace`]: the per-thread buffers a frame is evaluated in.
+//! - [`driver`]: frames in parallel chunks over per-thread workspaces,
+//!   results in frame order; [`interrupt`]: stopping it cleanly.
+pub mod driver;
+pub mod interrupt;
+pub mod perturbation;
+pub mod problem;
+pub mod settings;
+pub mod workspace;
+
+pub use problem::{Control, FrameResult, SoProblem};
+pub use settings::StaticOptimizationSetup;
+pub use workspace::Workspace;

@@ -1,0 +1,618 @@
+//! One frame of static optimization: the run's compiled problem
+//! ([`SoProblem`]: model, muscles, controls, passive forces, external loads,
+//! contacts) turned, at a frame's state, into the convex program of
+//! `optimize` — kinematics → muscle paths and strength → contact states →
+//! the equations of motion as A x = b with bounds and friction cones — and
+//! its solution into the frame's outputs ([`FrameResult`]).
+//!
+//! The equations are written in force space and reduced to the independent,
+//! unconstrained coordinates with the coupling vectors C_k:
+//! `C_kᵀ Σ_i x_i f_i g_i = C_kᵀ τ_required`, which is OpenSim's
+//! acceleration-level constraint `u̇_I(x) = u̇_target` multiplied by the
+//! (constraint-reduced) mass matrix. Every frame is solved from a cold start
+//! (no warm start from the previous frame), so results do not depend on how
+//! frames are spread over threads or on where a resumed run starts.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::contacts::{Contact, ContactState, Regime};
+use crate::dynamics::{kinematics, rnea, Data};
+use crate::forces::actuators::Actuator;
+use crate::forces::external_loads::ExternalLoads;
+use crate::forces::passive::PassiveForce;
+use crate::frame::perturbation::Perturbation;
+use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, DEFAULT_TOLERANCE};
+use crate::model::Model;
+use crate::motion::states::assemble;
+use crate::muscles::set::{MuscleFrame, MuscleSet};
+use crate::optimize::{
+    self, FrameProblem, FrameSolution, SolveSettings, SolveStatus, StaticContact,
+};
+use crate::paths::coupling;
+
+/// One optimisation variable: a muscle (index into the MuscleSet) or another actuator.
+#[derive(Debug, Clone)]
+pub enum Control {
+    Muscle(usize),
+    Actuator(Actuator),
+}
+
+/// Everything a frame needs, compiled once.
+pub struct SoProblem {
+    pub model: Model,
+    pub muscles: MuscleSet,
+    /// Variables in ForceSet order (the activation file's columns).
+    pub controls: Vec<Control>,
+    pub labels: Vec<String>,
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    pub passive: Vec<PassiveForce>,
+    /// For each passive force, how many controls precede it in ForceSet
+    /// order: where its record columns stand in the force file.
+    pub passive_after: Vec<usize>,
+    pub loads: Option<ExternalLoads>,
+    /// Independent, unconstrained coordinates: the equations' rows.
+    pub rows: Vec<usize>,
+    pub settings: StaticOptimizationSetup,
+    /// Labels of the force file: ForceSet record labels in ForceSet order
+    /// (see [`force_file_row`]), reserves, then external forces.
+    pub force_labels: Vec<String>,
+    /// Point-on-plane contacts; three multipliers each follow the controls.
+    pub contacts: Vec<Contact>,
+    /// The contact weight w0 of the current run.
+    pub w0: f64,
+}
+
+/// The ForceSet part of a force-file row (labels or values): each control's
+/// entry, with the record entries of passive force `j` (`passive_sizes[j]` of
+/// them, concatenated in `passive`) placed after the first
+/// `passive_after[j]` controls, i.e. where the force stands in the ForceSet,
+/// as OpenSim's ForceReporter orders them. Controls added after the ForceSet
+/// (reserves) come last.
+pub fn force_file_row<T: Clone>(
+    controls: &[T],
+    passive: &[T],
+    passive_sizes: &[usize],
+    passive_after: &[usize],
+) -> Vec<T> {
+    let mut row = Vec::with_capacity(controls.len() + passive.len());
+    let mut next_control = 0;
+    let mut next_passive = 0;
+    for (&size, &after) in passive_sizes.iter().zip(passive_after) {
+        row.extend_from_slice(&controls[next_control..after]);
+        next_control = after;
+        row.extend_from_slice(&passive[next_passive..next_passive + size]);
+        next_passive += size;
+    }
+    row.extend_from_slice(&controls[next_control..]);
+    row
+}
+
+/// Result of one frame.
+#[derive(Debug, Clone)]
+pub struct FrameResult {
+    pub time: f64,
+    pub solution: FrameSolution,
+    /// Actuator forces (x_i · f_i), same order as the controls.
+    pub forces: Vec<f64>,
+    /// The force file row.
+    pub force_row: Vec<f64>,
+    /// max |A x − b| relative to the largest |b| (1 when b = 0).
+    pub relative_residual: f64,
+    /// Largest friction-constraint violation over static contacts (≤ 0 when met).
+    pub friction_violation: f64,
+    /// Per free coordinate: required generalized force, and the parts supplied
+    /// by muscles, other actuators and contacts.
+    pub by_source: Vec<f64>,
+    /// Per muscle: mechanical power (W), positive when shortening under tension.
+    pub muscle_power: Vec<f64>,
+    /// The frame's assembled coordinates, speeds and accelerations (tree order).
+    pub q: Vec<f64>,
+    pub u: Vec<f64>,
+    pub udot: Vec<f64>,
+    pub contacts: ContactRows,
+}
+
+/// Per-frame contact outputs, one row for each contact table.
+#[derive(Debug, Clone, Default)]
+pub struct ContactRows {
+    /// Per contact: force on the point body (ground), point, distance,
+    /// w(d), slip speed, regime β (0 static, 1 kinetic, between: blended), multipliers.
+    pub contact: Vec<f64>,
+    /// Per body touched by a contact: force (ground) and moment about the
+    /// body origin (ground).
+    pub bodies: Vec<f64>,
+    /// ExternalLoads data: per contact, force and point on the point body,
+    /// then (plane body not ground) force and point on the plane body.
+    pub loads: Vec<f64>,
+}
+
+/// Column suffixes of the contact table.
+pub const CONTACT_COLUMNS: [&str; 13] = [
+    "fx",
+    "fy",
+    "fz",
+    "px",
+    "py",
+    "pz",
+    "distance",
+    "weight",
+    "slip_speed",
+    "regime",
+    "lambda_n",
+    "lambda_s1",
+    "lambda_s2",
+];
+
+impl SoProblem {
+    /// Build one frame's optimisation problem: returns the problem, each
+    /// variable's force scale (f_i) and the passive forces' record values.
+    pub fn frame_problem(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> (FrameProblem, Vec<f64>, Vec<f64>, Vec<ContactState>) {
+        let (p, scale, passive, states, _) =
+            self.frame_problem_scaled(t, q, u, udot_target, data, mf);
+        (p, scale, passive, states)
+    }
+
+    /// As [`frame_problem`](Self::frame_problem), with the matrix that turns
+    /// a row residual into generalized forces on the free coordinates: None
+    /// for the analytic rows (already forces), the constraint-reduced mass
+    /// matrix M_r = Cᵀ M C for the perturbation rows (accelerations).
+    pub fn frame_problem_scaled(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> (
+        FrameProblem,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<ContactState>,
+        Option<DMatrix<f64>>,
+    ) {
+        let model = &self.model;
+        let nq = model.nq();
+        data.q.copy_from_slice(q);
+        data.u.copy_from_slice(u);
+        assemble(model, t, &mut data.q, &mut data.u);
+        // Accelerations: targets for the unconstrained coordinates; the
+        // constrained ones follow from their constraints.
+        data.udot.copy_from_slice(udot_target);
+        crate::dynamics::forward::complete_accelerations(
+            model,
+            &data.q,
+            &data.u,
+            t,
+            &mut data.udot,
+        );
+        kinematics::full(model, data);
+        data.clear_applied();
+        if let Some(l) = &self.loads {
+            l.apply(t, data);
+        }
+        let mut passive_values = Vec::new();
+        for p in &self.passive {
+            let mut g = vec![0.0; nq];
+            p.add_generalized_force(model, data, t, &mut g);
+            for k in 0..nq {
+                data.applied_gen[k] += g[k];
+            }
+            passive_values.extend(p.record_values(data, t));
+        }
+        mf.evaluate(&self.muscles, model, data);
+        if self.settings.passive_fiber_forces {
+            for (m, f) in mf.unit_force.iter().enumerate() {
+                let fp = mf.passive_force[m];
+                for k in 0..nq {
+                    data.applied_gen[k] += fp * f[k];
+                }
+            }
+        }
+        let perturb = self.settings.constraint_matrix == ConstraintMatrix::Perturbation;
+        if !perturb {
+            rnea::inverse_dynamics_after_kinematics(model, data, true);
+        }
+        // Rows: C_kᵀ τ_required = C_kᵀ Σ x_i f_i g_i.
+        let nr = self.rows.len();
+        let nv = self.controls.len();
+        let mut a = DMatrix::zeros(nr, nv);
+        let mut b = DVector::zeros(nr);
+        let couplings: Vec<Vec<(usize, f64)>> = self
+            .rows
+            .iter()
+            .map(|&k| coupling::coupling_vector(model, &data.q, k))
+            .collect();
+        // Perturbation rows: u̇_I(x) = u̇_target,I by forward dynamics.
+        let fd = perturb.then(|| Perturbation::start(self, t, data, mf, &couplings));
+        if let Some(fd) = &fd {
+            for (r, &k) in self.rows.iter().enumerate() {
+                b[r] = fd.target[k] - fd.udot0[r];
+            }
+        } else {
+            for (r, cv) in couplings.iter().enumerate() {
+                b[r] = cv.iter().map(|(i, c)| c * data.tau[*i]).sum();
+            }
+        }
+        let mut scale = vec![0.0; nv];
+        let mut g = vec![0.0; nq];
+        for (v, ctl) in self.controls.iter().enumerate() {
+            let (f, gen): (f64, &[f64]) = match ctl {
+                Control::Muscle(m) => {
+                    let pm = &self.muscles.muscles[*m];
+                    let f = if self.settings.use_muscle_physiology {
+                        mf.max_active_force[*m]
+                    } else {
+                        pm.muscle.params.max_isometric_force
+                    };
+                    (f, &mf.unit_force[*m])
+                }
+                Control::Actuator(act) => {
+                    g.iter_mut().for_each(|x| *x = 0.0);
+                    act.add_unit_generalized_force(model, data, &mut g);
+                    (act.optimal_force, &g)
+                }
+            };
+            scale[v] = f;
+            if let Some(fd) = &fd {
+                let col = fd.column(self, t, data, mf, gen, f);
+                a.set_column(v, &col);
+                continue;
+            }
+            for (r, cv) in couplings.iter().enumerate() {
+                a[(r, v)] = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
+            }
+        }
+        // Contacts (Krüger & Wartzack eqs. 1-3, 10, 15-16): three multipliers
+        // each, weighted 1/w0; static regime: free shear inside the friction
+        // cone; kinetic regime: the shear follows the normal force (eq. 3)
+        // and the shear multipliers are held at zero.
+        let nc = self.contacts.len();
+        let mut a = a.resize_horizontally(nv + 3 * nc, 0.0);
+        let mut lower = self.lower.clone();
+        let mut upper = self.upper.clone();
+        let mut weights = vec![1.0; nv];
+        let mut static_contacts = Vec::new();
+        let mut states = Vec::with_capacity(nc);
+        let mut cols = [vec![0.0; nq], vec![0.0; nq], vec![0.0; nq]];
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let st = c.state(model, data);
+            let v0 = nv + 3 * ci;
+            cols.iter_mut()
+                .for_each(|col| col.iter_mut().for_each(|x| *x = 0.0));
+            let kinetic = st.regime == Regime::Kinetic;
+            if kinetic {
+                c.add_kinetic_normal_column(model, data, &st, &mut cols[0]);
+            } else {
+                c.add_unit_generalized_forces(model, data, &st, &mut cols);
+            }
+            for (k, col) in cols.iter().enumerate() {
+                if let Some(fd) = &fd {
+                    let column = fd.column(self, t, data, mf, col, 1.0);
+                    a.set_column(v0 + k, &column);
+                    continue;
+                }
+                for (r, cv) in couplings.iter().enumerate() {
+                    a[(r, v0 + k)] = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
+                }
+            }
+            let shear = if kinetic {
+                (0.0, 0.0)
+            } else {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            };
+            lower.extend([0.0, shear.0, shear.0]);
+            upper.extend([f64::INFINITY, shear.1, shear.1]);
+            weights.extend([1.0 / self.w0; 3]);
+            if !kinetic {
+                static_contacts.push(StaticContact {
+                    normal: v0,
+                    shear: [v0 + 1, v0 + 2],
+                    mu: c.static_limit(&st),
+                });
+            }
+            states.push(st);
+        }
+        let problem = FrameProblem {
+            a,
+            b,
+            weights,
+            exponent: self.settings.activation_exponent,
+            lower,
+            upper,
+            static_contacts,
+            friction: self.settings.friction,
+            settings: SolveSettings {
+                tolerance: self
+                    .settings
+                    .solver_tolerance
+                    .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
+                max_iter: self.settings.max_iterations.max(100),
+                solver: self.settings.solver,
+            },
+        };
+        let m_r = fd.map(|fd| fd.finish(model, data));
+        (problem, scale, passive_values, states, m_r)
+    }
+
+    /// Bodies that receive contact forces, in body order.
+    pub fn contact_bodies(&self) -> Vec<usize> {
+        let mut b: Vec<usize> = self
+            .contacts
+            .iter()
+            .flat_map(|c| [c.point_body, c.plane_body])
+            .collect();
+        b.sort_unstable();
+        b.dedup();
+        b
+    }
+
+    /// Columns of the generalized-forces-by-source table.
+    pub fn by_source_labels(&self) -> Vec<String> {
+        self.rows
+            .iter()
+            .flat_map(|&c| {
+                ["required", "muscles", "actuators", "contacts"]
+                    .map(|s| format!("{}_{s}", self.model.coordinates[c].name))
+            })
+            .collect()
+    }
+
+    pub fn muscle_labels(&self) -> Vec<String> {
+        self.controls
+            .iter()
+            .filter_map(|c| match c {
+                Control::Muscle(m) => Some(self.muscles.muscles[*m].muscle.name.clone()),
+                Control::Actuator(_) => None,
+            })
+            .collect()
+    }
+
+    pub fn contact_labels(&self) -> Vec<String> {
+        self.contacts
+            .iter()
+            .flat_map(|c| {
+                CONTACT_COLUMNS
+                    .iter()
+                    .map(move |s| format!("{}_{s}", c.name))
+            })
+            .collect()
+    }
+
+    pub fn contact_body_labels(&self) -> Vec<String> {
+        self.contact_bodies()
+            .iter()
+            .flat_map(|&b| {
+                ["Fx", "Fy", "Fz", "Mx", "My", "Mz"]
+                    .map(|s| format!("{}_{s}", self.model.bodies[b].name))
+            })
+            .collect()
+    }
+
+    /// The ExternalForces of the exported loads: (name, body, identifier prefix).
+    pub fn contact_load_forces(&self) -> Vec<(String, usize, String)> {
+        let mut v = Vec::new();
+        for c in &self.contacts {
+            v.push((
+                format!("{}_on_{}", c.name, self.model.bodies[c.point_body].name),
+                c.point_body,
+                format!("{}_point_", c.name),
+            ));
+            if c.plane_body != 0 {
+                v.push((
+                    format!("{}_on_{}", c.name, self.model.bodies[c.plane_body].name),
+                    c.plane_body,
+                    format!("{}_plane_", c.name),
+                ));
+            }
+        }
+        v
+    }
+
+    fn contact_outputs(&self, states: &[ContactState], lambda: &[f64], data: &Data) -> ContactRows {
+        let mut rows = ContactRows::default();
+        let bodies = self.contact_bodies();
+        let mut sums = vec![[0.0; 6]; bodies.len()];
+        let mut add = |b: usize, f: &nalgebra::Vector3<f64>, p: &nalgebra::Vector3<f64>| {
+            let k = bodies.iter().position(|&x| x == b).unwrap_or(0);
+            let m = (p - data.position[b]).cross(f);
+            for i in 0..3 {
+                sums[k][i] += f[i];
+                sums[k][3 + i] += m[i];
+            }
+        };
+        for (ci, (c, st)) in self.contacts.iter().zip(states).enumerate() {
+            let l = [lambda[3 * ci], lambda[3 * ci + 1], lambda[3 * ci + 2]];
+            let kinetic = st.regime == Regime::Kinetic;
+            let (f_point, p, f_plane) = c.forces(st, l, kinetic);
+            rows.contact.extend(f_point.iter());
+            rows.contact.extend(p.iter());
+            rows.contact.extend([
+                st.distance,
+                st.weight,
+                st.slip_speed,
+                st.beta,
+                l[0],
+                l[1],
+                l[2],
+            ]);
+            add(c.point_body, &f_point, &p);
+            add(c.plane_body, &f_plane, &st.projection_ground);
+            rows.loads.extend(f_point.iter());
+            rows.loads.extend(p.iter());
+            if c.plane_body != 0 {
+                rows.loads.extend(f_plane.iter());
+                rows.loads.extend(st.projection_ground.iter());
+            }
+        }
+        rows.bodies = sums.into_iter().flatten().collect();
+        rows
+    }
+
+    /// Solve one frame. `data` and `mf` are per-thread workspaces.
+    pub fn solve_frame(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+    ) -> FrameResult {
+        self.solve_frame_weights(t, q, u, udot_target, data, mf, &[self.w0])
+            .pop()
+            .expect("one result per weight")
+    }
+
+    /// Solve one frame once for each contact weight w0 in `weights`: the
+    /// physics (kinematics, muscle paths and strength, contact geometry,
+    /// the equations of motion) is assembled once, and only the contacts'
+    /// objective weights 1/w0 change between the solves. With the run's own
+    /// w0 the result equals [`solve_frame`](Self::solve_frame)'s bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_frame_weights(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+        weights: &[f64],
+    ) -> Vec<FrameResult> {
+        let (mut problem, scale, passive_values, states, m_r) =
+            self.frame_problem_scaled(t, q, u, udot_target, data, mf);
+        let nv = self.controls.len();
+        weights
+            .iter()
+            .map(|&w0| {
+                // Every variable after the controls is a contact multiplier.
+                problem.weights[nv..].iter_mut().for_each(|w| *w = 1.0 / w0);
+                let solution = optimize::solve(&problem);
+                self.frame_result(
+                    t,
+                    &problem,
+                    solution,
+                    &scale,
+                    &passive_values,
+                    &states,
+                    m_r.as_ref(),
+                    data,
+                    mf,
+                )
+            })
+            .collect()
+    }
+
+    /// The outputs of a solved frame problem.
+    #[allow(clippy::too_many_arguments)]
+    fn frame_result(
+        &self,
+        t: f64,
+        problem: &FrameProblem,
+        solution: optimize::FrameSolution,
+        scale: &[f64],
+        passive_values: &[f64],
+        states: &[ContactState],
+        m_r: Option<&DMatrix<f64>>,
+        data: &Data,
+        mf: &MuscleFrame,
+    ) -> FrameResult {
+        let bmax = problem.b.amax();
+        let relative_residual = if bmax > 0.0 {
+            solution.eq_residual / bmax
+        } else {
+            solution.eq_residual
+        };
+        let nv = self.controls.len();
+        let forces: Vec<f64> = solution.x[..nv]
+            .iter()
+            .zip(scale)
+            .map(|(x, f)| x * f)
+            .collect();
+        let friction_violation = problem
+            .static_contacts
+            .iter()
+            .map(|c| self.settings.friction.violation(c, &solution.x))
+            .fold(0.0, f64::max);
+        let contacts = self.contact_outputs(states, &solution.x[nv..], data);
+        // Generalized forces by source on each free coordinate (reduced rows):
+        // required, muscles, other actuators, contacts. Perturbation rows are
+        // accelerations: M_r turns them into generalized forces.
+        let nr = self.rows.len();
+        let mut parts = [
+            problem.b.clone(),
+            DVector::zeros(nr),
+            DVector::zeros(nr),
+            DVector::zeros(nr),
+        ];
+        for v in 0..problem.a.ncols() {
+            let k = match self.controls.get(v) {
+                Some(Control::Muscle(_)) => 1,
+                Some(Control::Actuator(_)) => 2,
+                None => 3,
+            };
+            parts[k].axpy(solution.x[v], &problem.a.column(v), 1.0);
+        }
+        if let Some(m) = m_r {
+            for p in parts.iter_mut() {
+                *p = m * &*p;
+            }
+        }
+        let mut by_source = Vec::with_capacity(4 * nr);
+        for r in 0..nr {
+            by_source.extend(parts.iter().map(|p| p[r]));
+        }
+        // Mechanical power of each muscle: tension x shortening speed.
+        let muscle_power: Vec<f64> = self
+            .controls
+            .iter()
+            .zip(&forces)
+            .filter_map(|(c, f)| match c {
+                Control::Muscle(m) => Some(-f * mf.speed[*m]),
+                Control::Actuator(_) => None,
+            })
+            .collect();
+        let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
+        let mut force_row =
+            force_file_row(&forces, passive_values, &passive_sizes, &self.passive_after);
+        if let Some(l) = &self.loads {
+            for ef in &l.forces {
+                let (f, p, tq) = ef.evaluate(t, data);
+                force_row.extend(ef.record(&f, &p, &tq, data));
+            }
+        }
+        FrameResult {
+            time: t,
+            solution,
+            forces,
+            force_row,
+            relative_residual,
+            friction_violation,
+            contacts,
+            by_source,
+            muscle_power,
+            q: data.q.clone(),
+            u: data.u.clone(),
+            udot: data.udot.clone(),
+        }
+    }
+}
+
+/// Status code written to the diagnostics table.
+pub fn status_code(s: SolveStatus) -> f64 {
+    match s {
+        SolveStatus::Solved => 0.0,
+        SolveStatus::AlmostSolved => 1.0,
+        _ => -1.0,
+    }
+}

@@ -1,0 +1,24 @@
+//! The per-thread buffers a frame is evaluated in: created once per worker
+//! thread and reused for every frame it solves (the frame driver's `init`).
+//! Everything that changes from frame to frame lives here; the compiled
+//! model, muscles and problem stay immutable and shared.
+
+use crate::dynamics::Data;
+use crate::model::Model;
+use crate::muscles::set::{MuscleFrame, MuscleSet};
+
+pub struct Workspace {
+    /// Kinematics, dynamics and applied forces of the current frame.
+    pub data: Data,
+    /// Muscle path states, lengths, speeds, strength and unit forces.
+    pub muscles: MuscleFrame,
+}
+
+impl Workspace {
+    pub fn new(model: &Model, muscles: &MuscleSet) -> Workspace {
+        Workspace {
+            data: Data::new(model),
+            muscles: MuscleFrame::new(muscles, model),
+        }
+    }
+}
