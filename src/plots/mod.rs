@@ -347,6 +347,9 @@ fn write_figure(
     let mut enc = png::Encoder::new(BufWriter::new(file), w, h);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
+    // fdeflate's PNG-tuned fast mode: flat-coloured charts compress about as
+    // well as with the default level, in a fraction of the time.
+    enc.set_compression(png::Compression::Fast);
     let mut writer = enc.write_header().map_err(png_err)?;
     writer.write_image_data(&rgb).map_err(png_err)?;
     writer.finish().map_err(png_err)?;
