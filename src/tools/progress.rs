@@ -5,7 +5,13 @@ use std::io::IsTerminal;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressStyle};
+use std::sync::OnceLock;
+
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+
+/// Every bar of the process: loops that run side by side (a study's setups)
+/// stack their bars instead of drawing over each other.
+static BARS: OnceLock<MultiProgress> = OnceLock::new();
 
 use crate::tools::RunOptions;
 
@@ -62,7 +68,9 @@ pub fn bar(len: u64, opts: &RunOptions, label: &str) -> Progress {
     let bar = if !opts.verbose || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
-        let pb = ProgressBar::new(len);
+        let pb = BARS
+            .get_or_init(MultiProgress::new)
+            .add(ProgressBar::new(len));
         if let Ok(style) =
             ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
         {

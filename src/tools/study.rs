@@ -493,18 +493,29 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let study = study_element(&root)?;
     let dir = study_dir(path);
     let (runs, elements, expected) = prepare(study, &dir, opts.results_dir.as_deref())?;
+    // The setups are independent: they run side by side (each one's frames in
+    // parallel too), so that one setup's serial parts (loading, closing the
+    // contacts, sweep statistics) overlap another's frames. Summaries are
+    // taken in the study's order, whatever order the setups finish in; the
+    // first error in that order is the study's.
+    use rayon::prelude::*;
+    let done: Vec<Result<RunSummary>> = runs
+        .par_iter()
+        .map(|r| {
+            let run_opts = RunOptions {
+                results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
+                ..opts.clone()
+            };
+            match &r.setup {
+                Setup::Analyze(a) => analyze::run(a, &run_opts),
+                Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts),
+            }
+        })
+        .collect();
     let mut summary = RunSummary::default();
-    for r in &runs {
+    for (r, done) in runs.iter().zip(done) {
         let s = r.file.display().to_string();
-        let run_opts = RunOptions {
-            results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
-            ..opts.clone()
-        };
-        let done = match &r.setup {
-            Setup::Analyze(a) => analyze::run(a, &run_opts)?,
-            Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts)?,
-        };
-        summary.absorb(done, Some(s.as_str()));
+        summary.absorb(done?, Some(s.as_str()));
         if summary.stopped.is_some() {
             return Ok(summary);
         }
@@ -544,11 +555,17 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
 pub fn draw(elements: &[Element], dir: &Path, out: &Path, name: &str) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    for f in elements.iter().filter(|e| e.name == "Figure") {
-        files.extend(figure(f, dir, out)?);
-    }
+    // Figures and metrics are independent: drawn and computed in parallel,
+    // listed in the study's order.
+    use rayon::prelude::*;
+    let figures: Vec<Vec<PathBuf>> = elements
+        .par_iter()
+        .filter(|e| e.name == "Figure")
+        .map(|f| figure(f, dir, out))
+        .collect::<Result<_>>()?;
+    files.extend(figures.into_iter().flatten());
     let metrics: Vec<(String, f64)> = elements
-        .iter()
+        .par_iter()
         .filter(|e| e.name == "Metric")
         .map(|m| metric(m, dir))
         .collect::<Result<_>>()?;
