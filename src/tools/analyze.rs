@@ -2,6 +2,7 @@
 //! the frames (rows i0..=i1 of the states table; opensim-semantics.md §9.3),
 //! and run each analysis of the setup on them.
 
+use crate::contacts::Contact;
 use crate::error::{Error, Location, Result};
 pub use crate::frame::driver::{for_each_frame, frame_rows, is_frame};
 use crate::motion::states::States;
@@ -58,10 +59,21 @@ fn check_time_range(
 
 /// Read the setup's motion into states.
 pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
+    load_states_with(setup, model, &[])
+}
+
+/// [`load_states`], taking the contacts `<close_contacts>` names from
+/// `contacts` (compiled against `model`) when they are there, rather than
+/// reading the model's force elements again.
+pub fn load_states_with(
+    setup: &AnalyzeSetup,
+    model: &crate::model::Model,
+    contacts: &[Contact],
+) -> Result<States> {
     let file = coordinates_file(setup)?;
     let mut table = load_coordinates(file, setup.lowpass_cutoff)?;
     if !setup.close_contacts.is_empty() {
-        close_setup_contacts(setup, model, &mut table)?;
+        close_setup_contacts(setup, model, contacts, &mut table)?;
     }
     let states =
         States::from_coordinates_with_degree(model, &table, file, setup.coordinate_spline)?;
@@ -80,9 +92,19 @@ pub fn open_state_stream<'m>(
     setup: &AnalyzeSetup,
     model: &'m crate::model::Model,
 ) -> Result<StateStream<'m>> {
+    open_state_stream_with(setup, model, &[])
+}
+
+/// [`open_state_stream`] with the run's compiled contacts (see
+/// [`load_states_with`]).
+pub fn open_state_stream_with<'m>(
+    setup: &AnalyzeSetup,
+    model: &'m crate::model::Model,
+    contacts: &[Contact],
+) -> Result<StateStream<'m>> {
     let file = coordinates_file(setup)?;
     let mut stream = if !setup.close_contacts.is_empty() {
-        let states = load_states(setup, model)?;
+        let states = load_states_with(setup, model, contacts)?;
         let udot = states.speed_derivatives(file)?;
         let mut stream =
             StateStream::in_memory(model, states, udot, setup.initial_time, setup.final_time);
@@ -234,38 +256,51 @@ pub fn results_dir(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<std::path:
     Ok(dir)
 }
 
-/// Apply the setup's `<close_contacts>`: the contacts come from the model's
-/// and the force-set files' force elements.
+/// Apply the setup's `<close_contacts>`: the contacts come from `known`
+/// (the run's compiled contacts) or else from the model's and the force-set
+/// files' force elements, read only when needed.
 fn close_setup_contacts(
     setup: &AnalyzeSetup,
     model: &crate::model::Model,
+    known: &[Contact],
     table: &mut crate::storage::Storage,
 ) -> Result<()> {
-    let am = crate::tools::loading::load_analysis_model(setup)?;
     let at = || {
         setup
             .close_contacts_loc
             .clone()
             .unwrap_or_else(|| Location::file(&setup.setup_file).with_element("<close_contacts>"))
     };
+    let mut am = None;
     let mut closures = Vec::new();
     for (contact, coordinate) in &setup.close_contacts {
-        let el = am
-            .forces
-            .iter()
-            .find(|f| {
-                f.attr("name") == Some(contact.as_str())
-                    && crate::tools::loading::force_kind(f)
-                        == crate::tools::loading::ForceKind::Contact
-            })
-            .ok_or_else(|| {
-                Error::input(
-                    at(),
-                    format!("no contact named '{contact}' in the model or its force-set files"),
-                )
-            })?;
-        let c = crate::contacts::Contact::from_xml(el, model)?
-            .ok_or_else(|| Error::input(at(), format!("'{contact}' is not a contact")))?;
+        let c = match known.iter().find(|c| &c.name == contact) {
+            Some(c) => c.clone(),
+            None => {
+                let am = match &am {
+                    Some(am) => am,
+                    None => am.insert(crate::tools::loading::load_analysis_model(setup)?),
+                };
+                let el = am
+                    .forces
+                    .iter()
+                    .find(|f| {
+                        f.attr("name") == Some(contact.as_str())
+                            && crate::tools::loading::force_kind(f)
+                                == crate::tools::loading::ForceKind::Contact
+                    })
+                    .ok_or_else(|| {
+                        Error::input(
+                            at(),
+                            format!(
+                                "no contact named '{contact}' in the model or its force-set files"
+                            ),
+                        )
+                    })?;
+                crate::contacts::Contact::from_xml(el, model)?
+                    .ok_or_else(|| Error::input(at(), format!("'{contact}' is not a contact")))?
+            }
+        };
         let k = model
             .coordinate_index(coordinate)
             .ok_or_else(|| Error::input(at(), format!("no coordinate named '{coordinate}'")))?;

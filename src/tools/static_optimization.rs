@@ -22,7 +22,7 @@ use crate::reactions::{
     column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
 };
 use crate::storage::StoWriter;
-use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream, results_dir};
+use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream_with, results_dir};
 use crate::tools::joint_reaction::{
     resolve_reactions, JointReactionSetup, DESCRIPTION as JR_DESCRIPTION,
 };
@@ -260,9 +260,9 @@ pub fn run(
         (p, w, None)
     };
     // The states are streamed block by block (motion::stream): memory stays
-    // flat however long the trial. Opened here for the checks, the missing
-    // coordinates and the frame count; each run below streams them again.
-    let stream = open_state_stream(setup, &problem.model)?;
+    // flat however long the trial. Opened once: for the checks, the missing
+    // coordinates and the frame count, then streamed by the one pass below.
+    let stream = open_state_stream_with(setup, &problem.model, &problem.contacts)?;
     // Columns of coordinates a reduction removed are not the user's typos.
     let dropped = reduction
         .as_ref()
@@ -277,7 +277,6 @@ pub fn run(
     }
     let step_interval = so.common.step_interval;
     let frames = frame_count(stream.first_row, stream.last_row, step_interval);
-    drop(stream);
     let dir = results_dir(setup, opts)?;
     let base = format!("{}_{}_", setup.name, so.common.name);
     let mut summary = RunSummary {
@@ -334,6 +333,7 @@ pub fn run(
     problem.w0 = weights[0];
     let summaries = run_sweep(
         &problem,
+        stream,
         setup,
         step_interval,
         &dir,
@@ -348,8 +348,11 @@ pub fn run(
                 if jr_setup.knee_loads {
                     let states = match &knee_states {
                         Some(s) => s,
-                        None => knee_states
-                            .insert(crate::tools::analyze::load_states(setup, &problem.model)?),
+                        None => knee_states.insert(crate::tools::analyze::load_states_with(
+                            setup,
+                            &problem.model,
+                            &problem.contacts,
+                        )?),
                     };
                     let table = dir.join(format!("{p}ReactionLoads.sto"));
                     knee_files.push(crate::tools::knee_loads::write(
@@ -1044,6 +1047,7 @@ fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
 /// pass serves every w0).
 fn run_sweep(
     problem: &SoProblem,
+    mut stream: crate::motion::stream::StateStream,
     setup: &AnalyzeSetup,
     step_interval: usize,
     dir: &std::path::Path,
@@ -1065,7 +1069,6 @@ fn run_sweep(
         .map(|w| w.skip_until)
         .fold(f64::INFINITY, f64::min);
     let weights: Vec<f64> = runs.iter().map(|r| r.w0).collect();
-    let mut stream = open_state_stream(setup, &problem.model)?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
     let mut progress = crate::tools::progress::bar(nframes as u64, opts, label);
