@@ -44,21 +44,50 @@ pub fn is_study(path: &Path) -> bool {
         .unwrap_or(false)
 }
 
+/// The tables figures and metrics read (paths relative to `dir`), each read
+/// once however many curves and metrics use it.
+struct Tables<'a> {
+    dir: &'a Path,
+    read: std::sync::Mutex<std::collections::HashMap<PathBuf, std::sync::Arc<Storage>>>,
+}
+
+impl<'a> Tables<'a> {
+    fn new(dir: &'a Path) -> Self {
+        Tables {
+            dir,
+            read: Default::default(),
+        }
+    }
+
+    fn read(&self, path: &Path) -> Result<std::sync::Arc<Storage>> {
+        let cached = self.read.lock().map(|m| m.get(path).cloned());
+        if let Ok(Some(t)) = cached {
+            return Ok(t);
+        }
+        let t = std::sync::Arc::new(storage::read(path)?);
+        if let Ok(mut m) = self.read.lock() {
+            m.insert(path.to_path_buf(), t.clone());
+        }
+        Ok(t)
+    }
+}
+
 /// The time column and one data column (or the sum of the space-separated
 /// `columns`), scaled by the `scale` attribute, of the table named by the
 /// attribute `file_attr`.
 fn table_column(
     el: &Element,
-    dir: &Path,
+    tables: &Tables,
     file_attr: &str,
     column: &str,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
     let file = el
         .attr(file_attr)
         .ok_or_else(|| el.error(format!("missing attribute {file_attr}")))?;
-    let path = resolve(dir, file);
-    let t: Storage =
-        storage::read(&path).map_err(|e| e.context(format!("{} ({})", el.describe(), file)))?;
+    let path = resolve(tables.dir, file);
+    let t = tables
+        .read(&path)
+        .map_err(|e| e.context(format!("{} ({})", el.describe(), file)))?;
     let mut y = vec![0.0; t.time.len()];
     for c in column.split_whitespace() {
         let j = t
@@ -82,7 +111,7 @@ fn table_column(
     Ok((t.time.clone(), y.into_iter().map(|v| v * scale).collect()))
 }
 
-fn figure(el: &Element, dir: &Path, out: &Path) -> Result<Vec<PathBuf>> {
+fn figure(el: &Element, tables: &Tables, out: &Path) -> Result<Vec<PathBuf>> {
     let name = el
         .attr("name")
         .ok_or_else(|| el.error("a Figure needs a name attribute"))?;
@@ -115,7 +144,7 @@ fn figure(el: &Element, dir: &Path, out: &Path) -> Result<Vec<PathBuf>> {
                 let column = c
                     .attr("column")
                     .ok_or_else(|| c.error("missing attribute column"))?;
-                let (x, y) = table_column(c, dir, "file", column)?;
+                let (x, y) = table_column(c, tables, "file", column)?;
                 chart.series.push(Series::new(
                     c.attr("label").unwrap_or(column),
                     x,
@@ -127,9 +156,9 @@ fn figure(el: &Element, dir: &Path, out: &Path) -> Result<Vec<PathBuf>> {
                 let column = c
                     .attr("column")
                     .ok_or_else(|| c.error("missing attribute column"))?;
-                let (x, mean) = table_column(c, dir, "mean", column)?;
-                let (_, lo) = table_column(c, dir, "min", column)?;
-                let (_, hi) = table_column(c, dir, "max", column)?;
+                let (x, mean) = table_column(c, tables, "mean", column)?;
+                let (_, lo) = table_column(c, tables, "min", column)?;
+                let (_, hi) = table_column(c, tables, "max", column)?;
                 let mut series = Series::new(c.attr("label").unwrap_or(column), x, mean, style(c)?);
                 series.band = Some((lo, hi));
                 chart.series.push(series);
@@ -162,7 +191,7 @@ fn figure(el: &Element, dir: &Path, out: &Path) -> Result<Vec<PathBuf>> {
     }
 }
 
-fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
+fn metric(el: &Element, tables: &Tables) -> Result<(String, f64)> {
     let name = el
         .attr("name")
         .ok_or_else(|| el.error("a Metric needs a name attribute"))?
@@ -170,13 +199,13 @@ fn metric(el: &Element, dir: &Path) -> Result<(String, f64)> {
     let columns = el
         .attr("columns")
         .ok_or_else(|| el.error("missing attribute columns"))?;
-    let (t, y) = table_column(el, dir, "file", columns)?;
+    let (t, y) = table_column(el, tables, "file", columns)?;
     // The column that locates a value (`where`): e.g. knee_flexion_r.
     let located = || -> Result<Vec<f64>> {
         let w = el
             .attr("where")
             .ok_or_else(|| el.error("this op needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"))?;
-        Ok(table_column(el, dir, "file", w)?.1)
+        Ok(table_column(el, tables, "file", w)?.1)
     };
     let op = el.attr("op").unwrap_or("max");
     let v = match op {
@@ -558,16 +587,17 @@ pub fn draw(elements: &[Element], dir: &Path, out: &Path, name: &str) -> Result<
     // Figures and metrics are independent: drawn and computed in parallel,
     // listed in the study's order.
     use rayon::prelude::*;
+    let tables = Tables::new(dir);
     let figures: Vec<Vec<PathBuf>> = elements
         .par_iter()
         .filter(|e| e.name == "Figure")
-        .map(|f| figure(f, dir, out))
+        .map(|f| figure(f, &tables, out))
         .collect::<Result<_>>()?;
     files.extend(figures.into_iter().flatten());
     let metrics: Vec<(String, f64)> = elements
         .par_iter()
         .filter(|e| e.name == "Metric")
-        .map(|m| metric(m, dir))
+        .map(|m| metric(m, &tables))
         .collect::<Result<_>>()?;
     if !metrics.is_empty() {
         let p = out.join(format!("{name}_metrics.csv"));
