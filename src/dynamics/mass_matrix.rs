@@ -7,24 +7,56 @@ use crate::model::Model;
 
 /// M(q) at `data.q` (positions must be current: call
 /// [`super::kinematics::positions`] first).
+///
+/// A body's Jacobians are nonzero only in the columns of the joints between
+/// it and ground, so each body adds m J_cᵀ J_c + J_ωᵀ I J_ω on those columns
+/// alone: O(Σ_b k_b²) for k_b such columns, instead of O(bodies × n²).
 pub fn mass_matrix(model: &Model, data: &Data) -> DMatrix<f64> {
     let n = model.nq();
     let mut m = DMatrix::zeros(n, n);
     let mut jc = DMatrix::zeros(3, n);
     let mut jw = DMatrix::zeros(3, n);
+    let mut cols: Vec<usize> = Vec::with_capacity(n);
+    // Per chain column: m J_c and I J_ω.
+    let mut mjc: Vec<Vector3<f64>> = Vec::with_capacity(n);
+    let mut ijw: Vec<Vector3<f64>> = Vec::with_capacity(n);
     for b in 1..model.nbodies() {
         let body = &model.bodies[b];
         if body.mass == 0.0 {
             continue;
         }
-        jc.fill(0.0);
-        jw.fill(0.0);
+        cols.clear();
+        let mut up = b;
+        while up != 0 {
+            let j = &model.joints[up];
+            cols.extend(j.q_start..j.q_start + j.nq);
+            up = j.parent_body;
+        }
+        for &c in &cols {
+            for r in 0..3 {
+                jc[(r, c)] = 0.0;
+                jw[(r, c)] = 0.0;
+            }
+        }
         let c = data.station_position(b, &body.mass_center);
         jacobian::add_station_jacobian(model, data, b, &c, 1.0, &mut jc);
         angular_jacobian(model, data, b, &mut jw);
         let r = data.rotation[b];
         let i_g = r * body.inertia * r.transpose();
-        m += body.mass * jc.transpose() * &jc + jw.transpose() * i_g * &jw;
+        let col3 =
+            |mat: &DMatrix<f64>, c: usize| Vector3::new(mat[(0, c)], mat[(1, c)], mat[(2, c)]);
+        mjc.clear();
+        ijw.clear();
+        for &c in &cols {
+            mjc.push(body.mass * col3(&jc, c));
+            ijw.push(i_g * col3(&jw, c));
+        }
+        for &ca in &cols {
+            let (jca, jwa) = (col3(&jc, ca), col3(&jw, ca));
+            for (k, &ck) in cols.iter().enumerate() {
+                m[(ca, ck)] += mjc[k].dot(&jca) + ijw[k].dot(&jwa);
+            }
+        }
     }
     m
 }
