@@ -1935,6 +1935,8 @@ struct LogNames {
     contacts: Vec<String>,
     /// Reaction label roots of the first coupled JointReaction, if any.
     joints: Vec<String>,
+    /// Writes each frame's messages straight to JSON bytes.
+    encoder: mcap_log::MessageEncoder,
 }
 
 /// Encoded messages of one frame: (channel index, JSON bytes).
@@ -1942,18 +1944,30 @@ type FrameMessages = Vec<(usize, Vec<u8>)>;
 
 impl LogNames {
     fn new(problem: &SoProblem, reactions: Option<&[ReactionSpec]>) -> LogNames {
+        let coordinates: Vec<String> = problem
+            .model
+            .coordinates
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        let labels = problem.labels.clone();
+        let contacts: Vec<String> = problem.contacts.iter().map(|c| c.name.clone()).collect();
+        let joints: Vec<String> = reactions
+            .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
+            .unwrap_or_default();
+        let encoder = mcap_log::MessageEncoder::new(&mcap_log::StatoptChannels {
+            coordinates: coordinates.clone(),
+            activations: labels.clone(),
+            forces: labels.clone(),
+            contacts: contacts.clone(),
+            joints: joints.clone(),
+        });
         LogNames {
-            coordinates: problem
-                .model
-                .coordinates
-                .iter()
-                .map(|c| c.name.clone())
-                .collect(),
-            labels: problem.labels.clone(),
-            contacts: problem.contacts.iter().map(|c| c.name.clone()).collect(),
-            joints: reactions
-                .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
-                .unwrap_or_default(),
+            coordinates,
+            labels,
+            contacts,
+            joints,
+            encoder,
         }
     }
 
@@ -1963,29 +1977,17 @@ impl LogNames {
         r: &FrameResult,
         jr_rows: &[Vec<f64>],
     ) -> Result<FrameMessages> {
-        fn names(v: &[String]) -> Vec<&str> {
-            v.iter().map(String::as_str).collect()
-        }
         let t = r.time;
         let nv = problem.controls.len();
-        let labels = names(&self.labels);
+        let enc = &self.encoder;
         let mut out = Vec::with_capacity(6);
-        let mut push = |idx: usize, v: serde_json::Value| -> Result<()> {
-            out.push((idx, mcap_log::serialize_message(t, &v)?));
-            Ok(())
-        };
-        push(
-            mcap_log::KINEMATICS,
-            mcap_log::kinematics_message(&names(&self.coordinates), &r.q, &r.u, &r.udot)?,
-        )?;
-        push(
-            mcap_log::ACTIVATIONS,
-            mcap_log::named_values_message(&labels, &r.solution.x[..nv])?,
-        )?;
-        push(
-            mcap_log::MUSCLE_FORCES,
-            mcap_log::named_values_message(&labels, &r.forces)?,
-        )?;
+        let mut data = Vec::new();
+        enc.kinematics(&mut data, t, &r.q, &r.u, &r.udot)?;
+        out.push((mcap_log::KINEMATICS, std::mem::take(&mut data)));
+        enc.activations(&mut data, t, &r.solution.x[..nv])?;
+        out.push((mcap_log::ACTIVATIONS, std::mem::take(&mut data)));
+        enc.muscle_forces(&mut data, t, &r.forces)?;
+        out.push((mcap_log::MUSCLE_FORCES, std::mem::take(&mut data)));
         if !self.contacts.is_empty() {
             let samples: Vec<mcap_log::ContactSample> = r
                 .contacts
@@ -2008,10 +2010,8 @@ impl LogNames {
                     },
                 })
                 .collect();
-            push(
-                mcap_log::CONTACTS,
-                mcap_log::contacts_message(&names(&self.contacts), &samples)?,
-            )?;
+            enc.contacts(&mut data, t, &samples)?;
+            out.push((mcap_log::CONTACTS, std::mem::take(&mut data)));
         }
         if let (Some(row), false) = (jr_rows.first(), self.joints.is_empty()) {
             let samples: Vec<mcap_log::JointReactionSample> = row
@@ -2021,23 +2021,21 @@ impl LogNames {
                     moment: [c[3], c[4], c[5]],
                 })
                 .collect();
-            push(
-                mcap_log::JOINT_REACTIONS,
-                mcap_log::joint_reactions_message(&names(&self.joints), &samples)?,
-            )?;
+            enc.joint_reactions(&mut data, t, &samples)?;
+            out.push((mcap_log::JOINT_REACTIONS, std::mem::take(&mut data)));
         }
         let status = format!("{:?}", r.solution.status);
-        push(
-            mcap_log::SOLVER,
-            mcap_log::solver_message(
-                &status,
-                r.solution.solver.name(),
-                r.solution.iterations,
-                r.solution.objective,
-                r.solution.eq_residual,
-                r.solution.solve_time,
-            ),
-        )?;
+        enc.solver(
+            &mut data,
+            t,
+            &status,
+            r.solution.solver.name(),
+            r.solution.iterations,
+            r.solution.objective,
+            r.solution.eq_residual,
+            r.solution.solve_time,
+        );
+        out.push((mcap_log::SOLVER, data));
         Ok(out)
     }
 }
