@@ -5,6 +5,7 @@ use crate::error::{Error, Location, Result};
 use std::fs::File;
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 /// OpenSim's default output precision (`IO::GetPrecision()`, AnalyzeTool
 /// `output_precision` default).
@@ -253,17 +254,29 @@ fn write_at(file: &mut File, bytes: &[u8], offset: u64) -> std::io::Result<()> {
 /// After every [`write_row`](Self::write_row) the file on disk is a complete,
 /// valid storage holding every row written so far: the row is written with a
 /// single `write` call and then the fixed-width `nRows=` field is rewritten
-/// in place.
+/// in place. With [`batch_rows`](Self::batch_rows) rows are written in
+/// batches instead; the file on disk is then a complete, valid storage of
+/// every row up to the last batch.
 pub struct StoWriter {
     file: File,
     path: PathBuf,
     n_labels: usize,
     precision: usize,
+    /// Rows given to [`Self::write_row`] (on disk or in `line`).
     n_rows: usize,
     /// Byte offset of the digits after `nRows=`.
     n_rows_offset: u64,
-    /// The row being formatted (reused).
+    /// Formatted rows not on disk yet (reused).
     line: Vec<u8>,
+    batch: Option<Batch>,
+}
+
+/// When a batching [`StoWriter`] writes its rows (see [`StoWriter::batch_rows`]).
+#[derive(Debug, Clone, Copy)]
+struct Batch {
+    rows: usize,
+    max_age: Duration,
+    last_write: Instant,
 }
 
 impl StoWriter {
@@ -338,6 +351,7 @@ impl StoWriter {
             n_rows: 0,
             n_rows_offset,
             line: Vec::new(),
+            batch: None,
         })
     }
 
@@ -374,30 +388,65 @@ impl StoWriter {
                 self.n_labels
             )));
         }
-        let (w, p) = (8 + self.precision, self.precision);
-        self.line.clear();
-        push_c_fixed(&mut self.line, t, w, p);
-        for &v in values {
-            self.line.push(b'\t');
-            push_c_fixed(&mut self.line, v, w, p);
-        }
-        self.line.push(b'\n');
-        let io = |e| Error::io(&self.path, e);
-        self.file.write_all(&self.line).map_err(io)?;
-        self.n_rows += 1;
-        // `nRows=` left-aligned in its field, padded with spaces.
-        let len = decimal_len(self.n_rows as u64);
-        if len > NROWS_WIDTH {
+        if decimal_len(self.n_rows as u64 + 1) > NROWS_WIDTH {
             return Err(Error::internal(format!(
                 "writing {}: more than {} rows",
                 self.path.display(),
                 "9".repeat(NROWS_WIDTH)
             )));
         }
-        let mut count = [b' '; NROWS_WIDTH];
-        put_digits(&mut count[..len], self.n_rows as u64);
-        write_at(&mut self.file, &count, self.n_rows_offset).map_err(io)?;
+        let (w, p) = (8 + self.precision, self.precision);
+        push_c_fixed(&mut self.line, t, w, p);
+        for &v in values {
+            self.line.push(b'\t');
+            push_c_fixed(&mut self.line, v, w, p);
+        }
+        self.line.push(b'\n');
+        self.n_rows += 1;
+        let due = match &self.batch {
+            None => true,
+            Some(b) => self.n_rows % b.rows == 0 || b.last_write.elapsed() >= b.max_age,
+        };
+        if due {
+            self.write_pending()?;
+        }
         Ok(())
+    }
+
+    /// Write rows in batches: every `rows`-th row writes the rows not yet
+    /// on disk in one `write` call (and updates `nRows=`), and so does the
+    /// first row at least `max_age` after the last write. Cheaper than a
+    /// write per row; a killed process loses the rows of the open batch.
+    /// Batches end at multiples of `rows` (counted from the file's first
+    /// row), so tables written frame by frame with the same `rows` stay in
+    /// step. [`Self::finish`] (or dropping the writer) writes the rest.
+    pub fn batch_rows(&mut self, rows: usize, max_age: Duration) {
+        self.batch = Some(Batch {
+            rows: rows.max(1),
+            max_age,
+            last_write: Instant::now(),
+        });
+    }
+
+    /// Write the rows not yet on disk, then `nRows=`.
+    fn write_pending(&mut self) -> Result<()> {
+        if let Some(b) = &mut self.batch {
+            b.last_write = Instant::now();
+        }
+        if self.line.is_empty() {
+            return Ok(());
+        }
+        let io = |e| Error::io(&self.path, e);
+        let written = self.file.write_all(&self.line);
+        self.line.clear();
+        written.map_err(io)?;
+        // `nRows=` left-aligned in its field, padded with spaces.
+        let mut count = [b' '; NROWS_WIDTH];
+        put_digits(
+            &mut count[..decimal_len(self.n_rows as u64)],
+            self.n_rows as u64,
+        );
+        write_at(&mut self.file, &count, self.n_rows_offset).map_err(io)
     }
 
     /// Reopen a table this writer wrote, keep its first `keep` rows (all of
@@ -462,18 +511,30 @@ impl StoWriter {
             n_rows: keep,
             n_rows_offset,
             line: Vec::new(),
+            batch: None,
         })
     }
 
-    /// Number of rows written so far.
+    /// Number of rows written so far (with [`Self::batch_rows`], some of
+    /// them may not be on disk yet).
     pub fn rows_written(&self) -> usize {
         self.n_rows
     }
 
     /// Flush to disk and close.
     pub fn finish(mut self) -> Result<()> {
+        self.write_pending()?;
         self.file.flush().map_err(|e| Error::io(&self.path, e))?;
         self.file.sync_all().map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+impl Drop for StoWriter {
+    /// A writer dropped without [`StoWriter::finish`] (a run stopped by an
+    /// error) still writes its pending rows, as a row-by-row writer would
+    /// have; errors cannot be reported here.
+    fn drop(&mut self) {
+        let _ = self.write_pending();
     }
 }
 

@@ -1358,6 +1358,12 @@ struct RunSpec<'a> {
     reactions: Vec<(String, &'a [ReactionSpec])>,
 }
 
+/// A run's tables are written every this many frames, and at least every
+/// [`TABLE_BATCH_AGE`] (one `write` per batch instead of per row; a killed
+/// run loses at most the open batch, as its log loses the open chunk).
+const TABLE_BATCH_ROWS: usize = 32;
+const TABLE_BATCH_AGE: std::time::Duration = std::time::Duration::from_millis(200);
+
 /// The tables, log and running statistics of one run.
 struct RunWriters<'a> {
     problem: &'a SoProblem,
@@ -1406,14 +1412,15 @@ impl<'a> RunWriters<'a> {
         } else {
             None
         };
-        // Each table is created, or, when resuming, reopened after its kept rows.
+        // Each table is created, or, when resuming, reopened after its kept
+        // rows; rows are written in batches (TABLE_BATCH_ROWS).
         let open_table = |path: &std::path::Path,
                           name: &str,
                           desc: &str,
                           labels: &[String],
                           precision: usize|
          -> Result<StoWriter> {
-            match &resume {
+            let mut w = match &resume {
                 Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
                 None => StoWriter::create_for_setup(
                     &setup.setup_file,
@@ -1424,7 +1431,9 @@ impl<'a> RunWriters<'a> {
                     precision,
                     false,
                 ),
-            }
+            }?;
+            w.batch_rows(TABLE_BATCH_ROWS, TABLE_BATCH_AGE);
+            Ok(w)
         };
         let act_w = open_table(
             &act_path,
