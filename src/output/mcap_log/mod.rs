@@ -8,7 +8,7 @@
 //!   with encoding `jsonschema` (a JSON Schema, draft 2020-12, as Foxglove
 //!   expects for JSON channels). Keys keep their insertion order
 //!   (`serde_json`'s `preserve_order`), so fields appear in model order.
-//! - **Chunks.** zstd-compressed chunks (default compression level, single
+//! - **Chunks.** zstd-compressed chunks (level [`ZSTD_LEVEL`], single
 //!   threaded). A chunk is closed when it holds more than
 //!   [`LogOptions::chunk_size`] uncompressed bytes (default 256 KiB, a few
 //!   hundred frames for a small model) or when [`LogOptions::max_chunk_age`]
@@ -83,6 +83,12 @@ mod mcaplog_tests;
 pub const TIME_ORIGIN_METADATA: &str = "statopt.time_origin";
 /// JSON Schema dialect of every schema written here.
 pub const JSON_SCHEMA_DIALECT: &str = "https://json-schema.org/draft/2020-12/schema";
+
+/// zstd level of the chunks: 1, zstd's fastest positive level. On statopt's
+/// JSON messages it compresses about twice as fast as the default level 3,
+/// and as well (gait2392: 422 kB against 450 kB); negative levels are
+/// hardly faster and leave the file about 1.7 times larger.
+pub const ZSTD_LEVEL: u32 = 1;
 
 /// One channel of the log: a topic and the JSON Schema of its messages.
 #[derive(Debug, Clone, PartialEq)]
@@ -170,6 +176,7 @@ impl McapLog {
         let file = File::create(path).map_err(|e| Error::io(path, e))?;
         let write_options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
+            .compression_level(ZSTD_LEVEL)
             .compression_threads(0)
             .chunk_size(Some(options.chunk_size))
             // Assemble each chunk in memory and write it whole: the file
