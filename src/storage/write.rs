@@ -37,11 +37,31 @@ const DIGIT_PAIRS: &[u8; 200] = b"\
 6061626364656667686970717273747576777879\
 8081828384858687888990919293949596979899";
 
+/// The eight decimal digits of `v` < 10^8, as ASCII, most significant
+/// first: both halves, then their digit pairs, then the digits, are split in
+/// parallel lanes of one u64 (division by 100 and by 10 as a multiply and
+/// shift, exact in this range).
+#[inline]
+fn eight_digits(v: u32) -> [u8; 8] {
+    let v = v as u64;
+    let x = (v / 10_000) | ((v % 10_000) << 32);
+    let hundreds = ((x * 10_486) >> 20) & 0x0000_007F_0000_007F;
+    let y = hundreds | ((x - hundreds * 100) << 16);
+    let tens = ((y * 103) >> 10) & 0x000F_000F_000F_000F;
+    let z = tens | ((y - tens * 10) << 8);
+    (z | 0x3030_3030_3030_3030).to_le_bytes()
+}
+
 /// Write `v` as exactly `out.len()` decimal digits (leading zeros; `v`
 /// must be below 10^len).
 #[inline]
 fn put_digits(out: &mut [u8], mut v: u64) {
     let mut i = out.len();
+    while i >= 8 {
+        out[i - 8..i].copy_from_slice(&eight_digits((v % 100_000_000) as u32));
+        v /= 100_000_000;
+        i -= 8;
+    }
     while i >= 2 {
         let pair = (v % 100) as usize * 2;
         v /= 100;
@@ -106,10 +126,11 @@ fn fraction_times_pow10(r: u128, s: u32, k: u32) -> (u64, u128, u32) {
 /// 53-bit m needs p <= 32.
 const FAST_MAX_PREC: usize = 32;
 
-/// Append `x` to `prec` decimals, exactly and rounded half to even on the
-/// exact binary value (as glibc's `%.Nf`), with integer arithmetic: for
-/// finite x with |x| < 2^64 and prec <= 32, except |x| in about
-/// [2^-68·2^-prec, 2^-68) (returns false, appends nothing).
+/// Append `x` to `prec` decimals, right-aligned in `width`, exactly and
+/// rounded half to even on the exact binary value (as glibc's `%W.Pf`),
+/// with integer arithmetic: for finite x with |x| < 2^64 and prec <= 32,
+/// except |x| in about [2^-68·2^-prec, 2^-68) and fields over 96 bytes
+/// (returns false, appends nothing).
 ///
 /// x = m·2^e; the integer part is m >> -e, the fraction f / 2^s. Its
 /// digits are floor(f · 10^k / 2^s) = (f · 5^k) >> (s − k), in one or two
@@ -190,14 +211,18 @@ fn push_fixed_fast(out: &mut Vec<u8>, x: f64, width: usize, prec: usize) -> bool
     }
     let int_len = decimal_len(int_part);
     let len = usize::from(negative) + int_len + if p > 0 { 1 + prec } else { 0 };
-    // Right-aligned in `width`: spaces, then the body.
-    let start = out.len() + width.saturating_sub(len);
-    out.resize(start + len, b' ');
-    let buf = &mut out[start..];
-    let mut i = 0;
+    // Right-aligned in `width`: spaces, then the body, built in a local
+    // buffer and appended at once.
+    const CAP: usize = 96;
+    let total = len.max(width);
+    if total > CAP {
+        return false;
+    }
+    let mut buf = [b' '; CAP];
+    let mut i = CAP - len;
     if negative {
-        buf[0] = b'-';
-        i = 1;
+        buf[i] = b'-';
+        i += 1;
     }
     put_digits(&mut buf[i..i + int_len], int_part);
     i += int_len;
@@ -208,6 +233,7 @@ fn push_fixed_fast(out: &mut Vec<u8>, x: f64, width: usize, prec: usize) -> bool
         i += k1 as usize;
         put_digits(&mut buf[i..i + k2 as usize], d2);
     }
+    out.extend_from_slice(&buf[CAP - total..]);
     true
 }
 
@@ -655,7 +681,7 @@ mod fast_format_tests {
     }
 
     fn check(x: f64, prec: usize) {
-        for width in [0, 8 + prec] {
+        for width in [0, 8 + prec, 100] {
             let want = before::format_c_fixed(x, width, prec);
             // std's exact formatting is the definition of the digits.
             if x.is_finite() {
@@ -670,6 +696,18 @@ mod fast_format_tests {
                 x.to_bits()
             );
             assert_eq!(format_c_fixed(x, width, prec), want);
+        }
+    }
+
+    /// The lane arithmetic of `eight_digits`, for every value below 10^8.
+    #[test]
+    fn eight_digits_of_every_value() {
+        for v in 0..100_000_000u32 {
+            let d = super::eight_digits(v);
+            let back = d
+                .iter()
+                .fold(0u32, |acc, &c| acc * 10 + u32::from(c.wrapping_sub(b'0')));
+            assert!(d.iter().all(u8::is_ascii_digit) && back == v, "{v}: {d:?}");
         }
     }
 
