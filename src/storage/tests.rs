@@ -145,6 +145,40 @@ fn streaming_file_is_valid_after_every_row() {
 }
 
 #[test]
+fn batched_rows_reach_the_file_batch_by_batch() {
+    let p = tmp("batched.sto");
+    let labels = vec!["x".to_string()];
+    let mut w = StoWriter::create(&p, "Batched", "", &labels, 8, false).unwrap();
+    w.batch_rows(4, std::time::Duration::from_secs(3600));
+    for i in 0..10 {
+        w.write_row(i as f64, &[2.0 * i as f64]).unwrap();
+        // Only whole batches are on disk, and the file is always valid.
+        let r = read(&p).unwrap();
+        assert_eq!(r.len(), (i + 1) / 4 * 4, "after row {i}");
+        assert_eq!(w.rows_written(), i + 1);
+    }
+    w.finish().unwrap();
+    let r = read(&p).unwrap();
+    assert_eq!(r.len(), 10);
+    assert_eq!(r.rows[9], vec![18.0]);
+
+    // A writer dropped without finish (a run stopped by an error) writes
+    // its pending rows; with max_age zero every row is written at once.
+    let mut w = StoWriter::create(&p, "Batched", "", &labels, 8, false).unwrap();
+    w.batch_rows(100, std::time::Duration::ZERO);
+    w.write_row(0.0, &[1.0]).unwrap();
+    assert_eq!(read(&p).unwrap().len(), 1);
+    w.batch_rows(100, std::time::Duration::from_secs(3600));
+    w.write_row(1.0, &[2.0]).unwrap();
+    w.write_row(2.0, &[3.0]).unwrap();
+    assert_eq!(read(&p).unwrap().len(), 1);
+    drop(w);
+    let r = read(&p).unwrap();
+    assert_eq!(r.len(), 3);
+    assert_eq!(r.rows[2], vec![3.0]);
+}
+
+#[test]
 fn writer_rejects_labels_with_spaces() {
     let p = tmp("badlabel.sto");
     let e = StoWriter::create(&p, "n", "", &["a b".to_string()], 8, false);

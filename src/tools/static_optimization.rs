@@ -618,6 +618,12 @@ struct RunSpec<'a> {
     reactions: Vec<(String, &'a [ReactionSpec])>,
 }
 
+/// A run's tables are written every this many frames, and at least every
+/// [`TABLE_BATCH_AGE`] (one `write` per batch instead of per row; a killed
+/// run loses at most the open batch, as its log loses the open chunk).
+const TABLE_BATCH_ROWS: usize = 32;
+const TABLE_BATCH_AGE: std::time::Duration = std::time::Duration::from_millis(200);
+
 /// The tables, log and running statistics of one run.
 struct RunWriters<'a> {
     problem: &'a SoProblem,
@@ -666,14 +672,15 @@ impl<'a> RunWriters<'a> {
         } else {
             None
         };
-        // Each table is created, or, when resuming, reopened after its kept rows.
+        // Each table is created, or, when resuming, reopened after its kept
+        // rows; rows are written in batches (TABLE_BATCH_ROWS).
         let open_table = |path: &std::path::Path,
                           name: &str,
                           desc: &str,
                           labels: &[String],
                           precision: usize|
          -> Result<StoWriter> {
-            match &resume {
+            let mut w = match &resume {
                 Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
                 None => StoWriter::create_for_setup(
                     &setup.setup_file,
@@ -684,7 +691,9 @@ impl<'a> RunWriters<'a> {
                     precision,
                     false,
                 ),
-            }
+            }?;
+            w.batch_rows(TABLE_BATCH_ROWS, TABLE_BATCH_AGE);
+            Ok(w)
         };
         let act_w = open_table(
             &act_path,
@@ -1187,6 +1196,8 @@ struct LogNames {
     contacts: Vec<String>,
     /// Reaction label roots of the first coupled JointReaction, if any.
     joints: Vec<String>,
+    /// Writes each frame's messages straight to JSON bytes.
+    encoder: mcap_log::MessageEncoder,
 }
 
 /// Encoded messages of one frame: (channel index, JSON bytes).
@@ -1194,18 +1205,30 @@ type FrameMessages = Vec<(usize, Vec<u8>)>;
 
 impl LogNames {
     fn new(problem: &SoProblem, reactions: Option<&[ReactionSpec]>) -> LogNames {
+        let coordinates: Vec<String> = problem
+            .model
+            .coordinates
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        let labels = problem.labels.clone();
+        let contacts: Vec<String> = problem.contacts.iter().map(|c| c.name.clone()).collect();
+        let joints: Vec<String> = reactions
+            .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
+            .unwrap_or_default();
+        let encoder = mcap_log::MessageEncoder::new(&mcap_log::StatoptChannels {
+            coordinates: coordinates.clone(),
+            activations: labels.clone(),
+            forces: labels.clone(),
+            contacts: contacts.clone(),
+            joints: joints.clone(),
+        });
         LogNames {
-            coordinates: problem
-                .model
-                .coordinates
-                .iter()
-                .map(|c| c.name.clone())
-                .collect(),
-            labels: problem.labels.clone(),
-            contacts: problem.contacts.iter().map(|c| c.name.clone()).collect(),
-            joints: reactions
-                .map(|s| s.iter().map(|r| r.label_root.clone()).collect())
-                .unwrap_or_default(),
+            coordinates,
+            labels,
+            contacts,
+            joints,
+            encoder,
         }
     }
 
@@ -1215,29 +1238,17 @@ impl LogNames {
         r: &FrameResult,
         jr_rows: &[Vec<f64>],
     ) -> Result<FrameMessages> {
-        fn names(v: &[String]) -> Vec<&str> {
-            v.iter().map(String::as_str).collect()
-        }
         let t = r.time;
         let nv = problem.controls.len();
-        let labels = names(&self.labels);
+        let enc = &self.encoder;
         let mut out = Vec::with_capacity(6);
-        let mut push = |idx: usize, v: serde_json::Value| -> Result<()> {
-            out.push((idx, mcap_log::serialize_message(t, &v)?));
-            Ok(())
-        };
-        push(
-            mcap_log::KINEMATICS,
-            mcap_log::kinematics_message(&names(&self.coordinates), &r.q, &r.u, &r.udot)?,
-        )?;
-        push(
-            mcap_log::ACTIVATIONS,
-            mcap_log::named_values_message(&labels, &r.solution.x[..nv])?,
-        )?;
-        push(
-            mcap_log::MUSCLE_FORCES,
-            mcap_log::named_values_message(&labels, &r.forces)?,
-        )?;
+        let mut data = Vec::new();
+        enc.kinematics(&mut data, t, &r.q, &r.u, &r.udot)?;
+        out.push((mcap_log::KINEMATICS, std::mem::take(&mut data)));
+        enc.activations(&mut data, t, &r.solution.x[..nv])?;
+        out.push((mcap_log::ACTIVATIONS, std::mem::take(&mut data)));
+        enc.muscle_forces(&mut data, t, &r.forces)?;
+        out.push((mcap_log::MUSCLE_FORCES, std::mem::take(&mut data)));
         if !self.contacts.is_empty() {
             let samples: Vec<mcap_log::ContactSample> = r
                 .contacts
@@ -1260,10 +1271,8 @@ impl LogNames {
                     },
                 })
                 .collect();
-            push(
-                mcap_log::CONTACTS,
-                mcap_log::contacts_message(&names(&self.contacts), &samples)?,
-            )?;
+            enc.contacts(&mut data, t, &samples)?;
+            out.push((mcap_log::CONTACTS, std::mem::take(&mut data)));
         }
         if let (Some(row), false) = (jr_rows.first(), self.joints.is_empty()) {
             let samples: Vec<mcap_log::JointReactionSample> = row
@@ -1273,23 +1282,21 @@ impl LogNames {
                     moment: [c[3], c[4], c[5]],
                 })
                 .collect();
-            push(
-                mcap_log::JOINT_REACTIONS,
-                mcap_log::joint_reactions_message(&names(&self.joints), &samples)?,
-            )?;
+            enc.joint_reactions(&mut data, t, &samples)?;
+            out.push((mcap_log::JOINT_REACTIONS, std::mem::take(&mut data)));
         }
         let status = format!("{:?}", r.solution.status);
-        push(
-            mcap_log::SOLVER,
-            mcap_log::solver_message(
-                &status,
-                r.solution.solver.name(),
-                r.solution.iterations,
-                r.solution.objective,
-                r.solution.eq_residual,
-                r.solution.solve_time,
-            ),
-        )?;
+        enc.solver(
+            &mut data,
+            t,
+            &status,
+            r.solution.solver.name(),
+            r.solution.iterations,
+            r.solution.objective,
+            r.solution.eq_residual,
+            r.solution.solve_time,
+        );
+        out.push((mcap_log::SOLVER, data));
         Ok(out)
     }
 }

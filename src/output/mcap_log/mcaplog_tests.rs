@@ -576,3 +576,179 @@ fn mcaplog_explicit_time_origin() {
     assert_eq!(m.len(), 1);
     assert_eq!(m[0].log_time, 750_000_000);
 }
+
+/// The direct encoder writes exactly the bytes of `serialize_message` on the
+/// `Value` messages: every channel, with non-finite values (left out),
+/// -0.0, subnormal, huge and tiny numbers, and names that need escaping.
+#[test]
+fn message_encoder_equals_serialized_values() {
+    let mut layout = arm_like();
+    layout.coordinates.push("quote\"back\\slash".to_string());
+    layout.activations.push("ünïcode\u{1}".to_string());
+    layout.forces.push("ünïcode\u{1}".to_string());
+    layout.contacts.push("tab\tcontact".to_string());
+    let enc = MessageEncoder::new(&layout);
+    let mut state = 0x9E3779B97F4A7C15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut value = move || {
+        let r = next();
+        match r % 10 {
+            0 => f64::NAN,
+            1 => f64::INFINITY,
+            2 => -0.0,
+            3 => f64::from_bits(r >> 12), // subnormal
+            4 => f64::from_bits(r),       // any
+            5 => (r >> 40) as f64,
+            _ => ((r >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 10f64.powi((r % 40) as i32 - 20),
+        }
+    };
+    let same = |what: &str, got: &[u8], t: f64, v: &Value| {
+        let want = serialize_message(t, v).expect("serialize");
+        assert_eq!(
+            String::from_utf8_lossy(got),
+            String::from_utf8_lossy(&want),
+            "{what} at t = {t}"
+        );
+    };
+    let mut out = Vec::new();
+    for k in 0..3000 {
+        let t = if k % 100 == 0 { -0.0 } else { frame_time(k) };
+        // The test's own frames, then random values.
+        if k < 50 {
+            for (idx, msg) in frame_messages(&arm_like(), k) {
+                let names = arm_like();
+                let e = MessageEncoder::new(&names);
+                out.clear();
+                let o = msg.as_object().expect("object");
+                let nums = |field: &str, keys: &[String]| -> Vec<f64> {
+                    keys.iter()
+                        .map(|n| o[field][n].as_f64().unwrap_or(f64::NAN))
+                        .collect()
+                };
+                match idx {
+                    KINEMATICS => e
+                        .kinematics(
+                            &mut out,
+                            t,
+                            &nums("q", &names.coordinates),
+                            &nums("qdot", &names.coordinates),
+                            &nums("qddot", &names.coordinates),
+                        )
+                        .expect("kinematics"),
+                    ACTIVATIONS | MUSCLE_FORCES => {
+                        let v: Vec<f64> = names
+                            .activations
+                            .iter()
+                            .map(|n| o[n].as_f64().unwrap_or(f64::NAN))
+                            .collect();
+                        if idx == ACTIVATIONS {
+                            e.activations(&mut out, t, &v).expect("activations")
+                        } else {
+                            e.muscle_forces(&mut out, t, &v).expect("forces")
+                        }
+                    }
+                    _ => continue, // random values below cover the rest
+                }
+                same("frame message", &out, t, &msg);
+            }
+        }
+        let coords = strs(&layout.coordinates);
+        let n = coords.len();
+        let (q, qd, qdd): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+            (0..n).map(|_| value()).collect(),
+            (0..n).map(|_| value()).collect(),
+            (0..n).map(|_| value()).collect(),
+        );
+        out.clear();
+        enc.kinematics(&mut out, t, &q, &qd, &qdd).expect("kin");
+        same(
+            "kinematics",
+            &out,
+            t,
+            &kinematics_message(&coords, &q, &qd, &qdd).expect("kin"),
+        );
+        let acts = strs(&layout.activations);
+        let a: Vec<f64> = (0..acts.len()).map(|_| value()).collect();
+        out.clear();
+        enc.activations(&mut out, t, &a).expect("act");
+        same(
+            "activations",
+            &out,
+            t,
+            &named_values_message(&acts, &a).expect("act"),
+        );
+        out.clear();
+        enc.muscle_forces(&mut out, t, &a).expect("forces");
+        same(
+            "forces",
+            &out,
+            t,
+            &named_values_message(&acts, &a).expect("forces"),
+        );
+        let contacts = strs(&layout.contacts);
+        let samples: Vec<ContactSample> = (0..contacts.len())
+            .map(|i| ContactSample {
+                force: [value(), value(), value()],
+                point: [value(), value(), value()],
+                distance: value(),
+                weight: value(),
+                slip_speed: value(),
+                regime: ["static", "kinetic", "blended", "odd\"one"][(k + i) % 4].to_string(),
+            })
+            .collect();
+        out.clear();
+        enc.contacts(&mut out, t, &samples).expect("contacts");
+        same(
+            "contacts",
+            &out,
+            t,
+            &contacts_message(&contacts, &samples).expect("c"),
+        );
+        let joints = strs(&layout.joints);
+        let reactions: Vec<JointReactionSample> = (0..joints.len())
+            .map(|_| JointReactionSample {
+                force: [value(), value(), value()],
+                moment: [value(), value(), value()],
+            })
+            .collect();
+        out.clear();
+        enc.joint_reactions(&mut out, t, &reactions).expect("jr");
+        same(
+            "joint reactions",
+            &out,
+            t,
+            &joint_reactions_message(&joints, &reactions).expect("jr"),
+        );
+        let (status, solver, it) = (
+            ["Solved", "AlmostSolved", "Failed\\x"][k % 3],
+            "newton",
+            k as u32 * 977,
+        );
+        let (obj, res) = (value(), value());
+        let dt = Duration::from_nanos(next_u64(k));
+        out.clear();
+        enc.solver(&mut out, t, status, solver, it, obj, res, dt);
+        same(
+            "solver",
+            &out,
+            t,
+            &solver_message(status, solver, it, obj, res, dt),
+        );
+    }
+    // Wrong lengths are errors, as for the Value builders.
+    assert!(enc.activations(&mut out, 0.0, &[1.0]).is_err());
+    assert!(enc
+        .kinematics(&mut out, 0.0, &[1.0], &[1.0], &[1.0])
+        .is_err());
+    assert!(enc.contacts(&mut out, 0.0, &[]).is_err());
+    assert!(enc.joint_reactions(&mut out, 0.0, &[]).is_err());
+}
+
+fn next_u64(k: usize) -> u64 {
+    (k as u64).wrapping_mul(0x9E3779B97F4A7C15) >> 20
+}
