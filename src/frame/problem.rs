@@ -144,6 +144,53 @@ pub const CONTACT_COLUMNS: [&str; 13] = [
     "lambda_s2",
 ];
 
+/// The buffers one frame's problem is assembled in ([`SoProblem::assemble`]),
+/// kept in the per-thread [`Workspace`](crate::frame::Workspace) and reused
+/// from frame to frame.
+#[derive(Debug, Clone)]
+pub struct Assembly {
+    /// The frame's convex program.
+    pub problem: FrameProblem,
+    /// Each variable's force scale f_i.
+    pub scale: Vec<f64>,
+    /// The passive forces' record values.
+    pub passive: Vec<f64>,
+    /// Contact states, one per contact.
+    pub states: Vec<ContactState>,
+    couplings: Vec<Vec<(usize, f64)>>,
+    g: Vec<f64>,
+    cols: [Vec<f64>; 3],
+}
+
+impl Default for Assembly {
+    /// Empty buffers, sized by the first [`SoProblem::assemble`].
+    fn default() -> Self {
+        Assembly {
+            problem: FrameProblem {
+                a: DMatrix::zeros(0, 0),
+                b: DVector::zeros(0),
+                weights: Vec::new(),
+                exponent: 2.0,
+                lower: Vec::new(),
+                upper: Vec::new(),
+                static_contacts: Vec::new(),
+                friction: Default::default(),
+                settings: SolveSettings {
+                    tolerance: DEFAULT_TOLERANCE,
+                    max_iter: 100,
+                    solver: Default::default(),
+                },
+            },
+            scale: Vec::new(),
+            passive: Vec::new(),
+            states: Vec::new(),
+            couplings: Vec::new(),
+            g: Vec::new(),
+            cols: Default::default(),
+        }
+    }
+}
+
 impl SoProblem {
     /// Build one frame's optimisation problem: returns the problem, each
     /// variable's force scale (f_i) and the passive forces' record values.
@@ -180,6 +227,32 @@ impl SoProblem {
         Vec<ContactState>,
         Option<DMatrix<f64>>,
     ) {
+        let mut asm = Assembly::default();
+        let m_r = self.assemble(t, q, u, udot_target, data, mf, &mut asm);
+        let Assembly {
+            problem,
+            scale,
+            passive,
+            states,
+            ..
+        } = asm;
+        (problem, scale, passive, states, m_r)
+    }
+
+    /// Assemble the frame's problem into `asm`, reusing its buffers: with the
+    /// same `asm` from frame to frame, the analytic rows allocate nothing
+    /// beyond the passive forces' records. Returns M_r for perturbation rows.
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+        asm: &mut Assembly,
+    ) -> Option<DMatrix<f64>> {
         let model = &self.model;
         let nq = model.nq();
         data.q.copy_from_slice(q);
@@ -200,10 +273,21 @@ impl SoProblem {
         if let Some(l) = &self.loads {
             l.apply(t, data);
         }
-        let mut passive_values = Vec::new();
+        let Assembly {
+            problem,
+            scale,
+            passive: passive_values,
+            states,
+            couplings,
+            g,
+            cols,
+        } = asm;
+        passive_values.clear();
+        g.clear();
+        g.resize(nq, 0.0);
         for p in &self.passive {
-            let mut g = vec![0.0; nq];
-            p.add_generalized_force(model, data, t, &mut g);
+            g.iter_mut().for_each(|x| *x = 0.0);
+            p.add_generalized_force(model, data, t, g);
             for k in 0..nq {
                 data.applied_gen[k] += g[k];
             }
@@ -225,15 +309,25 @@ impl SoProblem {
         // Rows: C_kᵀ τ_required = C_kᵀ Σ x_i f_i g_i.
         let nr = self.rows.len();
         let nv = self.controls.len();
-        let mut a = DMatrix::zeros(nr, nv);
-        let mut b = DVector::zeros(nr);
-        let couplings: Vec<Vec<(usize, f64)>> = self
-            .rows
-            .iter()
-            .map(|&k| coupling::coupling_vector(model, &data.q, k))
-            .collect();
+        let nc = self.contacts.len();
+        let a = &mut problem.a;
+        if a.shape() != (nr, nv + 3 * nc) {
+            *a = DMatrix::zeros(nr, nv + 3 * nc);
+        } else {
+            a.fill(0.0);
+        }
+        let b = &mut problem.b;
+        if b.len() != nr {
+            *b = DVector::zeros(nr);
+        } else {
+            b.fill(0.0);
+        }
+        couplings.resize_with(nr, Vec::new);
+        for (cv, &k) in couplings.iter_mut().zip(&self.rows) {
+            coupling::coupling_vector_into(model, &data.q, k, cv);
+        }
         // Perturbation rows: u̇_I(x) = u̇_target,I by forward dynamics.
-        let fd = perturb.then(|| Perturbation::start(self, t, data, mf, &couplings));
+        let fd = perturb.then(|| Perturbation::start(self, t, data, mf, couplings));
         if let Some(fd) = &fd {
             for (r, &k) in self.rows.iter().enumerate() {
                 b[r] = fd.target[k] - fd.udot0[r];
@@ -243,8 +337,8 @@ impl SoProblem {
                 b[r] = cv.iter().map(|(i, c)| c * data.tau[*i]).sum();
             }
         }
-        let mut scale = vec![0.0; nv];
-        let mut g = vec![0.0; nq];
+        scale.clear();
+        scale.resize(nv, 0.0);
         for (v, ctl) in self.controls.iter().enumerate() {
             let (f, gen): (f64, &[f64]) = match ctl {
                 Control::Muscle(m) => {
@@ -258,8 +352,8 @@ impl SoProblem {
                 }
                 Control::Actuator(act) => {
                     g.iter_mut().for_each(|x| *x = 0.0);
-                    act.add_unit_generalized_force(model, data, &mut g);
-                    (act.optimal_force, &g)
+                    act.add_unit_generalized_force(model, data, g);
+                    (act.optimal_force, g)
                 }
             };
             scale[v] = f;
@@ -276,14 +370,17 @@ impl SoProblem {
         // each, weighted 1/w0; static regime: free shear inside the friction
         // cone; kinetic regime: the shear follows the normal force (eq. 3)
         // and the shear multipliers are held at zero.
-        let nc = self.contacts.len();
-        let mut a = a.resize_horizontally(nv + 3 * nc, 0.0);
-        let mut lower = self.lower.clone();
-        let mut upper = self.upper.clone();
-        let mut weights = vec![1.0; nv];
-        let mut static_contacts = Vec::new();
-        let mut states = Vec::with_capacity(nc);
-        let mut cols = [vec![0.0; nq], vec![0.0; nq], vec![0.0; nq]];
+        problem.lower.clear();
+        problem.lower.extend_from_slice(&self.lower);
+        problem.upper.clear();
+        problem.upper.extend_from_slice(&self.upper);
+        problem.weights.clear();
+        problem.weights.resize(nv, 1.0);
+        problem.static_contacts.clear();
+        states.clear();
+        for col in cols.iter_mut() {
+            col.resize(nq, 0.0);
+        }
         for (ci, c) in self.contacts.iter().enumerate() {
             let st = c.state(model, data);
             let v0 = nv + 3 * ci;
@@ -293,7 +390,7 @@ impl SoProblem {
             if kinetic {
                 c.add_kinetic_normal_column(model, data, &st, &mut cols[0]);
             } else {
-                c.add_unit_generalized_forces(model, data, &st, &mut cols);
+                c.add_unit_generalized_forces(model, data, &st, cols);
             }
             for (k, col) in cols.iter().enumerate() {
                 if let Some(fd) = &fd {
@@ -310,11 +407,11 @@ impl SoProblem {
             } else {
                 (f64::NEG_INFINITY, f64::INFINITY)
             };
-            lower.extend([0.0, shear.0, shear.0]);
-            upper.extend([f64::INFINITY, shear.1, shear.1]);
-            weights.extend([1.0 / self.w0; 3]);
+            problem.lower.extend([0.0, shear.0, shear.0]);
+            problem.upper.extend([f64::INFINITY, shear.1, shear.1]);
+            problem.weights.extend([1.0 / self.w0; 3]);
             if !kinetic {
-                static_contacts.push(StaticContact {
+                problem.static_contacts.push(StaticContact {
                     normal: v0,
                     shear: [v0 + 1, v0 + 2],
                     mu: c.static_limit(&st),
@@ -322,26 +419,17 @@ impl SoProblem {
             }
             states.push(st);
         }
-        let problem = FrameProblem {
-            a,
-            b,
-            weights,
-            exponent: self.settings.activation_exponent,
-            lower,
-            upper,
-            static_contacts,
-            friction: self.settings.friction,
-            settings: SolveSettings {
-                tolerance: self
-                    .settings
-                    .solver_tolerance
-                    .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
-                max_iter: self.settings.max_iterations.max(100),
-                solver: self.settings.solver,
-            },
+        problem.exponent = self.settings.activation_exponent;
+        problem.friction = self.settings.friction;
+        problem.settings = SolveSettings {
+            tolerance: self
+                .settings
+                .solver_tolerance
+                .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
+            max_iter: self.settings.max_iterations.max(100),
+            solver: self.settings.solver,
         };
-        let m_r = fd.map(|fd| fd.finish(model, data));
-        (problem, scale, passive_values, states, m_r)
+        fd.map(|fd| fd.finish(model, data))
     }
 
     /// Bodies that receive contact forces, in body order.
@@ -489,22 +577,59 @@ impl SoProblem {
         mf: &mut MuscleFrame,
         weights: &[f64],
     ) -> Vec<FrameResult> {
-        let (mut problem, scale, passive_values, states, m_r) =
-            self.frame_problem_scaled(t, q, u, udot_target, data, mf);
+        let mut asm = Assembly::default();
+        self.solve_weights_in(t, q, u, udot_target, data, mf, &mut asm, weights)
+    }
+
+    /// [`solve_frame_weights`](Self::solve_frame_weights) in a per-thread
+    /// workspace: the frame is assembled in its buffers, and its kinematics
+    /// and muscle paths stay there for the frame's joint reactions.
+    pub fn solve_frame_in(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        ws: &mut crate::frame::Workspace,
+        weights: &[f64],
+    ) -> Vec<FrameResult> {
+        let crate::frame::Workspace {
+            data,
+            muscles,
+            assembly,
+        } = ws;
+        self.solve_weights_in(t, q, u, udot_target, data, muscles, assembly, weights)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn solve_weights_in(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        data: &mut Data,
+        mf: &mut MuscleFrame,
+        asm: &mut Assembly,
+        weights: &[f64],
+    ) -> Vec<FrameResult> {
+        let m_r = self.assemble(t, q, u, udot_target, data, mf, asm);
         let nv = self.controls.len();
         weights
             .iter()
             .map(|&w0| {
                 // Every variable after the controls is a contact multiplier.
-                problem.weights[nv..].iter_mut().for_each(|w| *w = 1.0 / w0);
-                let solution = optimize::solve(&problem);
+                asm.problem.weights[nv..]
+                    .iter_mut()
+                    .for_each(|w| *w = 1.0 / w0);
+                let solution = optimize::solve(&asm.problem);
                 self.frame_result(
                     t,
-                    &problem,
+                    &asm.problem,
                     solution,
-                    &scale,
-                    &passive_values,
-                    &states,
+                    &asm.scale,
+                    &asm.passive,
+                    &asm.states,
                     m_r.as_ref(),
                     data,
                     mf,

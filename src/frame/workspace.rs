@@ -4,6 +4,7 @@
 //! model, muscles and problem stay immutable and shared.
 
 use crate::dynamics::Data;
+use crate::frame::problem::Assembly;
 use crate::model::Model;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
 
@@ -12,6 +13,8 @@ pub struct Workspace {
     pub data: Data,
     /// Muscle path states, lengths, speeds, strength and unit forces.
     pub muscles: MuscleFrame,
+    /// The buffers static optimization assembles a frame's problem in.
+    pub assembly: Assembly,
 }
 
 impl Workspace {
@@ -19,6 +22,7 @@ impl Workspace {
         Workspace {
             data: Data::new(model),
             muscles: MuscleFrame::new(muscles, model),
+            assembly: Assembly::default(),
         }
     }
 }

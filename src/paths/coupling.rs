@@ -17,6 +17,14 @@ use crate::model::Model;
 /// Locked or prescribed coordinates other than k get no entry (their speed is
 /// held at zero).
 pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> {
+    let mut w = Vec::new();
+    coupling_vector_into(model, q, k, &mut w);
+    w
+}
+
+/// [`coupling_vector`] into `w` (cleared first), reusing its allocation.
+pub fn coupling_vector_into(model: &Model, q: &[f64], k: usize, w: &mut Vec<(usize, f64)>) {
+    w.clear();
     let independent_of = |c: usize| {
         model
             .couplers
@@ -25,7 +33,7 @@ pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> 
             .map(|cp| cp.independent[0])
     };
     let root = independent_of(k).unwrap_or(k);
-    let mut w: Vec<(usize, f64)> = vec![(root, 1.0)];
+    w.push((root, 1.0));
     for cp in &model.couplers {
         if cp.independent.first() == Some(&root) {
             let slope = cp.scale * cp.function.derivative(q[root], 1);
@@ -40,13 +48,14 @@ pub fn coupling_vector(model: &Model, q: &[f64], k: usize) -> Vec<(usize, f64)> 
             .unwrap_or(0.0);
         if wk == 0.0 {
             // The dependent coordinate cannot move alone: no finite coupling.
-            return vec![(k, 1.0)];
+            w.clear();
+            w.push((k, 1.0));
+            return;
         }
-        for e in &mut w {
+        for e in w.iter_mut() {
             e.1 /= wk;
         }
     }
-    w
 }
 
 /// `C_kᵀ f` for a dense generalized force `f`.

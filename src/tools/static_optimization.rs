@@ -1110,13 +1110,12 @@ fn run_sweep(
                 if block.time[i] <= skip_until {
                     return Ok(None);
                 }
-                let results = problem.solve_frame_weights(
+                let results = problem.solve_frame_in(
                     block.time[i],
                     &block.q[i],
                     &block.u[i],
                     &block.udot[i],
-                    &mut ws.data,
-                    &mut ws.muscles,
+                    ws,
                     &weights,
                 );
                 let mut out = Vec::with_capacity(results.len());
