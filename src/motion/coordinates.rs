@@ -4,7 +4,7 @@
 //! coordinate is splined with a quintic interpolating GCV spline.
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::{GcvSpline, SplineFitter};
 use crate::model::{Model, MotionType};
 use crate::storage::Storage;
 
@@ -149,6 +149,8 @@ impl CoordinateSplines {
         let mut splines = Vec::with_capacity(model.nq());
         let mut constants = Vec::with_capacity(model.nq());
         let mut missing_names = Vec::new();
+        // one spline system for every column (same bits as one per column)
+        let mut fit = SplineFitter::new(degree, &table.time);
         for c in &model.coordinates {
             match column_for(table, &c.name) {
                 Some(j) => {
@@ -162,7 +164,7 @@ impl CoordinateSplines {
                     if !c.dependent {
                         check_units(c, table, j, &v, file)?;
                     }
-                    let s = GcvSpline::interpolating(degree, &table.time, &v).map_err(|e| {
+                    let s = fit.spline(&v).map_err(|e| {
                         e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
                     })?;
                     values.push(v);

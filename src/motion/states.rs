@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::SplineFitter;
 use crate::model::Model;
 use crate::motion::coordinates::{CoordinateSplines, MissingCoordinate};
 use crate::storage::Storage;
@@ -72,12 +72,16 @@ impl States {
         let n = self.time.len();
         let nq = self.q.first().map_or(0, |r| r.len());
         let mut udot = vec![vec![0.0; nq]; n];
+        // S_u′ at the knots, one spline system for all columns (the same
+        // bits as `GcvSpline::interpolating(..).derivative(t_i, 1)`).
+        let mut fit = SplineFitter::new(degree, &self.time);
+        let mut slopes = Vec::with_capacity(n);
         for c in 0..nq {
             let col: Vec<f64> = self.u.iter().map(|r| r[c]).collect();
-            let s = GcvSpline::interpolating(degree, &self.time, &col)
+            fit.knot_slopes(&col, &mut slopes)
                 .map_err(|e| Error::input(Location::file(file), format!("splining speeds: {e}")))?;
             for i in 0..n {
-                udot[i][c] = s.derivative(self.time[i], 1);
+                udot[i][c] = slopes[i];
             }
         }
         Ok(udot)

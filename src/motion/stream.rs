@@ -43,7 +43,7 @@ use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::SplineFitter;
 use crate::model::{Model, MotionType};
 use crate::motion::coordinates::{column_for, units_error};
 use crate::motion::filter::{butterworth, iir_pass, pole_radius, MAX_RESAMPLE_SIZE};
@@ -541,10 +541,16 @@ impl<'m> StateStream<'m> {
         let nu = ub - ua;
         let mut q = vec![vec![0.0; nq]; nu];
         let mut u = vec![vec![0.0; nq]; nu];
+        // u = S_q′ and u̇ = S_u′ at the knots: one spline system per set of
+        // abscissae, shared by the columns (the same bits as splining each).
+        let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
+        let mut slopes = Vec::new();
+        let mut v = Vec::with_capacity(qb - qa);
         for (c, cc) in self.coord_cols.iter().enumerate() {
             let Some((j, scale)) = *cc else { continue };
-            let v: Vec<f64> = cols[j][qa..qb].iter().map(|x| x * scale).collect();
-            let sp = GcvSpline::interpolating(self.degree, &time[qa..qb], &v).map_err(|e| {
+            v.clear();
+            v.extend(cols[j][qa..qb].iter().map(|x| x * scale));
+            fit_q.knot_slopes(&v, &mut slopes).map_err(|e| {
                 e.context(format!(
                     "{}: column '{}'",
                     self.file.display(),
@@ -553,7 +559,7 @@ impl<'m> StateStream<'m> {
             })?;
             for i in 0..nu {
                 q[i][c] = v[ua + i - qa];
-                u[i][c] = sp.derivative(time[ua + i], 1);
+                u[i][c] = slopes[ua + i - qa];
             }
         }
         for i in 0..nu {
@@ -561,13 +567,20 @@ impl<'m> StateStream<'m> {
         }
         let (oa, ob) = (a - w0 - ua, b - w0 - ua);
         let mut udot = vec![vec![0.0; nq]; b - a];
+        let mut fit_u = if (ua, ub) == (qa, qb) {
+            fit_q
+        } else {
+            SplineFitter::new(self.degree, &time[ua..ub])
+        };
+        let mut col = Vec::with_capacity(nu);
         for c in 0..nq {
-            let col: Vec<f64> = u.iter().map(|r| r[c]).collect();
-            let sp = GcvSpline::interpolating(self.degree, &time[ua..ub], &col).map_err(|e| {
+            col.clear();
+            col.extend(u.iter().map(|r| r[c]));
+            fit_u.knot_slopes(&col, &mut slopes).map_err(|e| {
                 Error::input(Location::file(&self.file), format!("splining speeds: {e}"))
             })?;
             for i in oa..ob {
-                udot[i - oa][c] = sp.derivative(time[ua + i], 1);
+                udot[i - oa][c] = slopes[i];
             }
         }
         self.next_out = b;
@@ -819,9 +832,11 @@ impl GSource {
                 knots.drain(..before.saturating_sub(s));
                 let kt: Vec<f64> = knots.iter().map(|k| k.0).collect();
                 let mut vals = vec![Vec::with_capacity(labels.len()); times.len()];
+                let mut fit = SplineFitter::new(5, &kt);
                 for (j, label) in labels.iter().enumerate() {
                     let y: Vec<f64> = knots.iter().map(|k| k.1[j]).collect();
-                    let sp = GcvSpline::interpolating(5, &kt, &y)
+                    let sp = fit
+                        .spline(&y)
                         .map_err(|e| e.context(format!("resampling column '{label}'")))?;
                     for (i, &t) in times.iter().enumerate() {
                         vals[i].push(sp.value(t));
