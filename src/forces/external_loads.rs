@@ -180,14 +180,30 @@ impl ExternalLoads {
                     data_path.display()
                 )));
             }
+            let context = |c: usize, e: crate::error::Error| {
+                e.context(format!(
+                    "column '{}' of {}",
+                    table.labels[c],
+                    data_path.display()
+                ))
+            };
+            if table.time.len() >= 4 {
+                // the three cubic splines solved together
+                let ys: Vec<Vec<f64>> = cols.iter().map(|&c| table.column(c)).collect();
+                let ys: Vec<&[f64]> = ys.iter().map(|y| y.as_slice()).collect();
+                let [a, b, c]: [GcvSpline; 3] = fit
+                    .splines(&ys)
+                    .map_err(|(i, e)| context(cols[i], e))?
+                    .try_into()
+                    .expect("three columns");
+                return Ok(Some(Vec3Series([
+                    Series::Spline(a),
+                    Series::Spline(b),
+                    Series::Spline(c),
+                ])));
+            }
             let mut mk = |c: usize| {
-                Series::new(&table.time, &table.column(c), fit).map_err(|e| {
-                    e.context(format!(
-                        "column '{}' of {}",
-                        table.labels[c],
-                        data_path.display()
-                    ))
-                })
+                Series::new(&table.time, &table.column(c), fit).map_err(|e| context(c, e))
             };
             Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
         };

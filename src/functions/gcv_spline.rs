@@ -25,6 +25,9 @@ use std::sync::OnceLock;
 
 use crate::error::{Error, Result};
 
+/// Right-hand sides solved together by [`SplineFitter`]'s column methods.
+const LANES: usize = 4;
+
 /// Largest supported degree (half order 4, "heptic").
 const MAX_DEGREE: usize = 7;
 const MAX_COEF: usize = MAX_DEGREE + 1;
@@ -454,21 +457,90 @@ impl<'a> SplineFitter<'a> {
 
     /// Checks, then the B-spline coefficients of the spline through y.
     fn coefficients(&mut self, y: &[f64]) -> Result<(usize, Vec<f64>)> {
-        let m = check_data(self.degree, self.x, y)?;
-        let x = self.x;
-        let (_, band, _) = self.basis.get_or_insert_with(|| {
-            let t = knot_vector(2 * m - 1, x);
-            let mut slopes = Vec::with_capacity(x.len());
-            let mut band = system(m, x, &t, Some(&mut slopes));
-            let band = band.factor().map(|_| band).map_err(|_| ());
-            (t, band, slopes)
-        });
-        let Ok(band) = band else {
-            return Err(singular());
+        let m = self.check_columns(&[y]).map_err(|(_, e)| e)?;
+        let Some((_, Ok(band), _)) = &self.basis else {
+            unreachable!("check_columns factored the system");
         };
         let mut coef = rhs(m, y);
         band.apply(&mut coef);
         Ok((m, coef))
+    }
+
+    /// The checks of `coefficients` for every column in order, as calls
+    /// one column after the other would make them: the first error, with
+    /// its column.
+    fn check_columns(&mut self, ys: &[&[f64]]) -> std::result::Result<usize, (usize, Error)> {
+        let mut m = 0;
+        for (c, y) in ys.iter().enumerate() {
+            m = check_data(self.degree, self.x, y).map_err(|e| (c, e))?;
+            let x = self.x;
+            let (_, band, _) = self.basis.get_or_insert_with(|| {
+                let t = knot_vector(2 * m - 1, x);
+                let mut slopes = Vec::with_capacity(x.len());
+                let mut band = system(m, x, &t, Some(&mut slopes));
+                let band = band.factor().map(|_| band).map_err(|_| ());
+                (t, band, slopes)
+            });
+            if band.is_err() {
+                return Err((c, singular()));
+            }
+        }
+        Ok(m)
+    }
+
+    /// B-spline coefficients of checked columns, [`LANES`] at a time.
+    fn solve_columns(&self, m: usize, ys: &[&[f64]]) -> Vec<Vec<f64>> {
+        let Some((_, Ok(band), _)) = &self.basis else {
+            return Vec::new();
+        };
+        let mut out = Vec::with_capacity(ys.len());
+        let nb = band.n;
+        let mut b = vec![[0.0; LANES]; nb];
+        for chunk in ys.chunks(LANES) {
+            b.iter_mut().for_each(|v| *v = [0.0; LANES]);
+            for (lane, y) in chunk.iter().enumerate() {
+                for (v, r) in b.iter_mut().zip(rhs(m, y)) {
+                    v[lane] = r;
+                }
+            }
+            band.apply_lanes(&mut b);
+            for lane in 0..chunk.len() {
+                out.push(b.iter().map(|v| v[lane]).collect());
+            }
+        }
+        out
+    }
+
+    /// [`SplineFitter::spline`] of every column: the splines, or the first
+    /// error and its column.
+    pub fn splines(
+        &mut self,
+        ys: &[&[f64]],
+    ) -> std::result::Result<Vec<GcvSpline>, (usize, Error)> {
+        let m = self.check_columns(ys)?;
+        let coefs = self.solve_columns(m, ys);
+        let t = &self.basis.as_ref().expect("made by check_columns").0;
+        Ok(ys
+            .iter()
+            .zip(coefs)
+            .map(|(y, coef)| GcvSpline::with_coefficients(m, self.x, y, t.clone(), coef))
+            .collect())
+    }
+
+    /// [`SplineFitter::knot_slopes`] of every column into `out[c]`, or the
+    /// first error and its column.
+    pub fn knot_slopes_columns(
+        &mut self,
+        ys: &[&[f64]],
+        out: &mut Vec<Vec<f64>>,
+    ) -> std::result::Result<(), (usize, Error)> {
+        let m = self.check_columns(ys)?;
+        let coefs = self.solve_columns(m, ys);
+        out.resize_with(ys.len(), Vec::new);
+        for ((y, coef), o) in ys.iter().zip(coefs).zip(out.iter_mut()) {
+            self.slopes_of(m, y, &coef, o);
+        }
+        Ok(())
     }
 
     /// `GcvSpline::interpolating(degree, x, y)`.
@@ -489,6 +561,11 @@ impl<'a> SplineFitter<'a> {
     /// whole Taylor polynomial is made and evaluated as `derivative` does.
     pub fn knot_slopes(&mut self, y: &[f64], out: &mut Vec<f64>) -> Result<()> {
         let (m, coef) = self.coefficients(y)?;
+        self.slopes_of(m, y, &coef, out);
+        Ok(())
+    }
+
+    fn slopes_of(&self, m: usize, y: &[f64], coef: &[f64], out: &mut Vec<f64>) {
         let (t, _, d1) = self.basis.as_ref().expect("made by coefficients");
         let x = self.x;
         let n = x.len();
@@ -499,15 +576,14 @@ impl<'a> SplineFitter<'a> {
             if a1 != 0.0 && a1.is_finite() {
                 out.push(a1);
             } else {
-                let mut a = taylor(t, &coef, k, k + i, x[i], k);
+                let mut a = taylor(t, coef, k, k + i, x[i], k);
                 a[0] = y[i];
                 out.push(horner(&a, k, x[i] - x[i], 1));
             }
         }
-        let mut a = taylor(t, &coef, k, k + n - 2, x[n - 2], k);
+        let mut a = taylor(t, coef, k, k + n - 2, x[n - 2], k);
         a[0] = y[n - 2];
         out.push(horner(&a, k, x[n - 1] - x[n - 2], 1));
-        Ok(())
     }
 }
 
@@ -604,28 +680,45 @@ impl Band {
     /// Solve with the factors of [`Band::factor`]; `b` is overwritten with
     /// the solution.
     fn apply(&self, b: &mut [f64]) {
+        self.apply_lanes(b.as_chunks_mut::<1>().0);
+    }
+
+    /// [`Band::apply`] for L right-hand sides at once (`b[i][lane]`): each
+    /// lane gets exactly the operations of its own solve, but the L
+    /// dependency chains of the substitutions overlap in the processor.
+    /// (Rows of U are contiguous: `idx(p, p + j)` = p·w + kl + j.)
+    fn apply_lanes<const L: usize>(&self, b: &mut [[f64; L]]) {
         let n = self.n;
-        let (kl, ku) = (self.kl, self.ku);
+        let (kl, ku, w) = (self.kl, self.ku, self.w);
         for p in 0..n {
-            let last_row = (p + kl).min(n - 1);
-            if self.piv[p] != p {
-                b.swap(p, self.piv[p]);
+            let q = self.piv[p];
+            if q != p {
+                b.swap(p, q);
             }
-            for r in p + 1..=last_row {
-                let l = self.mult[p * kl + (r - p - 1)];
+            let last_row = (p + kl).min(n - 1);
+            let bp = b[p];
+            let mult = &self.mult[p * kl..p * kl + (last_row - p)];
+            for (br, &l) in b[p + 1..=last_row].iter_mut().zip(mult) {
                 if l == 0.0 {
                     continue;
                 }
-                b[r] -= l * b[p];
+                for (v, vp) in br.iter_mut().zip(&bp) {
+                    *v -= l * vp;
+                }
             }
         }
         for p in (0..n).rev() {
             let last_col = (p + kl + ku).min(n - 1);
+            let row = &self.data[p * w + kl..=p * w + kl + (last_col - p)];
             let mut s = b[p];
-            for c in p + 1..=last_col {
-                s -= self.get(p, c) * b[c];
+            for (u, bc) in row[1..].iter().zip(&b[p + 1..=last_col]) {
+                for (v, vc) in s.iter_mut().zip(bc) {
+                    *v -= u * vc;
+                }
             }
-            b[p] = s / self.get(p, p);
+            for (v, sv) in b[p].iter_mut().zip(&s) {
+                *v = sv / row[0];
+            }
         }
     }
 }
@@ -817,6 +910,23 @@ mod tests {
             }
         }
         assert!(zeros > 0, "the zero-slope path was not exercised");
+        // several columns at once (LANES at a time, a partial last group)
+        for (degree, x, y) in random_cases().into_iter().take(40) {
+            let cols: Vec<Vec<f64>> = (0..7)
+                .map(|c| y.iter().map(|v| v * (c as f64 - 2.5)).collect())
+                .collect();
+            let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            let mut f = SplineFitter::new(degree, &x);
+            let mut out = Vec::new();
+            f.knot_slopes_columns(&ys, &mut out).unwrap();
+            let splines = SplineFitter::new(degree, &x).splines(&ys).unwrap();
+            for (c, y) in ys.iter().enumerate() {
+                let s = GcvSpline::interpolating(degree, &x, y).unwrap();
+                let want: Vec<f64> = x.iter().map(|&xi| s.derivative(xi, 1)).collect();
+                assert_eq!(bits(&out[c]), bits(&want));
+                assert_eq!(bits(&splines[c].coef), bits(&s.coef));
+            }
+        }
         // errors: the data checks per column, then the singular system
         let x = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
         let mut f = SplineFitter::new(5, &x);
@@ -826,6 +936,13 @@ mod tests {
             let got = f.knot_slopes(y, &mut out).unwrap_err().to_string();
             assert_eq!(got, want);
         }
+        let ok = [0.0; 6];
+        let nan = [0.0, 1.0, f64::NAN, 0.0, 0.0, 0.0];
+        let e = SplineFitter::new(5, &x)
+            .knot_slopes_columns(&[&ok, &ok, &nan, &[1.0; 5]], &mut Vec::new())
+            .unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.to_string().contains("y[2] is not a finite"), "{}", e.1);
         let bad = [0.0, 1.0, 1.0, 2.0, 3.0, 4.0];
         let want = GcvSpline::interpolating(5, &bad, &[0.0; 6])
             .unwrap_err()

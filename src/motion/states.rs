@@ -75,13 +75,18 @@ impl States {
         // S_u′ at the knots, one spline system for all columns (the same
         // bits as `GcvSpline::interpolating(..).derivative(t_i, 1)`).
         let mut fit = SplineFitter::new(degree, &self.time);
-        let mut slopes = Vec::with_capacity(n);
-        for c in 0..nq {
-            let col: Vec<f64> = self.u.iter().map(|r| r[c]).collect();
-            fit.knot_slopes(&col, &mut slopes)
-                .map_err(|e| Error::input(Location::file(file), format!("splining speeds: {e}")))?;
+        let cols: Vec<Vec<f64>> = (0..nq)
+            .map(|c| self.u.iter().map(|r| r[c]).collect())
+            .collect();
+        let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let mut slopes = Vec::new();
+        fit.knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(_, e)| {
+                Error::input(Location::file(file), format!("splining speeds: {e}"))
+            })?;
+        for (c, sl) in slopes.iter().enumerate() {
             for i in 0..n {
-                udot[i][c] = slopes[i];
+                udot[i][c] = sl[i];
             }
         }
         Ok(udot)

@@ -185,7 +185,6 @@ impl<'m> StateStream<'m> {
 
         // Pass 1: length and end times.
         let in_degrees = reader.table.in_degrees;
-        drop(reader);
         let mut dependent = super::checks::DependentMismatch::new(model);
         let mut check = |k: usize, t: f64, picked: &[f64]| -> Result<()> {
             steps.push(t);
@@ -208,7 +207,7 @@ impl<'m> StateStream<'m> {
             }
             Ok(())
         };
-        let index = index_file(file, &sel, &mut check)?;
+        let index = index_file(reader, &sel, &mut check, block)?;
         let mut warnings = super::checks::time_warnings(file, &steps, cutoff)?;
         warnings.extend(dependent.warnings(model, file));
         let unmatched_columns = super::checks::unmatched_columns(model, &all_labels);
@@ -237,12 +236,9 @@ impl<'m> StateStream<'m> {
         let (mut p_first, mut p_last) = (p_first, p_last);
         let mut dt_filter = 0.0;
         if filtering && n >= 2 {
-            let mut r = open_rows(file)?;
-            let mut row = Vec::new();
             let mut min_step = f64::INFINITY;
             let mut prev = 0.0;
-            let mut k = 0usize;
-            while let Some(t) = r.next_row(&mut row)? {
+            for_each_time(file, &index, &mut |k, t| {
                 if k >= 1 {
                     min_step = min_step.min(t - prev);
                     if p > 0 && k >= 2 && k <= p {
@@ -265,8 +261,7 @@ impl<'m> StateStream<'m> {
                     p_last = 2.0 * tl - t;
                 }
                 prev = t;
-                k += 1;
-            }
+            })?;
             let mut dt = min_step;
             if dt < f64::EPSILON {
                 return Err(ctx(Error::msg(format!("the time column has a step of {dt}: rows must have strictly increasing times to be filtered"))));
@@ -303,16 +298,12 @@ impl<'m> StateStream<'m> {
         } else {
             let (mut c_init, mut c_final) = (0usize, 0usize);
             if n > 0 {
-                let mut r = open_rows(file)?;
-                let mut row = Vec::new();
-                let mut k = 0;
-                while let Some(t) = r.next_row(&mut row)? {
+                for_each_time(file, &index, &mut |k, t| {
                     p_time(k, t, &mut |pt| {
                         c_init += (pt <= initial) as usize;
                         c_final += (pt <= final_) as usize;
                     });
-                    k += 1;
-                }
+                })?;
             }
             rows = m;
             first_time = p_first;
@@ -361,16 +352,12 @@ impl<'m> StateStream<'m> {
                 i += 1;
             }
             let (mut below, mut upto) = (0usize, 0usize);
-            let mut r = open_rows(file)?;
-            let mut row = Vec::new();
-            let mut kk = 0;
-            while let Some(t) = r.next_row(&mut row)? {
+            for_each_time(file, &index, &mut |kk, t| {
                 p_time(kk, t, &mut |pt| {
                     below += (pt < t_lo) as usize;
                     upto += (pt <= t_hi) as usize;
                 });
-                kk += 1;
-            }
+            })?;
             let js = below.saturating_sub(SPLINE_OVERLAP + 2);
             let je = (upto + SPLINE_OVERLAP + 2).min(m);
             let src = PSource::new(file, sel.clone(), index, p, js, je);
@@ -545,21 +532,27 @@ impl<'m> StateStream<'m> {
         // abscissae, shared by the columns (the same bits as splining each).
         let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
         let mut slopes = Vec::new();
-        let mut v = Vec::with_capacity(qb - qa);
-        for (c, cc) in self.coord_cols.iter().enumerate() {
-            let Some((j, scale)) = *cc else { continue };
-            v.clear();
-            v.extend(cols[j][qa..qb].iter().map(|x| x * scale));
-            fit_q.knot_slopes(&v, &mut slopes).map_err(|e| {
+        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
+            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
+            .collect();
+        let vs: Vec<Vec<f64>> = picked
+            .iter()
+            .map(|&(_, j, scale)| cols[j][qa..qb].iter().map(|x| x * scale).collect())
+            .collect();
+        let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
+        fit_q
+            .knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(i, e)| {
                 e.context(format!(
                     "{}: column '{}'",
                     self.file.display(),
-                    self.labels[j]
+                    self.labels[picked[i].1]
                 ))
             })?;
+        for ((&(c, _, _), v), sl) in picked.iter().zip(&vs).zip(&slopes) {
             for i in 0..nu {
                 q[i][c] = v[ua + i - qa];
-                u[i][c] = slopes[ua + i - qa];
+                u[i][c] = sl[ua + i - qa];
             }
         }
         for i in 0..nu {
@@ -572,15 +565,16 @@ impl<'m> StateStream<'m> {
         } else {
             SplineFitter::new(self.degree, &time[ua..ub])
         };
-        let mut col = Vec::with_capacity(nu);
-        for c in 0..nq {
-            col.clear();
-            col.extend(u.iter().map(|r| r[c]));
-            fit_u.knot_slopes(&col, &mut slopes).map_err(|e| {
+        let us: Vec<Vec<f64>> = (0..nq).map(|c| u.iter().map(|r| r[c]).collect()).collect();
+        let ys: Vec<&[f64]> = us.iter().map(|v| v.as_slice()).collect();
+        fit_u
+            .knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(_, e)| {
                 Error::input(Location::file(&self.file), format!("splining speeds: {e}"))
             })?;
+        for (c, sl) in slopes.iter().enumerate() {
             for i in oa..ob {
-                udot[i - oa][c] = slopes[i];
+                udot[i - oa][c] = sl[i];
             }
         }
         self.next_out = b;
@@ -599,26 +593,32 @@ impl<'m> StateStream<'m> {
 const CHUNK: usize = if cfg!(test) { 97 } else { 4096 };
 
 /// What the first read of the file records: its length, first and last rows
-/// (carried columns) and a file position every [`CHUNK`] rows.
+/// (carried columns) and a file position every [`CHUNK`] rows; and, when the
+/// file has no more rows than a block, all of them (the later passes then
+/// read them from memory instead of the file).
 struct RawIndex {
     n: usize,
     first: (f64, Vec<f64>),
     last: (f64, Vec<f64>),
     marks: Vec<(usize, RowMark)>,
+    rows: Option<Vec<(f64, Vec<f64>)>>,
 }
 
+/// Read the rows of `r` (opened, before its first row); keep them if there
+/// are at most `keep` of them.
 fn index_file(
-    file: &Path,
+    mut r: RowReader,
     sel: &[usize],
     check: &mut dyn FnMut(usize, f64, &[f64]) -> Result<()>,
+    keep: usize,
 ) -> Result<RawIndex> {
-    let mut r = open_rows(file)?;
     let mut row = Vec::new();
     let mut idx = RawIndex {
         n: 0,
         first: (0.0, Vec::new()),
         last: (0.0, Vec::new()),
         marks: Vec::new(),
+        rows: Some(Vec::new()),
     };
     loop {
         if idx.n % CHUNK == 0 {
@@ -634,10 +634,36 @@ fn index_file(
         if idx.n == 0 {
             idx.first = (t, picked.clone());
         }
+        if let Some(rows) = &mut idx.rows {
+            if rows.len() < keep {
+                rows.push((t, picked.clone()));
+            } else {
+                idx.rows = None;
+            }
+        }
         idx.last = (t, picked);
         idx.n += 1;
     }
     Ok(idx)
+}
+
+/// `f(k, time of raw row k)` for every row, in order: from the rows
+/// [`index_file`] kept, else read from the file again.
+fn for_each_time(file: &Path, idx: &RawIndex, f: &mut dyn FnMut(usize, f64)) -> Result<()> {
+    if let Some(rows) = &idx.rows {
+        for (k, r) in rows.iter().enumerate() {
+            f(k, r.0);
+        }
+        return Ok(());
+    }
+    let mut r = open_rows(file)?;
+    let mut row = Vec::new();
+    let mut k = 0;
+    while let Some(t) = r.next_row(&mut row)? {
+        f(k, t);
+        k += 1;
+    }
+    Ok(())
 }
 
 /// P's rows `js..je` in order (time, carried columns), read from the file:
@@ -694,6 +720,9 @@ impl PSource {
 
     /// Raw row `k` (for the padding), through the chunk cache.
     fn raw(&mut self, k: usize, descending: bool) -> Result<&(f64, Vec<f64>)> {
+        if let Some(rows) = &self.idx.rows {
+            return Ok(&rows[k]);
+        }
         if k < self.chunk_lo || k >= self.chunk_lo + self.chunk.len() {
             // the padding walks the rows downwards: load the chunk ending at k
             let lo = if descending {
@@ -735,6 +764,10 @@ impl PSource {
             (2.0 * s0.0 - sk.0, v)
         } else if j < p + n {
             let k = j - p;
+            if let Some(rows) = &self.idx.rows {
+                self.j += 1;
+                return Ok(Some(rows[k].clone()));
+            }
             if self.seq.is_none() {
                 let mut r = open_rows(&self.file)?;
                 r.seek_row(k, &self.idx.marks)?;
