@@ -21,7 +21,7 @@
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the band-matrix math
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use crate::error::{Error, Result};
 
@@ -41,10 +41,10 @@ const MAX_COEF: usize = MAX_DEGREE + 1;
 #[derive(Debug, Clone)]
 pub struct GcvSpline {
     half_order: usize,
-    x: Vec<f64>,
+    /// Abscissae (shared by the splines of one [`SplineFitter`]).
+    x: Arc<[f64]>,
     y: Vec<f64>,
-    /// Knot vector ([`knot_vector`]) and B-spline coefficients.
-    t: Vec<f64>,
+    /// B-spline coefficients on the knots [`knot_vector`] makes of x.
     coef: Vec<f64>,
     /// Taylor coefficients f⁽ʲ⁾(base)/j! of n+1 segments, made on first use
     /// ([`GcvSpline::segment`]): segment 0 is the left extrapolation (base
@@ -111,17 +111,16 @@ impl GcvSpline {
         let mut band = system(m, x, &t, None);
         band.factor()?;
         band.apply(&mut coef);
-        Ok(GcvSpline::with_coefficients(m, x, y, t, coef))
+        Ok(GcvSpline::with_coefficients(m, x.into(), y, coef))
     }
 
-    fn with_coefficients(m: usize, x: &[f64], y: &[f64], t: Vec<f64>, coef: Vec<f64>) -> Self {
+    fn with_coefficients(m: usize, x: Arc<[f64]>, y: &[f64], coef: Vec<f64>) -> Self {
         GcvSpline {
             half_order: m,
-            x: x.to_vec(),
-            y: y.to_vec(),
-            t,
-            coef,
             seg: (0..=x.len()).map(|_| OnceLock::new()).collect(),
+            x,
+            y: y.to_vec(),
+            coef,
         }
     }
 
@@ -188,12 +187,12 @@ impl GcvSpline {
             let n = x.len();
             if s == n {
                 // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
-                let mut a = taylor(&self.t, &self.coef, k, k + n - 2, x[n - 1], m - 1);
+                let mut a = taylor_x(x, &self.coef, k, k + n - 2, x[n - 1], m - 1);
                 a[0] = y[n - 1];
                 return a;
             }
             let i = s.max(1) - 1;
-            let mut a = taylor(&self.t, &self.coef, k, k + i, x[i], k);
+            let mut a = taylor_x(x, &self.coef, k, k + i, x[i], k);
             a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
             if s == 0 {
                 // Left extrapolation: Taylor polynomial of degree m-1 at x0.
@@ -413,14 +412,45 @@ fn system(m: usize, x: &[f64], t: &[f64], mut slopes: Option<&mut Vec<[f64; MAX_
 /// `span` of the spline with B-spline coefficients `coef` (others 0).
 fn taylor(t: &[f64], coef: &[f64], k: usize, span: usize, u: f64, upto: usize) -> [f64; MAX_COEF] {
     let ders = basis_derivatives(t, span, k, u, upto);
-    let first = span - k;
+    taylor_of(&ders, &coef[span - k..], k, upto)
+}
+
+/// [`taylor`] on the knots [`knot_vector`] would make of `x`, from the 2k
+/// of them that the span's basis functions use (t[j] = x[clamp(j − k)]),
+/// placed so that `basis_derivatives` reads the same values.
+fn taylor_x(
+    x: &[f64],
+    coef: &[f64],
+    k: usize,
+    span: usize,
+    u: f64,
+    upto: usize,
+) -> [f64; MAX_COEF] {
+    let n = x.len();
+    // w[i] = t[span − k + i], i = 1..=2k; span k in w is span `span` in t
+    let mut w = [0.0; 2 * MAX_DEGREE + 1];
+    for (i, wi) in w.iter_mut().enumerate().take(2 * k + 1).skip(1) {
+        *wi = x[(span - k + i).saturating_sub(k).min(n - 1)];
+    }
+    let ders = basis_derivatives(&w, k, k, u, upto);
+    taylor_of(&ders, &coef[span - k..], k, upto)
+}
+
+/// Taylor coefficients from the basis derivatives `ders` of a span whose
+/// first B-spline coefficient is `coef[0]`.
+fn taylor_of(
+    ders: &[[f64; MAX_COEF]; MAX_COEF],
+    coef: &[f64],
+    k: usize,
+    upto: usize,
+) -> [f64; MAX_COEF] {
     let mut out = [0.0; MAX_COEF];
     let mut fact = 1.0;
     for (d, o) in out.iter_mut().enumerate().take(upto + 1) {
         if d > 0 {
             fact *= d as f64;
         }
-        let s: f64 = (0..=k).map(|r| coef[first + r] * ders[d][r]).sum();
+        let s: f64 = (0..=k).map(|r| coef[r] * ders[d][r]).sum();
         *o = s / fact;
     }
     out
@@ -440,6 +470,7 @@ pub struct SplineFitter<'a> {
         std::result::Result<Band, ()>,
         Vec<[f64; MAX_COEF]>,
     )>,
+    shared: Option<Arc<[f64]>>,
 }
 
 impl<'a> SplineFitter<'a> {
@@ -448,6 +479,7 @@ impl<'a> SplineFitter<'a> {
             degree,
             x,
             basis: None,
+            shared: None,
         }
     }
 
@@ -494,18 +526,15 @@ impl<'a> SplineFitter<'a> {
             return Vec::new();
         };
         let mut out = Vec::with_capacity(ys.len());
-        let nb = band.n;
-        let mut b = vec![[0.0; LANES]; nb];
-        for chunk in ys.chunks(LANES) {
-            b.iter_mut().for_each(|v| *v = [0.0; LANES]);
-            for (lane, y) in chunk.iter().enumerate() {
-                for (v, r) in b.iter_mut().zip(rhs(m, y)) {
-                    v[lane] = r;
-                }
-            }
-            band.apply_lanes(&mut b);
-            for lane in 0..chunk.len() {
-                out.push(b.iter().map(|v| v[lane]).collect());
+        let mut rest = ys;
+        while !rest.is_empty() {
+            let chunk;
+            if rest.len() >= 2 * LANES {
+                (chunk, rest) = rest.split_at(2 * LANES);
+                solve_lanes::<{ 2 * LANES }>(band, m, chunk, &mut out);
+            } else {
+                (chunk, rest) = rest.split_at(rest.len().min(LANES));
+                solve_lanes::<LANES>(band, m, chunk, &mut out);
             }
         }
         out
@@ -519,11 +548,11 @@ impl<'a> SplineFitter<'a> {
     ) -> std::result::Result<Vec<GcvSpline>, (usize, Error)> {
         let m = self.check_columns(ys)?;
         let coefs = self.solve_columns(m, ys);
-        let t = &self.basis.as_ref().expect("made by check_columns").0;
+        let x = self.shared_x();
         Ok(ys
             .iter()
             .zip(coefs)
-            .map(|(y, coef)| GcvSpline::with_coefficients(m, self.x, y, t.clone(), coef))
+            .map(|(y, coef)| GcvSpline::with_coefficients(m, x.clone(), y, coef))
             .collect())
     }
 
@@ -546,8 +575,13 @@ impl<'a> SplineFitter<'a> {
     /// `GcvSpline::interpolating(degree, x, y)`.
     pub fn spline(&mut self, y: &[f64]) -> Result<GcvSpline> {
         let (m, coef) = self.coefficients(y)?;
-        let t = self.basis.as_ref().expect("made by coefficients").0.clone();
-        Ok(GcvSpline::with_coefficients(m, self.x, y, t, coef))
+        Ok(GcvSpline::with_coefficients(m, self.shared_x(), y, coef))
+    }
+
+    /// The abscissae as the splines made here share them.
+    fn shared_x(&mut self) -> Arc<[f64]> {
+        let x = self.x;
+        self.shared.get_or_insert_with(|| x.into()).clone()
     }
 
     /// `out[i] = GcvSpline::interpolating(degree, x, y)?.derivative(x[i], 1)`
@@ -584,6 +618,21 @@ impl<'a> SplineFitter<'a> {
         let mut a = taylor(t, coef, k, k + n - 2, x[n - 2], k);
         a[0] = y[n - 2];
         out.push(horner(&a, k, x[n - 1] - x[n - 2], 1));
+    }
+}
+
+/// Solve up to L columns together ([`Band::apply_lanes`]; unused lanes are
+/// zeros) and append their coefficients to `out`.
+fn solve_lanes<const L: usize>(band: &Band, m: usize, ys: &[&[f64]], out: &mut Vec<Vec<f64>>) {
+    let mut b = vec![[0.0; L]; band.n];
+    for (lane, y) in ys.iter().enumerate() {
+        for (v, r) in b.iter_mut().zip(rhs(m, y)) {
+            v[lane] = r;
+        }
+    }
+    band.apply_lanes(&mut b);
+    for lane in 0..ys.len() {
+        out.push(b.iter().map(|v| v[lane]).collect());
     }
 }
 
@@ -812,15 +861,16 @@ mod tests {
         let (m, x, y) = (s.half_order, &s.x, &s.y);
         let n = x.len();
         let k = 2 * m - 1;
+        let t = knot_vector(k, x);
         let mut interior = Vec::new();
         for i in 0..n - 1 {
-            let mut a = taylor(&s.t, &s.coef, k, k + i, x[i], k);
+            let mut a = taylor(&t, &s.coef, k, k + i, x[i], k);
             a[0] = y[i];
             interior.push(a);
         }
         let mut left = interior[0];
         left[m..].iter_mut().for_each(|v| *v = 0.0);
-        let mut right = taylor(&s.t, &s.coef, k, k + n - 2, x[n - 1], m - 1);
+        let mut right = taylor(&t, &s.coef, k, k + n - 2, x[n - 1], m - 1);
         right[0] = y[n - 1];
         let mut seg = vec![left];
         seg.extend(interior);
@@ -910,9 +960,9 @@ mod tests {
             }
         }
         assert!(zeros > 0, "the zero-slope path was not exercised");
-        // several columns at once (LANES at a time, a partial last group)
+        // several columns at once (8, then 4 at a time, a partial last group)
         for (degree, x, y) in random_cases().into_iter().take(40) {
-            let cols: Vec<Vec<f64>> = (0..7)
+            let cols: Vec<Vec<f64>> = (0..19)
                 .map(|c| y.iter().map(|v| v * (c as f64 - 2.5)).collect())
                 .collect();
             let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();

@@ -345,6 +345,13 @@ fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<(
     Ok(())
 }
 
+/// These ASCII bytes are what `char::is_whitespace` (`split_whitespace`,
+/// `trim`) accepts below U+0080 (all ≤ b' ').
+#[inline(always)]
+fn is_ws(b: u8) -> bool {
+    b <= b' ' && matches!(b, b' ' | b'\t' | b'\n' | 0x0B | 0x0C | b'\r')
+}
+
 /// The common case of a legacy data line, in one pass over its bytes and
 /// without allocation: no empty cell ([`empty_cell`]'s rule) and exactly
 /// time and `nc` white-space separated values, all finite numbers that
@@ -354,10 +361,8 @@ fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<(
 /// which says what is wrong. Anything unusual (non-ASCII text included: a
 /// token holding it does not parse) is left to the general path.
 fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
-    // These ASCII bytes are what `char::is_whitespace` (`split_whitespace`,
-    // `trim`) accepts below U+0080; tokens end only at them, so every token
-    // boundary is a char boundary.
-    let is_ws = |b: u8| matches!(b, b' ' | b'\t' | b'\n' | 0x0B | 0x0C | b'\r');
+    // Tokens end only at ASCII white space, so every token boundary is a
+    // char boundary.
     let b = line.as_bytes();
     row.clear();
     let mut time = 0.0;
@@ -381,17 +386,23 @@ fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
             }
             break;
         }
-        if tabs > (count > 0) as usize {
+        if tabs > (count > 0) as usize || count > nc {
             return None;
         }
-        let start = i;
-        while i < b.len() && !is_ws(b[i]) {
-            i += 1;
-        }
-        if count > nc {
-            return None;
-        }
-        let v = parse_decimal(&line[start..i])?;
+        let v = match decimal_token(b, i) {
+            Some((v, end)) => {
+                i = end;
+                v
+            }
+            None => {
+                let start = i;
+                while i < b.len() && !is_ws(b[i]) {
+                    i += 1;
+                }
+                let v: f64 = line[start..i].parse().ok()?;
+                v
+            }
+        };
         if !v.is_finite() {
             return None;
         }
@@ -405,47 +416,44 @@ fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
     (count == nc + 1).then_some(time)
 }
 
-/// `s.parse::<f64>().ok()`, with Clinger's fast path for plain decimals
-/// (`[+-]digits[.digits]`, at most 15 significant digits, at most 22
-/// after the point): the integer of the digits and 10ᵉ are exact doubles,
-/// so one division rounds correctly, as `parse` does (correct rounding has
-/// one answer). Anything else goes to `parse`.
-fn parse_decimal(s: &str) -> Option<f64> {
-    let b = s.as_bytes();
-    let (neg, body) = match b.first() {
-        Some(b'-') => (true, &b[1..]),
-        Some(b'+') => (false, &b[1..]),
-        _ => (false, b),
-    };
-    let mut w: u64 = 0;
-    let mut digits = 0;
-    let mut frac: Option<usize> = None;
-    for &c in body {
-        match c {
-            b'0'..=b'9' => {
-                w = w * 10 + (c - b'0') as u64;
-                digits += 1;
-                if digits > 15 {
-                    return s.parse().ok();
-                }
-                if let Some(f) = frac.as_mut() {
-                    *f += 1;
-                }
-            }
-            b'.' if frac.is_none() => frac = Some(0),
-            _ => return s.parse().ok(),
-        }
-    }
-    let e = frac.unwrap_or(0);
-    if digits == 0 || e > 22 {
-        return s.parse().ok();
-    }
+/// The token of `b` that starts at `i`, when it is a plain decimal
+/// (`[+-]digits[.digits]`, at most 15 significant digits, at most 22 after
+/// the point): its value and end (the next white space or the end of `b`).
+/// Clinger's fast path: the integer of the digits and 10ᵉ are exact
+/// doubles, so one division rounds correctly, as `str::parse` does
+/// (correct rounding has one answer). None for any other token.
+#[inline(always)]
+fn decimal_token(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
     const POW10: [f64; 23] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
         1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
     ];
+    let neg = b[i] == b'-';
+    i += (neg || b[i] == b'+') as usize;
+    let mut w: u64 = 0;
+    let int_start = i;
+    while i < b.len() && b[i].is_ascii_digit() {
+        w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
+        i += 1;
+    }
+    let mut digits = i - int_start;
+    let mut e = 0;
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        let frac_start = i;
+        while i < b.len() && b[i].is_ascii_digit() {
+            w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
+            i += 1;
+        }
+        e = i - frac_start;
+        digits += e;
+    }
+    // (w is exact when digits ≤ 15)
+    if (i < b.len() && !is_ws(b[i])) || digits == 0 || digits > 15 || e > 22 {
+        return None;
+    }
     let v = w as f64 / POW10[e];
-    Some(if neg { -v } else { v })
+    Some((if neg { -v } else { v }, i))
 }
 
 /// Parse `toks` = time then `labels.len()` values into `row`; returns the time.
@@ -903,9 +911,9 @@ impl RowReader {
 mod fast_line_tests {
     use super::*;
 
-    /// `parse_decimal` = `str::parse::<f64>` bit for bit (None for None).
+    /// `decimal_token` = `str::parse::<f64>` bit for bit when it answers.
     #[test]
-    fn parse_decimal_is_parse() {
+    fn decimal_token_is_parse() {
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut rnd = |n: u64| {
             state ^= state << 13;
@@ -963,10 +971,19 @@ mod fast_line_tests {
             }
             cases.push(s);
         }
+        let mut fast = 0;
         for s in &cases {
             let want = s.parse::<f64>().ok().map(f64::to_bits);
-            assert_eq!(parse_decimal(s).map(f64::to_bits), want, "{s:?}");
+            if s.is_empty() {
+                continue; // a token is never empty
+            }
+            if let Some((v, end)) = decimal_token(s.as_bytes(), 0) {
+                fast += 1;
+                assert_eq!(end, s.len(), "{s:?}");
+                assert_eq!(Some(v.to_bits()), want, "{s:?}");
+            }
         }
+        assert!(fast > 100_000, "{fast}");
     }
 
     /// `parse_line_fast` accepts a line only when the general path
