@@ -51,7 +51,8 @@ pub struct GcvSpline {
     /// x₀), segment s (1 ≤ s ≤ n−1) covers [x_{s−1}, x_s) with base x_{s−1},
     /// segment n is the right extrapolation (base x_{n−1}). Unused high
     /// coefficients are 0.
-    seg: Vec<OnceLock<[f64; MAX_COEF]>>,
+    /// (Boxed: a slot not yet used takes 16 bytes, not 72.)
+    seg: Box<[OnceLock<Box<[f64; MAX_COEF]>>]>,
 }
 
 /// Splines are equal when they interpolate the same data with the same degree.
@@ -99,6 +100,23 @@ fn check_data(degree: usize, x: &[f64], y: &[f64]) -> Result<usize> {
         )));
     }
     Ok(m)
+}
+
+/// The checks of [`check_data`] on y, for abscissae that passed them.
+fn check_y(x: &[f64], y: &[f64]) -> Result<()> {
+    if x.len() != y.len() {
+        return Err(Error::msg(format!(
+            "GCVSpline: {} x values but {} y values",
+            x.len(),
+            y.len()
+        )));
+    }
+    if let Some(j) = y.iter().position(|v| !v.is_finite()) {
+        return Err(Error::msg(format!(
+            "GCVSpline: y[{j}] is not a finite number"
+        )));
+    }
+    Ok(())
 }
 
 impl GcvSpline {
@@ -181,25 +199,27 @@ impl GcvSpline {
     /// Taylor coefficients of segment `s` (see [`GcvSpline::seg`]).
     #[inline]
     fn segment(&self, s: usize) -> &[f64; MAX_COEF] {
-        self.seg[s].get_or_init(|| {
-            let (m, x, y) = (self.half_order, &self.x, &self.y);
-            let k = 2 * m - 1;
-            let n = x.len();
-            if s == n {
-                // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
-                let mut a = taylor_x(x, &self.coef, k, k + n - 2, x[n - 1], m - 1);
-                a[0] = y[n - 1];
-                return a;
-            }
-            let i = s.max(1) - 1;
-            let mut a = taylor_x(x, &self.coef, k, k + i, x[i], k);
-            a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
-            if s == 0 {
-                // Left extrapolation: Taylor polynomial of degree m-1 at x0.
-                a[m..].iter_mut().for_each(|v| *v = 0.0);
-            }
-            a
-        })
+        self.seg[s].get_or_init(|| Box::new(self.make_segment(s)))
+    }
+
+    fn make_segment(&self, s: usize) -> [f64; MAX_COEF] {
+        let (m, x, y) = (self.half_order, &self.x, &self.y);
+        let k = 2 * m - 1;
+        let n = x.len();
+        if s == n {
+            // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
+            let mut a = taylor_x(x, &self.coef, k, k + n - 2, x[n - 1], m - 1);
+            a[0] = y[n - 1];
+            return a;
+        }
+        let i = s.max(1) - 1;
+        let mut a = taylor_x(x, &self.coef, k, k + i, x[i], k);
+        a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
+        if s == 0 {
+            // Left extrapolation: Taylor polynomial of degree m-1 at x0.
+            a[m..].iter_mut().for_each(|v| *v = 0.0);
+        }
+        a
     }
 
     /// (value, first, second derivative) with one interval search.
@@ -504,8 +524,14 @@ impl<'a> SplineFitter<'a> {
     fn check_columns(&mut self, ys: &[&[f64]]) -> std::result::Result<usize, (usize, Error)> {
         let mut m = 0;
         for (c, y) in ys.iter().enumerate() {
-            m = check_data(self.degree, self.x, y).map_err(|e| (c, e))?;
             let x = self.x;
+            m = if self.basis.is_some() {
+                // x passed check_data already: only y's checks can fail
+                check_y(x, y).map_err(|e| (c, e))?;
+                self.degree.div_ceil(2)
+            } else {
+                check_data(self.degree, x, y).map_err(|e| (c, e))?
+            };
             let (_, band, _) = self.basis.get_or_insert_with(|| {
                 let t = knot_vector(2 * m - 1, x);
                 let mut slopes = Vec::with_capacity(x.len());
@@ -988,6 +1014,14 @@ mod tests {
         }
         let ok = [0.0; 6];
         let nan = [0.0, 1.0, f64::NAN, 0.0, 0.0, 0.0];
+        // after a good column (x checked), the y checks alone
+        let mut f = SplineFitter::new(5, &x);
+        f.knot_slopes(&ok, &mut out).unwrap();
+        for y in [&[1.0; 5][..], &[1.0; 7], &nan, &[f64::INFINITY; 6]] {
+            let want = GcvSpline::interpolating(5, &x, y).unwrap_err().to_string();
+            assert_eq!(f.knot_slopes(y, &mut out).unwrap_err().to_string(), want);
+            assert_eq!(f.spline(y).unwrap_err().to_string(), want);
+        }
         let e = SplineFitter::new(5, &x)
             .knot_slopes_columns(&[&ok, &ok, &nan, &[1.0; 5]], &mut Vec::new())
             .unwrap_err();

@@ -74,6 +74,7 @@ fn check_units(
 /// The error for one value (in model units, row `i` 0-based) of coordinate
 /// `c` read from column `label`, when it lies far outside the coordinate's
 /// range (see `check_units`); None when it does not.
+#[inline]
 pub(crate) fn units_error(
     c: &crate::model::Coordinate,
     label: &str,
@@ -96,6 +97,22 @@ pub(crate) fn units_error(
     if x >= lo - margin && x <= hi + margin {
         return None;
     }
+    units_message(c, label, in_degrees, i, t, x, file)
+}
+
+#[cold]
+#[inline(never)]
+fn units_message(
+    c: &crate::model::Coordinate,
+    label: &str,
+    in_degrees: bool,
+    i: usize,
+    t: f64,
+    x: f64,
+    file: &std::path::Path,
+) -> Option<Error> {
+    let [lo, hi] = c.range;
+    let rotational = c.motion_type == MotionType::Rotational;
     let (unit, hint) = if rotational {
         (
             "rad",
