@@ -476,6 +476,13 @@ fn taylor_of(
     out
 }
 
+/// Knots, factored system (Err: singular) and basis slopes at x_0…x_{n−2}.
+type Basis = (
+    Vec<f64>,
+    std::result::Result<Band, ()>,
+    Vec<[f64; MAX_COEF]>,
+);
+
 /// Interpolating splines of one degree on one set of abscissae: the spline
 /// system is assembled and factored once (on the first column whose data
 /// pass [`GcvSpline::interpolating`]'s checks) and reused for every column.
@@ -485,11 +492,7 @@ pub struct SplineFitter<'a> {
     degree: usize,
     x: &'a [f64],
     /// Knots, factored system (Err: singular) and basis slopes at x_0…x_{n−2}.
-    basis: Option<(
-        Vec<f64>,
-        std::result::Result<Band, ()>,
-        Vec<[f64; MAX_COEF]>,
-    )>,
+    basis: Option<Basis>,
     shared: Option<Arc<[f64]>>,
 }
 
@@ -638,7 +641,8 @@ impl<'a> SplineFitter<'a> {
             } else {
                 let mut a = taylor(t, coef, k, k + i, x[i], k);
                 a[0] = y[i];
-                out.push(horner(&a, k, x[i] - x[i], 1));
+                // t = x_i − x_i = +0
+                out.push(horner(&a, k, 0.0, 1));
             }
         }
         let mut a = taylor(t, coef, k, k + n - 2, x[n - 2], k);
@@ -755,7 +759,11 @@ impl Band {
     /// Solve with the factors of [`Band::factor`]; `b` is overwritten with
     /// the solution.
     fn apply(&self, b: &mut [f64]) {
-        self.apply_lanes(b.as_chunks_mut::<1>().0);
+        let mut one: Vec<[f64; 1]> = b.iter().map(|&v| [v]).collect();
+        self.apply_lanes(&mut one);
+        for (v, o) in b.iter_mut().zip(&one) {
+            *v = o[0];
+        }
     }
 
     /// [`Band::apply`] for L right-hand sides at once (`b[i][lane]`): each
