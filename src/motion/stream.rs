@@ -35,9 +35,15 @@
 //! length, end rows and a file position every few thousand rows, once for
 //! P's smallest step, once to locate the analysed time range in P, and then
 //! to stream the values — the data rows in order, the reflected padding (rows
-//! in reverse order) a chunk at a time from the recorded positions. Memory is
-//! O(block + overlaps + chunk) rows, whatever the length of the file and
-//! whichever part of it (padding included) is analysed.
+//! in reverse order) a chunk at a time from the recorded positions. A file of
+//! at most a block of rows is read once: the first read keeps its rows and
+//! the other passes take them from memory. Memory is O(block + overlaps +
+//! chunk) rows, whatever the length of the file and whichever part of it
+//! (padding included) is analysed.
+//!
+//! u and u̇ at the rows are the splines' slopes at their knots
+//! ([`SplineFitter::knot_slopes_columns`]: one spline system per window,
+//! shared by the columns, the bits of `GcvSpline::derivative(t_i, 1)`).
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
