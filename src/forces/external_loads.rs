@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 
 use crate::dynamics::{BodyForce, Data};
 use crate::error::Result;
-use crate::functions::GcvSpline;
+use crate::functions::{GcvSpline, SplineFitter};
 use crate::model::Model;
 use crate::storage::{self, Storage};
 use crate::xml::{self, Element};
@@ -24,12 +24,13 @@ enum Series {
 }
 
 impl Series {
-    fn new(t: &[f64], y: &[f64]) -> Result<Series> {
+    /// `fit`: cubic splines on `t` (one spline system for all columns).
+    fn new(t: &[f64], y: &[f64], fit: &mut SplineFitter) -> Result<Series> {
         Ok(match t.len() {
             0 => Series::Constant(0.0),
             1 => Series::Constant(y[0]),
             2 | 3 => Series::Linear(t.to_vec(), y.to_vec()),
-            _ => Series::Spline(GcvSpline::interpolating(3, t, y)?),
+            _ => Series::Spline(fit.spline(y)?),
         })
     }
     fn value(&self, x: f64) -> f64 {
@@ -121,9 +122,10 @@ impl ExternalLoads {
             })?;
         let table = storage::read(&data_path)?;
         let mut forces = Vec::new();
+        let mut fit = SplineFitter::new(3, &table.time);
         if let Some(objs) = el.child("objects") {
             for f in objs.children_named("ExternalForce") {
-                if let Some(ef) = Self::read_force(f, &table, &data_path, model)? {
+                if let Some(ef) = Self::read_force(f, &table, &mut fit, &data_path, model)? {
                     forces.push(ef);
                 }
             }
@@ -137,6 +139,7 @@ impl ExternalLoads {
     fn read_force(
         f: &Element,
         table: &Storage,
+        fit: &mut SplineFitter,
         data_path: &Path,
         model: &Model,
     ) -> Result<Option<ExternalForce>> {
@@ -161,7 +164,7 @@ impl ExternalLoads {
         })?;
         let expressed =
             |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
-        let series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
+        let mut series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
             let Some(id) = given(id) else { return Ok(None) };
             let cols: Vec<usize> = table
                 .labels
@@ -177,14 +180,30 @@ impl ExternalLoads {
                     data_path.display()
                 )));
             }
-            let mk = |c: usize| {
-                Series::new(&table.time, &table.column(c)).map_err(|e| {
-                    e.context(format!(
-                        "column '{}' of {}",
-                        table.labels[c],
-                        data_path.display()
-                    ))
-                })
+            let context = |c: usize, e: crate::error::Error| {
+                e.context(format!(
+                    "column '{}' of {}",
+                    table.labels[c],
+                    data_path.display()
+                ))
+            };
+            if table.time.len() >= 4 {
+                // the three cubic splines solved together
+                let ys: Vec<Vec<f64>> = cols.iter().map(|&c| table.column(c)).collect();
+                let ys: Vec<&[f64]> = ys.iter().map(|y| y.as_slice()).collect();
+                let [a, b, c]: [GcvSpline; 3] = fit
+                    .splines(&ys)
+                    .map_err(|(i, e)| context(cols[i], e))?
+                    .try_into()
+                    .expect("three columns");
+                return Ok(Some(Vec3Series([
+                    Series::Spline(a),
+                    Series::Spline(b),
+                    Series::Spline(c),
+                ])));
+            }
+            let mut mk = |c: usize| {
+                Series::new(&table.time, &table.column(c), fit).map_err(|e| context(c, e))
             };
             Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
         };

@@ -21,72 +21,135 @@
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the band-matrix math
 
+use std::sync::{Arc, OnceLock};
+
 use crate::error::{Error, Result};
+
+/// Right-hand sides solved together by [`SplineFitter`]'s column methods.
+const LANES: usize = 4;
 
 /// Largest supported degree (half order 4, "heptic").
 const MAX_DEGREE: usize = 7;
 const MAX_COEF: usize = MAX_DEGREE + 1;
 
 /// An interpolating natural spline of odd degree 1, 3, 5 or 7.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// The B-spline coefficients are solved when the spline is built; the
+/// Taylor coefficients of an interval are computed the first time the spline
+/// is evaluated there (and kept), so a long series evaluated at a few points
+/// costs little more than the solve.
+#[derive(Debug, Clone)]
 pub struct GcvSpline {
     half_order: usize,
-    x: Vec<f64>,
+    /// Abscissae (shared by the splines of one [`SplineFitter`]).
+    x: Arc<[f64]>,
     y: Vec<f64>,
-    /// Taylor coefficients f⁽ʲ⁾(base)/j! of n+1 segments: segment 0 is the
-    /// left extrapolation (base x₀), segment s (1 ≤ s ≤ n−1) covers
-    /// [x_{s−1}, x_s) with base x_{s−1}, segment n is the right
-    /// extrapolation (base x_{n−1}). Unused high coefficients are 0.
-    seg: Vec<[f64; MAX_COEF]>,
+    /// B-spline coefficients on the knots [`knot_vector`] makes of x.
+    coef: Vec<f64>,
+    /// Taylor coefficients f⁽ʲ⁾(base)/j! of n+1 segments, made on first use
+    /// ([`GcvSpline::segment`]): segment 0 is the left extrapolation (base
+    /// x₀), segment s (1 ≤ s ≤ n−1) covers [x_{s−1}, x_s) with base x_{s−1},
+    /// segment n is the right extrapolation (base x_{n−1}). Unused high
+    /// coefficients are 0.
+    /// (Boxed: a slot not yet used takes 16 bytes, not 72.)
+    seg: Box<[OnceLock<Box<[f64; MAX_COEF]>>]>,
+}
+
+/// Splines are equal when they interpolate the same data with the same degree.
+impl PartialEq for GcvSpline {
+    fn eq(&self, other: &GcvSpline) -> bool {
+        self.half_order == other.half_order && self.x == other.x && self.y == other.y
+    }
+}
+
+/// The checks of [`GcvSpline::interpolating`], in its order; returns m.
+fn check_data(degree: usize, x: &[f64], y: &[f64]) -> Result<usize> {
+    if degree % 2 == 0 || !(1..=MAX_DEGREE).contains(&degree) {
+        return Err(Error::msg(format!(
+            "GCVSpline degree must be 1, 3, 5 or 7, got {degree}"
+        )));
+    }
+    let m = degree.div_ceil(2);
+    if x.len() != y.len() {
+        return Err(Error::msg(format!(
+            "GCVSpline: {} x values but {} y values",
+            x.len(),
+            y.len()
+        )));
+    }
+    let n = x.len();
+    if n < 2 * m {
+        return Err(Error::msg(format!(
+            "GCVSpline: Too few data points: a degree {degree} spline needs at least {} points, got {n}",
+            2 * m
+        )));
+    }
+    if let Some(i) = x.iter().chain(y).position(|v| !v.is_finite()) {
+        let (what, j) = if i < n { ("x", i) } else { ("y", i - n) };
+        return Err(Error::msg(format!(
+            "GCVSpline: {what}[{j}] is not a finite number"
+        )));
+    }
+    if let Some(i) = (1..n).find(|&i| x[i] <= x[i - 1]) {
+        return Err(Error::msg(format!(
+            "GCVSpline: x values must be strictly increasing, but x[{}] = {} and x[{}] = {}",
+            i - 1,
+            x[i - 1],
+            i,
+            x[i]
+        )));
+    }
+    Ok(m)
+}
+
+/// The checks of [`check_data`] on y, for abscissae that passed them.
+fn check_y(x: &[f64], y: &[f64]) -> Result<()> {
+    if x.len() != y.len() {
+        return Err(Error::msg(format!(
+            "GCVSpline: {} x values but {} y values",
+            x.len(),
+            y.len()
+        )));
+    }
+    if let Some(j) = y.iter().position(|v| !v.is_finite()) {
+        return Err(Error::msg(format!(
+            "GCVSpline: y[{j}] is not a finite number"
+        )));
+    }
+    Ok(())
 }
 
 impl GcvSpline {
     /// Interpolating natural spline of odd degree (1, 3, 5, 7) through
     /// (x, y); x strictly increasing; needs n ≥ degree+1 points.
     pub fn interpolating(degree: usize, x: &[f64], y: &[f64]) -> Result<GcvSpline> {
-        if degree % 2 == 0 || !(1..=MAX_DEGREE).contains(&degree) {
-            return Err(Error::msg(format!(
-                "GCVSpline degree must be 1, 3, 5 or 7, got {degree}"
-            )));
-        }
-        let m = degree.div_ceil(2);
-        if x.len() != y.len() {
-            return Err(Error::msg(format!(
-                "GCVSpline: {} x values but {} y values",
-                x.len(),
-                y.len()
-            )));
-        }
-        let n = x.len();
-        if n < 2 * m {
-            return Err(Error::msg(format!(
-                "GCVSpline: Too few data points: a degree {degree} spline needs at least {} points, got {n}",
-                2 * m
-            )));
-        }
-        if let Some(i) = x.iter().chain(y).position(|v| !v.is_finite()) {
-            let (what, j) = if i < n { ("x", i) } else { ("y", i - n) };
-            return Err(Error::msg(format!(
-                "GCVSpline: {what}[{j}] is not a finite number"
-            )));
-        }
-        if let Some(i) = (1..n).find(|&i| x[i] <= x[i - 1]) {
-            return Err(Error::msg(format!(
-                "GCVSpline: x values must be strictly increasing, but x[{}] = {} and x[{}] = {}",
-                i - 1,
-                x[i - 1],
-                i,
-                x[i]
-            )));
-        }
-        let coef = solve_bspline_coefficients(m, x, y)?;
-        let seg = taylor_segments(m, x, y, &coef);
-        Ok(GcvSpline {
+        let m = check_data(degree, x, y)?;
+        let t = knot_vector(2 * m - 1, x);
+        let mut coef = rhs(m, y);
+        let mut band = system(m, x, &t, None);
+        band.factor()?;
+        band.apply(&mut coef);
+        Ok(GcvSpline::with_coefficients(m, x.into(), y, coef))
+    }
+
+    fn with_coefficients(m: usize, x: Arc<[f64]>, y: &[f64], coef: Vec<f64>) -> Self {
+        GcvSpline {
             half_order: m,
-            x: x.to_vec(),
+            seg: (0..=x.len()).map(|_| OnceLock::new()).collect(),
+            x,
             y: y.to_vec(),
-            seg,
-        })
+            coef,
+        }
+    }
+
+    /// d/dx at every knot of the interpolating spline through (x, y):
+    /// `out[i]` has the bits of `interpolating(degree, x, y)?.derivative(x[i], 1)`
+    /// (same errors), without building the Taylor segments. For several
+    /// columns on the same abscissae, [`SplineFitter`] shares the solve.
+    pub fn knot_slopes(degree: usize, x: &[f64], y: &[f64]) -> Result<Vec<f64>> {
+        let mut out = Vec::new();
+        SplineFitter::new(degree, x).knot_slopes(y, &mut out)?;
+        Ok(out)
     }
 
     pub fn degree(&self) -> usize {
@@ -130,21 +193,40 @@ impl GcvSpline {
             return 0.0;
         }
         let (s, base) = self.locate(x);
-        let a = &self.seg[s];
-        let t = x - base;
-        // Σ_{j≥order} a_j j!/(j−order)! t^(j−order), by Horner.
-        let mut acc = 0.0;
-        for j in (order..=deg).rev() {
-            acc = acc * t + a[j] * falling(j, order);
+        horner(self.segment(s), deg, x - base, order)
+    }
+
+    /// Taylor coefficients of segment `s` (see [`GcvSpline::seg`]).
+    #[inline]
+    fn segment(&self, s: usize) -> &[f64; MAX_COEF] {
+        self.seg[s].get_or_init(|| Box::new(self.make_segment(s)))
+    }
+
+    fn make_segment(&self, s: usize) -> [f64; MAX_COEF] {
+        let (m, x, y) = (self.half_order, &self.x, &self.y);
+        let k = 2 * m - 1;
+        let n = x.len();
+        if s == n {
+            // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
+            let mut a = taylor_x(x, &self.coef, k, k + n - 2, x[n - 1], m - 1);
+            a[0] = y[n - 1];
+            return a;
         }
-        acc
+        let i = s.max(1) - 1;
+        let mut a = taylor_x(x, &self.coef, k, k + i, x[i], k);
+        a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
+        if s == 0 {
+            // Left extrapolation: Taylor polynomial of degree m-1 at x0.
+            a[m..].iter_mut().for_each(|v| *v = 0.0);
+        }
+        a
     }
 
     /// (value, first, second derivative) with one interval search.
     pub fn eval2(&self, x: f64) -> (f64, f64, f64) {
         let deg = self.degree();
         let (s, base) = self.locate(x);
-        let a = &self.seg[s];
+        let a = self.segment(s);
         let t = x - base;
         // Horner for p, p', p'' simultaneously.
         let mut p = a[deg];
@@ -157,6 +239,17 @@ impl GcvSpline {
         }
         (p, d1, 2.0 * d2)
     }
+}
+
+/// Σ_{j≥order} a_j j!/(j−order)! t^(j−order), by Horner: the derivative of
+/// `order` at base + t of the degree-`deg` Taylor polynomial `a`.
+#[inline]
+fn horner(a: &[f64; MAX_COEF], deg: usize, t: f64, order: usize) -> f64 {
+    let mut acc = 0.0;
+    for j in (order..=deg).rev() {
+        acc = acc * t + a[j] * falling(j, order);
+    }
+    acc
 }
 
 /// j!/(j−r)! for r ≤ j.
@@ -260,24 +353,37 @@ fn basis_derivatives(
     ders
 }
 
-/// Solve for the B-spline coefficients of the natural interpolating spline.
-fn solve_bspline_coefficients(m: usize, x: &[f64], y: &[f64]) -> Result<Vec<f64>> {
+/// Right-hand side of the spline system ([`system`]) for data `y`.
+fn rhs(m: usize, y: &[f64]) -> Vec<f64> {
+    let n = y.len();
+    let nb = n + 2 * m - 2;
+    let mut rhs = vec![0.0; nb];
+    rhs[0] = y[0];
+    for i in 1..n - 1 {
+        rhs[m - 1 + i] = y[i];
+    }
+    rhs[nb - 1] = y[n - 1];
+    rhs
+}
+
+/// The band matrix of the natural interpolating spline's B-spline
+/// coefficients on abscissae `x` (knots `t`). With `slopes`, also the first
+/// derivatives of the k+1 basis functions at x_0 … x_{n−2} (spans k … k+n−2),
+/// from the same basis evaluations as the interior rows.
+fn system(m: usize, x: &[f64], t: &[f64], mut slopes: Option<&mut Vec<[f64; MAX_COEF]>>) -> Band {
     let n = x.len();
     let k = 2 * m - 1;
     let nb = n + k - 1; // number of basis functions = number of equations
-    let t = knot_vector(k, x);
     let bw = m - 1; // sub- and super-diagonals of the (unpivoted) matrix
     let mut a = Band::new(nb, bw, bw);
-    let mut rhs = vec![0.0; nb];
 
     // Left end: value row 0, then rows s = 1..m-1 for f^(m-1+s)(x0) = 0.
     // Derivative rows are scaled by h^d (h = first interval) to O(1).
     {
         let span = k;
-        let ders = basis_derivatives(&t, span, k, x[0], k - 1);
+        let ders = basis_derivatives(t, span, k, x[0], k - 1);
         let h = x[1] - x[0];
         a.set(0, 0, 1.0);
-        rhs[0] = y[0];
         for s in 1..m {
             let d = m - 1 + s;
             let scale = h.powi(d as i32);
@@ -285,26 +391,32 @@ fn solve_bspline_coefficients(m: usize, x: &[f64], y: &[f64]) -> Result<Vec<f64>
                 a.set(s, c, ders[d][c] * scale);
             }
         }
+        if let Some(out) = slopes.as_deref_mut() {
+            out.clear();
+            out.push(basis_derivatives(t, span, k, x[0], 1)[1]);
+        }
     }
     // Interior knots x_i (i = 1..n-2): row m-1+i, columns i..i+k-1
     // (B_{i+k} vanishes at the left end of its span).
+    let nd = slopes.is_some() as usize;
     for i in 1..n - 1 {
         let span = k + i;
-        let ders = basis_derivatives(&t, span, k, x[i], 0);
+        let ders = basis_derivatives(t, span, k, x[i], nd);
         let row = m - 1 + i;
         for r in 0..k {
             a.set(row, i + r, ders[0][r]);
         }
-        rhs[row] = y[i];
+        if let Some(out) = slopes.as_deref_mut() {
+            out.push(ders[1]);
+        }
     }
     // Right end: rows nb-1-s for f^(m-1+s)(x_{n-1}) = 0, value row nb-1.
     {
         let span = k + n - 2;
-        let ders = basis_derivatives(&t, span, k, x[n - 1], k - 1);
+        let ders = basis_derivatives(t, span, k, x[n - 1], k - 1);
         let h = x[n - 1] - x[n - 2];
         let first = span - k; // column of ders[.][0]
         a.set(nb - 1, nb - 1, 1.0);
-        rhs[nb - 1] = y[n - 1];
         for s in 1..m {
             let d = m - 1 + s;
             let scale = h.powi(d as i32);
@@ -313,45 +425,249 @@ fn solve_bspline_coefficients(m: usize, x: &[f64], y: &[f64]) -> Result<Vec<f64>
             }
         }
     }
-    a.solve(&mut rhs)?;
-    Ok(rhs)
+    a
 }
 
-/// Convert B-spline coefficients to the Taylor segments of [`GcvSpline`].
-fn taylor_segments(m: usize, x: &[f64], y: &[f64], coef: &[f64]) -> Vec<[f64; MAX_COEF]> {
+/// Taylor coefficients f⁽ᵈ⁾(u)/d!, d ≤ `upto`, of the piece of knot span
+/// `span` of the spline with B-spline coefficients `coef` (others 0).
+fn taylor(t: &[f64], coef: &[f64], k: usize, span: usize, u: f64, upto: usize) -> [f64; MAX_COEF] {
+    let ders = basis_derivatives(t, span, k, u, upto);
+    taylor_of(&ders, &coef[span - k..], k, upto)
+}
+
+/// [`taylor`] on the knots [`knot_vector`] would make of `x`, from the 2k
+/// of them that the span's basis functions use (t[j] = x[clamp(j − k)]),
+/// placed so that `basis_derivatives` reads the same values.
+fn taylor_x(
+    x: &[f64],
+    coef: &[f64],
+    k: usize,
+    span: usize,
+    u: f64,
+    upto: usize,
+) -> [f64; MAX_COEF] {
     let n = x.len();
-    let k = 2 * m - 1;
-    let t = knot_vector(k, x);
-    let mut seg = Vec::with_capacity(n + 1);
-    let taylor = |span: usize, u: f64, upto: usize| {
-        let ders = basis_derivatives(&t, span, k, u, upto);
-        let first = span - k;
-        let mut out = [0.0; MAX_COEF];
-        let mut fact = 1.0;
-        for (d, o) in out.iter_mut().enumerate().take(upto + 1) {
-            if d > 0 {
-                fact *= d as f64;
+    // w[i] = t[span − k + i], i = 1..=2k; span k in w is span `span` in t
+    let mut w = [0.0; 2 * MAX_DEGREE + 1];
+    for (i, wi) in w.iter_mut().enumerate().take(2 * k + 1).skip(1) {
+        *wi = x[(span - k + i).saturating_sub(k).min(n - 1)];
+    }
+    let ders = basis_derivatives(&w, k, k, u, upto);
+    taylor_of(&ders, &coef[span - k..], k, upto)
+}
+
+/// Taylor coefficients from the basis derivatives `ders` of a span whose
+/// first B-spline coefficient is `coef[0]`.
+fn taylor_of(
+    ders: &[[f64; MAX_COEF]; MAX_COEF],
+    coef: &[f64],
+    k: usize,
+    upto: usize,
+) -> [f64; MAX_COEF] {
+    let mut out = [0.0; MAX_COEF];
+    let mut fact = 1.0;
+    for (d, o) in out.iter_mut().enumerate().take(upto + 1) {
+        if d > 0 {
+            fact *= d as f64;
+        }
+        let s: f64 = (0..=k).map(|r| coef[r] * ders[d][r]).sum();
+        *o = s / fact;
+    }
+    out
+}
+
+/// Knots, factored system (Err: singular) and basis slopes at x_0…x_{n−2}.
+type Basis = (
+    Vec<f64>,
+    std::result::Result<Band, ()>,
+    Vec<[f64; MAX_COEF]>,
+);
+
+/// Interpolating splines of one degree on one set of abscissae: the spline
+/// system is assembled and factored once (on the first column whose data
+/// pass [`GcvSpline::interpolating`]'s checks) and reused for every column.
+/// Results and errors are those of [`GcvSpline::interpolating`], bit for bit
+/// (the elimination applies the same operations to each right-hand side).
+pub struct SplineFitter<'a> {
+    degree: usize,
+    x: &'a [f64],
+    /// Knots, factored system (Err: singular) and basis slopes at x_0…x_{n−2}.
+    basis: Option<Basis>,
+    shared: Option<Arc<[f64]>>,
+}
+
+impl<'a> SplineFitter<'a> {
+    pub fn new(degree: usize, x: &'a [f64]) -> Self {
+        SplineFitter {
+            degree,
+            x,
+            basis: None,
+            shared: None,
+        }
+    }
+
+    pub fn x(&self) -> &'a [f64] {
+        self.x
+    }
+
+    /// Checks, then the B-spline coefficients of the spline through y.
+    fn coefficients(&mut self, y: &[f64]) -> Result<(usize, Vec<f64>)> {
+        let m = self.check_columns(&[y]).map_err(|(_, e)| e)?;
+        let Some((_, Ok(band), _)) = &self.basis else {
+            unreachable!("check_columns factored the system");
+        };
+        let mut coef = rhs(m, y);
+        band.apply(&mut coef);
+        Ok((m, coef))
+    }
+
+    /// The checks of `coefficients` for every column in order, as calls
+    /// one column after the other would make them: the first error, with
+    /// its column.
+    fn check_columns(&mut self, ys: &[&[f64]]) -> std::result::Result<usize, (usize, Error)> {
+        let mut m = 0;
+        for (c, y) in ys.iter().enumerate() {
+            let x = self.x;
+            m = if self.basis.is_some() {
+                // x passed check_data already: only y's checks can fail
+                check_y(x, y).map_err(|e| (c, e))?;
+                self.degree.div_ceil(2)
+            } else {
+                check_data(self.degree, x, y).map_err(|e| (c, e))?
+            };
+            let (_, band, _) = self.basis.get_or_insert_with(|| {
+                let t = knot_vector(2 * m - 1, x);
+                let mut slopes = Vec::with_capacity(x.len());
+                let mut band = system(m, x, &t, Some(&mut slopes));
+                let band = band.factor().map(|_| band).map_err(|_| ());
+                (t, band, slopes)
+            });
+            if band.is_err() {
+                return Err((c, singular()));
             }
-            let s: f64 = (0..=k).map(|r| coef[first + r] * ders[d][r]).sum();
-            *o = s / fact;
+        }
+        Ok(m)
+    }
+
+    /// B-spline coefficients of checked columns, [`LANES`] at a time.
+    fn solve_columns(&self, m: usize, ys: &[&[f64]]) -> Vec<Vec<f64>> {
+        let Some((_, Ok(band), _)) = &self.basis else {
+            return Vec::new();
+        };
+        let mut out = Vec::with_capacity(ys.len());
+        let mut rest = ys;
+        while !rest.is_empty() {
+            let chunk;
+            if rest.len() >= 2 * LANES {
+                (chunk, rest) = rest.split_at(2 * LANES);
+                solve_lanes::<{ 2 * LANES }>(band, m, chunk, &mut out);
+            } else {
+                (chunk, rest) = rest.split_at(rest.len().min(LANES));
+                solve_lanes::<LANES>(band, m, chunk, &mut out);
+            }
         }
         out
-    };
-    let mut interior = Vec::with_capacity(n - 1);
-    for i in 0..n - 1 {
-        let mut a = taylor(k + i, x[i], k);
-        a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
-        interior.push(a);
     }
-    // Left extrapolation: Taylor polynomial of degree m-1 at x0.
-    let mut left = interior[0];
-    left[m..].iter_mut().for_each(|v| *v = 0.0);
-    seg.push(left);
-    seg.extend(interior);
-    let mut right = taylor(k + n - 2, x[n - 1], m - 1);
-    right[0] = y[n - 1];
-    seg.push(right);
-    seg
+
+    /// [`SplineFitter::spline`] of every column: the splines, or the first
+    /// error and its column.
+    pub fn splines(
+        &mut self,
+        ys: &[&[f64]],
+    ) -> std::result::Result<Vec<GcvSpline>, (usize, Error)> {
+        let m = self.check_columns(ys)?;
+        let coefs = self.solve_columns(m, ys);
+        let x = self.shared_x();
+        Ok(ys
+            .iter()
+            .zip(coefs)
+            .map(|(y, coef)| GcvSpline::with_coefficients(m, x.clone(), y, coef))
+            .collect())
+    }
+
+    /// [`SplineFitter::knot_slopes`] of every column into `out[c]`, or the
+    /// first error and its column.
+    pub fn knot_slopes_columns(
+        &mut self,
+        ys: &[&[f64]],
+        out: &mut Vec<Vec<f64>>,
+    ) -> std::result::Result<(), (usize, Error)> {
+        let m = self.check_columns(ys)?;
+        let coefs = self.solve_columns(m, ys);
+        out.resize_with(ys.len(), Vec::new);
+        for ((y, coef), o) in ys.iter().zip(coefs).zip(out.iter_mut()) {
+            self.slopes_of(m, y, &coef, o);
+        }
+        Ok(())
+    }
+
+    /// `GcvSpline::interpolating(degree, x, y)`.
+    pub fn spline(&mut self, y: &[f64]) -> Result<GcvSpline> {
+        let (m, coef) = self.coefficients(y)?;
+        Ok(GcvSpline::with_coefficients(m, self.shared_x(), y, coef))
+    }
+
+    /// The abscissae as the splines made here share them.
+    fn shared_x(&mut self) -> Arc<[f64]> {
+        let x = self.x;
+        self.shared.get_or_insert_with(|| x.into()).clone()
+    }
+
+    /// `out[i] = GcvSpline::interpolating(degree, x, y)?.derivative(x[i], 1)`
+    /// for every knot, bit for bit.
+    ///
+    /// At x_i, i < n−1, `derivative` evaluates the Taylor polynomial of
+    /// [x_i, x_{i+1}) at t = 0: (acc·0) + a₁ with a₁ = Σ_r c_r B′_r(x_i), the
+    /// same sum as here, and acc·0 = ±0 (the higher coefficients are finite),
+    /// so the result is a₁ unless a₁ is 0, when the sign of the zero depends
+    /// on acc: then (and at x_{n−1}, evaluated on the last interval) the
+    /// whole Taylor polynomial is made and evaluated as `derivative` does.
+    pub fn knot_slopes(&mut self, y: &[f64], out: &mut Vec<f64>) -> Result<()> {
+        let (m, coef) = self.coefficients(y)?;
+        self.slopes_of(m, y, &coef, out);
+        Ok(())
+    }
+
+    fn slopes_of(&self, m: usize, y: &[f64], coef: &[f64], out: &mut Vec<f64>) {
+        let (t, _, d1) = self.basis.as_ref().expect("made by coefficients");
+        let x = self.x;
+        let n = x.len();
+        let k = 2 * m - 1;
+        out.clear();
+        for (i, b) in d1.iter().enumerate() {
+            let a1 = (0..=k).map(|r| coef[i + r] * b[r]).sum::<f64>() / 1.0;
+            if a1 != 0.0 && a1.is_finite() {
+                out.push(a1);
+            } else {
+                let mut a = taylor(t, coef, k, k + i, x[i], k);
+                a[0] = y[i];
+                // t = x_i − x_i = +0
+                out.push(horner(&a, k, 0.0, 1));
+            }
+        }
+        let mut a = taylor(t, coef, k, k + n - 2, x[n - 2], k);
+        a[0] = y[n - 2];
+        out.push(horner(&a, k, x[n - 1] - x[n - 2], 1));
+    }
+}
+
+/// Solve up to L columns together ([`Band::apply_lanes`]; unused lanes are
+/// zeros) and append their coefficients to `out`.
+fn solve_lanes<const L: usize>(band: &Band, m: usize, ys: &[&[f64]], out: &mut Vec<Vec<f64>>) {
+    let mut b = vec![[0.0; L]; band.n];
+    for (lane, y) in ys.iter().enumerate() {
+        for (v, r) in b.iter_mut().zip(rhs(m, y)) {
+            v[lane] = r;
+        }
+    }
+    band.apply_lanes(&mut b);
+    for lane in 0..ys.len() {
+        out.push(b.iter().map(|v| v[lane]).collect());
+    }
+}
+
+fn singular() -> Error {
+    Error::internal("GCVSpline: singular spline system (ill-conditioned abscissae?)")
 }
 
 /// A square band matrix with room for the fill-in of partial pivoting.
@@ -362,6 +678,9 @@ struct Band {
     ku: usize,
     w: usize,
     data: Vec<f64>,
+    /// Pivot row of each column and the multipliers (kl per column).
+    piv: Vec<usize>,
+    mult: Vec<f64>,
 }
 
 impl Band {
@@ -373,6 +692,8 @@ impl Band {
             ku,
             w,
             data: vec![0.0; n * w],
+            piv: Vec::new(),
+            mult: Vec::new(),
         }
     }
     #[inline]
@@ -388,12 +709,15 @@ impl Band {
         self.data[self.idx(r, c)]
     }
 
-    /// Gaussian elimination with partial pivoting; `b` is overwritten with
-    /// the solution.
-    fn solve(&mut self, b: &mut [f64]) -> Result<()> {
+    /// LU factorisation with partial pivoting (row swaps in `piv`, the
+    /// multipliers in `mult`); [`Band::apply`] then solves for any
+    /// right-hand side with the operations a combined elimination would do.
+    fn factor(&mut self) -> Result<()> {
         let n = self.n;
         let (kl, ku) = (self.kl, self.ku);
         let scale = self.data.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        self.piv = vec![0; n];
+        self.mult = vec![0.0; n * kl];
         for p in 0..n {
             let last_row = (p + kl).min(n - 1);
             let last_col = (p + kl + ku).min(n - 1);
@@ -406,20 +730,19 @@ impl Band {
                 }
             }
             if big <= scale * 1e-14 || !big.is_finite() {
-                return Err(Error::internal(
-                    "GCVSpline: singular spline system (ill-conditioned abscissae?)",
-                ));
+                return Err(singular());
             }
+            self.piv[p] = piv;
             if piv != p {
                 for c in p..=last_col {
                     let (i, j) = (self.idx(p, c), self.idx(piv, c));
                     self.data.swap(i, j);
                 }
-                b.swap(p, piv);
             }
             let d = self.get(p, p);
             for r in p + 1..=last_row {
                 let l = self.get(r, p) / d;
+                self.mult[p * kl + (r - p - 1)] = l;
                 if l == 0.0 {
                     continue;
                 }
@@ -428,18 +751,58 @@ impl Band {
                     let i = self.idx(r, c);
                     self.data[i] -= l * v;
                 }
-                b[r] -= l * b[p];
+            }
+        }
+        Ok(())
+    }
+
+    /// Solve with the factors of [`Band::factor`]; `b` is overwritten with
+    /// the solution.
+    fn apply(&self, b: &mut [f64]) {
+        let mut one: Vec<[f64; 1]> = b.iter().map(|&v| [v]).collect();
+        self.apply_lanes(&mut one);
+        for (v, o) in b.iter_mut().zip(&one) {
+            *v = o[0];
+        }
+    }
+
+    /// [`Band::apply`] for L right-hand sides at once (`b[i][lane]`): each
+    /// lane gets exactly the operations of its own solve, but the L
+    /// dependency chains of the substitutions overlap in the processor.
+    /// (Rows of U are contiguous: `idx(p, p + j)` = p·w + kl + j.)
+    fn apply_lanes<const L: usize>(&self, b: &mut [[f64; L]]) {
+        let n = self.n;
+        let (kl, ku, w) = (self.kl, self.ku, self.w);
+        for p in 0..n {
+            let q = self.piv[p];
+            if q != p {
+                b.swap(p, q);
+            }
+            let last_row = (p + kl).min(n - 1);
+            let bp = b[p];
+            let mult = &self.mult[p * kl..p * kl + (last_row - p)];
+            for (br, &l) in b[p + 1..=last_row].iter_mut().zip(mult) {
+                if l == 0.0 {
+                    continue;
+                }
+                for (v, vp) in br.iter_mut().zip(&bp) {
+                    *v -= l * vp;
+                }
             }
         }
         for p in (0..n).rev() {
             let last_col = (p + kl + ku).min(n - 1);
+            let row = &self.data[p * w + kl..=p * w + kl + (last_col - p)];
             let mut s = b[p];
-            for c in p + 1..=last_col {
-                s -= self.get(p, c) * b[c];
+            for (u, bc) in row[1..].iter().zip(&b[p + 1..=last_col]) {
+                for (v, vc) in s.iter_mut().zip(bc) {
+                    *v -= u * vc;
+                }
             }
-            b[p] = s / self.get(p, p);
+            for (v, sv) in b[p].iter_mut().zip(&s) {
+                *v = sv / row[0];
+            }
         }
-        Ok(())
     }
 }
 
@@ -459,8 +822,227 @@ mod tests {
         let base = if si == 0 { s.x[0] } else { s.x[si - 1] };
         let t = x - base;
         (d..=s.degree())
-            .map(|j| s.seg[si][j] * falling(j, d) * t.powi((j - d) as i32))
+            .map(|j| s.segment(si)[j] * falling(j, d) * t.powi((j - d) as i32))
             .sum()
+    }
+
+    /// Small xorshift generator (deterministic).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The elimination as it was before [`Band::factor`] / [`Band::apply`]
+    /// were split: matrix and right-hand side in one pass.
+    fn solve_combined(a: &mut Band, b: &mut [f64]) -> Result<()> {
+        let n = a.n;
+        let (kl, ku) = (a.kl, a.ku);
+        let scale = a.data.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for p in 0..n {
+            let last_row = (p + kl).min(n - 1);
+            let last_col = (p + kl + ku).min(n - 1);
+            let (mut piv, mut big) = (p, a.get(p, p).abs());
+            for r in p + 1..=last_row {
+                let v = a.get(r, p).abs();
+                if v > big {
+                    piv = r;
+                    big = v;
+                }
+            }
+            if big <= scale * 1e-14 || !big.is_finite() {
+                return Err(singular());
+            }
+            if piv != p {
+                for c in p..=last_col {
+                    let (i, j) = (a.idx(p, c), a.idx(piv, c));
+                    a.data.swap(i, j);
+                }
+                b.swap(p, piv);
+            }
+            let d = a.get(p, p);
+            for r in p + 1..=last_row {
+                let l = a.get(r, p) / d;
+                if l == 0.0 {
+                    continue;
+                }
+                for c in p..=last_col {
+                    let v = a.get(p, c);
+                    let i = a.idx(r, c);
+                    a.data[i] -= l * v;
+                }
+                b[r] -= l * b[p];
+            }
+        }
+        for p in (0..n).rev() {
+            let last_col = (p + kl + ku).min(n - 1);
+            let mut s = b[p];
+            for c in p + 1..=last_col {
+                s -= a.get(p, c) * b[c];
+            }
+            b[p] = s / a.get(p, p);
+        }
+        Ok(())
+    }
+
+    /// The Taylor segments as they were made before they became lazy: all of
+    /// them, eagerly.
+    fn eager_segments(s: &GcvSpline) -> Vec<[f64; MAX_COEF]> {
+        let (m, x, y) = (s.half_order, &s.x, &s.y);
+        let n = x.len();
+        let k = 2 * m - 1;
+        let t = knot_vector(k, x);
+        let mut interior = Vec::new();
+        for i in 0..n - 1 {
+            let mut a = taylor(&t, &s.coef, k, k + i, x[i], k);
+            a[0] = y[i];
+            interior.push(a);
+        }
+        let mut left = interior[0];
+        left[m..].iter_mut().for_each(|v| *v = 0.0);
+        let mut right = taylor(&t, &s.coef, k, k + n - 2, x[n - 1], m - 1);
+        right[0] = y[n - 1];
+        let mut seg = vec![left];
+        seg.extend(interior);
+        seg.push(right);
+        seg
+    }
+
+    /// Random abscissae (uniform, jittered, or storage-like time stamps) and
+    /// data (smooth, noisy, constant, zero, with zero runs).
+    fn random_cases() -> Vec<(usize, Vec<f64>, Vec<f64>)> {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        let mut cases = Vec::new();
+        for case in 0..240 {
+            let degree: usize = [1, 3, 5, 7][case % 4];
+            let n = 2 * degree.div_ceil(2) + (rng.next() * 60.0) as usize;
+            let x: Vec<f64> = match case % 3 {
+                0 => (0..n).map(|i| 0.59999926 + i as f64 * 0.01).collect(),
+                1 => {
+                    let mut t = rng.next() - 0.5;
+                    (0..n)
+                        .map(|_| {
+                            t += 1e-3 + rng.next() * 0.05;
+                            t
+                        })
+                        .collect()
+                }
+                _ => (0..n).map(|i| i as f64 / 600.0).collect(),
+            };
+            let y: Vec<f64> = match (case / 4) % 5 {
+                0 => x.iter().map(|&t| (7.0 * t).sin() * 30.0).collect(),
+                1 => (0..n).map(|_| rng.next() * 2.0 - 1.0).collect(),
+                2 => vec![0.0; n],
+                3 => vec![-1.25; n],
+                _ => (0..n)
+                    .map(|i| if i % 9 < 4 { 0.0 } else { rng.next() - 0.5 })
+                    .collect(),
+            };
+            cases.push((degree, x, y));
+        }
+        cases
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// Factored once and applied per column = the one-pass elimination, bit
+    /// for bit; lazy segments = eager ones.
+    #[test]
+    fn factored_solve_and_lazy_segments_are_bit_identical() {
+        for (degree, x, y) in random_cases() {
+            let m = degree.div_ceil(2);
+            let t = knot_vector(degree, &x);
+            let mut want = rhs(m, &y);
+            solve_combined(&mut system(m, &x, &t, None), &mut want).unwrap();
+            let s = GcvSpline::interpolating(degree, &x, &y).unwrap();
+            assert_eq!(bits(&s.coef), bits(&want), "degree {degree} n {}", x.len());
+            let mut f = SplineFitter::new(degree, &x);
+            let s2 = f.spline(&y).unwrap();
+            assert_eq!(bits(&s2.coef), bits(&want));
+            let eager = eager_segments(&s);
+            for (i, e) in eager.iter().enumerate() {
+                assert_eq!(bits(s.segment(i)), bits(e));
+            }
+        }
+    }
+
+    /// `knot_slopes` = `interpolating(..).derivative(x_i, 1)` bit for bit,
+    /// with one fitter shared by several columns, and the same errors.
+    #[test]
+    fn knot_slopes_are_bit_identical() {
+        let mut zeros = 0;
+        for (degree, x, y) in random_cases() {
+            let s = GcvSpline::interpolating(degree, &x, &y).unwrap();
+            let want: Vec<f64> = x.iter().map(|&xi| s.derivative(xi, 1)).collect();
+            zeros += want.iter().filter(|v| **v == 0.0).count();
+            let got = GcvSpline::knot_slopes(degree, &x, &y).unwrap();
+            assert_eq!(bits(&got), bits(&want), "degree {degree} n {}", x.len());
+            let mut f = SplineFitter::new(degree, &x);
+            let mut out = Vec::new();
+            for scale in [1.0, -3.0, 0.0] {
+                let ys: Vec<f64> = y.iter().map(|v| v * scale).collect();
+                let s = GcvSpline::interpolating(degree, &x, &ys).unwrap();
+                let want: Vec<f64> = x.iter().map(|&xi| s.derivative(xi, 1)).collect();
+                f.knot_slopes(&ys, &mut out).unwrap();
+                assert_eq!(bits(&out), bits(&want));
+            }
+        }
+        assert!(zeros > 0, "the zero-slope path was not exercised");
+        // several columns at once (8, then 4 at a time, a partial last group)
+        for (degree, x, y) in random_cases().into_iter().take(40) {
+            let cols: Vec<Vec<f64>> = (0..19)
+                .map(|c| y.iter().map(|v| v * (c as f64 - 2.5)).collect())
+                .collect();
+            let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            let mut f = SplineFitter::new(degree, &x);
+            let mut out = Vec::new();
+            f.knot_slopes_columns(&ys, &mut out).unwrap();
+            let splines = SplineFitter::new(degree, &x).splines(&ys).unwrap();
+            for (c, y) in ys.iter().enumerate() {
+                let s = GcvSpline::interpolating(degree, &x, y).unwrap();
+                let want: Vec<f64> = x.iter().map(|&xi| s.derivative(xi, 1)).collect();
+                assert_eq!(bits(&out[c]), bits(&want));
+                assert_eq!(bits(&splines[c].coef), bits(&s.coef));
+            }
+        }
+        // errors: the data checks per column, then the singular system
+        let x = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+        let mut f = SplineFitter::new(5, &x);
+        let mut out = Vec::new();
+        for y in [&[1.0; 5][..], &[0.0, 1.0, f64::NAN, 0.0, 0.0, 0.0]] {
+            let want = GcvSpline::interpolating(5, &x, y).unwrap_err().to_string();
+            let got = f.knot_slopes(y, &mut out).unwrap_err().to_string();
+            assert_eq!(got, want);
+        }
+        let ok = [0.0; 6];
+        let nan = [0.0, 1.0, f64::NAN, 0.0, 0.0, 0.0];
+        // after a good column (x checked), the y checks alone
+        let mut f = SplineFitter::new(5, &x);
+        f.knot_slopes(&ok, &mut out).unwrap();
+        for y in [&[1.0; 5][..], &[1.0; 7], &nan, &[f64::INFINITY; 6]] {
+            let want = GcvSpline::interpolating(5, &x, y).unwrap_err().to_string();
+            assert_eq!(f.knot_slopes(y, &mut out).unwrap_err().to_string(), want);
+            assert_eq!(f.spline(y).unwrap_err().to_string(), want);
+        }
+        let e = SplineFitter::new(5, &x)
+            .knot_slopes_columns(&[&ok, &ok, &nan, &[1.0; 5]], &mut Vec::new())
+            .unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.to_string().contains("y[2] is not a finite"), "{}", e.1);
+        let bad = [0.0, 1.0, 1.0, 2.0, 3.0, 4.0];
+        let want = GcvSpline::interpolating(5, &bad, &[0.0; 6])
+            .unwrap_err()
+            .to_string();
+        let got = GcvSpline::knot_slopes(5, &bad, &[0.0; 6])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(got, want);
     }
 
     #[test]

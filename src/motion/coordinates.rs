@@ -4,7 +4,7 @@
 //! coordinate is splined with a quintic interpolating GCV spline.
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::{GcvSpline, SplineFitter};
 use crate::model::{Model, MotionType};
 use crate::storage::Storage;
 
@@ -74,6 +74,7 @@ fn check_units(
 /// The error for one value (in model units, row `i` 0-based) of coordinate
 /// `c` read from column `label`, when it lies far outside the coordinate's
 /// range (see `check_units`); None when it does not.
+#[inline]
 pub(crate) fn units_error(
     c: &crate::model::Coordinate,
     label: &str,
@@ -96,6 +97,22 @@ pub(crate) fn units_error(
     if x >= lo - margin && x <= hi + margin {
         return None;
     }
+    units_message(c, label, in_degrees, i, t, x, file)
+}
+
+#[cold]
+#[inline(never)]
+fn units_message(
+    c: &crate::model::Coordinate,
+    label: &str,
+    in_degrees: bool,
+    i: usize,
+    t: f64,
+    x: f64,
+    file: &std::path::Path,
+) -> Option<Error> {
+    let [lo, hi] = c.range;
+    let rotational = c.motion_type == MotionType::Rotational;
     let (unit, hint) = if rotational {
         (
             "rad",
@@ -149,6 +166,8 @@ impl CoordinateSplines {
         let mut splines = Vec::with_capacity(model.nq());
         let mut constants = Vec::with_capacity(model.nq());
         let mut missing_names = Vec::new();
+        // one spline system for every column (same bits as one per column)
+        let mut fit = SplineFitter::new(degree, &table.time);
         for c in &model.coordinates {
             match column_for(table, &c.name) {
                 Some(j) => {
@@ -162,7 +181,7 @@ impl CoordinateSplines {
                     if !c.dependent {
                         check_units(c, table, j, &v, file)?;
                     }
-                    let s = GcvSpline::interpolating(degree, &table.time, &v).map_err(|e| {
+                    let s = fit.spline(&v).map_err(|e| {
                         e.context(format!("{}: column '{}'", file.display(), table.labels[j]))
                     })?;
                     values.push(v);

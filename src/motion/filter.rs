@@ -5,7 +5,7 @@
 //! third-order Butterworth low-pass filter run forward and backward.
 
 use crate::error::{Error, Result};
-use crate::functions::GcvSpline;
+use crate::functions::SplineFitter;
 use crate::storage::Storage;
 
 /// OpenSim's `Storage::MAX_RESAMPLE_SIZE`.
@@ -83,9 +83,10 @@ pub fn resample(table: &mut Storage, dt: f64, degree: usize) -> Result<f64> {
     } else {
         dt
     };
+    let mut fit = SplineFitter::new(degree, &table.time);
     let splines = (0..table.labels.len())
         .map(|j| {
-            GcvSpline::interpolating(degree, &table.time, &table.column(j))
+            fit.spline(&table.column(j))
                 .map_err(|e| e.context(format!("resampling column '{}'", table.labels[j])))
         })
         .collect::<Result<Vec<_>>>()?;

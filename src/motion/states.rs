@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::SplineFitter;
 use crate::model::Model;
 use crate::motion::coordinates::{CoordinateSplines, MissingCoordinate};
 use crate::storage::Storage;
@@ -72,12 +72,21 @@ impl States {
         let n = self.time.len();
         let nq = self.q.first().map_or(0, |r| r.len());
         let mut udot = vec![vec![0.0; nq]; n];
-        for c in 0..nq {
-            let col: Vec<f64> = self.u.iter().map(|r| r[c]).collect();
-            let s = GcvSpline::interpolating(degree, &self.time, &col)
-                .map_err(|e| Error::input(Location::file(file), format!("splining speeds: {e}")))?;
+        // S_u′ at the knots, one spline system for all columns (the same
+        // bits as `GcvSpline::interpolating(..).derivative(t_i, 1)`).
+        let mut fit = SplineFitter::new(degree, &self.time);
+        let cols: Vec<Vec<f64>> = (0..nq)
+            .map(|c| self.u.iter().map(|r| r[c]).collect())
+            .collect();
+        let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let mut slopes = Vec::new();
+        fit.knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(_, e)| {
+                Error::input(Location::file(file), format!("splining speeds: {e}"))
+            })?;
+        for (c, sl) in slopes.iter().enumerate() {
             for i in 0..n {
-                udot[i][c] = s.derivative(self.time[i], 1);
+                udot[i][c] = sl[i];
             }
         }
         Ok(udot)

@@ -35,15 +35,21 @@
 //! length, end rows and a file position every few thousand rows, once for
 //! P's smallest step, once to locate the analysed time range in P, and then
 //! to stream the values — the data rows in order, the reflected padding (rows
-//! in reverse order) a chunk at a time from the recorded positions. Memory is
-//! O(block + overlaps + chunk) rows, whatever the length of the file and
-//! whichever part of it (padding included) is analysed.
+//! in reverse order) a chunk at a time from the recorded positions. A file of
+//! at most a block of rows is read once: the first read keeps its rows and
+//! the other passes take them from memory. Memory is O(block + overlaps +
+//! chunk) rows, whatever the length of the file and whichever part of it
+//! (padding included) is analysed.
+//!
+//! u and u̇ at the rows are the splines' slopes at their knots
+//! ([`SplineFitter::knot_slopes_columns`]: one spline system per window,
+//! shared by the columns, the bits of `GcvSpline::derivative(t_i, 1)`).
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location, Result};
-use crate::functions::GcvSpline;
+use crate::functions::SplineFitter;
 use crate::model::{Model, MotionType};
 use crate::motion::coordinates::{column_for, units_error};
 use crate::motion::filter::{butterworth, iir_pass, pole_radius, MAX_RESAMPLE_SIZE};
@@ -185,7 +191,6 @@ impl<'m> StateStream<'m> {
 
         // Pass 1: length and end times.
         let in_degrees = reader.table.in_degrees;
-        drop(reader);
         let mut dependent = super::checks::DependentMismatch::new(model);
         let mut check = |k: usize, t: f64, picked: &[f64]| -> Result<()> {
             steps.push(t);
@@ -208,7 +213,7 @@ impl<'m> StateStream<'m> {
             }
             Ok(())
         };
-        let index = index_file(file, &sel, &mut check)?;
+        let index = index_file(reader, &sel, &mut check, block)?;
         let mut warnings = super::checks::time_warnings(file, &steps, cutoff)?;
         warnings.extend(dependent.warnings(model, file));
         let unmatched_columns = super::checks::unmatched_columns(model, &all_labels);
@@ -237,12 +242,9 @@ impl<'m> StateStream<'m> {
         let (mut p_first, mut p_last) = (p_first, p_last);
         let mut dt_filter = 0.0;
         if filtering && n >= 2 {
-            let mut r = open_rows(file)?;
-            let mut row = Vec::new();
             let mut min_step = f64::INFINITY;
             let mut prev = 0.0;
-            let mut k = 0usize;
-            while let Some(t) = r.next_row(&mut row)? {
+            for_each_time(file, &index, &mut |k, t| {
                 if k >= 1 {
                     min_step = min_step.min(t - prev);
                     if p > 0 && k >= 2 && k <= p {
@@ -265,8 +267,7 @@ impl<'m> StateStream<'m> {
                     p_last = 2.0 * tl - t;
                 }
                 prev = t;
-                k += 1;
-            }
+            })?;
             let mut dt = min_step;
             if dt < f64::EPSILON {
                 return Err(ctx(Error::msg(format!("the time column has a step of {dt}: rows must have strictly increasing times to be filtered"))));
@@ -303,16 +304,12 @@ impl<'m> StateStream<'m> {
         } else {
             let (mut c_init, mut c_final) = (0usize, 0usize);
             if n > 0 {
-                let mut r = open_rows(file)?;
-                let mut row = Vec::new();
-                let mut k = 0;
-                while let Some(t) = r.next_row(&mut row)? {
+                for_each_time(file, &index, &mut |k, t| {
                     p_time(k, t, &mut |pt| {
                         c_init += (pt <= initial) as usize;
                         c_final += (pt <= final_) as usize;
                     });
-                    k += 1;
-                }
+                })?;
             }
             rows = m;
             first_time = p_first;
@@ -361,16 +358,12 @@ impl<'m> StateStream<'m> {
                 i += 1;
             }
             let (mut below, mut upto) = (0usize, 0usize);
-            let mut r = open_rows(file)?;
-            let mut row = Vec::new();
-            let mut kk = 0;
-            while let Some(t) = r.next_row(&mut row)? {
+            for_each_time(file, &index, &mut |kk, t| {
                 p_time(kk, t, &mut |pt| {
                     below += (pt < t_lo) as usize;
                     upto += (pt <= t_hi) as usize;
                 });
-                kk += 1;
-            }
+            })?;
             let js = below.saturating_sub(SPLINE_OVERLAP + 2);
             let je = (upto + SPLINE_OVERLAP + 2).min(m);
             let src = PSource::new(file, sel.clone(), index, p, js, je);
@@ -541,19 +534,31 @@ impl<'m> StateStream<'m> {
         let nu = ub - ua;
         let mut q = vec![vec![0.0; nq]; nu];
         let mut u = vec![vec![0.0; nq]; nu];
-        for (c, cc) in self.coord_cols.iter().enumerate() {
-            let Some((j, scale)) = *cc else { continue };
-            let v: Vec<f64> = cols[j][qa..qb].iter().map(|x| x * scale).collect();
-            let sp = GcvSpline::interpolating(self.degree, &time[qa..qb], &v).map_err(|e| {
+        // u = S_q′ and u̇ = S_u′ at the knots: one spline system per set of
+        // abscissae, shared by the columns (the same bits as splining each).
+        let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
+        let mut slopes = Vec::new();
+        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
+            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
+            .collect();
+        let vs: Vec<Vec<f64>> = picked
+            .iter()
+            .map(|&(_, j, scale)| cols[j][qa..qb].iter().map(|x| x * scale).collect())
+            .collect();
+        let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
+        fit_q
+            .knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(i, e)| {
                 e.context(format!(
                     "{}: column '{}'",
                     self.file.display(),
-                    self.labels[j]
+                    self.labels[picked[i].1]
                 ))
             })?;
+        for ((&(c, _, _), v), sl) in picked.iter().zip(&vs).zip(&slopes) {
             for i in 0..nu {
                 q[i][c] = v[ua + i - qa];
-                u[i][c] = sp.derivative(time[ua + i], 1);
+                u[i][c] = sl[ua + i - qa];
             }
         }
         for i in 0..nu {
@@ -561,13 +566,21 @@ impl<'m> StateStream<'m> {
         }
         let (oa, ob) = (a - w0 - ua, b - w0 - ua);
         let mut udot = vec![vec![0.0; nq]; b - a];
-        for c in 0..nq {
-            let col: Vec<f64> = u.iter().map(|r| r[c]).collect();
-            let sp = GcvSpline::interpolating(self.degree, &time[ua..ub], &col).map_err(|e| {
+        let mut fit_u = if (ua, ub) == (qa, qb) {
+            fit_q
+        } else {
+            SplineFitter::new(self.degree, &time[ua..ub])
+        };
+        let us: Vec<Vec<f64>> = (0..nq).map(|c| u.iter().map(|r| r[c]).collect()).collect();
+        let ys: Vec<&[f64]> = us.iter().map(|v| v.as_slice()).collect();
+        fit_u
+            .knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(_, e)| {
                 Error::input(Location::file(&self.file), format!("splining speeds: {e}"))
             })?;
+        for (c, sl) in slopes.iter().enumerate() {
             for i in oa..ob {
-                udot[i - oa][c] = sp.derivative(time[ua + i], 1);
+                udot[i - oa][c] = sl[i];
             }
         }
         self.next_out = b;
@@ -586,26 +599,32 @@ impl<'m> StateStream<'m> {
 const CHUNK: usize = if cfg!(test) { 97 } else { 4096 };
 
 /// What the first read of the file records: its length, first and last rows
-/// (carried columns) and a file position every [`CHUNK`] rows.
+/// (carried columns) and a file position every [`CHUNK`] rows; and, when the
+/// file has no more rows than a block, all of them (the later passes then
+/// read them from memory instead of the file).
 struct RawIndex {
     n: usize,
     first: (f64, Vec<f64>),
     last: (f64, Vec<f64>),
     marks: Vec<(usize, RowMark)>,
+    rows: Option<Vec<(f64, Vec<f64>)>>,
 }
 
+/// Read the rows of `r` (opened, before its first row); keep them if there
+/// are at most `keep` of them.
 fn index_file(
-    file: &Path,
+    mut r: RowReader,
     sel: &[usize],
     check: &mut dyn FnMut(usize, f64, &[f64]) -> Result<()>,
+    keep: usize,
 ) -> Result<RawIndex> {
-    let mut r = open_rows(file)?;
     let mut row = Vec::new();
     let mut idx = RawIndex {
         n: 0,
         first: (0.0, Vec::new()),
         last: (0.0, Vec::new()),
         marks: Vec::new(),
+        rows: Some(Vec::new()),
     };
     loop {
         if idx.n % CHUNK == 0 {
@@ -621,10 +640,36 @@ fn index_file(
         if idx.n == 0 {
             idx.first = (t, picked.clone());
         }
+        if let Some(rows) = &mut idx.rows {
+            if rows.len() < keep {
+                rows.push((t, picked.clone()));
+            } else {
+                idx.rows = None;
+            }
+        }
         idx.last = (t, picked);
         idx.n += 1;
     }
     Ok(idx)
+}
+
+/// `f(k, time of raw row k)` for every row, in order: from the rows
+/// [`index_file`] kept, else read from the file again.
+fn for_each_time(file: &Path, idx: &RawIndex, f: &mut dyn FnMut(usize, f64)) -> Result<()> {
+    if let Some(rows) = &idx.rows {
+        for (k, r) in rows.iter().enumerate() {
+            f(k, r.0);
+        }
+        return Ok(());
+    }
+    let mut r = open_rows(file)?;
+    let mut row = Vec::new();
+    let mut k = 0;
+    while let Some(t) = r.next_row(&mut row)? {
+        f(k, t);
+        k += 1;
+    }
+    Ok(())
 }
 
 /// P's rows `js..je` in order (time, carried columns), read from the file:
@@ -681,6 +726,9 @@ impl PSource {
 
     /// Raw row `k` (for the padding), through the chunk cache.
     fn raw(&mut self, k: usize, descending: bool) -> Result<&(f64, Vec<f64>)> {
+        if let Some(rows) = &self.idx.rows {
+            return Ok(&rows[k]);
+        }
         if k < self.chunk_lo || k >= self.chunk_lo + self.chunk.len() {
             // the padding walks the rows downwards: load the chunk ending at k
             let lo = if descending {
@@ -722,6 +770,10 @@ impl PSource {
             (2.0 * s0.0 - sk.0, v)
         } else if j < p + n {
             let k = j - p;
+            if let Some(rows) = &self.idx.rows {
+                self.j += 1;
+                return Ok(Some(rows[k].clone()));
+            }
             if self.seq.is_none() {
                 let mut r = open_rows(&self.file)?;
                 r.seek_row(k, &self.idx.marks)?;
@@ -819,9 +871,11 @@ impl GSource {
                 knots.drain(..before.saturating_sub(s));
                 let kt: Vec<f64> = knots.iter().map(|k| k.0).collect();
                 let mut vals = vec![Vec::with_capacity(labels.len()); times.len()];
+                let mut fit = SplineFitter::new(5, &kt);
                 for (j, label) in labels.iter().enumerate() {
                     let y: Vec<f64> = knots.iter().map(|k| k.1[j]).collect();
-                    let sp = GcvSpline::interpolating(5, &kt, &y)
+                    let sp = fit
+                        .spline(&y)
                         .map_err(|e| e.context(format!("resampling column '{label}'")))?;
                     for (i, &t) in times.iter().enumerate() {
                         vals[i].push(sp.value(t));

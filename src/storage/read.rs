@@ -304,6 +304,13 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
             break; // OpenSim reads exactly nRows rows and ignores the rest
         }
         last_line = no;
+        let mut row = Vec::with_capacity(nc);
+        if let Some(t) = parse_line_fast(text, nc, &mut row) {
+            st.time.push(t);
+            st.rows.push(row);
+            check_time(path, &st, no)?;
+            continue;
+        }
         empty_cell(path, &st.labels, no, text)?;
         let toks: Vec<&str> = text.split_whitespace().collect();
         push_row(path, &mut st, no, &toks, nc)?;
@@ -321,11 +328,8 @@ fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<(
     if !line.contains('\t') {
         return Ok(());
     }
-    let cells: Vec<&str> = line
-        .trim_end_matches(['\t', ' ', '\r'])
-        .split('\t')
-        .collect();
-    if let Some(k) = cells.iter().position(|c| c.trim().is_empty()) {
+    let mut cells = line.trim_end_matches(['\t', ' ', '\r']).split('\t');
+    if let Some(k) = cells.position(|c| c.trim().is_empty()) {
         let column = if k == 0 {
             "time"
         } else {
@@ -339,6 +343,117 @@ fn empty_cell(path: &Path, labels: &[String], no: usize, line: &str) -> Result<(
         ));
     }
     Ok(())
+}
+
+/// These ASCII bytes are what `char::is_whitespace` (`split_whitespace`,
+/// `trim`) accepts below U+0080 (all ≤ b' ').
+#[inline(always)]
+fn is_ws(b: u8) -> bool {
+    b <= b' ' && matches!(b, b' ' | b'\t' | b'\n' | 0x0B | 0x0C | b'\r')
+}
+
+/// The common case of a legacy data line, in one pass over its bytes and
+/// without allocation: no empty cell ([`empty_cell`]'s rule) and exactly
+/// time and `nc` white-space separated values, all finite numbers that
+/// `str::parse` reads. Then [`empty_cell`] passes and `parse_row` of the
+/// line's white-space tokens gives the same time and row. None otherwise
+/// (`row` is left in any state): the caller then takes the general path,
+/// which says what is wrong. Anything unusual (non-ASCII text included: a
+/// token holding it does not parse) is left to the general path.
+fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
+    // Tokens end only at ASCII white space, so every token boundary is a
+    // char boundary.
+    let b = line.as_bytes();
+    row.clear();
+    let mut time = 0.0;
+    let mut count = 0;
+    let mut i = 0;
+    loop {
+        // A gap between tokens holds at most one tab (and none before the
+        // first token): then every tab-separated cell holds a token. The
+        // gap after the last token must be all tabs, spaces and CRs
+        // (what `empty_cell` trims).
+        let mut tabs = 0;
+        let mut odd = false;
+        while i < b.len() && is_ws(b[i]) {
+            tabs += (b[i] == b'\t') as usize;
+            odd |= !matches!(b[i], b'\t' | b' ' | b'\r');
+            i += 1;
+        }
+        if i == b.len() {
+            if odd {
+                return None;
+            }
+            break;
+        }
+        if tabs > (count > 0) as usize || count > nc {
+            return None;
+        }
+        let v = match decimal_token(b, i) {
+            Some((v, end)) => {
+                i = end;
+                v
+            }
+            None => {
+                let start = i;
+                while i < b.len() && !is_ws(b[i]) {
+                    i += 1;
+                }
+                let v: f64 = line[start..i].parse().ok()?;
+                v
+            }
+        };
+        if !v.is_finite() {
+            return None;
+        }
+        if count == 0 {
+            time = v;
+        } else {
+            row.push(v);
+        }
+        count += 1;
+    }
+    (count == nc + 1).then_some(time)
+}
+
+/// The token of `b` that starts at `i`, when it is a plain decimal
+/// (`[+-]digits[.digits]`, at most 15 significant digits, at most 22 after
+/// the point): its value and end (the next white space or the end of `b`).
+/// Clinger's fast path: the integer of the digits and 10ᵉ are exact
+/// doubles, so one division rounds correctly, as `str::parse` does
+/// (correct rounding has one answer). None for any other token.
+#[inline(always)]
+fn decimal_token(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    let neg = b[i] == b'-';
+    i += (neg || b[i] == b'+') as usize;
+    let mut w: u64 = 0;
+    let int_start = i;
+    while i < b.len() && b[i].is_ascii_digit() {
+        w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
+        i += 1;
+    }
+    let mut digits = i - int_start;
+    let mut e = 0;
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        let frac_start = i;
+        while i < b.len() && b[i].is_ascii_digit() {
+            w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
+            i += 1;
+        }
+        e = i - frac_start;
+        digits += e;
+    }
+    // (w is exact when digits ≤ 15)
+    if (i < b.len() && !is_ws(b[i])) || digits == 0 || digits > 15 || e > 22 {
+        return None;
+    }
+    let v = w as f64 / POW10[e];
+    Some((if neg { -v } else { v }, i))
 }
 
 /// Parse `toks` = time then `labels.len()` values into `row`; returns the time.
@@ -538,8 +653,9 @@ struct LineSource {
 }
 
 impl LineSource {
-    /// The next line; Err(true) on invalid UTF-8, Err(false) on an I/O error.
-    fn next_line(&mut self) -> Option<std::result::Result<String, std::io::Error>> {
+    /// The next line (in a buffer reused from line to line); an error of
+    /// kind `InvalidData` on invalid UTF-8.
+    fn next_line(&mut self) -> Option<std::result::Result<&str, std::io::Error>> {
         use std::io::BufRead;
         self.buf.clear();
         match self.reader.read_until(b'\n', &mut self.buf) {
@@ -552,11 +668,9 @@ impl LineSource {
                 if self.buf.last() == Some(&b'\r') {
                     self.buf.pop();
                 }
-                Some(
-                    String::from_utf8(std::mem::take(&mut self.buf)).map_err(|_| {
-                        std::io::Error::new(std::io::ErrorKind::InvalidData, "invalid UTF-8")
-                    }),
-                )
+                Some(std::str::from_utf8(&self.buf).map_err(|_| {
+                    std::io::Error::new(std::io::ErrorKind::InvalidData, "invalid UTF-8")
+                }))
             }
             Err(e) => Some(Err(e)),
         }
@@ -590,7 +704,7 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
         let t = line.trim_matches(|c| c == ' ' || c == '\t');
         let key = &t[..t.find([' ', '\t', '=']).unwrap_or(t.len())];
         let end = key == "endheader";
-        header.push(line);
+        header.push(line.to_string());
         if end {
             break;
         }
@@ -635,7 +749,7 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
         line_no += 1;
         let line = line.map_err(utf8)?;
         if !line.trim().is_empty() {
-            break (line_no, line);
+            break (line_no, line.to_string());
         }
     };
     let (table, limit) = legacy_table(path, h, label_line, &label_text, is_mot)?;
@@ -764,9 +878,14 @@ impl RowReader {
                 if line.trim().is_empty() {
                     continue;
                 }
-                empty_cell(&self.path, &self.table.labels, *line_no, &line)?;
-                let toks: Vec<&str> = line.split_whitespace().collect();
-                let t = parse_row(&self.path, &self.table.labels, *line_no, &toks, row)?;
+                let t = match parse_line_fast(line, self.table.labels.len(), row) {
+                    Some(t) => t,
+                    None => {
+                        empty_cell(&self.path, &self.table.labels, *line_no, line)?;
+                        let toks: Vec<&str> = line.split_whitespace().collect();
+                        parse_row(&self.path, &self.table.labels, *line_no, &toks, row)?
+                    }
+                };
                 break (t, *line_no);
             },
         };
@@ -785,5 +904,168 @@ impl RowReader {
         self.last_time = t;
         self.last_line = no;
         Ok(Some(t))
+    }
+}
+
+#[cfg(test)]
+mod fast_line_tests {
+    use super::*;
+
+    /// `decimal_token` = `str::parse::<f64>` bit for bit when it answers.
+    #[test]
+    fn decimal_token_is_parse() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = |n: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % n
+        };
+        let fixed = [
+            "0",
+            "-0",
+            "+0",
+            "0.",
+            ".0",
+            ".",
+            "-",
+            "+",
+            "",
+            "1.5",
+            "-1.5",
+            "00012.50",
+            "123456789012345",
+            "1234567890123456",
+            "0.1234567890123456789012",
+            "1e5",
+            "1.5E-3",
+            "inf",
+            "nan",
+            "1..2",
+            "1.2.3",
+            "--1",
+            "9007199254740993",
+            "0.30000000000000004",
+            "4.52639516",
+            "-17.99348041",
+            "743.0973413",
+            "0.0000000000000000000001",
+        ];
+        let mut cases: Vec<String> = fixed.iter().map(|s| s.to_string()).collect();
+        for _ in 0..200_000 {
+            let mut s = String::new();
+            match rnd(3) {
+                0 => s.push('-'),
+                1 if rnd(4) == 0 => s.push('+'),
+                _ => {}
+            }
+            let int = rnd(12);
+            for _ in 0..int {
+                s.push((b'0' + rnd(10) as u8) as char);
+            }
+            if rnd(5) != 0 {
+                s.push('.');
+                for _ in 0..rnd(24) {
+                    s.push((b'0' + rnd(10) as u8) as char);
+                }
+            }
+            cases.push(s);
+        }
+        let mut fast = 0;
+        for s in &cases {
+            let want = s.parse::<f64>().ok().map(f64::to_bits);
+            if s.is_empty() {
+                continue; // a token is never empty
+            }
+            if let Some((v, end)) = decimal_token(s.as_bytes(), 0) {
+                fast += 1;
+                assert_eq!(end, s.len(), "{s:?}");
+                assert_eq!(Some(v.to_bits()), want, "{s:?}");
+            }
+        }
+        assert!(fast > 100_000, "{fast}");
+    }
+
+    /// `parse_line_fast` accepts a line only when the general path
+    /// (`empty_cell`, then `parse_row` of the white-space tokens) accepts it,
+    /// with the same time and row bits; it accepts the ordinary lines.
+    #[test]
+    fn fast_path_agrees_with_the_general_path() {
+        let labels: Vec<String> = ["a", "b", "c"].iter().map(|s| s.to_string()).collect();
+        let path = Path::new("x.sto");
+        let pieces = [
+            "0.5", "-1e-3", "2", "1.25E+2", "nan", "inf", "x", "", " ", "\t", "\t\t", "  ",
+            "\u{a0}", "\u{b}", "\u{c}", "\r", "-0", "+7.", ".5", "1,5", "1.#INF", "3e400",
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        let mut accepted = 0;
+        let mut lines: Vec<String> = vec![
+            "0.1\t1\t2\t3".into(),
+            "0.1 1 2 3".into(),
+            "  0.1\t 1\t2 \t3\t\r".into(),
+            "0.1\t\t2\t3".into(),
+            "\t0.1\t1\t2\t3".into(),
+            "0.1\t1\t2\t3\t4".into(),
+            "0.1\t1\t2".into(),
+            "0.1\t1\u{a0}\t2\t3".into(),
+            "0.1\u{a0}1\u{a0}2\u{a0}3".into(),
+            "0.1\t1\t2\t\u{b}3".into(),
+            "0.1\t1\t2\t3\t\u{b}".into(),
+        ];
+        for _ in 0..20000 {
+            let mut l = String::new();
+            // mostly 4 numbers with ordinary separators, sometimes not
+            let numbers = [
+                "0.5",
+                "-1e-3",
+                "2",
+                "1.25E+2",
+                "-0",
+                "+7.",
+                ".5",
+                "12345.678901",
+            ];
+            let count = if rnd(4) == 0 { rnd(12) } else { 4 };
+            for _ in 0..count {
+                let sep = [" ", "\t", "  ", "\t "][rnd(4)];
+                if rnd(8) == 0 {
+                    l.push_str(pieces[rnd(pieces.len())]);
+                } else {
+                    l.push_str(numbers[rnd(numbers.len())]);
+                }
+                l.push_str(if rnd(8) == 0 {
+                    pieces[rnd(pieces.len())]
+                } else {
+                    sep
+                });
+            }
+            lines.push(l);
+        }
+        for l in &lines {
+            let mut row = Vec::new();
+            let fast = parse_line_fast(l, labels.len(), &mut row);
+            let general = empty_cell(path, &labels, 1, l).and_then(|_| {
+                let toks: Vec<&str> = l.split_whitespace().collect();
+                let mut r = Vec::new();
+                parse_row(path, &labels, 1, &toks, &mut r).map(|t| (t, r))
+            });
+            if let Some(t) = fast {
+                accepted += 1;
+                let (gt, grow) = general.unwrap_or_else(|e| panic!("{l:?}: fast ok, general {e}"));
+                assert_eq!(t.to_bits(), gt.to_bits(), "{l:?}");
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&row), bits(&grow), "{l:?}");
+            }
+        }
+        assert!(accepted >= 2000, "{accepted}");
+        for l in &lines[..3] {
+            assert!(parse_line_fast(l, 3, &mut Vec::new()).is_some(), "{l:?}");
+        }
     }
 }
