@@ -6,7 +6,7 @@
 
 use crate::error::Result;
 use crate::motion::coordinates::find_index;
-use crate::motion::stream::{StateBlock, StateStream};
+use crate::motion::stream::{FrameSource, StateBlock};
 
 /// Rows analysed: i0 = last row with t <= initial_time, i1 = last row with
 /// t <= final_time; a row is recorded when it is the first, the last, or its
@@ -31,7 +31,7 @@ pub fn is_frame(i: usize, i0: usize, i1: usize, step_interval: usize) -> bool {
 /// Returns false when a stop was requested ([`crate::frame::interrupt`]):
 /// the frames handed to `sink` so far are complete, no later one is.
 pub fn for_each_frame<W, T>(
-    stream: &mut StateStream,
+    stream: &mut impl FrameSource,
     i0: usize,
     i1: usize,
     step_interval: usize,

@@ -253,3 +253,51 @@ mod tests {
         assert_eq!(find_index(&t, 9.0), 3);
     }
 }
+
+/// Rows `first..=last` of a [`CoordinateSplines`] as blocks of frames for the
+/// frame driver: q = S, u = S′, u̇ = S″ at each row's time (the
+/// InverseDynamicsTool's states), computed a block at a time.
+pub struct SplineFrames<'a> {
+    splines: &'a CoordinateSplines,
+    next: usize,
+    last: usize,
+    block: usize,
+}
+
+impl CoordinateSplines {
+    /// The rows `first..=last` as [`SplineFrames`].
+    pub fn frames(&self, first: usize, last: usize) -> SplineFrames<'_> {
+        SplineFrames {
+            splines: self,
+            next: first,
+            last,
+            block: crate::motion::stream::DEFAULT_BLOCK,
+        }
+    }
+}
+
+impl crate::motion::stream::FrameSource for SplineFrames<'_> {
+    fn next_block(&mut self) -> Result<Option<crate::motion::stream::StateBlock>> {
+        if self.next > self.last || self.next >= self.splines.time.len() {
+            return Ok(None);
+        }
+        let a = self.next;
+        let b = (a + self.block - 1).min(self.last);
+        let nq = self.splines.splines.len();
+        let time: Vec<f64> = self.splines.time[a..=b].to_vec();
+        let mut q = vec![vec![0.0; nq]; time.len()];
+        let mut u = q.clone();
+        let mut udot = q.clone();
+        for (k, &t) in time.iter().enumerate() {
+            self.splines.eval(t, &mut q[k], &mut u[k], &mut udot[k]);
+        }
+        self.next = b + 1;
+        Ok(Some(crate::motion::stream::StateBlock {
+            first: a,
+            time,
+            q,
+            u,
+            udot,
+        }))
+    }
+}

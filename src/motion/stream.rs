@@ -75,6 +75,21 @@ pub struct StateBlock {
     pub udot: Vec<Vec<f64>>,
 }
 
+/// Blocks of consecutive frames, in order: what the frame driver
+/// (`frame::driver::for_each_frame`) runs over. The AnalyzeTool's states
+/// ([`StateStream`]) and the InverseDynamicsTool's spline derivatives
+/// (`motion::coordinates::SplineFrames`) are two sources.
+pub trait FrameSource {
+    /// The next block; None after the last row.
+    fn next_block(&mut self) -> Result<Option<StateBlock>>;
+}
+
+impl FrameSource for StateStream<'_> {
+    fn next_block(&mut self) -> Result<Option<StateBlock>> {
+        StateStream::next_block(self)
+    }
+}
+
 /// Rows of the states table, in order, for the rows `first_row..=last_row`.
 pub struct StateStream<'m> {
     model: &'m Model,

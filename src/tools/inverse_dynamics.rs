@@ -169,14 +169,34 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     if !setup.joints_to_report_body_forces.is_empty() && setup.output_body_forces_file.is_some() {
         warnings.push("joints_to_report_body_forces: the body-forces-at-joints file is not written by statopt yet".into());
     }
-    let mut data = Data::new(&model);
-    for &t in &time[i0..=i1] {
-        inverse_dynamics_frame(&model, loads.as_ref(), &splines, t, &mut data);
-        writer.write_row(t, &data.tau)?;
-    }
+    // The frame driver every analysis uses: frames in parallel chunks,
+    // written in order; a stop request ends the run after a whole chunk.
+    let mut last_t = None;
+    let completed = crate::frame::driver::for_each_frame(
+        &mut splines.frames(i0, i1),
+        i0,
+        i1,
+        1,
+        || Data::new(&model),
+        |data, block, k| {
+            let t = block.time[k];
+            data.q.copy_from_slice(&block.q[k]);
+            data.u.copy_from_slice(&block.u[k]);
+            data.udot.copy_from_slice(&block.udot[k]);
+            inverse_dynamics_at_state(&model, loads.as_ref(), t, data);
+            Ok((t, data.tau.clone()))
+        },
+        |(t, tau)| {
+            last_t = Some(t);
+            writer.write_row(t, &tau)
+        },
+    )?;
     writer.finish()?;
+    let stopped =
+        (!completed).then(|| (crate::frame::interrupt::requested().unwrap_or(130), last_t));
     Ok(RunSummary {
         frames: i1 + 1 - i0,
+        stopped,
         results_dirs: vec![dir.clone()],
         files: vec![out],
         warnings,
@@ -193,6 +213,16 @@ pub fn inverse_dynamics_frame(
     data: &mut Data,
 ) {
     splines.eval(t, &mut data.q, &mut data.u, &mut data.udot);
+    inverse_dynamics_at_state(model, loads, t, data);
+}
+
+/// One frame of the InverseDynamicsTool at the q, u, u̇ already in `data`.
+pub fn inverse_dynamics_at_state(
+    model: &Model,
+    loads: Option<&ExternalLoads>,
+    t: f64,
+    data: &mut Data,
+) {
     kinematics::full(model, data);
     data.clear_applied();
     if let Some(l) = loads {
