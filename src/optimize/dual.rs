@@ -120,6 +120,8 @@ pub struct DualSolution {
     pub iterations: u32,
     /// Number of independent blocks of equations.
     pub blocks: usize,
+    /// max |A x − b| ([`FrameProblem::eq_residual`] of x).
+    pub eq_residual: f64,
 }
 
 /// Why [`solve_dual`] gave no answer.
@@ -410,11 +412,17 @@ impl SparseCols {
         self.val.resize(start + column.len(), 0.0);
         let (ri, vals) = (&mut self.row_idx[start..], &mut self.val[start..]);
         let mut k = 0;
-        for (r, &e) in column.iter().enumerate() {
-            // Written always, kept when nonzero (no branch to mispredict).
-            ri[k] = r;
-            vals[k] = e;
-            k += usize::from(e != 0.0);
+        for (c4, chunk) in column.chunks(4).enumerate() {
+            // (Most entries are zero, in runs.)
+            if chunk.iter().all(|e| *e == 0.0) {
+                continue;
+            }
+            for (i, &e) in chunk.iter().enumerate() {
+                // Written always, kept when nonzero.
+                ri[k] = 4 * c4 + i;
+                vals[k] = e;
+                k += usize::from(e != 0.0);
+            }
         }
         self.row_idx.truncate(start + k);
         self.val.truncate(start + k);
@@ -846,10 +854,9 @@ impl Block {
             for (y, d) in s.y.iter_mut().zip(&s.d) {
                 *y += t * d;
             }
-            // v moves with y (v = Mᵀy/2w up to rounding).
-            for (v, dv) in s.v.iter_mut().zip(&s.dv) {
-                *v += t * dv;
-            }
+            // v afresh from y (v + t·dv would carry the rounding of long
+            // steps: the optimality conditions hold to ~1e-11 instead).
+            self.unprojected(s);
             self.project(s);
         }
         give_up(s, solves, "step limit")
@@ -1162,6 +1169,11 @@ impl DualWorkspace {
                     block.rows.push(r);
                 }
             }
+            // The whole problem is one block (the usual case): take over
+            // its columns instead of copying them.
+            let whole = self.n_blocks == 1
+                && block.rows.len() == m
+                && self.block_of_group.iter().all(|&g| g == 0);
             let count = &mut self.row_count;
             count.clear();
             count.resize(m, 0);
@@ -1181,17 +1193,26 @@ impl DualWorkspace {
             block.groups.clear();
             block.group_col.clear();
             block.m.clear();
-            for (gi, gr) in groups.iter().enumerate() {
-                if self.block_of_group[gi] != k {
-                    continue;
+            if whole {
+                std::mem::swap(cols, &mut block.m);
+                std::mem::swap(groups, &mut block.groups);
+                std::mem::swap(&mut self.group_col, &mut block.group_col);
+                for r in block.m.row_idx.iter_mut() {
+                    *r = self.local[*r];
                 }
-                block.groups.push(*gr);
-                block.group_col.push(block.m.col_ptr.len() - 1);
-                for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
-                    let (ri, v) = cols.col(c);
-                    block
-                        .m
-                        .push_col(ri.iter().zip(v).map(|(&r, &e)| (self.local[r], e)));
+            } else {
+                for (gi, gr) in groups.iter().enumerate() {
+                    if self.block_of_group[gi] != k {
+                        continue;
+                    }
+                    block.groups.push(*gr);
+                    block.group_col.push(block.m.col_ptr.len() - 1);
+                    for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
+                        let (ri, v) = cols.col(c);
+                        block
+                            .m
+                            .push_col(ri.iter().zip(v).map(|(&r, &e)| (self.local[r], e)));
+                    }
                 }
             }
             block.b.clear();
@@ -1239,6 +1260,7 @@ impl DualWorkspace {
             y,
             iterations,
             blocks: self.n_blocks,
+            eq_residual: residual,
         })
     }
 }

@@ -75,7 +75,7 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         Ok(Ok(d)) => {
             return FrameSolution {
                 objective: p.objective(&d.x),
-                eq_residual: p.eq_residual(&d.x),
+                eq_residual: d.eq_residual,
                 x: d.x,
                 status: SolveStatus::Solved,
                 iterations: d.iterations,
