@@ -405,11 +405,24 @@ impl SparseCols {
         self.col_ptr.push(self.row_idx.len());
     }
 
-    /// Appends the nonzero entries of a dense column.
+    /// Makes room for `entries` entries to be written by
+    /// [`SparseCols::push_dense_col`] (columns are read by col_ptr; the
+    /// room left over is dropped by [`SparseCols::trim`]).
+    fn make_room(&mut self, entries: usize) {
+        self.row_idx.resize(entries, 0);
+        self.val.resize(entries, 0.0);
+    }
+
+    fn trim(&mut self) {
+        let end = self.col_ptr[self.col_ptr.len() - 1];
+        self.row_idx.truncate(end);
+        self.val.truncate(end);
+    }
+
+    /// Appends the nonzero entries of a dense column, within the room made
+    /// by [`SparseCols::make_room`].
     fn push_dense_col(&mut self, column: &[f64]) {
-        let start = self.row_idx.len();
-        self.row_idx.resize(start + column.len(), 0);
-        self.val.resize(start + column.len(), 0.0);
+        let start = self.col_ptr[self.col_ptr.len() - 1];
         let (ri, vals) = (&mut self.row_idx[start..], &mut self.val[start..]);
         let mut k = 0;
         for (c4, chunk) in column.chunks(4).enumerate() {
@@ -424,8 +437,6 @@ impl SparseCols {
                 k += usize::from(e != 0.0);
             }
         }
-        self.row_idx.truncate(start + k);
-        self.val.truncate(start + k);
         self.col_ptr.push(start + k);
     }
 
@@ -1086,6 +1097,7 @@ impl DualWorkspace {
         // The groups' columns; union-find over the equations they share.
         let cols = &mut self.cols;
         cols.clear();
+        cols.make_room(m * groups.iter().map(Group::len).sum::<usize>());
         let parent = &mut self.parent;
         parent.clear();
         parent.extend(0..m);
@@ -1097,7 +1109,7 @@ impl DualWorkspace {
             }
             let (start, end) = (
                 cols.col_ptr[*self.group_col.last().unwrap()],
-                cols.row_idx.len(),
+                cols.col_ptr[cols.col_ptr.len() - 1],
             );
             if end > start {
                 // Every row of the group under the root of its first row.
@@ -1110,6 +1122,7 @@ impl DualWorkspace {
                 }
             }
         }
+        cols.trim();
         let mut x = vec![0.0; n];
         let mut y = vec![0.0; m];
         for (j, v) in fixed.iter().enumerate() {
@@ -1186,7 +1199,7 @@ impl DualWorkspace {
                     }
                 }
             }
-            block.rows.sort_by_key(|&r| (count[r], r));
+            block.rows.sort_unstable_by_key(|&r| (count[r], r));
             for (i, &r) in block.rows.iter().enumerate() {
                 self.local[r] = i;
             }
