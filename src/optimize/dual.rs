@@ -636,46 +636,48 @@ impl Block {
         changed
     }
 
-    /// v = (Mᵀy)/2w at s.y.
-    fn unprojected(&self, s: &mut Newton) {
-        let mut c = 0;
-        for gr in &self.groups {
-            let inv2w = 0.5 / gr.w;
-            for k in c..c + gr.len() {
-                s.v[k] = self.m.dot(k, &s.y) * inv2w;
-            }
-            c += gr.len();
-        }
-    }
-
-    /// The state at s.v: x, the derivatives and F.
-    fn project(&self, s: &mut Newton) {
+    /// The state at s.y: v = (Mᵀy)/2w, x = Proj(v), the derivatives and
+    /// F = b − M x (one pass over the columns).
+    fn eval(&self, s: &mut Newton) {
         s.f.copy_from_slice(&self.b);
         let mut c = 0;
         for (gi, gr) in self.groups.iter().enumerate() {
+            let inv2w = 0.5 / gr.w;
             match gr.set {
                 Set::Interval { lo, hi } => {
-                    let v = s.v[c];
-                    s.x[c] = v.clamp(lo, hi);
+                    let (ri, a) = self.m.col(c);
+                    let v = ri.iter().zip(a).map(|(&r, a)| a * s.y[r]).sum::<f64>() * inv2w;
+                    let x = v.clamp(lo, hi);
+                    s.v[c] = v;
+                    s.x[c] = x;
                     s.deriv[gi] = if v > lo && v < hi {
                         Deriv::Identity
                     } else {
                         Deriv::Zero
                     };
+                    if x != 0.0 {
+                        for (&r, a) in ri.iter().zip(a) {
+                            s.f[r] -= a * x;
+                        }
+                    }
                 }
                 Set::Cone { mu, model } => {
-                    let v = [s.v[c], s.v[c + 1], s.v[c + 2]];
+                    let v = [
+                        self.m.dot(c, &s.y) * inv2w,
+                        self.m.dot(c + 1, &s.y) * inv2w,
+                        self.m.dot(c + 2, &s.y) * inv2w,
+                    ];
                     let (p, factors) = project_friction(v, mu, model);
+                    s.v[c..c + 3].copy_from_slice(&v);
                     s.x[c..c + 3].copy_from_slice(&p);
                     s.deriv[gi] = Deriv::Factors(factors);
-                }
-            }
-            for k in c..c + gr.len() {
-                let xk = s.x[k];
-                if xk != 0.0 {
-                    let (ri, v) = self.m.col(k);
-                    for (&r, a) in ri.iter().zip(v) {
-                        s.f[r] -= a * xk;
+                    for (k, &xk) in p.iter().enumerate() {
+                        if xk != 0.0 {
+                            let (ri, a) = self.m.col(c + k);
+                            for (&r, a) in ri.iter().zip(a) {
+                                s.f[r] -= a * xk;
+                            }
+                        }
                     }
                 }
             }
@@ -802,8 +804,7 @@ impl Block {
                 return Err((solves, "singular start"));
             }
         }
-        self.unprojected(s);
-        self.project(s);
+        self.eval(s);
         // Stopping short of the target: accepted if within `accept`.
         let give_up = |s: &Newton, solves: u32, why: &'static str| {
             if amax(&s.f) <= accept {
@@ -867,8 +868,7 @@ impl Block {
             }
             // v afresh from y (v + t·dv would carry the rounding of long
             // steps: the optimality conditions hold to ~1e-11 instead).
-            self.unprojected(s);
-            self.project(s);
+            self.eval(s);
         }
         give_up(s, solves, "step limit")
     }
