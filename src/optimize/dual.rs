@@ -887,7 +887,7 @@ fn cholesky(l: &mut [f64], n: usize) -> bool {
         let (left, right) = l.split_at_mut((j + 1) * n);
         let col = &mut left[j * n..];
         let d = col[j];
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return false;
         }
         let inv = 1.0 / d.sqrt();
@@ -1155,9 +1155,9 @@ impl DualWorkspace {
             }
             self.block_of_group.push(block_of_root[root]);
         }
-        for r in 0..m {
+        for (r, br) in b.iter().enumerate() {
             let root = find(parent, r);
-            if block_of_root[root] == usize::MAX && b[r].abs() > tol {
+            if block_of_root[root] == usize::MAX && br.abs() > tol {
                 // No free variable in this equation.
                 return Err(DualFailure::NotConverged {
                     iterations: 0,
