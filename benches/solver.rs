@@ -1,6 +1,9 @@
 //! The per-frame solve alone, dual Newton against Clarabel, on the real
-//! frame problems of gait2392 walking (92 muscles, 23 equations; the
-//! setup's 151 frames, assembled once before timing). Needs ../shared/models
+//! frame problems of gait2392 walking (92 muscles, 23 equations; every
+//! row of the motion in the setup's time range, 1500 frames, assembled
+//! once before timing). `newton` is `optimize::solve` as the drivers call
+//! it (cold start); `newton_warm` starts each frame from the previous
+//! frame's multipliers. Needs ../shared/models
 //! (skips with a message otherwise). `cargo bench --bench solver`
 
 use std::path::PathBuf;
@@ -8,7 +11,7 @@ use std::path::PathBuf;
 use criterion::{criterion_group, criterion_main, Criterion};
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
-use statopt::optimize::{self, FrameProblem, SolverChoice};
+use statopt::optimize::{self, dual, FrameProblem, SolverChoice};
 use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
@@ -73,6 +76,25 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+
+    // Warm start: each frame from the multipliers of the frame before
+    // (computed beforehand, cold), through a reused workspace. The drivers
+    // do not do this (every frame is solved cold, so results cannot depend
+    // on the order frames are solved in); this shows what it would save.
+    let ys: Vec<Vec<f64>> = frames
+        .iter()
+        .map(|p| dual::solve_dual(p, None).unwrap().y)
+        .collect();
+    let mut ws = dual::DualWorkspace::new();
+    let mut k = 1;
+    c.bench_function("so_solve/gait2392_92_muscles/newton_warm", |b| {
+        b.iter(|| {
+            let i = k % frames.len();
+            let i = if i == 0 { 1 } else { i };
+            k += 1;
+            ws.solve(&frames[i], Some(&ys[i - 1])).unwrap().iterations
+        })
+    });
 }
 
 criterion_group!(benches, bench);

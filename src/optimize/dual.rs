@@ -28,22 +28,35 @@
 //! −A D Aᵀ with D block-diagonal, D = J / 2w, J the (Clarke) derivative of
 //! the projection (1 or 0 for a clip; I, 0 or a rank-2 matrix for the cone,
 //! [`cone_jacobian_factors`]; I, the projector onto a face's plane, onto an
-//! edge, or 0 for a pyramid); each step solves (A D Aᵀ + εI) d = F(y) by
-//! Cholesky, ε = s·(1e-12 + ν·min(1, ‖F‖∞/max(1, ‖b‖∞))) with s the
-//! largest diagonal entry of A W⁻¹ Aᵀ/2 (Levenberg–Marquardt-like: A D Aᵀ
-//! is singular when all variables of an equation sit at bounds or a contact
-//! lies on the cone's surface; ν starts at 1e-6, falls tenfold after a full
-//! step and rises tenfold after a step shorter than ¼), and takes y + t d
-//! with the first t of the sequence 1, t₁, t₂, … that raises g by the Armijo
-//! fraction 1e-4·t·Fᵀd (or, where g's gain drowns in rounding, shrinks ‖F‖₂
-//! by 1 − 1e-4·t without lowering g beyond rounding); each next t is the
-//! zero of the secant of the (piecewise-linear, decreasing) directional
-//! derivative φ'(t) = F(y + t d)ᵀd, kept within [0.1, 0.5] of the last.
+//! edge, or 0 for a pyramid); each step solves (A D Aᵀ + ε S) d = F(y) by
+//! Cholesky, with S the diagonal of A W⁻¹ Aᵀ/2 (each equation's curvature
+//! with every bound inactive) and ε = 1e-12 + ν·min(1, ‖F‖∞/max(1, ‖b‖∞))
+//! (Levenberg–Marquardt-like: A D Aᵀ is singular when all variables of an
+//! equation sit at bounds or a contact lies on the cone's surface; ν starts
+//! at 0.1 from the cold start and 1e-6 from a warm one, falls a
+//! thousandfold after a full step and rises tenfold after a step shorter
+//! than ¼; ε = 1e-12 when a full step left every clip's derivative as it
+//! was, where F is linear and the plain Newton step exact). The step
+//! y + t d takes t = 1 when |φ'(1)| ≤ ½ φ'(0) for the concave
+//! φ(t) = g(y + t d), whose derivative φ'(t) = F(y + t d)ᵀd is decreasing
+//! (piecewise linear without contacts); otherwise t with |φ'(t)| ≤ ½ φ'(0),
+//! bracketed by doubling beyond 1 or between 0 and 1 and found by regula
+//! falsi (Illinois). φ' costs no product with A: with v = Aᵀy/2w and
+//! δ = Aᵀd/2w per variable, φ'(t) = bᵀd − Σ (Aᵀd)_i Proj(v + tδ)_i.
 //! The iterate x(y) is feasible for the bounds and friction cones by
 //! construction, and it is the exact
 //! minimiser of the problem with right-hand side A x(y); the method stops when
 //! ‖A x − b‖∞ ≤ [`TARGET_TOLERANCE`]·max(1, ‖b‖∞) (1e-12), and accepts
 //! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there.
+//!
+//! Linear algebra: A's columns are kept with their nonzero entries only;
+//! A D Aᵀ is updated between steps by removing and adding the variables
+//! whose derivative changed (rebuilt when most did); the Cholesky factor is
+//! computed on the equations ordered by their number of nonzero entries,
+//! so the equations coupled to most others (the pelvis beside two legs)
+//! come last and the zeros between the others survive. [`DualWorkspace`]
+//! holds every buffer, for callers that solve many frames
+//! ([`super::solve()`] keeps one per thread).
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
@@ -70,7 +83,7 @@
 //! search stalls, or an equation without free variables has a nonzero
 //! right-hand side, the caller falls back too: Clarabel certifies
 //! infeasibility and computes the elastic solution.
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use super::friction::FrictionModel;
 use super::problem::FrameProblem;
@@ -86,10 +99,13 @@ pub const RESIDUAL_TOLERANCE: f64 = 1e-10;
 pub const TARGET_TOLERANCE: f64 = 1e-12;
 /// Newton steps allowed per block before giving up.
 pub const MAX_NEWTON_STEPS: u32 = 50;
-/// Step halvings of one line search before giving up.
-const MAX_HALVINGS: u32 = 60;
-/// Armijo fraction.
-const SIGMA: f64 = 1e-4;
+/// Trial steps of one line search (after bracketing) before giving up.
+const MAX_LINE_SEARCH: u32 = 60;
+/// A step t is taken when |φ'(t)| ≤ this · φ'(0) (strong Wolfe curvature
+/// condition on the concave φ(t) = g(y + t d)).
+const CURVATURE: f64 = 0.5;
+/// Longest step tried along a Newton direction.
+const MAX_STEP: f64 = 1024.0;
 
 /// The dual Newton answer.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,6 +120,8 @@ pub struct DualSolution {
     pub iterations: u32,
     /// Number of independent blocks of equations.
     pub blocks: usize,
+    /// max |A x − b| ([`FrameProblem::eq_residual`] of x).
+    pub eq_residual: f64,
 }
 
 /// Why [`solve_dual`] gave no answer.
@@ -339,6 +357,18 @@ fn cone_jacobian_factors(v: [f64; 3], mu: f64, piece: u8) -> [[f64; 3]; 3] {
     }
 }
 
+/// Projection onto a group's set (no derivative).
+fn project_group(set: Set, v: [f64; 3]) -> [f64; 3] {
+    match set {
+        Set::Interval { lo, hi } => [v[0].clamp(lo, hi), 0.0, 0.0],
+        Set::Cone {
+            mu,
+            model: FrictionModel::Cone,
+        } => project_cone(v, mu).0,
+        Set::Cone { mu, model } => project_pyramid(v, mu, model).0,
+    }
+}
+
 /// Union-find with path halving.
 fn find(parent: &mut [usize], mut i: usize) -> usize {
     while parent[i] != i {
@@ -348,44 +378,66 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
     i
 }
 
-/// One independent block: its equations (global rows), its groups, the
-/// submatrix (columns in group order, stored by column with the nonzero
-/// entries only: a muscle spans a few joints) and the right-hand side with
-/// the fixed variables moved over.
-struct Block {
-    rows: Vec<usize>,
-    groups: Vec<Group>,
-    /// Column c holds entries col_ptr[c]..col_ptr[c + 1] of row_idx (local
-    /// rows) and val.
+/// Columns of a matrix stored by column with their nonzero entries only (a
+/// muscle spans a few joints): column c holds entries col_ptr[c]..col_ptr[c
+/// + 1] of row_idx (ascending) and val.
+#[derive(Debug, Default)]
+struct SparseCols {
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     val: Vec<f64>,
-    b: DVector<f64>,
 }
 
-/// A block's (x, y, linear solves), or (linear solves, why it failed).
-type BlockResult = Result<(DVector<f64>, DVector<f64>, u32), (u32, &'static str)>;
+impl SparseCols {
+    fn clear(&mut self) {
+        self.col_ptr.clear();
+        self.col_ptr.push(0);
+        self.row_idx.clear();
+        self.val.clear();
+    }
 
-/// State of a block at a multiplier vector.
-struct Eval {
-    x: DVector<f64>,
-    /// F = b − M x = ∇g.
-    f: DVector<f64>,
-    g: f64,
-}
+    /// Appends a column from (row, value) pairs.
+    fn push_col(&mut self, entries: impl Iterator<Item = (usize, f64)>) {
+        for (r, v) in entries {
+            self.row_idx.push(r);
+            self.val.push(v);
+        }
+        self.col_ptr.push(self.row_idx.len());
+    }
 
-/// Which derivative [`Block::eval`] accumulates into H = M D Mᵀ.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Hessian {
-    /// The projection's derivative at the point.
-    AtPoint,
-    /// Every bound and cone inactive (D = W⁻¹/2), for the starting point.
-    Free,
-}
+    /// Makes room for `entries` entries to be written by
+    /// [`SparseCols::push_dense_col`] (columns are read by col_ptr; the
+    /// room left over is dropped by [`SparseCols::trim`]).
+    fn make_room(&mut self, entries: usize) {
+        self.row_idx.resize(entries, 0);
+        self.val.resize(entries, 0.0);
+    }
 
-impl Block {
-    fn n_cols(&self) -> usize {
-        self.col_ptr.len() - 1
+    fn trim(&mut self) {
+        let end = self.col_ptr[self.col_ptr.len() - 1];
+        self.row_idx.truncate(end);
+        self.val.truncate(end);
+    }
+
+    /// Appends the nonzero entries of a dense column, within the room made
+    /// by [`SparseCols::make_room`].
+    fn push_dense_col(&mut self, column: &[f64]) {
+        let start = self.col_ptr[self.col_ptr.len() - 1];
+        let (ri, vals) = (&mut self.row_idx[start..], &mut self.val[start..]);
+        let mut k = 0;
+        for (c4, chunk) in column.chunks(4).enumerate() {
+            // (Most entries are zero, in runs.)
+            if chunk.iter().all(|e| *e == 0.0) {
+                continue;
+            }
+            for (i, &e) in chunk.iter().enumerate() {
+                // Written always, kept when nonzero.
+                ri[k] = 4 * c4 + i;
+                vals[k] = e;
+                k += usize::from(e != 0.0);
+            }
+        }
+        self.col_ptr.push(start + k);
     }
 
     fn col(&self, c: usize) -> (&[usize], &[f64]) {
@@ -394,433 +446,843 @@ impl Block {
     }
 
     /// (M_c)ᵀ y.
-    fn dot(&self, c: usize, y: &DVector<f64>) -> f64 {
+    fn dot(&self, c: usize, y: &[f64]) -> f64 {
         let (ri, v) = self.col(c);
         ri.iter().zip(v).map(|(&r, a)| a * y[r]).sum()
     }
+}
 
-    /// h += s · u uᵀ for u = Σ_k coef_k M_(c+k) (k < coef.len()); `u` is
-    /// scratch of the block's row count.
-    fn add_outer(&self, h: &mut DMatrix<f64>, c: usize, coef: &[f64], s: f64, u: &mut [f64]) {
-        if coef.len() == 1 {
-            let (ri, v) = self.col(c);
-            let k = s * coef[0] * coef[0];
-            for (&r1, a1) in ri.iter().zip(v) {
-                for (&r2, a2) in ri.iter().zip(v) {
-                    h[(r1, r2)] += k * a1 * a2;
-                }
-            }
-            return;
+/// The derivative of a group's projection at the current point, as used
+/// for the Hessian.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Deriv {
+    /// 0: at a bound, at the apex or in the polar cone.
+    Zero,
+    /// I: inside the bounds.
+    Identity,
+    /// Σ c_k c_kᵀ over the three factors (a contact).
+    Factors([[f64; 3]; 3]),
+}
+
+/// One independent block: its equations (global rows), its groups, the
+/// submatrix (columns in group order, local rows) and the right-hand side
+/// with the fixed variables moved over.
+#[derive(Debug, Default)]
+struct Block {
+    rows: Vec<usize>,
+    groups: Vec<Group>,
+    /// Each group's first column.
+    group_col: Vec<usize>,
+    m: SparseCols,
+    b: Vec<f64>,
+}
+
+/// Newton's buffers for one block (sized by [`Newton::resize`]).
+#[derive(Debug, Default)]
+struct Newton {
+    /// Multipliers, one per equation of the block.
+    y: Vec<f64>,
+    /// Newton direction.
+    d: Vec<f64>,
+    /// F = b − M x(y) = ∇g.
+    f: Vec<f64>,
+    /// Per column: v = (Mᵀy)/2w (the unprojected point), x = Proj(v),
+    /// q = Mᵀd and dv = q/2w (the change of v along d).
+    v: Vec<f64>,
+    x: Vec<f64>,
+    q: Vec<f64>,
+    dv: Vec<f64>,
+    /// Per group: the projection's derivative at v, and the derivative
+    /// that h holds.
+    deriv: Vec<Deriv>,
+    h_deriv: Vec<Deriv>,
+    /// H = M D Mᵀ (lower triangle, by column, n×n) and its Cholesky factor.
+    h: Vec<f64>,
+    l: Vec<f64>,
+    /// The diagonal of M W⁻¹ Mᵀ/2 (every bound and cone inactive): the
+    /// scale of each equation's curvature, which the damping follows.
+    h_free_diag: Vec<f64>,
+    /// Scratch of the block's row count.
+    u: Vec<f64>,
+}
+
+impl Newton {
+    fn resize(&mut self, n_rows: usize, n_cols: usize, n_groups: usize) {
+        for (buf, len) in [
+            (&mut self.y, n_rows),
+            (&mut self.d, n_rows),
+            (&mut self.f, n_rows),
+            (&mut self.u, n_rows),
+            (&mut self.h_free_diag, n_rows),
+            (&mut self.v, n_cols),
+            (&mut self.x, n_cols),
+            (&mut self.q, n_cols),
+            (&mut self.dv, n_cols),
+            (&mut self.h, n_rows * n_rows),
+            (&mut self.l, n_rows * n_rows),
+        ] {
+            buf.clear();
+            buf.resize(len, 0.0);
         }
+        self.deriv.clear();
+        self.deriv.resize(n_groups, Deriv::Zero);
+        self.h_deriv.clear();
+        self.h_deriv.resize(n_groups, Deriv::Zero);
+    }
+}
+
+/// A block's outcome: Ok(linear solves) with the answer in the [`Newton`]
+/// buffers, or (linear solves, why it failed).
+type BlockResult = Result<u32, (u32, &'static str)>;
+
+impl Block {
+    fn n_rows(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// h += s · u uᵀ (lower triangle) for u = Σ_k coef_k M_(c+k); `u` is
+    /// scratch of the block's row count.
+    fn add_outer(&self, h: &mut [f64], c: usize, coef: &[f64; 3], s: f64, u: &mut [f64]) {
+        let n = u.len();
         u.iter_mut().for_each(|e| *e = 0.0);
         for (k, &ck) in coef.iter().enumerate() {
             if ck != 0.0 {
-                let (ri, v) = self.col(c + k);
+                let (ri, v) = self.m.col(c + k);
                 for (&r, a) in ri.iter().zip(v) {
                     u[r] += ck * a;
                 }
             }
         }
-        for r1 in 0..u.len() {
+        for r1 in 0..n {
             if u[r1] != 0.0 {
                 let k = s * u[r1];
-                for r2 in 0..u.len() {
-                    h[(r1, r2)] += k * u[r2];
+                for (hv, ur) in h[r1 * n + r1..(r1 + 1) * n].iter_mut().zip(&u[r1..]) {
+                    *hv += k * ur;
                 }
             }
         }
     }
 
-    /// Projected point x(y), gradient F and dual value g at y; with `hess`,
-    /// also H = M D Mᵀ (overwritten).
-    fn eval(&self, y: &DVector<f64>, mut hess: Option<(&mut DMatrix<f64>, Hessian)>) -> Eval {
-        let nr = self.rows.len();
-        let mut x = DVector::zeros(self.n_cols());
-        let mut f = self.b.clone();
-        let mut obj = 0.0;
-        let mut u = vec![0.0; nr];
-        if let Some((h, _)) = hess.as_mut() {
-            h.fill(0.0);
+    /// h += s · M_c M_cᵀ (lower triangle; the column's rows need not be
+    /// in order).
+    fn add_col_outer(&self, h: &mut [f64], n: usize, c: usize, s: f64) {
+        let (ri, v) = self.m.col(c);
+        for (i, (&r1, a1)) in ri.iter().zip(v).enumerate() {
+            let k = s * a1;
+            for (&r2, a2) in ri[i..].iter().zip(&v[i..]) {
+                h[r1.min(r2) * n + r1.max(r2)] += k * a2;
+            }
         }
+    }
+
+    /// H = M D Mᵀ into `h` (lower triangle, by column): D from `deriv`, or
+    /// with every bound and cone inactive (D = W⁻¹/2, for the starting
+    /// point) when `deriv` is None.
+    fn hessian(&self, deriv: Option<&[Deriv]>, h: &mut [f64], u: &mut [f64]) {
+        h.iter_mut().for_each(|e| *e = 0.0);
+        for gi in 0..self.groups.len() {
+            let d = deriv.map_or(Deriv::Identity, |d| d[gi]);
+            self.add_group(h, gi, d, 1.0, u);
+        }
+    }
+
+    /// h += sign · M_g D_g M_gᵀ for group gi with derivative d.
+    fn add_group(&self, h: &mut [f64], gi: usize, d: Deriv, sign: f64, u: &mut [f64]) {
+        let gr = &self.groups[gi];
+        let c = self.group_col[gi];
+        let s = sign * 0.5 / gr.w;
+        match d {
+            Deriv::Zero => {}
+            Deriv::Identity => {
+                for k in 0..gr.len() {
+                    self.add_col_outer(h, self.n_rows(), c + k, s);
+                }
+            }
+            Deriv::Factors(factors) => {
+                for fac in &factors {
+                    if fac.iter().any(|e| *e != 0.0) {
+                        self.add_outer(h, c, fac, s, u);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Brings s.h to M D Mᵀ for D = s.deriv: from the matrix it holds
+    /// (D = s.h_deriv) by removing and adding the groups whose derivative
+    /// changed, or afresh when that is less work (the first step, where
+    /// many variables leave their bounds or reach them). Returns how many
+    /// groups changed.
+    fn update_hessian(&self, s: &mut Newton) -> usize {
+        let changed = s
+            .deriv
+            .iter()
+            .zip(&s.h_deriv)
+            .filter(|(a, b)| a != b)
+            .count();
+        let nonzero = s.deriv.iter().filter(|d| **d != Deriv::Zero).count();
+        if 2 * changed >= nonzero {
+            self.hessian(Some(&s.deriv), &mut s.h, &mut s.u);
+        } else {
+            for gi in 0..self.groups.len() {
+                let (old, new) = (s.h_deriv[gi], s.deriv[gi]);
+                if old != new {
+                    self.add_group(&mut s.h, gi, old, -1.0, &mut s.u);
+                    self.add_group(&mut s.h, gi, new, 1.0, &mut s.u);
+                }
+            }
+        }
+        s.h_deriv.copy_from_slice(&s.deriv);
+        changed
+    }
+
+    /// The state at s.y: v = (Mᵀy)/2w, x = Proj(v), the derivatives and
+    /// F = b − M x (one pass over the columns).
+    fn eval(&self, s: &mut Newton) {
+        s.f.copy_from_slice(&self.b);
         let mut c = 0;
-        for gr in &self.groups {
+        for (gi, gr) in self.groups.iter().enumerate() {
             let inv2w = 0.5 / gr.w;
             match gr.set {
                 Set::Interval { lo, hi } => {
-                    let v = self.dot(c, y) * inv2w;
-                    let xc = v.clamp(lo, hi);
-                    x[c] = xc;
-                    obj += gr.w * xc * xc;
-                    if let Some((h, kind)) = hess.as_mut() {
-                        if *kind == Hessian::Free || (v > lo && v < hi) {
-                            self.add_outer(h, c, &[1.0], inv2w, &mut u);
+                    let (ri, a) = self.m.col(c);
+                    let v = ri.iter().zip(a).map(|(&r, a)| a * s.y[r]).sum::<f64>() * inv2w;
+                    let x = v.clamp(lo, hi);
+                    s.v[c] = v;
+                    s.x[c] = x;
+                    s.deriv[gi] = if v > lo && v < hi {
+                        Deriv::Identity
+                    } else {
+                        Deriv::Zero
+                    };
+                    if x != 0.0 {
+                        for (&r, a) in ri.iter().zip(a) {
+                            s.f[r] -= a * x;
                         }
                     }
                 }
                 Set::Cone { mu, model } => {
                     let v = [
-                        self.dot(c, y) * inv2w,
-                        self.dot(c + 1, y) * inv2w,
-                        self.dot(c + 2, y) * inv2w,
+                        self.m.dot(c, &s.y) * inv2w,
+                        self.m.dot(c + 1, &s.y) * inv2w,
+                        self.m.dot(c + 2, &s.y) * inv2w,
                     ];
                     let (p, factors) = project_friction(v, mu, model);
-                    for k in 0..3 {
-                        x[c + k] = p[k];
-                        obj += gr.w * p[k] * p[k];
-                    }
-                    if let Some((h, kind)) = hess.as_mut() {
-                        let factors = if *kind == Hessian::Free {
-                            IDENTITY
-                        } else {
-                            factors
-                        };
-                        for fac in factors {
-                            if fac.iter().any(|e| *e != 0.0) {
-                                self.add_outer(h, c, &fac, inv2w, &mut u);
+                    s.v[c..c + 3].copy_from_slice(&v);
+                    s.x[c..c + 3].copy_from_slice(&p);
+                    s.deriv[gi] = Deriv::Factors(factors);
+                    for (k, &xk) in p.iter().enumerate() {
+                        if xk != 0.0 {
+                            let (ri, a) = self.m.col(c + k);
+                            for (&r, a) in ri.iter().zip(a) {
+                                s.f[r] -= a * xk;
                             }
                         }
                     }
                 }
             }
-            for k in 0..gr.len() {
-                let xk = x[c + k];
-                if xk != 0.0 {
-                    let (ri, v) = self.col(c + k);
-                    for (&r, a) in ri.iter().zip(v) {
-                        f[r] -= a * xk;
-                    }
+            c += gr.len();
+        }
+    }
+
+    /// φ'(t) = F(y + t d)ᵀd along the step, from v, dv and q alone:
+    /// bᵀd − Σ_c q_c x_c(t) with x(t) = Proj(v + t dv).
+    fn slope_at(&self, s: &Newton, bd: f64, t: f64) -> f64 {
+        let mut acc = bd;
+        let mut c = 0;
+        for gr in &self.groups {
+            match gr.set {
+                Set::Interval { lo, hi } => {
+                    acc -= s.q[c] * (s.v[c] + t * s.dv[c]).clamp(lo, hi);
+                }
+                set => {
+                    let v = [
+                        s.v[c] + t * s.dv[c],
+                        s.v[c + 1] + t * s.dv[c + 1],
+                        s.v[c + 2] + t * s.dv[c + 2],
+                    ];
+                    let p = project_group(set, v);
+                    acc -= s.q[c] * p[0] + s.q[c + 1] * p[1] + s.q[c + 2] * p[2];
                 }
             }
             c += gr.len();
         }
-        // g(y) = Σ w x² − yᵀ(M x − b) at the minimiser x(y).
-        let g = obj + y.dot(&f);
-        Eval { x, f, g }
+        acc
     }
 
-    /// Newton from `y`; returns (x, y, linear solves) or the failure.
-    fn solve(&self, y0: Option<DVector<f64>>, target: f64, accept: f64) -> BlockResult {
-        let nr = self.rows.len();
-        let mut h = DMatrix::zeros(nr, nr);
-        let mut h_free = DMatrix::zeros(nr, nr);
-        self.eval(&DVector::zeros(nr), Some((&mut h_free, Hessian::Free)));
-        let scale = (0..nr).map(|r| h_free[(r, r)]).fold(0.0, f64::max);
+    /// The step length along s.d (see the module documentation): t with
+    /// |φ'(t)| ≤ [`CURVATURE`]·φ'(0), 1 if it qualifies, else bracketed by
+    /// doubling beyond 1 or between 0 and 1 and found by regula falsi
+    /// (Illinois). None when no such t turns up.
+    fn line_search(&self, s: &Newton, bd: f64, slope: f64) -> Option<f64> {
+        let tol = CURVATURE * slope;
+        let phi = |t: f64| self.slope_at(s, bd, t);
+        // Bracket [a, b] with φ'(a) > 0 > φ'(b).
+        let p1 = phi(1.0);
+        if !p1.is_finite() {
+            return None;
+        }
+        if p1.abs() <= tol {
+            return Some(1.0);
+        }
+        let (mut a, mut pa, mut b, mut pb) = (0.0, slope, 1.0, p1);
+        if p1 > 0.0 {
+            (a, pa) = (1.0, p1);
+            loop {
+                if b >= MAX_STEP {
+                    return Some(a);
+                }
+                b *= 2.0;
+                pb = phi(b);
+                if !pb.is_finite() {
+                    return Some(a);
+                }
+                if pb.abs() <= tol {
+                    return Some(b);
+                }
+                if pb < 0.0 {
+                    break;
+                }
+                (a, pa) = (b, pb);
+            }
+        }
+        let mut side = 0;
+        for _ in 0..MAX_LINE_SEARCH {
+            let t = (a * pb - b * pa) / (pb - pa);
+            if !(t > a && t < b) {
+                break;
+            }
+            let p = phi(t);
+            if !p.is_finite() {
+                break;
+            }
+            if p.abs() <= tol {
+                return Some(t);
+            }
+            if p > 0.0 {
+                (a, pa) = (t, p);
+                if side == -1 {
+                    pb *= 0.5;
+                }
+                side = -1;
+            } else {
+                (b, pb) = (t, p);
+                if side == 1 {
+                    pa *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        // Not within the tolerance: the largest t known to raise g.
+        (a > 0.0).then_some(a)
+    }
+
+    /// Newton from s.y (the caller's start) or, when `warm` is false, from
+    /// the unconstrained multipliers; the answer is left in s.x and s.y.
+    fn solve(&self, s: &mut Newton, warm: bool, target: f64, accept: f64) -> BlockResult {
+        let nr = self.n_rows();
+        self.hessian(None, &mut s.h, &mut s.u);
+        let scale = (0..nr).map(|r| s.h[r * nr + r]).fold(0.0, f64::max);
         if !(scale > 0.0 && scale.is_finite()) {
             return Err((0, "degenerate equations"));
         }
-        let eps0 = 1e-12 * scale;
+        for r in 0..nr {
+            s.h_free_diag[r] = s.h[r * nr + r].max(1e-12 * scale);
+        }
         let bscale = accept / RESIDUAL_TOLERANCE;
-        let mut nu = 1e-6;
+        // Damping factor ν: a cold start is far from the answer (its active
+        // set is the unconstrained one), a warm start presumably close.
+        let mut nu = if warm { 1e-6 } else { 0.1 };
         let mut solves = 0u32;
-        let mut y = match y0 {
-            Some(y) => y,
-            None => {
-                solves += 1;
-                match regularised_solve(h_free, &self.b, eps0) {
-                    Some(y) => y,
-                    None => return Err((solves, "singular start")),
-                }
+        let mut full_step = false;
+        // h holds the matrix of every variable free.
+        s.h_deriv.iter_mut().for_each(|d| *d = Deriv::Identity);
+        if !warm {
+            solves += 1;
+            s.u.copy_from_slice(&self.b);
+            if !regularised_solve(s, 1e-12, Target::Y) {
+                return Err((solves, "singular start"));
             }
-        };
-        let mut cur = self.eval(&y, Some((&mut h, Hessian::AtPoint)));
+        }
+        self.eval(s);
         // Stopping short of the target: accepted if within `accept`.
-        let give_up = |cur: Eval, y: DVector<f64>, solves: u32, why: &'static str| {
-            if cur.f.amax() <= accept {
-                Ok((cur.x, y, solves))
+        let give_up = |s: &Newton, solves: u32, why: &'static str| {
+            if amax(&s.f) <= accept {
+                Ok(solves)
             } else {
                 Err((solves, why))
             }
         };
         for _ in 0..MAX_NEWTON_STEPS {
-            if cur.f.amax() <= target {
-                return Ok((cur.x, y, solves));
+            let fmax = amax(&s.f);
+            if fmax <= target {
+                return Ok(solves);
             }
             solves += 1;
-            // Levenberg–Marquardt-like damping, proportional to the residual
-            // (bounded steps where A D Aᵀ is singular: a row all of whose
-            // variables sit at bounds, a contact on the cone's surface;
-            // vanishing as it converges), with a factor ν lowered after full
-            // steps and raised after short ones.
-            let eps = eps0 + nu * scale * (cur.f.amax() / bscale).min(1.0);
-            let Some(d) = regularised_solve(h.clone(), &cur.f, eps) else {
-                return give_up(cur, y, solves, "Newton system not solvable");
+            // Levenberg–Marquardt-like damping in proportion to each
+            // equation's curvature scale and to the residual (bounded steps
+            // where A D Aᵀ is singular: equations all of whose variables sit
+            // at bounds, a contact on the cone's surface; vanishing as it
+            // converges), with ν lowered after full steps and raised after
+            // short ones.
+            // Once a full step leaves every derivative as it was, F is
+            // linear between the last two iterates and the plain Newton
+            // step is exact (piecewise-linear F: intervals only).
+            let changed = self.update_hessian(s);
+            let eps = if full_step && changed == 0 {
+                1e-12
+            } else {
+                1e-12 + nu * (fmax / bscale).min(1.0)
             };
-            let slope = cur.f.dot(&d);
-            let fnorm = cur.f.norm();
-            let mut t = 1.0;
-            let mut next = None;
-            for _ in 0..MAX_HALVINGS {
-                let yt = &y + &d * t;
-                let e = self.eval(&yt, None);
-                // Armijo on the concave g; near convergence, where g's gain
-                // drowns in its rounding, a shrinking residual with g not
-                // lower beyond rounding.
-                if e.g >= cur.g + SIGMA * t * slope
-                    || (e.g >= cur.g - 1e-13 * cur.g.abs()
-                        && e.f.norm() <= (1.0 - SIGMA * t) * fnorm)
-                {
-                    next = Some((yt, e));
-                    break;
-                }
-                // Next trial: the zero of the secant of φ'(s) = Fᵀd along
-                // the step (φ' is piecewise linear and decreasing, φ'(0) =
-                // slope), kept within [0.1 t, 0.5 t].
-                let dphi = e.f.dot(&d);
-                let secant = if slope - dphi > 0.0 {
-                    t * slope / (slope - dphi)
-                } else {
-                    0.5 * t
-                };
-                t = secant.clamp(0.1 * t, 0.5 * t);
+            s.u.copy_from_slice(&s.f);
+            if !regularised_solve(s, eps, Target::D) {
+                return give_up(s, solves, "Newton system not solvable");
             }
-            let Some((yt, _)) = next else {
-                return give_up(cur, y, solves, "line search stalled");
+            let slope: f64 = s.f.iter().zip(&s.d).map(|(f, d)| f * d).sum();
+            let bd: f64 = self.b.iter().zip(&s.d).map(|(b, d)| b * d).sum();
+            let mut c = 0;
+            for gr in &self.groups {
+                let inv2w = 0.5 / gr.w;
+                for k in c..c + gr.len() {
+                    s.q[k] = self.m.dot(k, &s.d);
+                    s.dv[k] = s.q[k] * inv2w;
+                }
+                c += gr.len();
+            }
+            let t = if slope > 0.0 {
+                self.line_search(s, bd, slope)
+            } else {
+                None
             };
+            let Some(t) = t else {
+                return give_up(s, solves, "line search stalled");
+            };
+            full_step = t == 1.0;
             if t == 1.0 {
-                nu = (nu * 0.1).max(1e-12);
+                nu = (nu * 1e-3).max(1e-12);
             } else if t < 0.25 {
                 nu = (nu * 10.0).min(1.0);
             }
-            y = yt;
-            cur = self.eval(&y, Some((&mut h, Hessian::AtPoint)));
+            for (y, d) in s.y.iter_mut().zip(&s.d) {
+                *y += t * d;
+            }
+            // v afresh from y (v + t·dv would carry the rounding of long
+            // steps: the optimality conditions hold to ~1e-11 instead).
+            self.eval(s);
         }
-        give_up(cur, y, solves, "step limit")
+        give_up(s, solves, "step limit")
     }
 }
 
-/// Cholesky solve of (h + eps I) z = rhs, raising eps by 1e3 up to four
-/// times when the factorisation fails.
-fn regularised_solve(mut h: DMatrix<f64>, rhs: &DVector<f64>, eps: f64) -> Option<DVector<f64>> {
-    let n = h.nrows();
-    let mut added = 0.0;
+/// max |v_i| (0 for an empty slice).
+fn amax(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, e| m.max(e.abs()))
+}
+
+/// Cholesky factor L of the n×n matrix `l` (lower triangle, by column; the
+/// upper triangle is not read) in place, with 1/L_jj in place of L_jj.
+/// False when a pivot is not positive.
+fn cholesky(l: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let (left, right) = l.split_at_mut((j + 1) * n);
+        let col = &mut left[j * n..];
+        let d = col[j];
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let inv = 1.0 / d.sqrt();
+        col[j] = inv;
+        col[j + 1..].iter_mut().for_each(|e| *e *= inv);
+        // Columns k > j: rows k.. less l_kj · (l_rj)_r.
+        for (k, next) in (j + 1..n).zip(right.chunks_exact_mut(n)) {
+            let lkj = col[k];
+            if lkj != 0.0 {
+                for (e, lr) in next[k..].iter_mut().zip(&col[k..]) {
+                    *e -= lkj * lr;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves L Lᵀ z = z in place with the factor of [`cholesky`].
+fn cholesky_solve(l: &[f64], n: usize, z: &mut [f64]) {
+    for j in 0..n {
+        let col = &l[j * n..(j + 1) * n];
+        z[j] *= col[j];
+        let zj = z[j];
+        for (e, lr) in z[j + 1..].iter_mut().zip(&col[j + 1..]) {
+            *e -= zj * lr;
+        }
+    }
+    for j in (0..n).rev() {
+        let col = &l[j * n..(j + 1) * n];
+        let s: f64 = col[j + 1..]
+            .iter()
+            .zip(&z[j + 1..])
+            .map(|(a, b)| a * b)
+            .sum();
+        z[j] = (z[j] - s) * col[j];
+    }
+}
+
+/// Which vector [`regularised_solve`] writes.
+#[derive(Clone, Copy)]
+enum Target {
+    Y,
+    D,
+}
+
+/// Cholesky solve of (H + eps·diag(h_free_diag)) z = s.u with H = s.h,
+/// into s.y or s.d, raising eps by 1e3 up to four times when the
+/// factorisation fails. False when it never succeeds.
+fn regularised_solve(s: &mut Newton, eps: f64, target: Target) -> bool {
+    let n = s.h_free_diag.len();
     let mut e = eps;
     for _ in 0..5 {
+        s.l.copy_from_slice(&s.h);
         for i in 0..n {
-            h[(i, i)] += e - added;
+            s.l[i * n + i] += e * s.h_free_diag[i];
         }
-        added = e;
-        if let Some(ch) = h.clone().cholesky() {
-            let z = ch.solve(rhs);
+        if cholesky(&mut s.l, n) {
+            let z = match target {
+                Target::Y => &mut s.y,
+                Target::D => &mut s.d,
+            };
+            z.copy_from_slice(&s.u);
+            cholesky_solve(&s.l, n, z);
             if z.iter().all(|v| v.is_finite()) {
-                return Some(z);
+                return true;
             }
         }
         e *= 1e3;
     }
-    None
+    false
 }
 
-/// Solves a valid problem (see [`FrameProblem::validate`]) by dual Newton,
-/// optionally from multipliers `y0` (one per equation). See the module
-/// documentation for what is handled.
-pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, DualFailure> {
-    use DualFailure::NotHandled;
-    if p.exponent != 2.0 {
-        return Err(NotHandled("activation exponent other than 2"));
+/// Reusable buffers of the dual Newton method. [`DualWorkspace::solve`]
+/// answers exactly as [`solve_dual`] does (nothing carries over from one
+/// problem to the next but allocated memory); a caller solving many frames
+/// keeps one per thread to avoid allocating.
+#[derive(Debug, Default)]
+pub struct DualWorkspace {
+    /// Per variable: its fixed value, whether it belongs to a contact.
+    fixed: Vec<Option<f64>>,
+    in_contact: Vec<bool>,
+    groups: Vec<Group>,
+    /// Right-hand side with the fixed variables moved over.
+    b: Vec<f64>,
+    /// Columns of the groups' variables (global rows), in group order, and
+    /// each group's first column.
+    cols: SparseCols,
+    group_col: Vec<usize>,
+    /// Union-find over equations; each block's root row; the block of each
+    /// group (usize::MAX: in no equation).
+    parent: Vec<usize>,
+    block_of_root: Vec<usize>,
+    block_of_group: Vec<usize>,
+    n_blocks: usize,
+    /// Global row → row within its block; entries per row.
+    local: Vec<usize>,
+    row_count: Vec<usize>,
+    block: Block,
+    newton: Newton,
+}
+
+impl DualWorkspace {
+    pub fn new() -> Self {
+        Self::default()
     }
-    let n = p.n_var();
-    let m = p.n_eq();
-    if y0.is_some_and(|y| y.len() != m) {
-        return Err(NotHandled("warm start of the wrong length"));
-    }
-    // Partition the variables: fixed values, groups.
-    let mut fixed: Vec<Option<f64>> = vec![None; n];
-    let mut in_contact = vec![false; n];
-    let mut groups: Vec<Group> = Vec::with_capacity(n);
-    for c in &p.static_contacts {
-        for s in c.shear {
-            in_contact[s] = true;
+
+    /// As [`solve_dual`], with this workspace's buffers.
+    pub fn solve(
+        &mut self,
+        p: &FrameProblem,
+        y0: Option<&[f64]>,
+    ) -> Result<DualSolution, DualFailure> {
+        use DualFailure::NotHandled;
+        if p.exponent != 2.0 {
+            return Err(NotHandled("activation exponent other than 2"));
         }
-        if c.mu == 0.0 {
-            // Shear is 0 in every friction model; the normal is an ordinary
-            // bounded variable (handled below).
+        let n = p.n_var();
+        let m = p.n_eq();
+        if y0.is_some_and(|y| y.len() != m) {
+            return Err(NotHandled("warm start of the wrong length"));
+        }
+        // Partition the variables: fixed values, groups.
+        let fixed = &mut self.fixed;
+        fixed.clear();
+        fixed.resize(n, None);
+        let in_contact = &mut self.in_contact;
+        in_contact.clear();
+        in_contact.resize(n, false);
+        let groups = &mut self.groups;
+        groups.clear();
+        for c in &p.static_contacts {
             for s in c.shear {
-                if !(p.lower[s] <= 0.0 && p.upper[s] >= 0.0) {
-                    return Err(NotHandled(
-                        "frictionless contact with shear bounds excluding 0",
-                    ));
+                in_contact[s] = true;
+            }
+            if c.mu == 0.0 {
+                // Shear is 0 in every friction model; the normal is an
+                // ordinary bounded variable (handled below).
+                for s in c.shear {
+                    if !(p.lower[s] <= 0.0 && p.upper[s] >= 0.0) {
+                        return Err(NotHandled(
+                            "frictionless contact with shear bounds excluding 0",
+                        ));
+                    }
+                    fixed[s] = Some(0.0);
                 }
-                fixed[s] = Some(0.0);
+                continue;
             }
-            continue;
-        }
-        in_contact[c.normal] = true;
-        let w = p.weights[c.normal];
-        let vars = [c.normal, c.shear[0], c.shear[1]];
-        if w <= 0.0 || vars.iter().any(|&v| p.weights[v] != w) {
-            return Err(NotHandled("contact variables of unequal or zero weight"));
-        }
-        if c.shear
-            .iter()
-            .any(|&s| p.lower[s] != f64::NEG_INFINITY || p.upper[s] != f64::INFINITY)
-            || p.lower[c.normal] > 0.0
-            || p.upper[c.normal] != f64::INFINITY
-        {
-            return Err(NotHandled("contact with bounds other than the cone's"));
-        }
-        groups.push(Group {
-            set: Set::Cone {
-                mu: c.mu,
-                model: p.friction,
-            },
-            w,
-            vars,
-        });
-    }
-    for j in 0..n {
-        if in_contact[j] {
-            continue;
-        }
-        let (lo, hi, w) = (p.lower[j], p.upper[j], p.weights[j]);
-        if lo == hi {
-            fixed[j] = Some(lo);
-        } else if w > 0.0 {
+            in_contact[c.normal] = true;
+            let w = p.weights[c.normal];
+            let vars = [c.normal, c.shear[0], c.shear[1]];
+            if w <= 0.0 || vars.iter().any(|&v| p.weights[v] != w) {
+                return Err(NotHandled("contact variables of unequal or zero weight"));
+            }
+            if c.shear
+                .iter()
+                .any(|&s| p.lower[s] != f64::NEG_INFINITY || p.upper[s] != f64::INFINITY)
+                || p.lower[c.normal] > 0.0
+                || p.upper[c.normal] != f64::INFINITY
+            {
+                return Err(NotHandled("contact with bounds other than the cone's"));
+            }
             groups.push(Group {
-                set: Set::Interval { lo, hi },
+                set: Set::Cone {
+                    mu: c.mu,
+                    model: p.friction,
+                },
                 w,
-                vars: [j, usize::MAX, usize::MAX],
+                vars,
             });
-        } else {
-            return Err(NotHandled("free variable of weight 0"));
         }
-    }
-
-    let bmax = p.b.amax();
-    let tol = RESIDUAL_TOLERANCE * bmax.max(1.0);
-    // Right-hand side with the fixed variables moved over.
-    let mut b = p.b.clone();
-    for (j, v) in fixed.iter().enumerate() {
-        if let Some(v) = *v {
-            if v != 0.0 {
-                b.axpy(-v, &p.a.column(j), 1.0);
+        for j in 0..n {
+            if in_contact[j] {
+                continue;
+            }
+            let (lo, hi, w) = (p.lower[j], p.upper[j], p.weights[j]);
+            if lo == hi {
+                fixed[j] = Some(lo);
+            } else if w > 0.0 {
+                groups.push(Group {
+                    set: Set::Interval { lo, hi },
+                    w,
+                    vars: [j, usize::MAX, usize::MAX],
+                });
+            } else {
+                return Err(NotHandled("free variable of weight 0"));
             }
         }
-    }
 
-    // Union-find over equations; the first row each group touches.
-    let mut parent: Vec<usize> = (0..m).collect();
-    let mut first_row = vec![usize::MAX; groups.len()];
-    for (gi, gr) in groups.iter().enumerate() {
-        for &v in &gr.vars[..gr.len()] {
-            for r in 0..m {
-                if p.a[(r, v)] != 0.0 {
-                    if first_row[gi] == usize::MAX {
-                        first_row[gi] = r;
-                    } else {
-                        let (a, bb) = (find(&mut parent, first_row[gi]), find(&mut parent, r));
-                        parent[a] = bb;
+        let bmax = p.b.amax();
+        let tol = RESIDUAL_TOLERANCE * bmax.max(1.0);
+        // Right-hand side with the fixed variables moved over.
+        let a = p.a.as_slice();
+        let b = &mut self.b;
+        b.clear();
+        b.extend_from_slice(p.b.as_slice());
+        for (j, v) in fixed.iter().enumerate() {
+            if let Some(v) = *v {
+                if v != 0.0 {
+                    for (bi, aij) in b.iter_mut().zip(&a[j * m..(j + 1) * m]) {
+                        *bi -= v * aij;
                     }
                 }
             }
         }
-    }
-    let mut x = vec![0.0; n];
-    let mut y = vec![0.0; m];
-    for (j, v) in fixed.iter().enumerate() {
-        if let Some(v) = *v {
-            x[j] = v;
-        }
-    }
-    // Blocks keyed by root row.
-    let mut block_of_root = vec![usize::MAX; m];
-    let mut blocks: Vec<(Vec<usize>, Vec<Group>)> = Vec::new();
-    for (gi, gr) in groups.iter().enumerate() {
-        if first_row[gi] == usize::MAX {
-            let v = gr.at_zero();
-            for k in 0..gr.len() {
-                x[gr.vars[k]] = v[k];
-            }
-            continue;
-        }
-        let root = find(&mut parent, first_row[gi]);
-        if block_of_root[root] == usize::MAX {
-            block_of_root[root] = blocks.len();
-            blocks.push((Vec::new(), Vec::new()));
-        }
-        blocks[block_of_root[root]].1.push(*gr);
-    }
-    for r in 0..m {
-        let root = find(&mut parent, r);
-        match block_of_root[root] {
-            usize::MAX => {
-                // No free variable in this equation.
-                if b[r].abs() > tol {
-                    return Err(DualFailure::NotConverged {
-                        iterations: 0,
-                        reason: "an equation without free variables does not hold",
-                    });
-                }
-            }
-            k => blocks[k].0.push(r),
-        }
-    }
 
-    let mut iterations = 0u32;
-    let n_blocks = blocks.len();
-    for (rows, groups) in blocks {
-        let cols: Vec<usize> = groups
-            .iter()
-            .flat_map(|g| g.vars[..g.len()].iter().copied())
-            .collect();
-        let mut local = vec![usize::MAX; m];
-        for (k, &r) in rows.iter().enumerate() {
-            local[r] = k;
-        }
-        let mut col_ptr = Vec::with_capacity(cols.len() + 1);
-        let (mut row_idx, mut val) = (Vec::new(), Vec::new());
-        col_ptr.push(0);
-        for &j in &cols {
-            for &r in &rows {
-                let v = p.a[(r, j)];
-                if v != 0.0 {
-                    row_idx.push(local[r]);
-                    val.push(v);
+        // The groups' columns; union-find over the equations they share.
+        let cols = &mut self.cols;
+        cols.clear();
+        cols.make_room(m * groups.iter().map(Group::len).sum::<usize>());
+        let parent = &mut self.parent;
+        parent.clear();
+        parent.extend(0..m);
+        self.group_col.clear();
+        for gr in groups.iter() {
+            self.group_col.push(cols.col_ptr.len() - 1);
+            for &v in &gr.vars[..gr.len()] {
+                cols.push_dense_col(&a[v * m..(v + 1) * m]);
+            }
+            let (start, end) = (
+                cols.col_ptr[*self.group_col.last().unwrap()],
+                cols.col_ptr[cols.col_ptr.len() - 1],
+            );
+            if end > start {
+                // Every row of the group under the root of its first row.
+                let root = find(parent, cols.row_idx[start]);
+                for &r in &cols.row_idx[start + 1..end] {
+                    let rr = find(parent, r);
+                    if rr != root {
+                        parent[rr] = root;
+                    }
                 }
             }
-            col_ptr.push(row_idx.len());
         }
-        let block = Block {
-            col_ptr,
-            row_idx,
-            val,
-            b: DVector::from_iterator(rows.len(), rows.iter().map(|&r| b[r])),
-            rows,
-            groups,
-        };
-        let start = y0
-            .map(|y0| DVector::from_iterator(block.rows.len(), block.rows.iter().map(|&r| y0[r])));
-        match block.solve(start, TARGET_TOLERANCE * bmax.max(1.0), tol) {
-            Ok((xb, yb, it)) => {
-                iterations += it;
-                for (k, &j) in cols.iter().enumerate() {
-                    x[j] = xb[k];
-                }
-                for (k, &r) in block.rows.iter().enumerate() {
-                    y[r] = yb[k];
-                }
+        cols.trim();
+        let mut x = vec![0.0; n];
+        let mut y = vec![0.0; m];
+        for (j, v) in fixed.iter().enumerate() {
+            if let Some(v) = *v {
+                x[j] = v;
             }
-            Err((it, reason)) => {
+        }
+        // Blocks numbered by root row, in order of their first group.
+        let block_of_root = &mut self.block_of_root;
+        block_of_root.clear();
+        block_of_root.resize(m, usize::MAX);
+        self.block_of_group.clear();
+        self.n_blocks = 0;
+        for (gi, gr) in groups.iter().enumerate() {
+            let start = cols.col_ptr[self.group_col[gi]];
+            let end = cols.col_ptr[self.group_col[gi] + gr.len()];
+            if start == end {
+                // In no equation: the projection of 0.
+                let v = gr.at_zero();
+                for k in 0..gr.len() {
+                    x[gr.vars[k]] = v[k];
+                }
+                self.block_of_group.push(usize::MAX);
+                continue;
+            }
+            let root = find(parent, cols.row_idx[start]);
+            if block_of_root[root] == usize::MAX {
+                block_of_root[root] = self.n_blocks;
+                self.n_blocks += 1;
+            }
+            self.block_of_group.push(block_of_root[root]);
+        }
+        for (r, br) in b.iter().enumerate() {
+            let root = find(parent, r);
+            if block_of_root[root] == usize::MAX && br.abs() > tol {
+                // No free variable in this equation.
                 return Err(DualFailure::NotConverged {
-                    iterations: iterations + it,
-                    reason,
-                })
+                    iterations: 0,
+                    reason: "an equation without free variables does not hold",
+                });
             }
         }
-    }
-    // Safety net: the whole system, with the original matrix.
-    let residual = p.eq_residual(&x);
-    if residual.is_nan() || residual > tol {
-        return Err(DualFailure::NotConverged {
+
+        let mut iterations = 0u32;
+        self.local.clear();
+        self.local.resize(m, usize::MAX);
+        for k in 0..self.n_blocks {
+            // Gather the block: rows, groups, local columns.
+            // Rows in order of their count of nonzero entries (then
+            // index): equations coupled to many others (a pelvis beside two
+            // legs) come last, so the Cholesky factor keeps the zeros of
+            // H between the others (no fill between the legs).
+            let block = &mut self.block;
+            block.rows.clear();
+            for r in 0..m {
+                if block_of_root[find(parent, r)] == k {
+                    block.rows.push(r);
+                }
+            }
+            // The whole problem is one block (the usual case): take over
+            // its columns instead of copying them.
+            let whole = self.n_blocks == 1
+                && block.rows.len() == m
+                && self.block_of_group.iter().all(|&g| g == 0);
+            let count = &mut self.row_count;
+            count.clear();
+            count.resize(m, 0);
+            for (gi, gr) in groups.iter().enumerate() {
+                if self.block_of_group[gi] == k {
+                    for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
+                        for &r in cols.col(c).0 {
+                            count[r] += 1;
+                        }
+                    }
+                }
+            }
+            block.rows.sort_unstable_by_key(|&r| (count[r], r));
+            for (i, &r) in block.rows.iter().enumerate() {
+                self.local[r] = i;
+            }
+            block.groups.clear();
+            block.group_col.clear();
+            block.m.clear();
+            if whole {
+                std::mem::swap(cols, &mut block.m);
+                std::mem::swap(groups, &mut block.groups);
+                std::mem::swap(&mut self.group_col, &mut block.group_col);
+                for r in block.m.row_idx.iter_mut() {
+                    *r = self.local[*r];
+                }
+            } else {
+                for (gi, gr) in groups.iter().enumerate() {
+                    if self.block_of_group[gi] != k {
+                        continue;
+                    }
+                    block.groups.push(*gr);
+                    block.group_col.push(block.m.col_ptr.len() - 1);
+                    for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
+                        let (ri, v) = cols.col(c);
+                        block
+                            .m
+                            .push_col(ri.iter().zip(v).map(|(&r, &e)| (self.local[r], e)));
+                    }
+                }
+            }
+            block.b.clear();
+            block.b.extend(block.rows.iter().map(|&r| b[r]));
+            let nc = block.m.col_ptr.len() - 1;
+            let s = &mut self.newton;
+            s.resize(block.rows.len(), nc, block.groups.len());
+            if let Some(y0) = y0 {
+                for (yk, &r) in s.y.iter_mut().zip(&block.rows) {
+                    *yk = y0[r];
+                }
+            }
+            match block.solve(s, y0.is_some(), TARGET_TOLERANCE * bmax.max(1.0), tol) {
+                Ok(it) => {
+                    iterations += it;
+                    let mut c = 0;
+                    for gr in &block.groups {
+                        for &j in &gr.vars[..gr.len()] {
+                            x[j] = s.x[c];
+                            c += 1;
+                        }
+                    }
+                    for (yk, &r) in s.y.iter().zip(&block.rows) {
+                        y[r] = *yk;
+                    }
+                }
+                Err((it, reason)) => {
+                    return Err(DualFailure::NotConverged {
+                        iterations: iterations + it,
+                        reason,
+                    })
+                }
+            }
+        }
+        // Safety net: the whole system, with the original matrix.
+        let residual = p.eq_residual(&x);
+        if residual.is_nan() || residual > tol {
+            return Err(DualFailure::NotConverged {
+                iterations,
+                reason: "residual of the assembled solution",
+            });
+        }
+        Ok(DualSolution {
+            x,
+            y,
             iterations,
-            reason: "residual of the assembled solution",
-        });
+            blocks: self.n_blocks,
+            eq_residual: residual,
+        })
     }
-    Ok(DualSolution {
-        x,
-        y,
-        iterations,
-        blocks: n_blocks,
-    })
+}
+
+/// Solves a valid problem (see [`FrameProblem::validate`]) by dual Newton,
+/// optionally from multipliers `y0` (one per equation). See the module
+/// documentation for what is handled. A fresh [`DualWorkspace`] each call.
+pub fn solve_dual(p: &FrameProblem, y0: Option<&[f64]>) -> Result<DualSolution, DualFailure> {
+    DualWorkspace::new().solve(p, y0)
 }
 
 #[cfg(test)]

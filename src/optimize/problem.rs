@@ -190,10 +190,9 @@ impl FrameProblem {
                 self.exponent
             ));
         }
-        if let Some((i, j)) = (0..n)
-            .flat_map(|j| (0..m).map(move |i| (i, j)))
-            .find(|&(i, j)| !self.a[(i, j)].is_finite())
-        {
+        // (A is stored by column.)
+        if let Some(k) = self.a.as_slice().iter().position(|v| !v.is_finite()) {
+            let (i, j) = (k % m, k / m);
             return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
         }
         if let Some(i) = self.b.iter().position(|v| !v.is_finite()) {
@@ -266,14 +265,17 @@ impl FrameProblem {
 
     /// max_j |(A x − b)_j|, 0 without equalities.
     pub fn eq_residual(&self, x: &[f64]) -> f64 {
-        let mut worst = 0.0f64;
-        for i in 0..self.n_eq() {
-            let mut r = -self.b[i];
-            for (j, xj) in x.iter().enumerate() {
-                r += self.a[(i, j)] * xj;
-            }
-            worst = worst.max(r.abs());
+        // Column by column (A is stored by column).
+        let m = self.n_eq();
+        if m == 0 {
+            return 0.0;
         }
-        worst
+        let mut r: Vec<f64> = self.b.iter().map(|b| -b).collect();
+        for (column, xj) in self.a.as_slice().chunks_exact(m).zip(x) {
+            for (ri, a) in r.iter_mut().zip(column) {
+                *ri += a * xj;
+            }
+        }
+        r.iter().fold(0.0f64, |worst, ri| worst.max(ri.abs()))
     }
 }

@@ -60,13 +60,22 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
         return solve_clarabel(p);
     }
     let start = Instant::now();
-    let newton =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dual::solve_dual(p, None)));
+    thread_local! {
+        // Buffers only: an answer never depends on the frames solved before.
+        static WORKSPACE: std::cell::RefCell<dual::DualWorkspace> = Default::default();
+    }
+    let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        WORKSPACE.with(|ws| match ws.try_borrow_mut() {
+            Ok(mut ws) => ws.solve(p, None),
+            // (Only if a solve were re-entered.)
+            Err(_) => dual::solve_dual(p, None),
+        })
+    }));
     let spent = match newton {
         Ok(Ok(d)) => {
             return FrameSolution {
                 objective: p.objective(&d.x),
-                eq_residual: p.eq_residual(&d.x),
+                eq_residual: d.eq_residual,
                 x: d.x,
                 status: SolveStatus::Solved,
                 iterations: d.iterations,
