@@ -7,7 +7,7 @@
 # validation READMEs' measurements (run / frames) and, for the leg extension human,
 # tests/reference_scripts/opensim_so_timing.py.
 #
-#   scripts/speed_accuracy.sh [repeats]        (default 3; takes about 2 minutes on 2 cores)
+#   scripts/speed_accuracy.sh [repeats]        (default 3; takes about half a minute on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repeat="${1:-3}"
