@@ -518,6 +518,27 @@ fn prepare(
 /// with `-o DIR` every output goes under DIR (each setup's tables in
 /// DIR/<its results folder's name>).
 pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
+    // `--threads N` bounds the whole study: one pool of N threads runs the
+    // setups side by side and, nested in it, each setup's frames and the
+    // figures (the setups' own runs then use that pool instead of each
+    // starting one of N threads).
+    match opts.threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
+            let inner = RunOptions {
+                threads: None,
+                ..opts.clone()
+            };
+            pool.install(|| run_study(path, &inner))
+        }
+        None => run_study(path, opts),
+    }
+}
+
+fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let root = xml::parse_file(path)?;
     let study = study_element(&root)?;
     let dir = study_dir(path);
