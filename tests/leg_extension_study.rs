@@ -252,3 +252,46 @@ fn knee_loads_tables_are_written_per_run() {
         }
     }
 }
+
+/// `--threads N` bounds a whole study. Its setups run side by side on a pool
+/// of N threads: with one thread, one setup's frame loop ends before the
+/// next one starts. (When each setup only bounded its own frames, the
+/// setups ran concurrently on every core and their loops interleaved.)
+#[test]
+fn study_honours_the_thread_bound() {
+    use statopt::tools::progress::ProgressHook;
+    use std::sync::{Arc, Mutex};
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("study_one_thread");
+    let _ = std::fs::remove_dir_all(&out);
+    let events: Arc<Mutex<Vec<(String, u64, u64)>>> = Arc::default();
+    let sink = events.clone();
+    let opts = RunOptions {
+        results_dir: Some(out),
+        threads: Some(1),
+        progress: Some(ProgressHook(Arc::new(move |label: &str, done, total| {
+            sink.lock().unwrap().push((label.to_string(), done, total));
+        }))),
+        ..Default::default()
+    };
+    study::run(&root().join("setups/leg_extension_study.xml"), &opts).unwrap();
+    let events = events.lock().unwrap();
+    let mut open: Option<&str> = None;
+    let mut loops = 0;
+    for (label, done, total) in events.iter() {
+        match open {
+            None => {
+                assert_eq!(*done, 0, "{label}: a loop's first report is its start");
+                open = Some(label);
+                loops += 1;
+            }
+            Some(o) => assert_eq!(
+                o, label,
+                "with one thread, {label} reported while {o}'s loop was still running"
+            ),
+        }
+        if done == total {
+            open = None;
+        }
+    }
+    assert!(loops >= 4, "one frame loop per setup, found {loops}");
+}
