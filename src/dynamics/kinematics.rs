@@ -32,6 +32,14 @@ pub fn positions(model: &Model, data: &mut Data) {
 /// Positions, velocities and accelerations of every body.
 pub fn full(model: &Model, data: &mut Data) {
     positions(model, data);
+    motion(model, data);
+}
+
+/// Velocities and accelerations of every body from `data.u` and
+/// `data.udot`, with the positions (and motion maps) already current for
+/// `data.q` and `data.u`: after [`positions`] or [`full`] at the same state,
+/// e.g. when only the accelerations changed.
+pub fn motion(model: &Model, data: &mut Data) {
     for b in 1..model.nbodies() {
         let j = &model.joints[b];
         let p = j.parent_body;

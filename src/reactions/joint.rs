@@ -85,14 +85,16 @@ pub fn forward_dynamics(model: &Model, data: &mut Data, t: f64) -> Result<()> {
 
 /// The reactions of `specs` at the accelerations already in `data.udot`
 /// (applied forces set), written to `out` (9 values per spec, see
-/// [`column_labels`]).
+/// [`column_labels`]). The positions in `data` must be current (as
+/// [`forward_dynamics`] leaves them): only velocities and accelerations are
+/// recomputed.
 pub fn reactions_at_accelerations(
     model: &Model,
     data: &mut Data,
     specs: &[ReactionSpec],
     out: &mut [f64],
 ) {
-    kinematics::full(model, data);
+    kinematics::motion(model, data);
     rnea::inverse_dynamics_after_kinematics(model, data, true);
     for (s, o) in specs.iter().zip(out.chunks_mut(9)) {
         let b = s.joint;
