@@ -239,21 +239,6 @@ pub fn find_index(time: &[f64], t: f64) -> usize {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::find_index;
-
-    #[test]
-    fn find_index_semantics() {
-        let t = [0.0, 0.1, 0.2, 0.30000000000000004];
-        assert_eq!(find_index(&t, -1.0), 0);
-        assert_eq!(find_index(&t, 0.1), 1);
-        assert_eq!(find_index(&t, 0.15), 1);
-        assert_eq!(find_index(&t, 0.3), 2);
-        assert_eq!(find_index(&t, 9.0), 3);
-    }
-}
-
 /// Rows `first..=last` of a [`CoordinateSplines`] as blocks of frames for the
 /// frame driver: q = S, u = S′, u̇ = S″ at each row's time (the
 /// InverseDynamicsTool's states), computed a block at a time.
@@ -299,5 +284,20 @@ impl crate::motion::stream::FrameSource for SplineFrames<'_> {
             u,
             udot,
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::find_index;
+
+    #[test]
+    fn find_index_semantics() {
+        let t = [0.0, 0.1, 0.2, 0.30000000000000004];
+        assert_eq!(find_index(&t, -1.0), 0);
+        assert_eq!(find_index(&t, 0.1), 1);
+        assert_eq!(find_index(&t, 0.15), 1);
+        assert_eq!(find_index(&t, 0.3), 2);
+        assert_eq!(find_index(&t, 9.0), 3);
     }
 }

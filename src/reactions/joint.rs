@@ -54,8 +54,7 @@ pub fn column_labels(specs: &[ReactionSpec]) -> Vec<String> {
 pub fn forward_dynamics(model: &Model, data: &mut Data, t: f64) -> Result<()> {
     let nq = model.nq();
     // d: accelerations with every independent acceleration zero.
-    let (q, u) = (data.q.clone(), data.u.clone());
-    forward::constrained_accelerations(model, &q, &u, t, &mut data.udot);
+    forward::constrained_accelerations(model, &data.q, &data.u, t, &mut data.udot);
     kinematics::full(model, data);
     rnea::inverse_dynamics_after_kinematics(model, data, true);
     let rows: Vec<usize> = (0..nq)
