@@ -283,3 +283,67 @@ fn newton_matches_clarabel_with_friction_pyramids() {
         check_with(&[("cam1", file.clone())], Some(model));
     }
 }
+
+/// A muscle cannot move the coordinates that carry its whole path rigidly
+/// (a hip muscle and the pelvis's six), so its column of the equations is
+/// exactly 0 there, not the rounding of cancelling terms; gait2392's 23
+/// equations then fall apart into independent blocks (pelvis, each leg,
+/// lumbar) that Newton solves one by one.
+#[test]
+fn gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split() {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models/gait2392/subject01_walk/setup_SO.xml");
+    if !file.is_file() {
+        eprintln!(
+            "SKIP gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split: {} is absent",
+            file.display()
+        );
+        return;
+    }
+    let setup = match Setup::read(&file).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let (el, common_) = setup
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
+        .unwrap();
+    let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+    let model = &problem.model;
+    let states = analyze::load_states(&setup, model).unwrap();
+    let udot = states
+        .speed_derivatives(setup.coordinates_file.as_ref().unwrap())
+        .unwrap();
+    let pelvis: Vec<usize> = (0..model.nq())
+        .filter(|&k| model.is_root_coordinate(k))
+        .collect();
+    assert_eq!(pelvis.len(), 6);
+    let mut data = Data::new(model);
+    let mut mf = MuscleFrame::new(&problem.muscles, model);
+    for i in (0..states.time.len()).step_by(25) {
+        let (fp, ..) = problem.frame_problem(
+            states.time[i],
+            &states.q[i],
+            &states.u[i],
+            &udot[i],
+            &mut data,
+            &mut mf,
+        );
+        for (m, f) in mf.unit_force.iter().enumerate() {
+            for &k in &pelvis {
+                assert_eq!(
+                    f[k], 0.0,
+                    "muscle {m} on pelvis coordinate {k} at t = {}",
+                    states.time[i]
+                );
+            }
+        }
+        // And the lengths' derivatives (moment arms) on the other
+        // coordinates are untouched: nonzero for the hip.
+        let hip = model.coordinate_index("hip_flexion_r").unwrap();
+        assert!(mf.unit_force.iter().any(|f| f[hip].abs() > 1e-3));
+        let d = dual::solve_dual(&fp, None).unwrap();
+        assert_eq!(d.blocks, 4, "t = {}", states.time[i]);
+    }
+}

@@ -45,8 +45,25 @@ pub fn add_point_force(
     f: &Vector3<f64>,
     gen: &mut [f64],
 ) {
+    add_point_force_below(model, data, b, 0, x, f, gen);
+}
+
+/// The part of [`add_point_force`] on the coordinates of the joints between
+/// body `b` and its ancestor `top` (`top`'s own joint and those above it
+/// excluded). With `top` the common ancestor of two bodies pulled by opposite
+/// forces (a path segment), the rest is the pair's net moment on `top`
+/// ([`add_body_torque`]), zero when the forces are collinear.
+pub fn add_point_force_below(
+    model: &Model,
+    data: &Data,
+    b: usize,
+    top: usize,
+    x: &Vector3<f64>,
+    f: &Vector3<f64>,
+    gen: &mut [f64],
+) {
     let mut body = b;
-    while body != 0 {
+    while body != top {
         let j = &model.joints[body];
         let m = &data.joint_motion[body];
         let r_gf = data.r_gf[body];

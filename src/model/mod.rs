@@ -206,6 +206,33 @@ impl Model {
             .map(|k| self.bodies[k].mass)
             .sum()
     }
+    /// The deepest body that carries both `a` and `b` (ground is 0, the
+    /// common ancestor of everything; a body carries itself).
+    pub fn common_ancestor(&self, a: usize, b: usize) -> usize {
+        let depth = |mut k: usize| {
+            let mut d = 0;
+            while k != 0 {
+                k = self.joints[k].parent_body;
+                d += 1;
+            }
+            d
+        };
+        let (mut a, mut b) = (a, b);
+        let (mut da, mut db) = (depth(a), depth(b));
+        while da > db {
+            a = self.joints[a].parent_body;
+            da -= 1;
+        }
+        while db > da {
+            b = self.joints[b].parent_body;
+            db -= 1;
+        }
+        while a != b {
+            a = self.joints[a].parent_body;
+            b = self.joints[b].parent_body;
+        }
+        a
+    }
     pub fn coordinate_index(&self, name: &str) -> Option<usize> {
         self.coordinates.iter().position(|c| c.name == name)
     }

@@ -67,10 +67,12 @@
 //!
 //! Block splitting: equations that share no free variable (a contact's three
 //! variables count as one) are independent; they are grouped by union-find
-//! and each group is solved on its own, with its own line search. (In the
-//! analytic force-space rows a muscle crossing the hip also loads the pelvis
-//! coordinates, so gait2392's 23 equations form a single block; the split
-//! pays off for models whose parts do not interact.) Fixed variables
+//! and each group is solved on its own, with its own line search. A muscle
+//! has an exact 0 in the rows of coordinates that carry its whole path
+//! rigidly (`paths::geometry::add_unit_tension_force`), so gait2392's 23
+//! equations split into four blocks: the pelvis (residual actuators only),
+//! each leg, the lumbar joint. Contacts join the blocks of the bodies they
+//! touch. Fixed variables
 //! (lower == upper, and the shear multipliers of a contact with μ = 0) move
 //! to the right-hand side; variables that appear in no equation take their
 //! projection of 0.

@@ -351,11 +351,21 @@ fn unit_pulls(st: &PathState) -> impl Iterator<Item = (&CurrentPoint, Vector3<f6
         .windows(2)
         .filter(|w| w[0].body != w[1].body)
         .flat_map(|w| {
-            let d = w[1].ground - w[0].ground;
-            let n = d.norm();
-            let e = if n > 0.0 { d / n } else { Vector3::zeros() };
+            let e = unit_direction(&w[0], &w[1]);
             [(&w[0], e), (&w[1], -e)]
         })
+}
+
+/// Unit vector from `a` towards `b` (their ground locations; 0 when they
+/// coincide).
+fn unit_direction(a: &CurrentPoint, b: &CurrentPoint) -> Vector3<f64> {
+    let d = b.ground - a.ground;
+    let n = d.norm();
+    if n > 0.0 {
+        d / n
+    } else {
+        Vector3::zeros()
+    }
 }
 
 /// Lengthening speed (positions and velocities in `data` must be current).
@@ -385,10 +395,24 @@ pub fn add_unit_tension_force(
     st: &PathState,
     gen: &mut [f64],
 ) {
-    for (p, e) in unit_pulls(st) {
-        jacobian::add_point_force(model, data, p.body, &p.at, &e, gen);
-        if let Some((c, dp)) = moving_point_rate(path, data, p) {
-            gen[c] += dp.dot(&e);
+    for w in st.points.windows(2).filter(|w| w[0].body != w[1].body) {
+        let e = unit_direction(&w[0], &w[1]);
+        // The segment's ends are pulled by opposite forces; the joints that
+        // carry both ends get only their net moment, which vanishes when the
+        // ends lie on the line of pull (`at` = `ground`; see CurrentPoint):
+        // the exact 0 keeps a muscle out of the rows of coordinates it
+        // cannot move (a hip muscle and the pelvis's), so those rows stay
+        // independent equations for the solver.
+        let top = model.common_ancestor(w[0].body, w[1].body);
+        for (p, f) in [(&w[0], e), (&w[1], -e)] {
+            jacobian::add_point_force_below(model, data, p.body, top, &p.at, &f, gen);
+            if let Some((c, dp)) = moving_point_rate(path, data, p) {
+                gen[c] += dp.dot(&f);
+            }
+        }
+        if w[0].at != w[0].ground || w[1].at != w[1].ground {
+            let moment = (w[0].at - w[1].at).cross(&e);
+            jacobian::add_body_torque(model, data, top, &moment, gen);
         }
     }
 }
