@@ -20,10 +20,12 @@
 //! variable t_i ≥ |x_i|^p expressed with a 3-D power cone.
 //!
 //! Files: [`problem`] (data types and validation), [`friction`] (contact
-//! constraint geometry), [`dual`] (dual Newton), [`solve`](mod@solve)
+//! constraint geometry), [`dual`] (dual Newton), [`polish`] (an
+//! interior-point answer to the exact optimum), [`solve`](mod@solve)
 //! (dispatch and Clarabel formulation).
 pub mod dual;
 pub mod friction;
+pub mod polish;
 pub mod problem;
 pub mod solve;
 

@@ -153,6 +153,10 @@ pub struct FrameSolution {
     pub solve_time: Duration,
     /// Which solver answered.
     pub solver: SolverKind,
+    /// Clarabel's answer was polished to the exact optimum
+    /// ([`super::polish`]); always false for Newton, whose answers are
+    /// exact.
+    pub polished: bool,
 }
 
 impl FrameProblem {

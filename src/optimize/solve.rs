@@ -36,6 +36,7 @@ use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, S
 
 use super::dual;
 use super::friction::FrictionModel;
+use super::polish;
 use super::problem::{FrameProblem, FrameSolution, SolveStatus, SolverChoice, SolverKind};
 
 /// Weight of ‖A x − b‖² in the elastic problem solved when a frame is
@@ -81,6 +82,7 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
                 iterations: d.iterations,
                 solve_time: start.elapsed(),
                 solver: SolverKind::Newton,
+                polished: false,
             }
         }
         Ok(Err(f)) => f.iterations(),
@@ -131,6 +133,7 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
             eq_residual: f64::NAN,
             solve_time: start.elapsed(),
             solver: SolverKind::Clarabel,
+            polished: false,
         };
     }
 
@@ -173,6 +176,16 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
         x.resize(n, 0.0);
         status = SolveStatus::NumericalError;
     }
+    let mut polished = false;
+    if matches!(status, SolveStatus::Solved | SolveStatus::AlmostSolved) {
+        // To the exact optimum when its active set can be identified and
+        // the answer passes the optimality certificate ([`polish`]).
+        if let Some((xp, _)) = polish::polish(p, &x) {
+            x = xp;
+            status = SolveStatus::Solved;
+            polished = true;
+        }
+    }
     FrameSolution {
         objective: p.objective(&x),
         eq_residual: p.eq_residual(&x),
@@ -181,6 +194,7 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
         iterations,
         solve_time: start.elapsed(),
         solver: SolverKind::Clarabel,
+        polished,
     }
 }
 

@@ -728,3 +728,82 @@ fn friction_default_is_the_cone_everywhere() {
         "README states the cone default"
     );
 }
+
+// ---------------------------------------------------------------------
+// Polishing Clarabel's answer to the exact optimum (`polish`).
+
+/// min Σ x_i² s.t. x1 + x2 + x3 = 2.5, x1 ≤ 0.5: the bound is active, so
+/// x1 = 0.5 and x2 = x3 = 1 exactly. An interior point stops short of the
+/// bound; the polished answer is exact to rounding.
+#[test]
+fn clarabel_answers_are_polished_onto_active_bounds() {
+    let mut p = problem(
+        &[&[1.0, 1.0, 1.0]],
+        &[2.5],
+        &[1.0; 3],
+        &[-INF; 3],
+        &[0.5, INF, INF],
+    );
+    p.settings.solver = SolverChoice::Clarabel;
+    let sol = solve(&p);
+    assert!(sol.polished);
+    assert_eq!(sol.status, SolveStatus::Solved);
+    assert_eq!(sol.solver, SolverKind::Clarabel);
+    for (got, want) in sol.x.iter().zip([0.5, 1.0, 1.0]) {
+        assert_close(*got, want, 1e-14, "x");
+    }
+    // From a rough start (three interior-point iterations, far from the
+    // bound's neighbourhood): the active-set corrections still find it.
+    let mut rough = p.clone();
+    rough.settings.max_iter = 3;
+    let raw = solve_clarabel(&rough).x;
+    let (xp, y) = polish::polish(&p, &raw).expect("polished from a rough start");
+    for (got, want) in xp.iter().zip([0.5, 1.0, 1.0]) {
+        assert_close(*got, want, 1e-14, "x from a rough start");
+    }
+    // y: 2 x_free = Aᵀ y → y = 2.
+    assert_close(y[0], 2.0, 1e-13, "y");
+}
+
+/// A contact on the surface of its friction cone. Variables (λn, λs1, λs2,
+/// u), weights 1: λn = 1, λs2 = 0.3, λs1 + u = 1, μ = 0.5. Unconstrained,
+/// λs1 = u = 0.5, but ‖λs‖ ≤ 0.5 allows λs1 ≤ 0.4: the optimum is on the
+/// cone, λs = (0.4, 0.3), u = 0.6.
+#[test]
+fn clarabel_answers_are_polished_onto_the_friction_cone() {
+    for model in [FrictionModel::Cone, FrictionModel::Pyramid8] {
+        let mut p = problem(
+            &[
+                &[1.0, 0.0, 0.0, 0.0],
+                &[0.0, 1.0, 0.0, 1.0],
+                &[0.0, 0.0, 1.0, 0.0],
+            ],
+            &[1.0, 1.0, 0.3],
+            &[1.0; 4],
+            &[0.0, -INF, -INF, -INF],
+            &[INF; 4],
+        );
+        p.static_contacts = vec![StaticContact {
+            normal: 0,
+            shear: [1, 2],
+            mu: 0.5,
+        }];
+        p.friction = model;
+        p.settings.solver = SolverChoice::Clarabel;
+        let sol = solve(&p);
+        assert!(sol.polished, "{model:?}");
+        // Against Newton (exact; the pyramid's optimum lies on a face).
+        let mut q = p.clone();
+        q.settings.solver = SolverChoice::Auto;
+        let newton = solve(&q);
+        assert_eq!(newton.solver, SolverKind::Newton);
+        for k in 0..4 {
+            assert_close(sol.x[k], newton.x[k], 1e-13, &format!("{model:?} x[{k}]"));
+        }
+        if model == FrictionModel::Cone {
+            for (got, want) in sol.x.iter().zip([1.0, 0.4, 0.3, 0.6]) {
+                assert_close(*got, want, 1e-13, "cone x");
+            }
+        }
+    }
+}
