@@ -29,7 +29,7 @@ use statopt::muscles::set::MuscleFrame;
 use statopt::optimize::{
     self, dual, FrameSolution, FrictionModel, SolveStatus, SolverChoice, SolverKind,
 };
-use statopt::parse::setup::Setup;
+use statopt::parse::setup::{AnalyzeSetup, Setup};
 use statopt::tools::analyze;
 use statopt::tools::static_optimization::{Control, SoProblem, StaticOptimizationSetup};
 
@@ -57,7 +57,11 @@ struct Stats {
     failures: Vec<String>,
 }
 
-fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, stats: &mut Stats) {
+/// The setup, its StaticOptimization element and the compiled problem.
+fn so_case(
+    setup_file: &Path,
+    friction: Option<FrictionModel>,
+) -> (AnalyzeSetup, StaticOptimizationSetup, SoProblem) {
     let setup = match Setup::read(setup_file).unwrap() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
@@ -70,7 +74,24 @@ fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, 
     if let Some(f) = friction {
         so.friction = f;
     }
-    let (mut problem, _) = SoProblem::build(&setup, &so).unwrap();
+    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+    (setup, so, problem)
+}
+
+/// gait2392's walking setup, or None (with a SKIP line naming `test`).
+fn gait2392(test: &str) -> Option<PathBuf> {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models/gait2392/subject01_walk/setup_SO.xml");
+    if file.is_file() {
+        Some(file)
+    } else {
+        eprintln!("SKIP {test}: {} is absent", file.display());
+        None
+    }
+}
+
+fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, stats: &mut Stats) {
+    let (setup, so, mut problem) = so_case(setup_file, friction);
     let states = analyze::load_states(&setup, &problem.model).unwrap();
     let udot = states
         .speed_derivatives(setup.coordinates_file.as_ref().unwrap())
@@ -272,15 +293,9 @@ fn newton_matches_clarabel_on_the_validation_cases() {
 
 #[test]
 fn newton_matches_clarabel_on_gait2392() {
-    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models/gait2392/subject01_walk/setup_SO.xml");
-    if !file.is_file() {
-        eprintln!(
-            "SKIP newton_matches_clarabel_on_gait2392: {} is absent",
-            file.display()
-        );
+    let Some(file) = gait2392("newton_matches_clarabel_on_gait2392") else {
         return;
-    }
+    };
     check(&[("gait2392", file)]);
 }
 
@@ -312,25 +327,12 @@ fn newton_matches_clarabel_with_friction_pyramids() {
 /// lumbar) that Newton solves one by one.
 #[test]
 fn gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split() {
-    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models/gait2392/subject01_walk/setup_SO.xml");
-    if !file.is_file() {
-        eprintln!(
-            "SKIP gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split: {} is absent",
-            file.display()
-        );
+    let Some(file) =
+        gait2392("gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split")
+    else {
         return;
-    }
-    let setup = match Setup::read(&file).unwrap() {
-        Setup::Analyze(s) => s,
-        _ => unreachable!(),
     };
-    let (el, common_) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
-    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+    let (setup, _, problem) = so_case(&file, None);
     let model = &problem.model;
     let states = analyze::load_states(&setup, model).unwrap();
     let udot = states
