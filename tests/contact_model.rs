@@ -411,12 +411,33 @@ fn multi_contact_invariants_and_external_loads_round_trip() {
         let hi =
             storage::read(&dir.join(format!("out_{friction}/block_SO_w0_max_ContactForces.sto")))
                 .unwrap();
+        let runs: Vec<_> = ["1", "500", "1000"]
+            .iter()
+            .map(|w| {
+                storage::read(
+                    &dir.join(format!("out_{friction}/block_SO_w0_{w}_ContactForces.sto")),
+                )
+                .unwrap()
+            })
+            .collect();
+        assert_eq!(mean.time, runs[0].time);
         for i in 0..mean.time.len() {
             for j in 0..mean.labels.len() {
                 assert!(
                     lo.rows[i][j] <= mean.rows[i][j] + 1e-12
                         && mean.rows[i][j] <= hi.rows[i][j] + 1e-12
                 );
+                // They are the statistics of the runs' tables (as written,
+                // to the table's precision).
+                let vals: Vec<f64> = runs.iter().map(|r| r.rows[i][j]).collect();
+                let want = [
+                    vals.iter().sum::<f64>() / 3.0,
+                    vals.iter().copied().fold(f64::INFINITY, f64::min),
+                    vals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                ];
+                for (got, want) in [&mean, &lo, &hi].iter().zip(want) {
+                    assert!((got.rows[i][j] - want).abs() <= 1e-8 * want.abs().max(1.0));
+                }
             }
         }
     }

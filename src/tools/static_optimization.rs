@@ -436,7 +436,8 @@ pub fn run(
 }
 
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
-/// (the paper's uncertainty band, section 3.2).
+/// (the paper's uncertainty band, section 3.2). The runs' tables are read
+/// row by row in step, so memory does not grow with the trial's length.
 fn write_sweep_statistics(
     setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
@@ -446,39 +447,71 @@ fn write_sweep_statistics(
     weights: &[f64],
     precision: usize,
 ) -> Result<Vec<std::path::PathBuf>> {
-    let tables = files
+    let mut readers = files
         .iter()
-        .map(|f| crate::storage::read(f))
+        .map(|f| crate::storage::open_rows(f))
         .collect::<Result<Vec<_>>>()?;
-    let first = &tables[0];
+    let labels = readers[0].table.labels.clone();
+    for (r, f) in readers.iter().zip(files).skip(1) {
+        if r.table.labels != labels {
+            return Err(Error::internal(format!(
+                "{}: its columns differ from {}'s",
+                f.display(),
+                files[0].display()
+            )));
+        }
+    }
+    let stats = ["mean", "min", "max"];
     let mut out = Vec::new();
-    for stat in ["mean", "min", "max"] {
+    let mut writers = Vec::new();
+    for stat in stats {
         let path = dir.join(format!("{prefix}{stat}_{kind}.sto"));
         let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
-        let mut w = StoWriter::create_for_setup(
+        writers.push(StoWriter::create_for_setup(
             setup_file,
             &path,
             &format!("{kind} {stat}"),
             &desc,
-            &first.labels,
+            &labels,
             precision,
             false,
-        )?;
-        for i in 0..first.time.len() {
-            let row: Vec<f64> = (0..first.labels.len())
-                .map(|j| {
-                    let vals = tables.iter().map(|t| t.rows[i][j]);
-                    match stat {
-                        "mean" => vals.sum::<f64>() / tables.len() as f64,
-                        "min" => vals.fold(f64::INFINITY, f64::min),
-                        _ => vals.fold(f64::NEG_INFINITY, f64::max),
-                    }
-                })
-                .collect();
-            w.write_row(first.time[i], &row)?;
-        }
-        w.finish()?;
+        )?);
         out.push(path);
+    }
+    let nl = labels.len();
+    let mut rows = vec![Vec::with_capacity(nl); readers.len()];
+    let mut row = vec![0.0; nl];
+    'frames: loop {
+        let mut time = None;
+        for (k, (r, buf)) in readers.iter_mut().zip(rows.iter_mut()).enumerate() {
+            match (r.next_row(buf)?, k) {
+                (None, 0) => break 'frames,
+                (None, _) => {
+                    return Err(Error::internal(format!(
+                        "{}: fewer rows than {}",
+                        files[k].display(),
+                        files[0].display()
+                    )))
+                }
+                (Some(t), 0) => time = Some(t),
+                (Some(_), _) => {}
+            }
+        }
+        let t = time.expect("the first table's row");
+        for (stat, w) in stats.iter().zip(writers.iter_mut()) {
+            for (j, v) in row.iter_mut().enumerate() {
+                let vals = rows.iter().map(|r| r[j]);
+                *v = match *stat {
+                    "mean" => vals.sum::<f64>() / rows.len() as f64,
+                    "min" => vals.fold(f64::INFINITY, f64::min),
+                    _ => vals.fold(f64::NEG_INFINITY, f64::max),
+                };
+            }
+            w.write_row(t, &row)?;
+        }
+    }
+    for w in writers {
+        w.finish()?;
     }
     Ok(out)
 }
