@@ -106,10 +106,8 @@ impl MuscleFrame {
             let f = &mut self.unit_force[m];
             f.iter_mut().for_each(|x| *x = 0.0);
             geometry::add_unit_tension_force(model, data, st, f);
-            self.max_active_force[m] = pm
-                .muscle
-                .max_active_fiber_force_rigid_tendon(st.length, self.speed[m]);
-            self.passive_force[m] = pm.muscle.passive_fiber_force_rigid_tendon(st.length);
+            (self.max_active_force[m], self.passive_force[m]) =
+                pm.muscle.rigid_tendon_forces(st.length, self.speed[m]);
         }
     }
 
