@@ -255,7 +255,7 @@ impl ExternalLoads {
     pub fn apply_recording(&self, t: f64, data: &mut Data, record: &mut Vec<f64>) {
         for ef in &self.forces {
             let (f_g, p_g, t_g) = ef.evaluate(t, data);
-            record.extend(ef.record(&f_g, &p_g, &t_g, data));
+            ef.record_into(&f_g, &p_g, &t_g, data, record);
             ef.add_to(data, f_g, p_g, t_g);
         }
     }
@@ -278,18 +278,30 @@ impl ExternalForce {
         data: &Data,
     ) -> Vec<f64> {
         let mut v = Vec::with_capacity(9);
+        self.record_into(f_g, p_g, t_g, data, &mut v);
+        v
+    }
+
+    /// [`record`](Self::record), appended to `out`.
+    pub fn record_into(
+        &self,
+        f_g: &Vector3<f64>,
+        p_g: &Vector3<f64>,
+        t_g: &Vector3<f64>,
+        data: &Data,
+        out: &mut Vec<f64>,
+    ) {
         if self.force.is_some() {
-            v.extend(f_g.iter());
+            out.extend(f_g.iter());
         }
         if self.point.is_some() {
             let b = self.applied_to_body;
             let local = data.rotation[b].transpose() * (p_g - data.position[b]);
-            v.extend(local.iter());
+            out.extend(local.iter());
         }
         if self.torque.is_some() {
-            v.extend(t_g.iter());
+            out.extend(t_g.iter());
         }
-        v
     }
 
     /// Force, point of application and torque in ground at time `t`.
