@@ -369,6 +369,18 @@ pub fn lengthening_speed(st: &PathState) -> f64 {
     s
 }
 
+/// `model.common_ancestor(a, b)`, answering the common case of a body and
+/// its parent without walking to the ground.
+fn segment_top(model: &Model, a: usize, b: usize) -> usize {
+    if b != 0 && model.joints[b].parent_body == a {
+        a
+    } else if a != 0 && model.joints[a].parent_body == b {
+        b
+    } else {
+        model.common_ancestor(a, b)
+    }
+}
+
 /// Generalized force of a unit tension along the current path, added to
 /// `gen` (OpenSim's `GeometryPath::produceForces`): at each point, unit
 /// vectors towards its neighbours on other bodies, plus the work of moving
@@ -382,7 +394,7 @@ pub fn add_unit_tension_force(model: &Model, data: &Data, st: &PathState, gen: &
         // the exact 0 keeps a muscle out of the rows of coordinates it
         // cannot move (a hip muscle and the pelvis's), so those rows stay
         // independent equations for the solver.
-        let top = model.common_ancestor(w[0].body, w[1].body);
+        let top = segment_top(model, w[0].body, w[1].body);
         for (p, f) in [(&w[0], e), (&w[1], -e)] {
             jacobian::add_point_force_below(model, data, p.body, top, &p.at, &f, gen);
             if let Some((c, dp)) = p.moving {
@@ -416,5 +428,28 @@ pub fn add_tension_forces(
         if let Some((c, dp)) = p.moving {
             gen[c] += dp.dot(&f);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segment_top_is_the_common_ancestor() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("models/leg_extension/human_seated_rajagopal.osim");
+        let (_, model) = crate::tools::loading::load_model(&file).unwrap();
+        let nb = model.bodies.len();
+        assert!(nb > 5);
+        let mut direct = 0;
+        for a in 0..nb {
+            for b in 0..nb {
+                let top = model.common_ancestor(a, b);
+                assert_eq!(segment_top(&model, a, b), top, "bodies {a} {b}");
+                direct += (top == a || top == b) as usize;
+            }
+        }
+        assert!(direct > nb);
     }
 }
