@@ -46,7 +46,9 @@ impl Series {
                 let slope = (y[k + 1] - y[k]) / (t[k + 1] - t[k]).max(1e-7);
                 y[k] + slope * (x - t[k])
             }
-            Series::Spline(s) => s.value(x),
+            // Frames advance through the data: its segments are rarely
+            // revisited, so none is kept.
+            Series::Spline(s) => s.value_transient(x),
         }
     }
 }
@@ -243,14 +245,29 @@ impl ExternalLoads {
     pub fn apply(&self, t: f64, data: &mut Data) {
         for ef in &self.forces {
             let (f_g, p_g, t_g) = ef.evaluate(t, data);
-            let mut bf = BodyForce::torque(t_g);
-            bf.add(&BodyForce::at_point(f_g, p_g));
-            data.applied[ef.applied_to_body].add(&bf);
+            ef.add_to(data, f_g, p_g, t_g);
+        }
+    }
+
+    /// [`apply`](Self::apply), and append to `record` what the force
+    /// reporter records of each load ([`ExternalForce::record`] in order):
+    /// the values are evaluated once for both.
+    pub fn apply_recording(&self, t: f64, data: &mut Data, record: &mut Vec<f64>) {
+        for ef in &self.forces {
+            let (f_g, p_g, t_g) = ef.evaluate(t, data);
+            ef.record_into(&f_g, &p_g, &t_g, data, record);
+            ef.add_to(data, f_g, p_g, t_g);
         }
     }
 }
 
 impl ExternalForce {
+    fn add_to(&self, data: &mut Data, f_g: Vector3<f64>, p_g: Vector3<f64>, t_g: Vector3<f64>) {
+        let mut bf = BodyForce::torque(t_g);
+        bf.add(&BodyForce::at_point(f_g, p_g));
+        data.applied[self.applied_to_body].add(&bf);
+    }
+
     /// The values OpenSim's ForceReporter records (labels in [`Self::labels`]):
     /// force in ground, point in the applied body's frame, torque in ground.
     pub fn record(
@@ -261,18 +278,30 @@ impl ExternalForce {
         data: &Data,
     ) -> Vec<f64> {
         let mut v = Vec::with_capacity(9);
+        self.record_into(f_g, p_g, t_g, data, &mut v);
+        v
+    }
+
+    /// [`record`](Self::record), appended to `out`.
+    pub fn record_into(
+        &self,
+        f_g: &Vector3<f64>,
+        p_g: &Vector3<f64>,
+        t_g: &Vector3<f64>,
+        data: &Data,
+        out: &mut Vec<f64>,
+    ) {
         if self.force.is_some() {
-            v.extend(f_g.iter());
+            out.extend(f_g.iter());
         }
         if self.point.is_some() {
             let b = self.applied_to_body;
             let local = data.rotation[b].transpose() * (p_g - data.position[b]);
-            v.extend(local.iter());
+            out.extend(local.iter());
         }
         if self.torque.is_some() {
-            v.extend(t_g.iter());
+            out.extend(t_g.iter());
         }
-        v
     }
 
     /// Force, point of application and torque in ground at time `t`.

@@ -157,6 +157,8 @@ pub struct Assembly {
     pub passive: Vec<f64>,
     /// Contact states, one per contact.
     pub states: Vec<ContactState>,
+    /// The external loads' force-table values (`ExternalLoads::apply_recording`).
+    pub external: Vec<f64>,
     couplings: Vec<Vec<(usize, f64)>>,
     g: Vec<f64>,
     cols: [Vec<f64>; 3],
@@ -184,6 +186,7 @@ impl Default for Assembly {
             scale: Vec::new(),
             passive: Vec::new(),
             states: Vec::new(),
+            external: Vec::new(),
             couplings: Vec::new(),
             g: Vec::new(),
             cols: Default::default(),
@@ -270,14 +273,16 @@ impl SoProblem {
         );
         kinematics::full(model, data);
         data.clear_applied();
+        asm.external.clear();
         if let Some(l) = &self.loads {
-            l.apply(t, data);
+            l.apply_recording(t, data, &mut asm.external);
         }
         let Assembly {
             problem,
             scale,
             passive: passive_values,
             states,
+            external: _,
             couplings,
             g,
             cols,
@@ -629,6 +634,7 @@ impl SoProblem {
                     solution,
                     &asm.scale,
                     &asm.passive,
+                    &asm.external,
                     &asm.states,
                     m_r.as_ref(),
                     data,
@@ -647,6 +653,7 @@ impl SoProblem {
         solution: optimize::FrameSolution,
         scale: &[f64],
         passive_values: &[f64],
+        external: &[f64],
         states: &[ContactState],
         m_r: Option<&DMatrix<f64>>,
         data: &Data,
@@ -710,12 +717,7 @@ impl SoProblem {
         let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
         let mut force_row =
             force_file_row(&forces, passive_values, &passive_sizes, &self.passive_after);
-        if let Some(l) = &self.loads {
-            for ef in &l.forces {
-                let (f, p, tq) = ef.evaluate(t, data);
-                force_row.extend(ef.record(&f, &p, &tq, data));
-            }
-        }
+        force_row.extend_from_slice(external);
         FrameResult {
             time: t,
             solution,

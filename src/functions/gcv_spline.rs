@@ -53,6 +53,28 @@ pub struct GcvSpline {
     /// coefficients are 0.
     /// (Boxed: a slot not yet used takes 16 bytes, not 72.)
     seg: Box<[OnceLock<Box<[f64; MAX_COEF]>>]>,
+    /// The B-spline basis derivatives each segment's Taylor coefficients
+    /// are made from ([`SpanBasis`]): they depend on x and the degree only,
+    /// so the splines of one [`SplineFitter`] share them.
+    basis: Arc<SpanBasis>,
+}
+
+/// Basis derivatives `ders` (see [`basis_derivatives`]) of each segment of
+/// the splines of one degree on one set of abscissae, made on first use,
+/// slot s for segment s (as [`GcvSpline::seg`]).
+#[derive(Debug)]
+struct SpanBasis {
+    seg: Box<[OnceLock<Box<Ders>>]>,
+}
+
+type Ders = [[f64; MAX_COEF]; MAX_COEF];
+
+impl SpanBasis {
+    fn new(n: usize) -> Arc<SpanBasis> {
+        Arc::new(SpanBasis {
+            seg: (0..=n).map(|_| OnceLock::new()).collect(),
+        })
+    }
 }
 
 /// Splines are equal when they interpolate the same data with the same degree.
@@ -129,13 +151,21 @@ impl GcvSpline {
         let mut band = system(m, x, &t, None);
         band.factor()?;
         band.apply(&mut coef);
-        Ok(GcvSpline::with_coefficients(m, x.into(), y, coef))
+        let basis = SpanBasis::new(x.len());
+        Ok(GcvSpline::with_coefficients(m, x.into(), basis, y, coef))
     }
 
-    fn with_coefficients(m: usize, x: Arc<[f64]>, y: &[f64], coef: Vec<f64>) -> Self {
+    fn with_coefficients(
+        m: usize,
+        x: Arc<[f64]>,
+        basis: Arc<SpanBasis>,
+        y: &[f64],
+        coef: Vec<f64>,
+    ) -> Self {
         GcvSpline {
             half_order: m,
             seg: (0..=x.len()).map(|_| OnceLock::new()).collect(),
+            basis,
             x,
             y: y.to_vec(),
             coef,
@@ -186,6 +216,19 @@ impl GcvSpline {
         self.derivative(x, 0)
     }
 
+    /// [`value`](Self::value) bit for bit, for arguments that seldom come
+    /// back to a segment (a data series read at increasing times): a
+    /// segment not made yet is made for this call only, not kept (its basis
+    /// is, shared with the fitter's other splines).
+    pub fn value_transient(&self, x: f64) -> f64 {
+        let deg = self.degree();
+        let (s, base) = self.locate(x);
+        match self.seg[s].get() {
+            Some(a) => horner(a, deg, x - base, 0),
+            None => horner(&self.make_segment(s), deg, x - base, 0),
+        }
+    }
+
     /// Derivative of the given order (0 = value); orders ≥ 2m are 0.
     pub fn derivative(&self, x: f64, order: usize) -> f64 {
         let deg = self.degree();
@@ -208,18 +251,34 @@ impl GcvSpline {
         let n = x.len();
         if s == n {
             // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
-            let mut a = taylor_x(x, &self.coef, k, k + n - 2, x[n - 1], m - 1);
+            let span = k + n - 2;
+            let mut a = taylor_of(self.span_basis(s), &self.coef[span - k..], k, m - 1);
             a[0] = y[n - 1];
             return a;
         }
         let i = s.max(1) - 1;
-        let mut a = taylor_x(x, &self.coef, k, k + i, x[i], k);
+        let mut a = taylor_of(self.span_basis(s), &self.coef[i..], k, k);
         a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
         if s == 0 {
             // Left extrapolation: Taylor polynomial of degree m-1 at x0.
             a[m..].iter_mut().for_each(|v| *v = 0.0);
         }
         a
+    }
+
+    /// The basis derivatives segment `s` is made from ([`basis_x`] at the
+    /// segment's span, base and order), shared by the splines of one fitter.
+    fn span_basis(&self, s: usize) -> &Ders {
+        self.basis.seg[s].get_or_init(|| {
+            let (k, n) = (self.degree(), self.x.len());
+            let m = self.half_order;
+            Box::new(if s == n {
+                basis_x(&self.x, k, k + n - 2, self.x[n - 1], m - 1)
+            } else {
+                let i = s.max(1) - 1;
+                basis_x(&self.x, k, k + i, self.x[i], k)
+            })
+        })
     }
 
     /// (value, first, second derivative) with one interval search.
@@ -435,25 +494,18 @@ fn taylor(t: &[f64], coef: &[f64], k: usize, span: usize, u: f64, upto: usize) -
     taylor_of(&ders, &coef[span - k..], k, upto)
 }
 
-/// [`taylor`] on the knots [`knot_vector`] would make of `x`, from the 2k
-/// of them that the span's basis functions use (t[j] = x[clamp(j − k)]),
-/// placed so that `basis_derivatives` reads the same values.
-fn taylor_x(
-    x: &[f64],
-    coef: &[f64],
-    k: usize,
-    span: usize,
-    u: f64,
-    upto: usize,
-) -> [f64; MAX_COEF] {
+/// The basis derivatives [`taylor`] uses on the knots [`knot_vector`] would
+/// make of `x`, from the 2k of them that the span's basis functions use
+/// (t[j] = x[clamp(j − k)]), placed so that `basis_derivatives` reads the
+/// same values.
+fn basis_x(x: &[f64], k: usize, span: usize, u: f64, upto: usize) -> Ders {
     let n = x.len();
     // w[i] = t[span − k + i], i = 1..=2k; span k in w is span `span` in t
     let mut w = [0.0; 2 * MAX_DEGREE + 1];
     for (i, wi) in w.iter_mut().enumerate().take(2 * k + 1).skip(1) {
         *wi = x[(span - k + i).saturating_sub(k).min(n - 1)];
     }
-    let ders = basis_derivatives(&w, k, k, u, upto);
-    taylor_of(&ders, &coef[span - k..], k, upto)
+    basis_derivatives(&w, k, k, u, upto)
 }
 
 /// Taylor coefficients from the basis derivatives `ders` of a span whose
@@ -493,7 +545,7 @@ pub struct SplineFitter<'a> {
     x: &'a [f64],
     /// Knots, factored system (Err: singular) and basis slopes at x_0…x_{n−2}.
     basis: Option<Basis>,
-    shared: Option<Arc<[f64]>>,
+    shared: Option<(Arc<[f64]>, Arc<SpanBasis>)>,
 }
 
 impl<'a> SplineFitter<'a> {
@@ -577,11 +629,11 @@ impl<'a> SplineFitter<'a> {
     ) -> std::result::Result<Vec<GcvSpline>, (usize, Error)> {
         let m = self.check_columns(ys)?;
         let coefs = self.solve_columns(m, ys);
-        let x = self.shared_x();
+        let (x, basis) = self.shared_x();
         Ok(ys
             .iter()
             .zip(coefs)
-            .map(|(y, coef)| GcvSpline::with_coefficients(m, x.clone(), y, coef))
+            .map(|(y, coef)| GcvSpline::with_coefficients(m, x.clone(), basis.clone(), y, coef))
             .collect())
     }
 
@@ -604,13 +656,18 @@ impl<'a> SplineFitter<'a> {
     /// `GcvSpline::interpolating(degree, x, y)`.
     pub fn spline(&mut self, y: &[f64]) -> Result<GcvSpline> {
         let (m, coef) = self.coefficients(y)?;
-        Ok(GcvSpline::with_coefficients(m, self.shared_x(), y, coef))
+        let (x, basis) = self.shared_x();
+        Ok(GcvSpline::with_coefficients(m, x, basis, y, coef))
     }
 
-    /// The abscissae as the splines made here share them.
-    fn shared_x(&mut self) -> Arc<[f64]> {
+    /// The abscissae and segment basis as the splines made here share them
+    /// (one degree, so one basis).
+    fn shared_x(&mut self) -> (Arc<[f64]>, Arc<SpanBasis>) {
         let x = self.x;
-        self.shared.get_or_insert_with(|| x.into()).clone()
+        let (x, b) = self
+            .shared
+            .get_or_insert_with(|| (x.into(), SpanBasis::new(x.len())));
+        (x.clone(), b.clone())
     }
 
     /// `out[i] = GcvSpline::interpolating(degree, x, y)?.derivative(x[i], 1)`
@@ -969,6 +1026,62 @@ mod tests {
             for (i, e) in eager.iter().enumerate() {
                 assert_eq!(bits(s.segment(i)), bits(e));
             }
+        }
+    }
+
+    /// The splines of one fitter share one segment basis: a segment made
+    /// from a basis another column made first (in any order, including the
+    /// end segments) has the bits of that column's own eager segment.
+    #[test]
+    fn shared_segment_basis_gives_each_columns_own_segments() {
+        for (degree, x, y) in random_cases().into_iter().step_by(7) {
+            let n = x.len();
+            let y2: Vec<f64> = y
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v * 0.5 - i as f64)
+                .collect();
+            let y3: Vec<f64> = y.iter().map(|v| (v * 3.0).cos()).collect();
+            let mut f = SplineFitter::new(degree, &x);
+            let mut ss = f.splines(&[&y, &y2, &y3]).unwrap();
+            ss.push(f.spline(&y2).unwrap());
+            assert!(ss.windows(2).all(|w| Arc::ptr_eq(&w[0].basis, &w[1].basis)));
+            let eager: Vec<_> = ss.iter().map(eager_segments).collect();
+            // interleave columns and visit segments backwards, then forwards
+            let order: Vec<usize> = (0..=n).rev().chain(0..=n).collect();
+            for (j, &seg) in order.iter().enumerate() {
+                let c = (j + seg) % ss.len();
+                assert_eq!(bits(ss[c].segment(seg)), bits(&eager[c][seg]));
+            }
+            for (s, e) in ss.iter().zip(&eager) {
+                for (i, ei) in e.iter().enumerate() {
+                    assert_eq!(bits(s.segment(i)), bits(ei), "degree {degree} n {n}");
+                }
+            }
+        }
+    }
+
+    /// `value_transient` = `value` bit for bit, on fresh splines (segments
+    /// made for the call and dropped) and on splines whose segments are
+    /// kept; it keeps none itself.
+    #[test]
+    fn value_transient_is_value_and_keeps_no_segment() {
+        for (degree, x, y) in random_cases().into_iter().step_by(3) {
+            let n = x.len();
+            let (lo, hi) = (x[0] - 0.3, x[n - 1] + 0.3);
+            let ts: Vec<f64> = (0..=97)
+                .map(|i| lo + (hi - lo) * i as f64 / 97.0)
+                .chain(x.iter().copied())
+                .collect();
+            let mut f = SplineFitter::new(degree, &x);
+            let fresh = f.spline(&y).unwrap();
+            let kept = f.spline(&y).unwrap();
+            for &t in &ts {
+                let want = kept.value(t);
+                assert_eq!(fresh.value_transient(t).to_bits(), want.to_bits(), "t {t}");
+                assert_eq!(kept.value_transient(t).to_bits(), want.to_bits(), "t {t}");
+            }
+            assert!(fresh.seg.iter().all(|s| s.get().is_none()));
         }
     }
 

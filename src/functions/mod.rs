@@ -85,6 +85,22 @@ impl Function {
         }
     }
 
+    /// `(value(x), derivative(x, 1))`, bit for bit, with one interval
+    /// search where the two share it (SimmSpline, also inside a multiplier).
+    pub fn value_and_slope(&self, x: f64) -> (f64, f64) {
+        match self {
+            Function::SimmSpline(f) => {
+                let (v, d1, _) = f.eval2(x);
+                (v, d1)
+            }
+            Function::Multiplier { scale, inner } => {
+                let (v, d1) = inner.value_and_slope(x);
+                (scale * v, scale * d1)
+            }
+            _ => (self.value(x), self.derivative(x, 1)),
+        }
+    }
+
     /// (value, first, second derivative) in one call (one interval search
     /// for the tabulated functions).
     #[inline]
@@ -160,6 +176,45 @@ mod tests {
                 assert!((a - f.value(t)).abs() < 1e-12, "{f:?} {t}");
                 assert!((b - f.derivative(t, 1)).abs() < 1e-10, "{f:?} {t}");
                 assert!((c - f.derivative(t, 2)).abs() < 1e-8, "{f:?} {t}");
+            }
+        }
+    }
+
+    /// `value_and_slope` has the bits of `value` and `derivative(.., 1)` for
+    /// every kind, inside and outside the data and on the knots.
+    #[test]
+    fn value_and_slope_is_value_and_derivative_bit_for_bit() {
+        let x = [0.0, 0.2, 0.5, 0.9, 1.4, 1.5, 2.0];
+        let y = [0.1, 0.4, -0.2, 0.3, 0.9, 1.0, 0.2];
+        let simm = Function::SimmSpline(SimmSpline::new(&x, &y).unwrap());
+        let fs = [
+            simm.clone(),
+            Function::Multiplier {
+                scale: 0.988523,
+                inner: Box::new(simm),
+            },
+            Function::GcvSpline(GcvSpline::interpolating(5, &x, &y).unwrap()),
+            Function::GcvSpline(GcvSpline::interpolating(3, &x, &y).unwrap()),
+            Function::PiecewiseLinear(PiecewiseLinear::new(&x, &y).unwrap()),
+            Function::Step {
+                t0: 0.3,
+                t1: 1.1,
+                y0: -1.0,
+                y1: 2.0,
+            },
+            Function::Polynomial(vec![0.5, -1.0, 2.0, 0.3]),
+            Function::Constant(0.25),
+            Function::Linear {
+                slope: -0.3,
+                intercept: 0.1,
+            },
+        ];
+        let ts = (0..45).map(|i| -0.5 + 0.07 * i as f64).chain(x);
+        for t in ts {
+            for f in &fs {
+                let (v, d) = f.value_and_slope(t);
+                assert_eq!(v.to_bits(), f.value(t).to_bits(), "{f:?} {t}");
+                assert_eq!(d.to_bits(), f.derivative(t, 1).to_bits(), "{f:?} {t}");
             }
         }
     }

@@ -112,6 +112,21 @@ impl Muscle {
         }
     }
 
+    /// `(max_active_fiber_force_rigid_tendon(length, lengthening_speed),
+    /// passive_fiber_force_rigid_tendon(length))`, bit for bit, sharing
+    /// the fiber length and pennation they both need.
+    pub fn rigid_tendon_forces(&self, length: f64, lengthening_speed: f64) -> (f64, f64) {
+        match &self.model {
+            MuscleModel::Thelen2003(t) => {
+                t.rigid_tendon_forces(&self.params, length, lengthening_speed)
+            }
+            MuscleModel::Millard2012(m) => (
+                m.max_active_fiber_force_rigid_tendon(&self.params, length, lengthening_speed),
+                m.passive_fiber_force_rigid_tendon(&self.params, length),
+            ),
+        }
+    }
+
     /// Passive elastic fiber force along the tendon with a rigid tendon:
     /// fiber length from the path length with the tendon at slack length,
     /// clamped at the model's minimum fiber length, then

@@ -108,6 +108,16 @@ impl FixedWidthPennation {
         }
     }
 
+    /// cos of [`pennation_angle`](Self::pennation_angle), bit for bit: 1
+    /// without evaluating cos(0) for a muscle that is not pennated.
+    pub fn cos_pennation(&self, fiber_length: f64) -> f64 {
+        if self.pennation_angle_at_optimal > EPS {
+            self.pennation_angle(fiber_length).cos()
+        } else {
+            1.0
+        }
+    }
+
     /// Fiber velocity from musculotendon and tendon velocities
     /// (`calcFiberVelocity`): (v^MT − v^T) cos φ.
     pub fn fiber_velocity(

@@ -100,16 +100,14 @@ impl MuscleFrame {
     pub fn evaluate(&mut self, set: &MuscleSet, model: &Model, data: &Data) {
         for (m, pm) in set.muscles.iter().enumerate() {
             let st = &mut self.paths[m];
-            geometry::evaluate(model, &pm.path, &set.wrap_objects, data, st);
+            geometry::evaluate(&pm.path, &set.wrap_objects, data, st);
             self.length[m] = st.length;
-            self.speed[m] = geometry::lengthening_speed(&pm.path, data, st);
+            self.speed[m] = geometry::lengthening_speed(st);
             let f = &mut self.unit_force[m];
             f.iter_mut().for_each(|x| *x = 0.0);
-            geometry::add_unit_tension_force(model, &pm.path, data, st, f);
-            self.max_active_force[m] = pm
-                .muscle
-                .max_active_fiber_force_rigid_tendon(st.length, self.speed[m]);
-            self.passive_force[m] = pm.muscle.passive_fiber_force_rigid_tendon(st.length);
+            geometry::add_unit_tension_force(model, data, st, f);
+            (self.max_active_force[m], self.passive_force[m]) =
+                pm.muscle.rigid_tendon_forces(st.length, self.speed[m]);
         }
     }
 
@@ -122,5 +120,101 @@ impl MuscleFrame {
     /// The current path of muscle `m` (points in ground), e.g. for display.
     pub fn path_state(&self, m: usize) -> &PathState {
         &self.paths[m]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::kinematics;
+    use crate::paths::geometry::Origin;
+    use crate::paths::PointKind;
+    use nalgebra::Vector3;
+
+    /// The per-point values `geometry::evaluate` keeps (ground velocity,
+    /// moving points' ∂p/∂q) equal fresh evaluations bit for bit, and so
+    /// does the lengthening speed made from them, on models with
+    /// conditional and moving points and with wrapping.
+    #[test]
+    fn kept_point_motion_matches_fresh_evaluation() {
+        let (mut moving, mut wrapped) = (0, 0);
+        for name in ["human_seated.osim", "human_seated_rajagopal.osim"] {
+            let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("models/leg_extension")
+                .join(name);
+            let (spec, model) = crate::tools::loading::load_model(&file).unwrap();
+            let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+            assert!(!set.is_empty());
+            check_point_motion(&set, &model, &mut moving, &mut wrapped);
+        }
+        assert!(
+            moving > 0 && wrapped > 0,
+            "moving {moving} wrapped {wrapped}"
+        );
+    }
+
+    fn check_point_motion(set: &MuscleSet, model: &Model, moving: &mut usize, wrapped: &mut usize) {
+        let mut data = Data::new(model);
+        let mut mf = MuscleFrame::new(set, model);
+        for trial in 0..6 {
+            let state = |k: usize, s: f64| ((k * 7 + trial * 3) as f64 * 0.37 + s).sin();
+            for (k, c) in model.coordinates.iter().enumerate() {
+                let [lo, hi] = c.range;
+                let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
+                data.q[k] = lo + (hi - lo) * 0.5 * (1.0 + state(k, 0.0));
+                data.u[k] = state(k, 1.3);
+            }
+            kinematics::full(model, &mut data);
+            mf.evaluate(set, model, &data);
+            for (m, pm) in set.muscles.iter().enumerate() {
+                let st = mf.path_state(m);
+                let mut fresh = Vec::new();
+                for p in &st.points {
+                    let mut v = data.station_velocity(p.body, &p.local);
+                    match p.origin {
+                        Origin::Point(i) => match &pm.path.points[i].kind {
+                            PointKind::Moving {
+                                coordinate,
+                                functions,
+                                ..
+                            } => {
+                                let q = data.q[*coordinate];
+                                let d = Vector3::new(
+                                    functions[0].derivative(q, 1),
+                                    functions[1].derivative(q, 1),
+                                    functions[2].derivative(q, 1),
+                                );
+                                let frame_rot = pm.path.points[i].frame.rotation;
+                                let dp = data.rotation[p.body] * (frame_rot * d);
+                                assert_eq!(p.moving, Some((*coordinate, dp)));
+                                v += dp * data.u[*coordinate];
+                                *moving += 1;
+                            }
+                            _ => assert_eq!(p.moving, None),
+                        },
+                        Origin::Wrap { .. } => {
+                            assert_eq!(p.moving, None);
+                            *wrapped += 1;
+                        }
+                    }
+                    assert_eq!(p.velocity, v, "{} trial {trial}", pm.muscle.name);
+                    fresh.push(v);
+                }
+                // The speed from fresh velocities, as it was computed before
+                // the velocities were kept.
+                let mut speed = 0.0;
+                for (w, v) in st.points.windows(2).zip(fresh.windows(2)) {
+                    let d = w[0].ground - w[1].ground;
+                    let dv = v[0] - v[1];
+                    let n = d.norm();
+                    speed += if n < f64::EPSILON {
+                        dv.norm()
+                    } else {
+                        dv.dot(&d) / n
+                    };
+                }
+                assert_eq!(mf.speed[m].to_bits(), speed.to_bits(), "{}", pm.muscle.name);
+            }
+        }
     }
 }

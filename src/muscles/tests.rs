@@ -670,3 +670,32 @@ fn thelen_default_curves_match_opensim() {
         );
     }
 }
+
+/// `rigid_tendon_forces` = (`max_active_fiber_force_rigid_tendon`,
+/// `passive_fiber_force_rigid_tendon`) bit for bit, for pennated and
+/// unpennated Thelen muscles and Millard, from below the minimum fiber
+/// length (no active force) to far beyond optimal, at several speeds.
+#[test]
+fn rigid_tendon_forces_are_the_two_forces_bit_for_bit() {
+    let unpennated = r#"<Thelen2003Muscle name="t"><max_isometric_force>1000</max_isometric_force>
+           <optimal_fiber_length>0.1</optimal_fiber_length><tendon_slack_length>0.2</tendon_slack_length>
+           </Thelen2003Muscle>"#;
+    let mut nonzero = [0usize; 2];
+    for xml in [TRI, unpennated, SOLEUS] {
+        let m = muscle_from(xml).unwrap();
+        let ls = m.params.tendon_slack_length;
+        for i in 0..=80 {
+            let l = ls - 0.02 + i as f64 * 0.004;
+            for ld in [-1.7, -0.4, 0.0, 0.3, 1.1, 2.5] {
+                let (a, p) = m.rigid_tendon_forces(l, ld);
+                let a0 = m.max_active_fiber_force_rigid_tendon(l, ld);
+                let p0 = m.passive_fiber_force_rigid_tendon(l);
+                assert_eq!(a.to_bits(), a0.to_bits(), "{} L={l} Ldot={ld}", m.name);
+                assert_eq!(p.to_bits(), p0.to_bits(), "{} L={l}", m.name);
+                nonzero[0] += (a != 0.0) as usize;
+                nonzero[1] += (p != 0.0) as usize;
+            }
+        }
+    }
+    assert!(nonzero[0] > 100 && nonzero[1] > 100, "{nonzero:?}");
+}

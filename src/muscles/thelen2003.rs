@@ -220,9 +220,33 @@ impl Thelen2003 {
         if !(lce > pen.minimum_fiber_length) {
             return 0.0;
         }
-        let phi = pen.pennation_angle(lce);
-        let vce = pen.fiber_velocity(phi.cos(), lengthening_speed, 0.0);
-        self.active_fiber_force_along_tendon(p, 1.0, lce, vce)
+        let cos_phi = pen.cos_pennation(lce);
+        let vce = pen.fiber_velocity(cos_phi, lengthening_speed, 0.0);
+        self.active_force_along_tendon_at(p, 1.0, lce, vce, cos_phi)
+    }
+
+    /// ([`max_active_fiber_force_rigid_tendon`], [`passive_fiber_force_rigid_tendon`])
+    /// bit for bit, with the fiber length and pennation computed once.
+    ///
+    /// [`max_active_fiber_force_rigid_tendon`]: Self::max_active_fiber_force_rigid_tendon
+    /// [`passive_fiber_force_rigid_tendon`]: Self::passive_fiber_force_rigid_tendon
+    pub fn rigid_tendon_forces(
+        &self,
+        p: &MuscleParams,
+        length: f64,
+        lengthening_speed: f64,
+    ) -> (f64, f64) {
+        let pen = &self.pennation;
+        let lce = pen.fiber_length(length, p.tendon_slack_length);
+        if !(lce > pen.minimum_fiber_length) {
+            return (0.0, self.passive_fiber_force_rigid_tendon(p, length));
+        }
+        // lce > l_min: the passive force's clamped fiber length is lce.
+        let cos_phi = pen.cos_pennation(lce);
+        let vce = pen.fiber_velocity(cos_phi, lengthening_speed, 0.0);
+        let active = self.active_force_along_tendon_at(p, 1.0, lce, vce, cos_phi);
+        let passive = p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * cos_phi;
+        (active, passive)
     }
 
     /// `calcActiveFiberForceAlongTendon(a, l^M, v^M)`.
@@ -237,6 +261,21 @@ impl Thelen2003 {
         if !(fiber_length > pen.minimum_fiber_length) {
             return 0.0;
         }
+        let cos_phi = pen.cos_pennation(fiber_length);
+        self.active_force_along_tendon_at(p, activation, fiber_length, fiber_velocity, cos_phi)
+    }
+
+    /// [`active_fiber_force_along_tendon`](Self::active_fiber_force_along_tendon)
+    /// for a fiber longer than l_min whose cos(pennation) is `cos_phi`.
+    fn active_force_along_tendon_at(
+        &self,
+        p: &MuscleParams,
+        activation: f64,
+        fiber_length: f64,
+        fiber_velocity: f64,
+        cos_phi: f64,
+    ) -> f64 {
+        let pen = &self.pennation;
         let a = activation.clamp(self.minimum_activation.min(1.0), 1.0);
         let lce_n = pen.clamp_fiber_length(fiber_length) / p.optimal_fiber_length;
         let v_n = fiber_velocity / (p.optimal_fiber_length * p.max_contraction_velocity);
@@ -250,8 +289,7 @@ impl Thelen2003 {
             // exact inverse, which is the best available answer.
             None => self.fv_full_activation(v_n),
         };
-        let phi = pen.pennation_angle(fiber_length);
-        p.max_isometric_force * a * fal * fv * phi.cos()
+        p.max_isometric_force * a * fal * fv * cos_phi
     }
 
     /// Passive fiber force along the tendon with a rigid tendon: fiber length
@@ -260,8 +298,7 @@ impl Thelen2003 {
     pub fn passive_fiber_force_rigid_tendon(&self, p: &MuscleParams, length: f64) -> f64 {
         let pen = &self.pennation;
         let lce = pen.clamp_fiber_length(pen.fiber_length(length, p.tendon_slack_length));
-        let phi = pen.pennation_angle(lce);
-        p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * phi.cos()
+        p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * pen.cos_pennation(lce)
     }
 }
 

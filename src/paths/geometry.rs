@@ -36,6 +36,13 @@ pub struct CurrentPoint {
     /// Where the point is now, in ground: what the next wrap computation
     /// starts from and where a tension acts (OpenSim's `getLocation`).
     pub at: Vector3<f64>,
+    /// Ground velocity of the point (of `at`): the body's station velocity
+    /// plus, for a moving path point, its motion along its body.
+    pub velocity: Vector3<f64>,
+    /// For a moving path point: its coordinate and ∂p/∂q (ground frame),
+    /// the derivative taken at the unclamped coordinate value as OpenSim
+    /// does.
+    pub moving: Option<(usize, Vector3<f64>)>,
 }
 
 /// Reusable per-path workspace.
@@ -47,25 +54,51 @@ pub struct PathState {
     pub length: f64,
 }
 
-fn point_local(model: &Model, path: &GeometryPath, i: usize, data: &Data) -> Vector3<f64> {
+/// Path point `i` as a current point: location in its body, in ground, its
+/// ground velocity and (moving points) its rate of motion, each computed
+/// once for the path's length, speed and forces.
+fn current_point(path: &GeometryPath, i: usize, data: &Data) -> CurrentPoint {
     let p = &path.points[i];
-    let _ = model;
-    let loc = match &p.kind {
+    let body = p.body;
+    let (local, moving) = match &p.kind {
         PointKind::Moving {
             coordinate,
             functions,
             clamp,
         } => {
-            let q = data.q[*coordinate].clamp(clamp[0], clamp[1]);
-            Vector3::new(
-                functions[0].value(q),
-                functions[1].value(q),
-                functions[2].value(q),
-            )
+            // Location at the clamped coordinate, derivative at the
+            // unclamped one; one evaluation for both when they coincide.
+            let q = data.q[*coordinate];
+            let qc = q.clamp(clamp[0], clamp[1]);
+            let mut loc = Vector3::zeros();
+            let mut d = Vector3::zeros();
+            for k in 0..3 {
+                (loc[k], d[k]) = if qc == q {
+                    functions[k].value_and_slope(q)
+                } else {
+                    (functions[k].value(qc), functions[k].derivative(q, 1))
+                };
+            }
+            let rate = data.rotation[body] * (p.frame.rotation * d);
+            (p.frame.apply(&loc), Some((*coordinate, rate)))
         }
-        _ => p.location,
+        _ => (p.body_location, None),
     };
-    p.frame.apply(&loc)
+    let r = data.rotation[body] * local;
+    let ground = data.position[body] + r;
+    let mut velocity = data.velocity[body] + data.omega[body].cross(&r);
+    if let Some((c, rate)) = moving {
+        velocity += rate * data.u[c];
+    }
+    CurrentPoint {
+        origin: Origin::Point(i),
+        body,
+        local,
+        ground,
+        at: ground,
+        velocity,
+        moving,
+    }
 }
 
 fn is_active(path: &GeometryPath, i: usize, data: &Data) -> bool {
@@ -98,30 +131,16 @@ fn length_of(points: &[CurrentPoint], wrap_length: &[f64]) -> f64 {
     l
 }
 
-/// Compute the current path and its length at the positions in `data`
-/// (`kinematics::positions` must have run).
-pub fn evaluate(
-    model: &Model,
-    path: &GeometryPath,
-    wraps: &[BodyWrapObject],
-    data: &Data,
-    st: &mut PathState,
-) {
+/// Compute the current path and its length at the positions in `data`, and
+/// its points' velocities (positions and velocities in `data` must be
+/// current).
+pub fn evaluate(path: &GeometryPath, wraps: &[BodyWrapObject], data: &Data, st: &mut PathState) {
     st.points.clear();
     st.wrap_length.clear();
     st.wrap_length.resize(path.wraps.len(), 0.0);
     for i in 0..path.points.len() {
         if is_active(path, i, data) {
-            let body = path.points[i].body;
-            let local = point_local(model, path, i, data);
-            let ground = data.station_position(body, &local);
-            st.points.push(CurrentPoint {
-                origin: Origin::Point(i),
-                body,
-                local,
-                ground,
-                at: ground,
-            });
+            st.points.push(current_point(path, i, data));
         }
     }
     if !path.wraps.is_empty() && !st.points.is_empty() {
@@ -258,10 +277,9 @@ fn apply_wrap_objects(
                 let l1 = wo.rotation * wr.r1 + wo.translation;
                 let l2 = wo.rotation * wr.r2 + wo.translation;
                 st.wrap_length[wi] = wr.wrap_path_length;
-                let (a1, a2) = (
-                    data.station_position(body, &l1),
-                    data.station_position(body, &l2),
-                );
+                let (r1, r2) = (data.rotation[body] * l1, data.rotation[body] * l2);
+                let (a1, a2) = (data.position[body] + r1, data.position[body] + r2);
+                let velocity = |r: &Vector3<f64>| data.velocity[body] + data.omega[body].cross(r);
                 let [g1, g2] = *latched[wi].get_or_insert([a1, a2]);
                 let p1 = CurrentPoint {
                     origin: Origin::Wrap {
@@ -272,6 +290,8 @@ fn apply_wrap_objects(
                     local: l1,
                     ground: g1,
                     at: a1,
+                    velocity: velocity(&r1),
+                    moving: None,
                 };
                 let p2 = CurrentPoint {
                     origin: Origin::Wrap {
@@ -282,6 +302,8 @@ fn apply_wrap_objects(
                     local: l2,
                     ground: g2,
                     at: a2,
+                    velocity: velocity(&r2),
+                    moving: None,
                 };
                 st.points.insert(at, p1);
                 st.points.insert(at + 1, p2);
@@ -304,43 +326,6 @@ fn apply_wrap_objects(
             st.wrap_length[w0] = 0.0;
         }
     }
-}
-
-/// Ground velocity of a current-path point.
-fn point_velocity(path: &GeometryPath, data: &Data, p: &CurrentPoint) -> Vector3<f64> {
-    let mut v = data.station_velocity(p.body, &p.local);
-    if let Some((c, dp)) = moving_point_rate(path, data, p) {
-        v += dp * data.u[c];
-    }
-    v
-}
-
-/// For a moving path point: its coordinate and ∂p/∂q (ground frame), the
-/// derivative taken at the unclamped coordinate value as OpenSim does.
-fn moving_point_rate(
-    path: &GeometryPath,
-    data: &Data,
-    p: &CurrentPoint,
-) -> Option<(usize, Vector3<f64>)> {
-    let Origin::Point(i) = p.origin else {
-        return None;
-    };
-    let pp = &path.points[i];
-    let PointKind::Moving {
-        coordinate,
-        functions,
-        ..
-    } = &pp.kind
-    else {
-        return None;
-    };
-    let q = data.q[*coordinate];
-    let d = Vector3::new(
-        functions[0].derivative(q, 1),
-        functions[1].derivative(q, 1),
-        functions[2].derivative(q, 1),
-    );
-    Some((*coordinate, data.rotation[p.body] * (pp.frame.rotation * d)))
 }
 
 /// The pull of a unit tension on the path's points: at each end of every
@@ -368,12 +353,12 @@ fn unit_direction(a: &CurrentPoint, b: &CurrentPoint) -> Vector3<f64> {
     }
 }
 
-/// Lengthening speed (positions and velocities in `data` must be current).
-pub fn lengthening_speed(path: &GeometryPath, data: &Data, st: &PathState) -> f64 {
+/// Lengthening speed of the path [`evaluate`] made.
+pub fn lengthening_speed(st: &PathState) -> f64 {
     let mut s = 0.0;
     for w in st.points.windows(2) {
         let d = w[0].ground - w[1].ground;
-        let dv = point_velocity(path, data, &w[0]) - point_velocity(path, data, &w[1]);
+        let dv = w[0].velocity - w[1].velocity;
         let n = d.norm();
         s += if n < f64::EPSILON {
             dv.norm()
@@ -384,17 +369,23 @@ pub fn lengthening_speed(path: &GeometryPath, data: &Data, st: &PathState) -> f6
     s
 }
 
+/// `model.common_ancestor(a, b)`, answering the common case of a body and
+/// its parent without walking to the ground.
+fn segment_top(model: &Model, a: usize, b: usize) -> usize {
+    if b != 0 && model.joints[b].parent_body == a {
+        a
+    } else if a != 0 && model.joints[a].parent_body == b {
+        b
+    } else {
+        model.common_ancestor(a, b)
+    }
+}
+
 /// Generalized force of a unit tension along the current path, added to
 /// `gen` (OpenSim's `GeometryPath::produceForces`): at each point, unit
 /// vectors towards its neighbours on other bodies, plus the work of moving
 /// points. Moment arm about an unconstrained coordinate = this force.
-pub fn add_unit_tension_force(
-    model: &Model,
-    path: &GeometryPath,
-    data: &Data,
-    st: &PathState,
-    gen: &mut [f64],
-) {
+pub fn add_unit_tension_force(model: &Model, data: &Data, st: &PathState, gen: &mut [f64]) {
     for w in st.points.windows(2).filter(|w| w[0].body != w[1].body) {
         let e = unit_direction(&w[0], &w[1]);
         // The segment's ends are pulled by opposite forces; the joints that
@@ -403,10 +394,10 @@ pub fn add_unit_tension_force(
         // the exact 0 keeps a muscle out of the rows of coordinates it
         // cannot move (a hip muscle and the pelvis's), so those rows stay
         // independent equations for the solver.
-        let top = model.common_ancestor(w[0].body, w[1].body);
+        let top = segment_top(model, w[0].body, w[1].body);
         for (p, f) in [(&w[0], e), (&w[1], -e)] {
             jacobian::add_point_force_below(model, data, p.body, top, &p.at, &f, gen);
-            if let Some((c, dp)) = moving_point_rate(path, data, p) {
+            if let Some((c, dp)) = p.moving {
                 gen[c] += dp.dot(&f);
             }
         }
@@ -426,8 +417,6 @@ pub fn add_unit_tension_force(
 /// `tension ×` [`add_unit_tension_force`]. Joint reactions need the body
 /// forces themselves (opensim-semantics.md §7.2).
 pub fn add_tension_forces(
-    path: &GeometryPath,
-    data: &Data,
     st: &PathState,
     tension: f64,
     applied: &mut [crate::dynamics::BodyForce],
@@ -436,8 +425,31 @@ pub fn add_tension_forces(
     for (p, e) in unit_pulls(st) {
         let f = e * tension;
         applied[p.body].add(&crate::dynamics::BodyForce::at_point(f, p.at));
-        if let Some((c, dp)) = moving_point_rate(path, data, p) {
+        if let Some((c, dp)) = p.moving {
             gen[c] += dp.dot(&f);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segment_top_is_the_common_ancestor() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("models/leg_extension/human_seated_rajagopal.osim");
+        let (_, model) = crate::tools::loading::load_model(&file).unwrap();
+        let nb = model.bodies.len();
+        assert!(nb > 5);
+        let mut direct = 0;
+        for a in 0..nb {
+            for b in 0..nb {
+                let top = model.common_ancestor(a, b);
+                assert_eq!(segment_top(&model, a, b), top, "bodies {a} {b}");
+                direct += (top == a || top == b) as usize;
+            }
+        }
+        assert!(direct > nb);
     }
 }

@@ -43,6 +43,9 @@ pub struct PathPoint {
     pub frame: Transform,
     /// Location in the parent frame (ignored for moving points).
     pub location: Vector3<f64>,
+    /// `frame` applied to `location`: the location in the body (ignored
+    /// for moving points).
+    pub body_location: Vector3<f64>,
     pub kind: PointKind,
 }
 
@@ -235,6 +238,7 @@ fn read_point(p: &Element, model: &Model) -> Result<PathPoint> {
         body,
         frame,
         location,
+        body_location: frame.apply(&location),
         kind,
     })
 }

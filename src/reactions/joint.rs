@@ -153,7 +153,7 @@ pub fn apply_forces(
     if controls.iter().any(|c| matches!(c, Control::Muscle(_))) {
         mf.evaluate(muscles, model, data);
     }
-    apply_forces_at_state(data, mf, muscles, controls, values, passive, loads, t);
+    apply_forces_at_state(data, mf, controls, values, passive, loads, t);
 }
 
 /// [`apply_forces`] when `data`'s positions and velocities and the muscle
@@ -162,7 +162,6 @@ pub fn apply_forces(
 fn apply_forces_at_state(
     data: &mut Data,
     mf: &MuscleFrame,
-    muscles: &MuscleSet,
     controls: &[Control],
     values: &[f64],
     passive: &[PassiveForce],
@@ -180,14 +179,9 @@ fn apply_forces_at_state(
     }
     for (c, &v) in controls.iter().zip(values) {
         match c {
-            Control::Muscle(m) => geometry::add_tension_forces(
-                &muscles.muscles[*m].path,
-                data,
-                mf.path_state(*m),
-                v,
-                &mut applied,
-                &mut gen,
-            ),
+            Control::Muscle(m) => {
+                geometry::add_tension_forces(mf.path_state(*m), v, &mut applied, &mut gen)
+            }
             Control::Actuator(a) => a.apply(data, v, &mut applied, &mut gen),
         }
     }
@@ -225,7 +219,6 @@ pub fn static_optimization_reactions(
     apply_forces_at_state(
         data,
         mf,
-        &problem.muscles,
         &problem.controls,
         &result.forces,
         &problem.passive,
@@ -254,10 +247,8 @@ pub fn static_optimization_reactions(
     if problem.settings.passive_fiber_forces {
         let mut applied = std::mem::take(&mut data.applied);
         let mut gen = std::mem::take(&mut data.applied_gen);
-        for (m, pm) in problem.muscles.muscles.iter().enumerate() {
+        for m in 0..problem.muscles.len() {
             geometry::add_tension_forces(
-                &pm.path,
-                data,
                 mf.path_state(m),
                 mf.passive_force[m],
                 &mut applied,
