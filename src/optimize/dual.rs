@@ -104,6 +104,10 @@ const MAX_LINE_SEARCH: u32 = 60;
 /// A step t is taken when |φ'(t)| ≤ this · φ'(0) (strong Wolfe curvature
 /// condition on the concave φ(t) = g(y + t d)).
 const CURVATURE: f64 = 0.5;
+/// A residual at most this · max(1, ‖b‖∞) that a full Newton step fails to
+/// cut is taken for the rounding floor of x(y) and refined in the primal
+/// (`Block::polish`).
+const POLISH_BELOW: f64 = 1e-6;
 /// Longest step tried along a Newton direction.
 const MAX_STEP: f64 = 1024.0;
 
@@ -504,6 +508,10 @@ struct Newton {
     h_free_diag: Vec<f64>,
     /// Scratch of the block's row count.
     u: Vec<f64>,
+    /// x, y and F before a primal refinement (`Block::polish`).
+    keep_x: Vec<f64>,
+    keep_y: Vec<f64>,
+    keep_f: Vec<f64>,
 }
 
 impl Newton {
@@ -513,6 +521,9 @@ impl Newton {
             (&mut self.d, n_rows),
             (&mut self.f, n_rows),
             (&mut self.u, n_rows),
+            (&mut self.keep_y, n_rows),
+            (&mut self.keep_f, n_rows),
+            (&mut self.keep_x, n_cols),
             (&mut self.h_free_diag, n_rows),
             (&mut self.v, n_cols),
             (&mut self.x, n_cols),
@@ -777,6 +788,95 @@ impl Block {
         (a > 0.0).then_some(a)
     }
 
+    /// Primal refinement at a converged active set, for frames where the
+    /// residual stalls at the rounding of x(y) = Proj(Mᵀy/2w): a column
+    /// with large entries and a small weight (a contact, w = 1/w0) turns
+    /// the rounding of Mᵀy (terms far larger than their sum) into errors of
+    /// x that no representable y removes. Here x is carried explicitly:
+    /// each round solves H δy = F for the current derivative D, moves
+    /// y by δy and x by D Mᵀδy/2w (a small correction, computed to its own
+    /// precision), and evaluates F = b − M x from that x. Stops at
+    /// `target`, after three rounds, or when F no longer halves. The answer
+    /// stays in s.x and s.y; returns max |F|.
+    fn polish(&self, s: &mut Newton, target: f64) -> f64 {
+        let mut fmax = amax(&s.f);
+        s.keep_x.copy_from_slice(&s.x);
+        s.keep_y.copy_from_slice(&s.y);
+        s.keep_f.copy_from_slice(&s.f);
+        let start = fmax;
+        for _ in 0..3 {
+            if fmax <= target {
+                break;
+            }
+            self.update_hessian(s);
+            s.u.copy_from_slice(&s.f);
+            if !regularised_solve(s, 1e-12, Target::D) {
+                break;
+            }
+            let mut c = 0;
+            for (gi, gr) in self.groups.iter().enumerate() {
+                let inv2w = 0.5 / gr.w;
+                match (gr.set, s.deriv[gi]) {
+                    (_, Deriv::Zero) => {}
+                    (Set::Interval { lo, hi }, Deriv::Identity) => {
+                        let dx = self.m.dot(c, &s.d) * inv2w;
+                        s.x[c] = (s.x[c] + dx).clamp(lo, hi);
+                    }
+                    (set @ Set::Cone { .. }, Deriv::Factors(factors)) => {
+                        let dv = [
+                            self.m.dot(c, &s.d) * inv2w,
+                            self.m.dot(c + 1, &s.d) * inv2w,
+                            self.m.dot(c + 2, &s.d) * inv2w,
+                        ];
+                        for f in &factors {
+                            let k = f[0] * dv[0] + f[1] * dv[1] + f[2] * dv[2];
+                            if k != 0.0 {
+                                for j in 0..3 {
+                                    s.x[c + j] += k * f[j];
+                                }
+                            }
+                        }
+                        // Back onto the set (a tangential move leaves a face
+                        // near an edge, the cone's surface to second order).
+                        let p = project_group(set, [s.x[c], s.x[c + 1], s.x[c + 2]]);
+                        s.x[c..c + 3].copy_from_slice(&p);
+                    }
+                    // (A cone's derivative is always Factors, an
+                    // interval's never.)
+                    (Set::Cone { .. }, Deriv::Identity)
+                    | (Set::Interval { .. }, Deriv::Factors(_)) => {}
+                }
+                c += gr.len();
+            }
+            for (y, d) in s.y.iter_mut().zip(&s.d) {
+                *y += d;
+            }
+            s.f.copy_from_slice(&self.b);
+            for c in 0..s.x.len() {
+                let xc = s.x[c];
+                if xc != 0.0 {
+                    let (ri, a) = self.m.col(c);
+                    for (&r, a) in ri.iter().zip(a) {
+                        s.f[r] -= a * xc;
+                    }
+                }
+            }
+            let new = amax(&s.f);
+            if !(new <= 0.5 * fmax) {
+                fmax = new;
+                break;
+            }
+            fmax = new;
+        }
+        if !(fmax < start) {
+            s.x.copy_from_slice(&s.keep_x);
+            s.y.copy_from_slice(&s.keep_y);
+            s.f.copy_from_slice(&s.keep_f);
+            return start;
+        }
+        fmax
+    }
+
     /// Newton from s.y (the caller's start) or, when `warm` is false, from
     /// the unconstrained multipliers; the answer is left in s.x and s.y.
     fn solve(&self, s: &mut Newton, warm: bool, target: f64, accept: f64) -> BlockResult {
@@ -805,19 +905,36 @@ impl Block {
             }
         }
         self.eval(s);
-        // Stopping short of the target: accepted if within `accept`.
-        let give_up = |s: &Newton, solves: u32, why: &'static str| {
-            if amax(&s.f) <= accept {
+        // Stopping short of the target: accepted if within `accept`, after
+        // a primal refinement when the residual is small.
+        let give_up = |s: &mut Newton, solves: u32, why: &'static str| {
+            let mut f = amax(&s.f);
+            if f > target && f <= POLISH_BELOW * bscale {
+                f = self.polish(s, target);
+            }
+            if f <= accept {
                 Ok(solves)
             } else {
                 Err((solves, why))
             }
         };
+        let mut last_fmax = f64::INFINITY;
         for _ in 0..MAX_NEWTON_STEPS {
             let fmax = amax(&s.f);
             if fmax <= target {
                 return Ok(solves);
             }
+            if full_step && fmax > 0.25 * last_fmax && fmax <= POLISH_BELOW * bscale {
+                // A full step that did not cut a small residual: at the
+                // rounding floor of x(y) (see `polish`).
+                let f = self.polish(s, target);
+                if f <= accept {
+                    return Ok(solves + 1);
+                }
+                // (x and F back in step with y.)
+                self.eval(s);
+            }
+            last_fmax = fmax;
             solves += 1;
             // Levenberg–Marquardt-like damping in proportion to each
             // equation's curvature scale and to the residual (bounded steps
@@ -1298,7 +1415,34 @@ mod tests;
 /// (checked separately), these conditions certify x as the optimum; the
 /// unit tests and tests/dual_newton.rs hold every Newton answer to them.
 pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
+    optimality_violation_floored(p, x, y, 0.0)
+}
+
+/// [`optimality_violation`] with each variable's scale raised to at least
+/// `floor` · Σ_i |a_ij y_i|, the size of the terms whose sum is (Aᵀy)_j.
+/// Where those terms cancel to a small (Aᵀy)_j (a contact barely loaded
+/// while its column meets large multipliers), the rounding of Aᵀy alone,
+/// about 1e-16 of the terms, exceeds 1e-9 of (Aᵀy)_j, and no pair (x, y) in
+/// double precision meets the plain test; a floor of 1e-6 accepts that
+/// rounding and nothing beyond a few units of it. `floor` = 0 is
+/// [`optimality_violation`].
+pub fn optimality_violation_floored(p: &FrameProblem, x: &[f64], y: &[f64], floor: f64) -> f64 {
     let aty = p.a.tr_mul(&DVector::from_column_slice(y));
+    let terms: Vec<f64> = if floor > 0.0 {
+        (0..p.n_var())
+            .map(|j| {
+                floor
+                    * p.a
+                        .column(j)
+                        .iter()
+                        .zip(y)
+                        .map(|(a, y)| (a * y).abs())
+                        .sum::<f64>()
+            })
+            .collect()
+    } else {
+        vec![0.0; p.n_var()]
+    };
     let mut worst = 0.0f64;
     let mut in_cone = vec![false; p.n_var()];
     for c in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
@@ -1307,7 +1451,7 @@ pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
         let z: Vec<f64> = v.iter().map(|&j| aty[j] - 2.0 * w * x[j]).collect();
         let scale = v
             .iter()
-            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
+            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()).max(terms[j]))
             .fold(1e-300, f64::max);
         // Polar of the cone: z_n + μ‖z_s‖ ≤ 0; of a pyramid: zᵀr ≤ 0 for
         // every edge direction r = (1, μ·corner).
@@ -1341,6 +1485,7 @@ pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
         let scale = aty[j]
             .abs()
             .max(2.0 * p.weights[j] * x[j].abs())
+            .max(terms[j])
             .max(1e-300);
         let v = if x[j] == p.lower[j] {
             (-g).max(0.0)
