@@ -34,20 +34,31 @@
 //! (Levenberg–Marquardt-like: A D Aᵀ is singular when all variables of an
 //! equation sit at bounds or a contact lies on the cone's surface; ν starts
 //! at 0.1 from the cold start and 1e-6 from a warm one, falls a
-//! thousandfold after a full step and rises tenfold after a step shorter
-//! than ¼; ε = 1e-12 when a full step left every clip's derivative as it
-//! was, where F is linear and the plain Newton step exact). The step
+//! thousandfold after a full step and a hundredfold after a step longer
+//! than 1 (the damping held the step short), rises tenfold after a step
+//! shorter than ¼; ε = 1e-12 when a full step left every clip's derivative
+//! as it was, where F is linear and the plain Newton step exact). The step
 //! y + t d takes t = 1 when |φ'(1)| ≤ ½ φ'(0) for the concave
 //! φ(t) = g(y + t d), whose derivative φ'(t) = F(y + t d)ᵀd is decreasing
 //! (piecewise linear without contacts); otherwise t with |φ'(t)| ≤ ½ φ'(0),
 //! bracketed by doubling beyond 1 or between 0 and 1 and found by regula
 //! falsi (Illinois). φ' costs no product with A: with v = Aᵀy/2w and
 //! δ = Aᵀd/2w per variable, φ'(t) = bᵀd − Σ (Aᵀd)_i Proj(v + tδ)_i.
+//! With friction cones a cut step (t < 1) gets a second-order correction
+//! (`Block::second_order_correction`): a contact held near the cone's apex
+//! while its Mᵀy/2w is large confines y to a curved ridge that the linear
+//! model steps off.
 //! The iterate x(y) is feasible for the bounds and friction cones by
 //! construction, and it is the exact
 //! minimiser of the problem with right-hand side A x(y); the method stops when
 //! ‖A x − b‖∞ ≤ [`TARGET_TOLERANCE`]·max(1, ‖b‖∞) (1e-12), and accepts
-//! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there.
+//! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there. Where a full
+//! step fails to cut a residual below 1e-6·max(1, ‖b‖∞) (and at the step
+//! limit) the residual is the rounding of x(y) itself: a cheap contact
+//! (weight 1/w0) barely loaded while its column meets large multipliers
+//! has (Aᵀy)_j as the small sum of large terms, and one ulp of y moves F by
+//! more than the tolerance. `Block::polish` then refines in the primal:
+//! x is carried explicitly and corrected by D Mᵀδy/2w with H δy = F.
 //!
 //! Linear algebra: A's columns are kept with their nonzero entries only;
 //! A D Aᵀ is updated between steps by removing and adding the variables
@@ -97,8 +108,11 @@ pub const RESIDUAL_TOLERANCE: f64 = 1e-10;
 /// up to ~3e-8; the extra precision costs about half a linear solve per
 /// frame (quadratic convergence once the active set is right).
 pub const TARGET_TOLERANCE: f64 = 1e-12;
-/// Newton steps allowed per block before giving up.
-pub const MAX_NEWTON_STEPS: u32 = 50;
+/// Newton steps allowed per block before giving up. (Frames of the
+/// ten-contact gait2392 scene of `benches/contacts.rs` with friction cones
+/// held near their apex take up to ~150; three of its 151 take more and
+/// fall back to Clarabel.)
+pub const MAX_NEWTON_STEPS: u32 = 200;
 /// Trial steps of one line search (after bracketing) before giving up.
 const MAX_LINE_SEARCH: u32 = 60;
 /// A step t is taken when |φ'(t)| ≤ this · φ'(0) (strong Wolfe curvature
@@ -108,6 +122,9 @@ const CURVATURE: f64 = 0.5;
 /// cut is taken for the rounding floor of x(y) and refined in the primal
 /// (`Block::polish`).
 const POLISH_BELOW: f64 = 1e-6;
+/// An undamped Newton step longer than this · max(1, ‖y‖∞) is recomputed
+/// with the damping.
+const HUGE_STEP: f64 = 1e6;
 /// Longest step tried along a Newton direction.
 const MAX_STEP: f64 = 1024.0;
 
@@ -831,8 +848,8 @@ impl Block {
                         for f in &factors {
                             let k = f[0] * dv[0] + f[1] * dv[1] + f[2] * dv[2];
                             if k != 0.0 {
-                                for j in 0..3 {
-                                    s.x[c + j] += k * f[j];
+                                for (xj, fj) in s.x[c..c + 3].iter_mut().zip(f) {
+                                    *xj += k * fj;
                                 }
                             }
                         }
@@ -862,19 +879,77 @@ impl Block {
                 }
             }
             let new = amax(&s.f);
-            if !(new <= 0.5 * fmax) {
+            // (NaN counts as no progress.)
+            if new.is_nan() || new > 0.5 * fmax {
                 fmax = new;
                 break;
             }
             fmax = new;
         }
-        if !(fmax < start) {
+        if fmax.is_nan() || fmax >= start {
             s.x.copy_from_slice(&s.keep_x);
             s.y.copy_from_slice(&s.keep_y);
             s.f.copy_from_slice(&s.keep_f);
             return start;
         }
         fmax
+    }
+
+    /// Along s.d: q = Mᵀd, dv = q/2w per column; returns (φ'(0), bᵀd).
+    fn direction(&self, s: &mut Newton) -> (f64, f64) {
+        let slope: f64 = s.f.iter().zip(&s.d).map(|(f, d)| f * d).sum();
+        let bd: f64 = self.b.iter().zip(&s.d).map(|(b, d)| b * d).sum();
+        let mut c = 0;
+        for gr in &self.groups {
+            let inv2w = 0.5 / gr.w;
+            for k in c..c + gr.len() {
+                s.q[k] = self.m.dot(k, &s.d);
+                s.dv[k] = s.q[k] * inv2w;
+            }
+            c += gr.len();
+        }
+        (slope, bd)
+    }
+
+    /// Second-order correction of a Newton step the line search cut to
+    /// `t` < 1, for blocks with friction cones. A contact on the cone's
+    /// surface near its polar cone (a large Mᵀy/2w whose projection is
+    /// small: the contact wants to pull and is held at a small force)
+    /// confines the multipliers to a curved ridge {n + μ‖s‖ ≈ 0}: the
+    /// linear model steps off it, the line search cuts the step, and Newton
+    /// creeps along the ridge (seen: g still short of its maximum after 200
+    /// steps). The correction d₂ = (H + εS)⁻¹F(y + d), with the factor at
+    /// hand, bends the step back; the corrected direction d + d₂ is taken
+    /// when its line search accepts the full step, otherwise the cut step
+    /// along d stands. Leaves s.d and the direction buffers on the step
+    /// taken; returns its length.
+    fn second_order_correction(&self, s: &mut Newton, t: f64) -> f64 {
+        let n = s.y.len();
+        s.keep_y.copy_from_slice(&s.y);
+        for (y, d) in s.y.iter_mut().zip(&s.d) {
+            *y += d;
+        }
+        self.eval(s);
+        s.u.copy_from_slice(&s.f);
+        cholesky_solve(&s.l, n, &mut s.u);
+        s.y.copy_from_slice(&s.keep_y);
+        self.eval(s);
+        if !s.u.iter().all(|v| v.is_finite()) {
+            self.direction(s);
+            return t;
+        }
+        // keep_y holds d while d becomes d + d₂.
+        s.keep_y.copy_from_slice(&s.d);
+        for (d, d2) in s.d.iter_mut().zip(&s.u) {
+            *d += d2;
+        }
+        let (slope, bd) = self.direction(s);
+        if slope > 0.0 && self.line_search(s, bd, slope) == Some(1.0) {
+            return 1.0;
+        }
+        s.d.copy_from_slice(&s.keep_y);
+        self.direction(s);
+        t
     }
 
     /// Newton from s.y (the caller's start) or, when `warm` is false, from
@@ -919,6 +994,15 @@ impl Block {
             }
         };
         let mut last_fmax = f64::INFINITY;
+        let has_cone = self.groups.iter().any(|g| {
+            matches!(
+                g.set,
+                Set::Cone {
+                    model: FrictionModel::Cone,
+                    ..
+                }
+            )
+        });
         for _ in 0..MAX_NEWTON_STEPS {
             let fmax = amax(&s.f);
             if fmax <= target {
@@ -955,28 +1039,34 @@ impl Block {
             if !regularised_solve(s, eps, Target::D) {
                 return give_up(s, solves, "Newton system not solvable");
             }
-            let slope: f64 = s.f.iter().zip(&s.d).map(|(f, d)| f * d).sum();
-            let bd: f64 = self.b.iter().zip(&s.d).map(|(b, d)| b * d).sum();
-            let mut c = 0;
-            for gr in &self.groups {
-                let inv2w = 0.5 / gr.w;
-                for k in c..c + gr.len() {
-                    s.q[k] = self.m.dot(k, &s.d);
-                    s.dv[k] = s.q[k] * inv2w;
+            if eps == 1e-12 && amax(&s.d) > HUGE_STEP * amax(&s.y).max(1.0) {
+                // The undamped step along a near-null direction of H (an
+                // equation whose variables all sit at bounds): seen to throw
+                // y to 1e10, where rounding stalls every later step. Damped
+                // as usual instead.
+                s.u.copy_from_slice(&s.f);
+                let eps = 1e-12 + nu * (fmax / bscale).min(1.0);
+                if !regularised_solve(s, eps, Target::D) {
+                    return give_up(s, solves, "Newton system not solvable");
                 }
-                c += gr.len();
             }
+            let (slope, bd) = self.direction(s);
             let t = if slope > 0.0 {
                 self.line_search(s, bd, slope)
             } else {
                 None
             };
-            let Some(t) = t else {
+            let Some(mut t) = t else {
                 return give_up(s, solves, "line search stalled");
             };
+            if t < 1.0 && has_cone {
+                t = self.second_order_correction(s, t);
+            }
             full_step = t == 1.0;
             if t == 1.0 {
                 nu = (nu * 1e-3).max(1e-12);
+            } else if t > 1.0 {
+                nu = (nu * 1e-2).max(1e-12);
             } else if t < 0.25 {
                 nu = (nu * 10.0).min(1.0);
             }
