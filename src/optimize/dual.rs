@@ -34,20 +34,31 @@
 //! (Levenberg–Marquardt-like: A D Aᵀ is singular when all variables of an
 //! equation sit at bounds or a contact lies on the cone's surface; ν starts
 //! at 0.1 from the cold start and 1e-6 from a warm one, falls a
-//! thousandfold after a full step and rises tenfold after a step shorter
-//! than ¼; ε = 1e-12 when a full step left every clip's derivative as it
-//! was, where F is linear and the plain Newton step exact). The step
+//! thousandfold after a full step and a hundredfold after a step longer
+//! than 1 (the damping held the step short), rises tenfold after a step
+//! shorter than ¼; ε = 1e-12 when a full step left every clip's derivative
+//! as it was, where F is linear and the plain Newton step exact). The step
 //! y + t d takes t = 1 when |φ'(1)| ≤ ½ φ'(0) for the concave
 //! φ(t) = g(y + t d), whose derivative φ'(t) = F(y + t d)ᵀd is decreasing
 //! (piecewise linear without contacts); otherwise t with |φ'(t)| ≤ ½ φ'(0),
 //! bracketed by doubling beyond 1 or between 0 and 1 and found by regula
 //! falsi (Illinois). φ' costs no product with A: with v = Aᵀy/2w and
 //! δ = Aᵀd/2w per variable, φ'(t) = bᵀd − Σ (Aᵀd)_i Proj(v + tδ)_i.
+//! With friction cones a cut step (t < 1) gets a second-order correction
+//! (`Block::second_order_correction`): a contact held near the cone's apex
+//! while its Mᵀy/2w is large confines y to a curved ridge that the linear
+//! model steps off.
 //! The iterate x(y) is feasible for the bounds and friction cones by
 //! construction, and it is the exact
 //! minimiser of the problem with right-hand side A x(y); the method stops when
 //! ‖A x − b‖∞ ≤ [`TARGET_TOLERANCE`]·max(1, ‖b‖∞) (1e-12), and accepts
-//! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there.
+//! [`RESIDUAL_TOLERANCE`] (1e-10) when it cannot get there. Where a full
+//! step fails to cut a residual below 1e-6·max(1, ‖b‖∞) (and at the step
+//! limit) the residual is the rounding of x(y) itself: a cheap contact
+//! (weight 1/w0) barely loaded while its column meets large multipliers
+//! has (Aᵀy)_j as the small sum of large terms, and one ulp of y moves F by
+//! more than the tolerance. `Block::polish` then refines in the primal:
+//! x is carried explicitly and corrected by D Mᵀδy/2w with H δy = F.
 //!
 //! Linear algebra: A's columns are kept with their nonzero entries only;
 //! A D Aᵀ is updated between steps by removing and adding the variables
@@ -99,13 +110,23 @@ pub const RESIDUAL_TOLERANCE: f64 = 1e-10;
 /// up to ~3e-8; the extra precision costs about half a linear solve per
 /// frame (quadratic convergence once the active set is right).
 pub const TARGET_TOLERANCE: f64 = 1e-12;
-/// Newton steps allowed per block before giving up.
-pub const MAX_NEWTON_STEPS: u32 = 50;
+/// Newton steps allowed per block before giving up. (Frames of the
+/// ten-contact gait2392 scene of `benches/contacts.rs` with friction cones
+/// held near their apex take up to ~150; three of its 151 take more and
+/// fall back to Clarabel.)
+pub const MAX_NEWTON_STEPS: u32 = 200;
 /// Trial steps of one line search (after bracketing) before giving up.
 const MAX_LINE_SEARCH: u32 = 60;
 /// A step t is taken when |φ'(t)| ≤ this · φ'(0) (strong Wolfe curvature
 /// condition on the concave φ(t) = g(y + t d)).
 const CURVATURE: f64 = 0.5;
+/// A residual at most this · max(1, ‖b‖∞) that a full Newton step fails to
+/// cut is taken for the rounding floor of x(y) and refined in the primal
+/// (`Block::polish`).
+const POLISH_BELOW: f64 = 1e-6;
+/// An undamped Newton step longer than this · max(1, ‖y‖∞) is recomputed
+/// with the damping.
+const HUGE_STEP: f64 = 1e6;
 /// Longest step tried along a Newton direction.
 const MAX_STEP: f64 = 1024.0;
 
@@ -506,6 +527,10 @@ struct Newton {
     h_free_diag: Vec<f64>,
     /// Scratch of the block's row count.
     u: Vec<f64>,
+    /// x, y and F before a primal refinement (`Block::polish`).
+    keep_x: Vec<f64>,
+    keep_y: Vec<f64>,
+    keep_f: Vec<f64>,
 }
 
 impl Newton {
@@ -515,6 +540,9 @@ impl Newton {
             (&mut self.d, n_rows),
             (&mut self.f, n_rows),
             (&mut self.u, n_rows),
+            (&mut self.keep_y, n_rows),
+            (&mut self.keep_f, n_rows),
+            (&mut self.keep_x, n_cols),
             (&mut self.h_free_diag, n_rows),
             (&mut self.v, n_cols),
             (&mut self.x, n_cols),
@@ -779,6 +807,153 @@ impl Block {
         (a > 0.0).then_some(a)
     }
 
+    /// Primal refinement at a converged active set, for frames where the
+    /// residual stalls at the rounding of x(y) = Proj(Mᵀy/2w): a column
+    /// with large entries and a small weight (a contact, w = 1/w0) turns
+    /// the rounding of Mᵀy (terms far larger than their sum) into errors of
+    /// x that no representable y removes. Here x is carried explicitly:
+    /// each round solves H δy = F for the current derivative D, moves
+    /// y by δy and x by D Mᵀδy/2w (a small correction, computed to its own
+    /// precision), and evaluates F = b − M x from that x. Stops at
+    /// `target`, after three rounds, or when F no longer halves. The answer
+    /// stays in s.x and s.y; returns max |F|.
+    fn polish(&self, s: &mut Newton, target: f64) -> f64 {
+        let mut fmax = amax(&s.f);
+        s.keep_x.copy_from_slice(&s.x);
+        s.keep_y.copy_from_slice(&s.y);
+        s.keep_f.copy_from_slice(&s.f);
+        let start = fmax;
+        for _ in 0..3 {
+            if fmax <= target {
+                break;
+            }
+            self.update_hessian(s);
+            s.u.copy_from_slice(&s.f);
+            if !regularised_solve(s, 1e-12, Target::D) {
+                break;
+            }
+            let mut c = 0;
+            for (gi, gr) in self.groups.iter().enumerate() {
+                let inv2w = 0.5 / gr.w;
+                match (gr.set, s.deriv[gi]) {
+                    (_, Deriv::Zero) => {}
+                    (Set::Interval { lo, hi }, Deriv::Identity) => {
+                        let dx = self.m.dot(c, &s.d) * inv2w;
+                        s.x[c] = (s.x[c] + dx).clamp(lo, hi);
+                    }
+                    (set @ Set::Cone { .. }, Deriv::Factors(factors)) => {
+                        let dv = [
+                            self.m.dot(c, &s.d) * inv2w,
+                            self.m.dot(c + 1, &s.d) * inv2w,
+                            self.m.dot(c + 2, &s.d) * inv2w,
+                        ];
+                        for f in &factors {
+                            let k = f[0] * dv[0] + f[1] * dv[1] + f[2] * dv[2];
+                            if k != 0.0 {
+                                for (xj, fj) in s.x[c..c + 3].iter_mut().zip(f) {
+                                    *xj += k * fj;
+                                }
+                            }
+                        }
+                        // Back onto the set (a tangential move leaves a face
+                        // near an edge, the cone's surface to second order).
+                        let p = project_group(set, [s.x[c], s.x[c + 1], s.x[c + 2]]);
+                        s.x[c..c + 3].copy_from_slice(&p);
+                    }
+                    // (A cone's derivative is always Factors, an
+                    // interval's never.)
+                    (Set::Cone { .. }, Deriv::Identity)
+                    | (Set::Interval { .. }, Deriv::Factors(_)) => {}
+                }
+                c += gr.len();
+            }
+            for (y, d) in s.y.iter_mut().zip(&s.d) {
+                *y += d;
+            }
+            s.f.copy_from_slice(&self.b);
+            for c in 0..s.x.len() {
+                let xc = s.x[c];
+                if xc != 0.0 {
+                    let (ri, a) = self.m.col(c);
+                    for (&r, a) in ri.iter().zip(a) {
+                        s.f[r] -= a * xc;
+                    }
+                }
+            }
+            let new = amax(&s.f);
+            // (NaN counts as no progress.)
+            if new.is_nan() || new > 0.5 * fmax {
+                fmax = new;
+                break;
+            }
+            fmax = new;
+        }
+        if fmax.is_nan() || fmax >= start {
+            s.x.copy_from_slice(&s.keep_x);
+            s.y.copy_from_slice(&s.keep_y);
+            s.f.copy_from_slice(&s.keep_f);
+            return start;
+        }
+        fmax
+    }
+
+    /// Along s.d: q = Mᵀd, dv = q/2w per column; returns (φ'(0), bᵀd).
+    fn direction(&self, s: &mut Newton) -> (f64, f64) {
+        let slope: f64 = s.f.iter().zip(&s.d).map(|(f, d)| f * d).sum();
+        let bd: f64 = self.b.iter().zip(&s.d).map(|(b, d)| b * d).sum();
+        let mut c = 0;
+        for gr in &self.groups {
+            let inv2w = 0.5 / gr.w;
+            for k in c..c + gr.len() {
+                s.q[k] = self.m.dot(k, &s.d);
+                s.dv[k] = s.q[k] * inv2w;
+            }
+            c += gr.len();
+        }
+        (slope, bd)
+    }
+
+    /// Second-order correction of a Newton step the line search cut to
+    /// `t` < 1, for blocks with friction cones. A contact on the cone's
+    /// surface near its polar cone (a large Mᵀy/2w whose projection is
+    /// small: the contact wants to pull and is held at a small force)
+    /// confines the multipliers to a curved ridge {n + μ‖s‖ ≈ 0}: the
+    /// linear model steps off it, the line search cuts the step, and Newton
+    /// creeps along the ridge (seen: g still short of its maximum after 200
+    /// steps). The correction d₂ = (H + εS)⁻¹F(y + d), with the factor at
+    /// hand, bends the step back; the corrected direction d + d₂ is taken
+    /// when its line search accepts the full step, otherwise the cut step
+    /// along d stands. Leaves s.d and the direction buffers on the step
+    /// taken; returns its length.
+    fn second_order_correction(&self, s: &mut Newton, t: f64) -> f64 {
+        let n = s.y.len();
+        s.keep_y.copy_from_slice(&s.y);
+        for (y, d) in s.y.iter_mut().zip(&s.d) {
+            *y += d;
+        }
+        self.eval(s);
+        s.u.copy_from_slice(&s.f);
+        cholesky_solve(&s.l, n, &mut s.u);
+        s.y.copy_from_slice(&s.keep_y);
+        self.eval(s);
+        if !s.u.iter().all(|v| v.is_finite()) {
+            self.direction(s);
+            return t;
+        }
+        // keep_y holds d while d becomes d + d₂.
+        s.keep_y.copy_from_slice(&s.d);
+        for (d, d2) in s.d.iter_mut().zip(&s.u) {
+            *d += d2;
+        }
+        let (slope, bd) = self.direction(s);
+        if slope > 0.0 && self.line_search(s, bd, slope) == Some(1.0) {
+            return 1.0;
+        }
+        s.d.copy_from_slice(&s.keep_y);
+        self.direction(s);
+        t
+    }
+
     /// Newton from s.y (the caller's start) or, when `warm` is false, from
     /// the unconstrained multipliers; the answer is left in s.x and s.y.
     fn solve(&self, s: &mut Newton, warm: bool, target: f64, accept: f64) -> BlockResult {
@@ -807,19 +982,45 @@ impl Block {
             }
         }
         self.eval(s);
-        // Stopping short of the target: accepted if within `accept`.
-        let give_up = |s: &Newton, solves: u32, why: &'static str| {
-            if amax(&s.f) <= accept {
+        // Stopping short of the target: accepted if within `accept`, after
+        // a primal refinement when the residual is small.
+        let give_up = |s: &mut Newton, solves: u32, why: &'static str| {
+            let mut f = amax(&s.f);
+            if f > target && f <= POLISH_BELOW * bscale {
+                f = self.polish(s, target);
+            }
+            if f <= accept {
                 Ok(solves)
             } else {
                 Err((solves, why))
             }
         };
+        let mut last_fmax = f64::INFINITY;
+        let has_cone = self.groups.iter().any(|g| {
+            matches!(
+                g.set,
+                Set::Cone {
+                    model: FrictionModel::Cone,
+                    ..
+                }
+            )
+        });
         for _ in 0..MAX_NEWTON_STEPS {
             let fmax = amax(&s.f);
             if fmax <= target {
                 return Ok(solves);
             }
+            if full_step && fmax > 0.25 * last_fmax && fmax <= POLISH_BELOW * bscale {
+                // A full step that did not cut a small residual: at the
+                // rounding floor of x(y) (see `polish`).
+                let f = self.polish(s, target);
+                if f <= accept {
+                    return Ok(solves + 1);
+                }
+                // (x and F back in step with y.)
+                self.eval(s);
+            }
+            last_fmax = fmax;
             solves += 1;
             // Levenberg–Marquardt-like damping in proportion to each
             // equation's curvature scale and to the residual (bounded steps
@@ -840,28 +1041,34 @@ impl Block {
             if !regularised_solve(s, eps, Target::D) {
                 return give_up(s, solves, "Newton system not solvable");
             }
-            let slope: f64 = s.f.iter().zip(&s.d).map(|(f, d)| f * d).sum();
-            let bd: f64 = self.b.iter().zip(&s.d).map(|(b, d)| b * d).sum();
-            let mut c = 0;
-            for gr in &self.groups {
-                let inv2w = 0.5 / gr.w;
-                for k in c..c + gr.len() {
-                    s.q[k] = self.m.dot(k, &s.d);
-                    s.dv[k] = s.q[k] * inv2w;
+            if eps == 1e-12 && amax(&s.d) > HUGE_STEP * amax(&s.y).max(1.0) {
+                // The undamped step along a near-null direction of H (an
+                // equation whose variables all sit at bounds): seen to throw
+                // y to 1e10, where rounding stalls every later step. Damped
+                // as usual instead.
+                s.u.copy_from_slice(&s.f);
+                let eps = 1e-12 + nu * (fmax / bscale).min(1.0);
+                if !regularised_solve(s, eps, Target::D) {
+                    return give_up(s, solves, "Newton system not solvable");
                 }
-                c += gr.len();
             }
+            let (slope, bd) = self.direction(s);
             let t = if slope > 0.0 {
                 self.line_search(s, bd, slope)
             } else {
                 None
             };
-            let Some(t) = t else {
+            let Some(mut t) = t else {
                 return give_up(s, solves, "line search stalled");
             };
+            if t < 1.0 && has_cone {
+                t = self.second_order_correction(s, t);
+            }
             full_step = t == 1.0;
             if t == 1.0 {
                 nu = (nu * 1e-3).max(1e-12);
+            } else if t > 1.0 {
+                nu = (nu * 1e-2).max(1e-12);
             } else if t < 0.25 {
                 nu = (nu * 10.0).min(1.0);
             }
@@ -1300,7 +1507,34 @@ mod tests;
 /// (checked separately), these conditions certify x as the optimum; the
 /// unit tests and tests/dual_newton.rs hold every Newton answer to them.
 pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
+    optimality_violation_floored(p, x, y, 0.0)
+}
+
+/// [`optimality_violation`] with each variable's scale raised to at least
+/// `floor` · Σ_i |a_ij y_i|, the size of the terms whose sum is (Aᵀy)_j.
+/// Where those terms cancel to a small (Aᵀy)_j (a contact barely loaded
+/// while its column meets large multipliers), the rounding of Aᵀy alone,
+/// about 1e-16 of the terms, exceeds 1e-9 of (Aᵀy)_j, and no pair (x, y) in
+/// double precision meets the plain test; a floor of 1e-6 accepts that
+/// rounding and nothing beyond a few units of it. `floor` = 0 is
+/// [`optimality_violation`].
+pub fn optimality_violation_floored(p: &FrameProblem, x: &[f64], y: &[f64], floor: f64) -> f64 {
     let aty = p.a.tr_mul(&DVector::from_column_slice(y));
+    let terms: Vec<f64> = if floor > 0.0 {
+        (0..p.n_var())
+            .map(|j| {
+                floor
+                    * p.a
+                        .column(j)
+                        .iter()
+                        .zip(y)
+                        .map(|(a, y)| (a * y).abs())
+                        .sum::<f64>()
+            })
+            .collect()
+    } else {
+        vec![0.0; p.n_var()]
+    };
     let mut worst = 0.0f64;
     let mut in_cone = vec![false; p.n_var()];
     for c in p.static_contacts.iter().filter(|c| c.mu > 0.0) {
@@ -1309,7 +1543,7 @@ pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
         let z: Vec<f64> = v.iter().map(|&j| aty[j] - 2.0 * w * x[j]).collect();
         let scale = v
             .iter()
-            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()))
+            .map(|&j| aty[j].abs().max(2.0 * w * x[j].abs()).max(terms[j]))
             .fold(1e-300, f64::max);
         // Polar of the cone: z_n + μ‖z_s‖ ≤ 0; of a pyramid: zᵀr ≤ 0 for
         // every edge direction r = (1, μ·corner).
@@ -1343,6 +1577,7 @@ pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
         let scale = aty[j]
             .abs()
             .max(2.0 * p.weights[j] * x[j].abs())
+            .max(terms[j])
             .max(1e-300);
         let v = if x[j] == p.lower[j] {
             (-g).max(0.0)
