@@ -629,13 +629,13 @@ impl Block<'_> {
     fn hessian(&self, deriv: Option<&[Deriv]>, h: &mut [f64], u: &mut [f64]) {
         h.iter_mut().for_each(|e| *e = 0.0);
         for gi in 0..self.groups.len() {
-            let d = deriv.map_or(Deriv::Identity, |d| d[gi]);
+            let d = deriv.map_or(&Deriv::Identity, |d| &d[gi]);
             self.add_group(h, gi, d, 1.0, u);
         }
     }
 
     /// h += sign · M_g D_g M_gᵀ for group gi with derivative d.
-    fn add_group(&self, h: &mut [f64], gi: usize, d: Deriv, sign: f64, u: &mut [f64]) {
+    fn add_group(&self, h: &mut [f64], gi: usize, d: &Deriv, sign: f64, u: &mut [f64]) {
         let gr = &self.groups[gi];
         let c = self.group_col[gi];
         let s = sign * 0.5 / gr.w;
@@ -647,7 +647,7 @@ impl Block<'_> {
                 }
             }
             Deriv::Factors(factors) => {
-                for fac in &factors {
+                for fac in factors {
                     if fac.iter().any(|e| *e != 0.0) {
                         self.add_outer(h, c, fac, s, u);
                     }
@@ -673,7 +673,7 @@ impl Block<'_> {
             self.hessian(Some(&s.deriv), &mut s.h, &mut s.u);
         } else {
             for gi in 0..self.groups.len() {
-                let (old, new) = (s.h_deriv[gi], s.deriv[gi]);
+                let (old, new) = (&s.h_deriv[gi], &s.deriv[gi]);
                 if old != new {
                     self.add_group(&mut s.h, gi, old, -1.0, &mut s.u);
                     self.add_group(&mut s.h, gi, new, 1.0, &mut s.u);
@@ -1247,6 +1247,8 @@ pub struct DualWorkspace {
     /// the blocks' rows in the layout's order.
     b: Vec<f64>,
     block_b: Vec<f64>,
+    /// A x − b of the answer.
+    residual: Vec<f64>,
     layout: Layout,
     newton: Newton,
     /// Layouts built (to test that they are reused and rebuilt).
@@ -1432,8 +1434,22 @@ impl DualWorkspace {
                 }
             }
         }
-        // Safety net: the whole system, with the original matrix.
-        let residual = p.eq_residual(&x);
+        // Safety net: the whole system, with the original matrix: as
+        // FrameProblem::eq_residual, without allocating, and skipping the
+        // columns of variables at 0 (which add ±0 to a finite A's sums).
+        let r = &mut self.residual;
+        r.clear();
+        r.extend(p.b.iter().map(|b| -b));
+        if m > 0 {
+            for (column, &xj) in a.chunks_exact(m).zip(&x) {
+                if xj != 0.0 {
+                    for (ri, aij) in r.iter_mut().zip(column) {
+                        *ri += aij * xj;
+                    }
+                }
+            }
+        }
+        let residual = r.iter().fold(0.0f64, |worst, ri| worst.max(ri.abs()));
         if residual.is_nan() || residual > tol {
             return Err(DualFailure::NotConverged {
                 iterations,

@@ -739,6 +739,11 @@ fn reused_workspace_answers_as_a_fresh_one() {
         let reused = bits(ws.solve(p, None));
         let fresh = bits(solve_dual(p, None));
         assert_eq!(reused, fresh);
+        if let Ok(d) = &fresh {
+            // The residual as FrameProblem computes it.
+            let x: Vec<f64> = d.0.iter().map(|v| f64::from_bits(*v)).collect();
+            assert_eq!(d.4, p.eq_residual(&x).to_bits());
+        }
         assert_eq!(ws.rebuilds - before, u64::from(rebuild), "rebuilt");
         if let Some(k) = blocks {
             assert_eq!(fresh.unwrap().3, k);
