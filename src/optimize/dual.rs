@@ -56,7 +56,13 @@
 //! so the equations coupled to most others (the pelvis beside two legs)
 //! come last and the zeros between the others survive. [`DualWorkspace`]
 //! holds every buffer, for callers that solve many frames
-//! ([`super::solve()`] keeps one per thread).
+//! ([`super::solve()`] keeps one per thread), and the block structure of
+//! the last problem (blocks, row orders, A's columns laid out block by
+//! block), a function of the grouping of the variables and of A's pattern
+//! of nonzero entries alone: each call checks both against the new problem
+//! (one pass over A, which also takes its values) and rebuilds the
+//! structure when either differs, so the answer is the same bit for bit as
+//! from a fresh workspace.
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
@@ -671,16 +677,17 @@ impl Block<'_> {
         let nonzero = s.deriv.iter().filter(|d| **d != Deriv::Zero).count();
         if 2 * changed >= nonzero {
             self.hessian(Some(&s.deriv), &mut s.h, &mut s.u);
-        } else {
+            s.h_deriv.copy_from_slice(&s.deriv);
+        } else if changed > 0 {
             for gi in 0..self.groups.len() {
                 let (old, new) = (&s.h_deriv[gi], &s.deriv[gi]);
                 if old != new {
                     self.add_group(&mut s.h, gi, old, -1.0, &mut s.u);
                     self.add_group(&mut s.h, gi, new, 1.0, &mut s.u);
+                    s.h_deriv[gi] = s.deriv[gi];
                 }
             }
         }
-        s.h_deriv.copy_from_slice(&s.deriv);
         changed
     }
 
