@@ -636,7 +636,9 @@ impl Block<'_> {
         h.iter_mut().for_each(|e| *e = 0.0);
         for gi in 0..self.groups.len() {
             let d = deriv.map_or(&Deriv::Identity, |d| &d[gi]);
-            self.add_group(h, gi, d, 1.0, u);
+            if *d != Deriv::Zero {
+                self.add_group(h, gi, d, 1.0, u);
+            }
         }
     }
 
