@@ -505,27 +505,28 @@ enum Deriv {
 #[derive(Debug, Clone, Copy)]
 struct Block<'a> {
     rows: &'a [usize],
-    groups: Groups<'a>,
+    groups: Part<'a, Group>,
     /// Each group's first column.
     group_col: &'a [usize],
     m: Cols<'a>,
-    b: &'a [f64],
+    b: Part<'a, f64>,
 }
 
-/// A block's groups (a slice that `for gr in &block.groups` walks).
+/// A slice of a block's data in the workspace, used as [`Block`] used its
+/// own vectors (`for gr in &block.groups`, `copy_from_slice(&block.b)`).
 #[derive(Debug, Clone, Copy)]
-struct Groups<'a>(&'a [Group]);
+struct Part<'a, T>(&'a [T]);
 
-impl<'a> std::ops::Deref for Groups<'a> {
-    type Target = [Group];
-    fn deref(&self) -> &[Group] {
+impl<T> std::ops::Deref for Part<'_, T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
         self.0
     }
 }
 
-impl<'a> IntoIterator for &Groups<'a> {
-    type Item = &'a Group;
-    type IntoIter = std::slice::Iter<'a, Group>;
+impl<'a, T> IntoIterator for &Part<'a, T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
     fn into_iter(self) -> Self::IntoIter {
         self.0.iter()
     }
@@ -1409,10 +1410,10 @@ impl DualWorkspace {
             let (c0, c1) = (layout.block_col[k], layout.block_col[k + 1]);
             let block = Block {
                 rows: &layout.rows[r0..r1],
-                groups: Groups(&self.ordered[g0..g1]),
+                groups: Part(&self.ordered[g0..g1]),
                 group_col: &layout.group_col[g0..g1],
                 m: layout.cols.view(c0..c1),
-                b: &self.block_b[r0..r1],
+                b: Part(&self.block_b[r0..r1]),
             };
             let s = &mut self.newton;
             s.resize(r1 - r0, c1 - c0, g1 - g0);
