@@ -67,7 +67,13 @@
 //! so the equations coupled to most others (the pelvis beside two legs)
 //! come last and the zeros between the others survive. [`DualWorkspace`]
 //! holds every buffer, for callers that solve many frames
-//! ([`super::solve()`] keeps one per thread).
+//! ([`super::solve()`] keeps one per thread), and the block structure of
+//! the last problem (blocks, row orders, A's columns laid out block by
+//! block), a function of the grouping of the variables and of A's pattern
+//! of nonzero entries alone: each call checks both against the new problem
+//! (one pass over A, which also takes its values) and rebuilds the
+//! structure when either differs, so the answer is the same bit for bit as
+//! from a fresh workspace.
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
@@ -468,7 +474,34 @@ impl SparseCols {
         (&self.row_idx[r.clone()], &self.val[r])
     }
 
+    /// Columns `cols` (a block's) as a [`Cols`] numbered from 0.
+    fn view(&self, cols: std::ops::Range<usize>) -> Cols<'_> {
+        Cols {
+            col_ptr: &self.col_ptr[cols.start..cols.end + 1],
+            row_idx: &self.row_idx,
+            val: &self.val,
+        }
+    }
+}
+
+/// Some consecutive columns of a [`SparseCols`]: column c holds entries
+/// col_ptr[c]..col_ptr[c + 1] of row_idx and val.
+#[derive(Debug, Clone, Copy)]
+struct Cols<'a> {
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    val: &'a [f64],
+}
+
+impl<'a> Cols<'a> {
+    #[inline]
+    fn col(&self, c: usize) -> (&'a [usize], &'a [f64]) {
+        let r = self.col_ptr[c]..self.col_ptr[c + 1];
+        (&self.row_idx[r.clone()], &self.val[r])
+    }
+
     /// (M_c)ᵀ y.
+    #[inline]
     fn dot(&self, c: usize, y: &[f64]) -> f64 {
         let (ri, v) = self.col(c);
         ri.iter().zip(v).map(|(&r, a)| a * y[r]).sum()
@@ -489,15 +522,35 @@ enum Deriv {
 
 /// One independent block: its equations (global rows), its groups, the
 /// submatrix (columns in group order, local rows) and the right-hand side
-/// with the fixed variables moved over.
-#[derive(Debug, Default)]
-struct Block {
-    rows: Vec<usize>,
-    groups: Vec<Group>,
+/// with the fixed variables moved over; views into a [`DualWorkspace`].
+#[derive(Debug, Clone, Copy)]
+struct Block<'a> {
+    rows: &'a [usize],
+    groups: Part<'a, Group>,
     /// Each group's first column.
-    group_col: Vec<usize>,
-    m: SparseCols,
-    b: Vec<f64>,
+    group_col: &'a [usize],
+    m: Cols<'a>,
+    b: Part<'a, f64>,
+}
+
+/// A slice of a block's data in the workspace, used as [`Block`] used its
+/// own vectors (`for gr in &block.groups`, `copy_from_slice(&block.b)`).
+#[derive(Debug, Clone, Copy)]
+struct Part<'a, T>(&'a [T]);
+
+impl<T> std::ops::Deref for Part<'_, T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        self.0
+    }
+}
+
+impl<'a, T> IntoIterator for &Part<'a, T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
 }
 
 /// Newton's buffers for one block (sized by [`Newton::resize`]).
@@ -565,7 +618,7 @@ impl Newton {
 /// buffers, or (linear solves, why it failed).
 type BlockResult = Result<u32, (u32, &'static str)>;
 
-impl Block {
+impl Block<'_> {
     fn n_rows(&self) -> usize {
         self.rows.len()
     }
@@ -611,13 +664,15 @@ impl Block {
     fn hessian(&self, deriv: Option<&[Deriv]>, h: &mut [f64], u: &mut [f64]) {
         h.iter_mut().for_each(|e| *e = 0.0);
         for gi in 0..self.groups.len() {
-            let d = deriv.map_or(Deriv::Identity, |d| d[gi]);
-            self.add_group(h, gi, d, 1.0, u);
+            let d = deriv.map_or(&Deriv::Identity, |d| &d[gi]);
+            if *d != Deriv::Zero {
+                self.add_group(h, gi, d, 1.0, u);
+            }
         }
     }
 
     /// h += sign · M_g D_g M_gᵀ for group gi with derivative d.
-    fn add_group(&self, h: &mut [f64], gi: usize, d: Deriv, sign: f64, u: &mut [f64]) {
+    fn add_group(&self, h: &mut [f64], gi: usize, d: &Deriv, sign: f64, u: &mut [f64]) {
         let gr = &self.groups[gi];
         let c = self.group_col[gi];
         let s = sign * 0.5 / gr.w;
@@ -629,7 +684,7 @@ impl Block {
                 }
             }
             Deriv::Factors(factors) => {
-                for fac in &factors {
+                for fac in factors {
                     if fac.iter().any(|e| *e != 0.0) {
                         self.add_outer(h, c, fac, s, u);
                     }
@@ -653,16 +708,17 @@ impl Block {
         let nonzero = s.deriv.iter().filter(|d| **d != Deriv::Zero).count();
         if 2 * changed >= nonzero {
             self.hessian(Some(&s.deriv), &mut s.h, &mut s.u);
-        } else {
+            s.h_deriv.copy_from_slice(&s.deriv);
+        } else if changed > 0 {
             for gi in 0..self.groups.len() {
-                let (old, new) = (s.h_deriv[gi], s.deriv[gi]);
+                let (old, new) = (&s.h_deriv[gi], &s.deriv[gi]);
                 if old != new {
                     self.add_group(&mut s.h, gi, old, -1.0, &mut s.u);
                     self.add_group(&mut s.h, gi, new, 1.0, &mut s.u);
+                    s.h_deriv[gi] = s.deriv[gi];
                 }
             }
         }
-        s.h_deriv.copy_from_slice(&s.deriv);
         changed
     }
 
@@ -1170,33 +1226,251 @@ fn regularised_solve(s: &mut Newton, eps: f64, target: Target) -> bool {
     false
 }
 
+/// The block structure of a problem: which groups and equations form each
+/// independent block, the order of each block's equations, and A's columns
+/// laid out block by block. It is a function of the grouping of the
+/// variables and of A's pattern of nonzero entries alone, so
+/// [`DualWorkspace`] keeps it from one problem to the next and rebuilds it
+/// when either differs ([`Layout::refill`] checks both on every call): a
+/// problem's answer is the same bit for bit whatever was solved before.
+#[derive(Debug, Default)]
+struct Layout {
+    /// Built for these dimensions and these groups' variables (in the order
+    /// the partition lists them).
+    valid: bool,
+    m: usize,
+    n: usize,
+    key: Vec<[usize; 3]>,
+    /// Groups (indices into the partition's list) block by block, and each
+    /// block's first (n_blocks + 1 entries).
+    order: Vec<usize>,
+    block_group: Vec<usize>,
+    /// Per entry of `order`: its first column, counted from its block's.
+    group_col: Vec<usize>,
+    /// Groups in no equation.
+    idle_groups: Vec<usize>,
+    /// The ordered groups' columns, rows local to their block (entries in
+    /// ascending global row), each entry's global row, and each block's
+    /// first column (n_blocks + 1 entries).
+    cols: SparseCols,
+    src_row: Vec<usize>,
+    block_col: Vec<usize>,
+    /// Each block's equations (global rows) in the block's order, and each
+    /// block's first (n_blocks + 1 entries).
+    rows: Vec<usize>,
+    block_row: Vec<usize>,
+    /// Equations without free variables.
+    idle_rows: Vec<usize>,
+    /// Scratch of [`Layout::rebuild`].
+    tmp: SparseCols,
+    tmp_first: Vec<usize>,
+    parent: Vec<usize>,
+    block_of_root: Vec<usize>,
+    block_of_group: Vec<usize>,
+    row_block: Vec<usize>,
+    count: Vec<usize>,
+    local: Vec<usize>,
+}
+
+/// Number of nonzero (or NaN) entries of a dense column.
+fn nonzeros(column: &[f64]) -> usize {
+    column.iter().map(|&e| usize::from(e != 0.0)).sum()
+}
+
+impl Layout {
+    fn n_blocks(&self) -> usize {
+        self.block_row.len().saturating_sub(1)
+    }
+
+    /// Whether the layout was built for these dimensions and groups.
+    fn fits(&self, m: usize, n: usize, groups: &[Group]) -> bool {
+        self.valid
+            && self.m == m
+            && self.n == n
+            && self.key.len() == groups.len()
+            && self.key.iter().zip(groups).all(|(k, g)| *k == g.vars)
+    }
+
+    /// Takes A's values (dense, m rows) into the columns when A has the
+    /// pattern the layout was built for: every column of a grouped
+    /// variable nonzero exactly in its recorded rows. False otherwise (the
+    /// values are then partly written; [`Layout::rebuild`] follows).
+    fn refill(&mut self, a: &[f64], m: usize, groups: &[Group]) -> bool {
+        let mut c = 0;
+        for &g in &self.order {
+            let gr = &groups[g];
+            for &v in &gr.vars[..gr.len()] {
+                let column = &a[v * m..(v + 1) * m];
+                let (start, end) = (self.cols.col_ptr[c], self.cols.col_ptr[c + 1]);
+                if nonzeros(column) != end - start {
+                    return false;
+                }
+                for (e, &r) in self.cols.val[start..end]
+                    .iter_mut()
+                    .zip(&self.src_row[start..end])
+                {
+                    *e = column[r];
+                    if *e == 0.0 {
+                        return false;
+                    }
+                }
+                c += 1;
+            }
+        }
+        self.idle_groups.iter().all(|&g| {
+            let gr = &groups[g];
+            gr.vars[..gr.len()]
+                .iter()
+                .all(|&v| nonzeros(&a[v * m..(v + 1) * m]) == 0)
+        })
+    }
+
+    /// Builds the layout afresh for A (dense, m rows) and these groups.
+    fn rebuild(&mut self, a: &[f64], m: usize, n: usize, groups: &[Group]) {
+        self.valid = false;
+        // The groups' columns (global rows); union-find over the equations
+        // they share.
+        let tmp = &mut self.tmp;
+        tmp.clear();
+        tmp.make_room(m * groups.iter().map(Group::len).sum::<usize>());
+        let parent = &mut self.parent;
+        parent.clear();
+        parent.extend(0..m);
+        let first = &mut self.tmp_first;
+        first.clear();
+        for gr in groups {
+            let c0 = tmp.col_ptr.len() - 1;
+            first.push(c0);
+            for &v in &gr.vars[..gr.len()] {
+                tmp.push_dense_col(&a[v * m..(v + 1) * m]);
+            }
+            let (start, end) = (tmp.col_ptr[c0], tmp.col_ptr[tmp.col_ptr.len() - 1]);
+            if end > start {
+                // Every row of the group under the root of its first row.
+                let root = find(parent, tmp.row_idx[start]);
+                for &r in &tmp.row_idx[start + 1..end] {
+                    let rr = find(parent, r);
+                    if rr != root {
+                        parent[rr] = root;
+                    }
+                }
+            }
+        }
+        tmp.trim();
+        first.push(tmp.col_ptr.len() - 1);
+        // Blocks numbered by root row, in order of their first group.
+        let block_of_root = &mut self.block_of_root;
+        block_of_root.clear();
+        block_of_root.resize(m, usize::MAX);
+        let block_of_group = &mut self.block_of_group;
+        block_of_group.clear();
+        let mut n_blocks = 0;
+        for gi in 0..groups.len() {
+            let (start, end) = (tmp.col_ptr[first[gi]], tmp.col_ptr[first[gi + 1]]);
+            if start == end {
+                block_of_group.push(usize::MAX);
+                continue;
+            }
+            let root = find(parent, tmp.row_idx[start]);
+            if block_of_root[root] == usize::MAX {
+                block_of_root[root] = n_blocks;
+                n_blocks += 1;
+            }
+            block_of_group.push(block_of_root[root]);
+        }
+        // Each block's rows in order of their count of nonzero entries
+        // (then index): equations coupled to many others (a pelvis beside
+        // two legs) come last, so the Cholesky factor keeps the zeros of H
+        // between the others (no fill between the legs).
+        let count = &mut self.count;
+        count.clear();
+        count.resize(m, 0);
+        for &r in &tmp.row_idx {
+            count[r] += 1;
+        }
+        self.row_block.clear();
+        self.idle_rows.clear();
+        for r in 0..m {
+            let k = block_of_root[find(parent, r)];
+            self.row_block.push(k);
+            if k == usize::MAX {
+                self.idle_rows.push(r);
+            }
+        }
+        self.rows.clear();
+        self.block_row.clear();
+        self.local.clear();
+        self.local.resize(m, usize::MAX);
+        for k in 0..n_blocks {
+            let start = self.rows.len();
+            self.block_row.push(start);
+            let row_block = &self.row_block;
+            self.rows.extend((0..m).filter(|&r| row_block[r] == k));
+            self.rows[start..].sort_unstable_by_key(|&r| (count[r], r));
+            for (i, &r) in self.rows[start..].iter().enumerate() {
+                self.local[r] = i;
+            }
+        }
+        self.block_row.push(self.rows.len());
+        // The groups block by block, their columns with local rows.
+        self.order.clear();
+        self.block_group.clear();
+        self.group_col.clear();
+        self.block_col.clear();
+        self.src_row.clear();
+        let cols = &mut self.cols;
+        cols.clear();
+        for k in 0..n_blocks {
+            self.block_group.push(self.order.len());
+            let c0 = cols.col_ptr.len() - 1;
+            self.block_col.push(c0);
+            for gi in (0..groups.len()).filter(|&gi| block_of_group[gi] == k) {
+                self.order.push(gi);
+                self.group_col.push(cols.col_ptr.len() - 1 - c0);
+                for c in first[gi]..first[gi + 1] {
+                    let (ri, v) = tmp.col(c);
+                    let local = &self.local;
+                    cols.push_col(ri.iter().zip(v).map(|(&r, &e)| (local[r], e)));
+                    self.src_row.extend_from_slice(ri);
+                }
+            }
+        }
+        self.block_group.push(self.order.len());
+        self.block_col.push(cols.col_ptr.len() - 1);
+        self.idle_groups.clear();
+        self.idle_groups
+            .extend((0..groups.len()).filter(|&gi| block_of_group[gi] == usize::MAX));
+        self.key.clear();
+        self.key.extend(groups.iter().map(|g| g.vars));
+        (self.m, self.n) = (m, n);
+        self.valid = true;
+    }
+}
+
 /// Reusable buffers of the dual Newton method. [`DualWorkspace::solve`]
-/// answers exactly as [`solve_dual`] does (nothing carries over from one
-/// problem to the next but allocated memory); a caller solving many frames
-/// keeps one per thread to avoid allocating.
+/// answers exactly as [`solve_dual`] does: besides allocated memory it
+/// keeps only the block structure of the last problem ([`Layout`]), which
+/// it checks against each new problem and rebuilds when it differs. A
+/// caller solving many frames keeps one per thread.
 #[derive(Debug, Default)]
 pub struct DualWorkspace {
     /// Per variable: its fixed value, whether it belongs to a contact.
     fixed: Vec<Option<f64>>,
     in_contact: Vec<bool>,
+    /// The groups in the partition's order, and in the layout's.
     groups: Vec<Group>,
-    /// Right-hand side with the fixed variables moved over.
+    ordered: Vec<Group>,
+    /// Right-hand side with the fixed variables moved over, and that of
+    /// the blocks' rows in the layout's order.
     b: Vec<f64>,
-    /// Columns of the groups' variables (global rows), in group order, and
-    /// each group's first column.
-    cols: SparseCols,
-    group_col: Vec<usize>,
-    /// Union-find over equations; each block's root row; the block of each
-    /// group (usize::MAX: in no equation).
-    parent: Vec<usize>,
-    block_of_root: Vec<usize>,
-    block_of_group: Vec<usize>,
-    n_blocks: usize,
-    /// Global row → row within its block; entries per row.
-    local: Vec<usize>,
-    row_count: Vec<usize>,
-    block: Block,
+    block_b: Vec<f64>,
+    /// A x − b of the answer.
+    residual: Vec<f64>,
+    layout: Layout,
     newton: Newton,
+    /// Layouts built (to test that they are reused and rebuilt).
+    #[cfg(test)]
+    rebuilds: u64,
 }
 
 impl DualWorkspace {
@@ -1293,8 +1567,10 @@ impl DualWorkspace {
         let b = &mut self.b;
         b.clear();
         b.extend_from_slice(p.b.as_slice());
+        let mut x = vec![0.0; n];
         for (j, v) in fixed.iter().enumerate() {
             if let Some(v) = *v {
+                x[j] = v;
                 if v != 0.0 {
                     for (bi, aij) in b.iter_mut().zip(&a[j * m..(j + 1) * m]) {
                         *bi -= v * aij;
@@ -1303,147 +1579,53 @@ impl DualWorkspace {
             }
         }
 
-        // The groups' columns; union-find over the equations they share.
-        let cols = &mut self.cols;
-        cols.clear();
-        cols.make_room(m * groups.iter().map(Group::len).sum::<usize>());
-        let parent = &mut self.parent;
-        parent.clear();
-        parent.extend(0..m);
-        self.group_col.clear();
-        for gr in groups.iter() {
-            self.group_col.push(cols.col_ptr.len() - 1);
-            for &v in &gr.vars[..gr.len()] {
-                cols.push_dense_col(&a[v * m..(v + 1) * m]);
-            }
-            let (start, end) = (
-                cols.col_ptr[*self.group_col.last().unwrap()],
-                cols.col_ptr[cols.col_ptr.len() - 1],
-            );
-            if end > start {
-                // Every row of the group under the root of its first row.
-                let root = find(parent, cols.row_idx[start]);
-                for &r in &cols.row_idx[start + 1..end] {
-                    let rr = find(parent, r);
-                    if rr != root {
-                        parent[rr] = root;
-                    }
-                }
+        // The block structure: the last problem's when it applies.
+        let layout = &mut self.layout;
+        if !(layout.fits(m, n, groups) && layout.refill(a, m, groups)) {
+            layout.rebuild(a, m, n, groups);
+            #[cfg(test)]
+            {
+                self.rebuilds += 1;
             }
         }
-        cols.trim();
-        let mut x = vec![0.0; n];
-        let mut y = vec![0.0; m];
-        for (j, v) in fixed.iter().enumerate() {
-            if let Some(v) = *v {
-                x[j] = v;
+        for &g in &layout.idle_groups {
+            // In no equation: the projection of 0.
+            let gr = &groups[g];
+            let v = gr.at_zero();
+            for k in 0..gr.len() {
+                x[gr.vars[k]] = v[k];
             }
         }
-        // Blocks numbered by root row, in order of their first group.
-        let block_of_root = &mut self.block_of_root;
-        block_of_root.clear();
-        block_of_root.resize(m, usize::MAX);
-        self.block_of_group.clear();
-        self.n_blocks = 0;
-        for (gi, gr) in groups.iter().enumerate() {
-            let start = cols.col_ptr[self.group_col[gi]];
-            let end = cols.col_ptr[self.group_col[gi] + gr.len()];
-            if start == end {
-                // In no equation: the projection of 0.
-                let v = gr.at_zero();
-                for k in 0..gr.len() {
-                    x[gr.vars[k]] = v[k];
-                }
-                self.block_of_group.push(usize::MAX);
-                continue;
-            }
-            let root = find(parent, cols.row_idx[start]);
-            if block_of_root[root] == usize::MAX {
-                block_of_root[root] = self.n_blocks;
-                self.n_blocks += 1;
-            }
-            self.block_of_group.push(block_of_root[root]);
+        if layout.idle_rows.iter().any(|&r| b[r].abs() > tol) {
+            // No free variable in this equation.
+            return Err(DualFailure::NotConverged {
+                iterations: 0,
+                reason: "an equation without free variables does not hold",
+            });
         }
-        for (r, br) in b.iter().enumerate() {
-            let root = find(parent, r);
-            if block_of_root[root] == usize::MAX && br.abs() > tol {
-                // No free variable in this equation.
-                return Err(DualFailure::NotConverged {
-                    iterations: 0,
-                    reason: "an equation without free variables does not hold",
-                });
-            }
-        }
+        self.ordered.clear();
+        self.ordered.extend(layout.order.iter().map(|&g| groups[g]));
+        self.block_b.clear();
+        self.block_b.extend(layout.rows.iter().map(|&r| b[r]));
 
+        let mut y = vec![0.0; m];
         let mut iterations = 0u32;
-        self.local.clear();
-        self.local.resize(m, usize::MAX);
-        for k in 0..self.n_blocks {
-            // Gather the block: rows, groups, local columns.
-            // Rows in order of their count of nonzero entries (then
-            // index): equations coupled to many others (a pelvis beside two
-            // legs) come last, so the Cholesky factor keeps the zeros of
-            // H between the others (no fill between the legs).
-            let block = &mut self.block;
-            block.rows.clear();
-            for r in 0..m {
-                if block_of_root[find(parent, r)] == k {
-                    block.rows.push(r);
-                }
-            }
-            // The whole problem is one block (the usual case): take over
-            // its columns instead of copying them.
-            let whole = self.n_blocks == 1
-                && block.rows.len() == m
-                && self.block_of_group.iter().all(|&g| g == 0);
-            let count = &mut self.row_count;
-            count.clear();
-            count.resize(m, 0);
-            for (gi, gr) in groups.iter().enumerate() {
-                if self.block_of_group[gi] == k {
-                    for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
-                        for &r in cols.col(c).0 {
-                            count[r] += 1;
-                        }
-                    }
-                }
-            }
-            block.rows.sort_unstable_by_key(|&r| (count[r], r));
-            for (i, &r) in block.rows.iter().enumerate() {
-                self.local[r] = i;
-            }
-            block.groups.clear();
-            block.group_col.clear();
-            block.m.clear();
-            if whole {
-                std::mem::swap(cols, &mut block.m);
-                std::mem::swap(groups, &mut block.groups);
-                std::mem::swap(&mut self.group_col, &mut block.group_col);
-                for r in block.m.row_idx.iter_mut() {
-                    *r = self.local[*r];
-                }
-            } else {
-                for (gi, gr) in groups.iter().enumerate() {
-                    if self.block_of_group[gi] != k {
-                        continue;
-                    }
-                    block.groups.push(*gr);
-                    block.group_col.push(block.m.col_ptr.len() - 1);
-                    for c in self.group_col[gi]..self.group_col[gi] + gr.len() {
-                        let (ri, v) = cols.col(c);
-                        block
-                            .m
-                            .push_col(ri.iter().zip(v).map(|(&r, &e)| (self.local[r], e)));
-                    }
-                }
-            }
-            block.b.clear();
-            block.b.extend(block.rows.iter().map(|&r| b[r]));
-            let nc = block.m.col_ptr.len() - 1;
+        let n_blocks = layout.n_blocks();
+        for k in 0..n_blocks {
+            let (r0, r1) = (layout.block_row[k], layout.block_row[k + 1]);
+            let (g0, g1) = (layout.block_group[k], layout.block_group[k + 1]);
+            let (c0, c1) = (layout.block_col[k], layout.block_col[k + 1]);
+            let block = Block {
+                rows: &layout.rows[r0..r1],
+                groups: Part(&self.ordered[g0..g1]),
+                group_col: &layout.group_col[g0..g1],
+                m: layout.cols.view(c0..c1),
+                b: Part(&self.block_b[r0..r1]),
+            };
             let s = &mut self.newton;
-            s.resize(block.rows.len(), nc, block.groups.len());
+            s.resize(r1 - r0, c1 - c0, g1 - g0);
             if let Some(y0) = y0 {
-                for (yk, &r) in s.y.iter_mut().zip(&block.rows) {
+                for (yk, &r) in s.y.iter_mut().zip(block.rows) {
                     *yk = y0[r];
                 }
             }
@@ -1457,7 +1639,7 @@ impl DualWorkspace {
                             c += 1;
                         }
                     }
-                    for (yk, &r) in s.y.iter().zip(&block.rows) {
+                    for (yk, &r) in s.y.iter().zip(block.rows) {
                         y[r] = *yk;
                     }
                 }
@@ -1469,8 +1651,22 @@ impl DualWorkspace {
                 }
             }
         }
-        // Safety net: the whole system, with the original matrix.
-        let residual = p.eq_residual(&x);
+        // Safety net: the whole system, with the original matrix: as
+        // FrameProblem::eq_residual, without allocating, and skipping the
+        // columns of variables at 0 (which add ±0 to a finite A's sums).
+        let r = &mut self.residual;
+        r.clear();
+        r.extend(p.b.iter().map(|b| -b));
+        if m > 0 {
+            for (column, &xj) in a.chunks_exact(m).zip(&x) {
+                if xj != 0.0 {
+                    for (ri, aij) in r.iter_mut().zip(column) {
+                        *ri += aij * xj;
+                    }
+                }
+            }
+        }
+        let residual = r.iter().fold(0.0f64, |worst, ri| worst.max(ri.abs()));
         if residual.is_nan() || residual > tol {
             return Err(DualFailure::NotConverged {
                 iterations,
@@ -1481,7 +1677,7 @@ impl DualWorkspace {
             x,
             y,
             iterations,
-            blocks: self.n_blocks,
+            blocks: n_blocks,
             eq_residual: residual,
         })
     }

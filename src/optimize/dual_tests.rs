@@ -687,3 +687,128 @@ fn newton_converges_on_every_random_feasible_problem() {
     );
     assert_eq!(fails, 0);
 }
+
+/// A problem with two blocks: rows 0–2 hold variables 0–9, rows 3–5
+/// variables 10–19 and the contact (random_problem's values and bounds
+/// otherwise), with b = A x for random_problem's feasible x.
+fn two_blocks(seed: u64) -> (FrameProblem, Vec<f64>) {
+    let (mut p, x) = random_problem(seed, 6, 20, 1, 0.0);
+    for j in 0..p.n_var() {
+        for i in 0..6 {
+            if (j < 10) != (i < 3) {
+                p.a[(i, j)] = 0.0;
+            }
+        }
+    }
+    p.b = &p.a * DVector::from_column_slice(&x);
+    (p, x)
+}
+
+/// p with every entry of A scaled by its own factor (same pattern) and b
+/// brought back to A x.
+fn rescaled(p: &FrameProblem, x: &[f64], k: f64) -> FrameProblem {
+    let mut q = p.clone();
+    for (i, e) in q.a.as_mut_slice().iter_mut().enumerate() {
+        *e *= 1.0 + k * ((i % 7) as f64 - 3.0) / 10.0;
+    }
+    q.b = &q.a * DVector::from_column_slice(x);
+    q
+}
+
+/// A workspace reused over a sequence of problems of different shapes,
+/// groupings and patterns of A answers bit for bit as a fresh one, reusing
+/// its block structure exactly when the grouping and the pattern are those
+/// of the problem before.
+#[test]
+fn reused_workspace_answers_as_a_fresh_one() {
+    type Bits = (Vec<u64>, Vec<u64>, u32, usize, u64);
+    fn bits(d: Result<DualSolution, DualFailure>) -> Result<Bits, DualFailure> {
+        d.map(|d| {
+            (
+                d.x.iter().map(|v| v.to_bits()).collect(),
+                d.y.iter().map(|v| v.to_bits()).collect(),
+                d.iterations,
+                d.blocks,
+                d.eq_residual.to_bits(),
+            )
+        })
+    }
+    let mut ws = DualWorkspace::new();
+    let mut check = |p: &FrameProblem, rebuild: bool, blocks: Option<usize>| {
+        let before = ws.rebuilds;
+        let reused = bits(ws.solve(p, None));
+        let fresh = bits(solve_dual(p, None));
+        assert_eq!(reused, fresh);
+        if let Ok(d) = &fresh {
+            // The residual as FrameProblem computes it.
+            let x: Vec<f64> = d.0.iter().map(|v| f64::from_bits(*v)).collect();
+            assert_eq!(d.4, p.eq_residual(&x).to_bits());
+        }
+        assert_eq!(ws.rebuilds - before, u64::from(rebuild), "rebuilt");
+        if let Some(k) = blocks {
+            assert_eq!(fresh.unwrap().3, k);
+        }
+    };
+    let (p, x) = two_blocks(1);
+    check(&p, true, Some(2));
+    // Same grouping and pattern, other values: the structure is reused.
+    for k in 1..4 {
+        let mut q = rescaled(&p, &x, k as f64);
+        q.weights[3] *= 1.5;
+        q.upper[4] = q.upper[4].max(x[4]) * 2.0;
+        check(&q, false, Some(2));
+    }
+    // One more entry joins the blocks; removed again; an entry fewer.
+    let mut joined = p.clone();
+    joined.a[(0, 15)] = 0.7;
+    joined.b = &joined.a * DVector::from_column_slice(&x);
+    check(&joined, true, Some(1));
+    check(&rescaled(&joined, &x, 2.0), false, Some(1));
+    check(&p, true, Some(2));
+    let j = (0..10).find(|&j| p.lower[j] != p.upper[j]).unwrap();
+    let mut fewer = p.clone();
+    fewer.a[(1, j)] = 0.0;
+    fewer.b = &fewer.a * DVector::from_column_slice(&x);
+    check(&fewer, true, Some(2));
+    // A variable fixed (another grouping); a variable in no equation, then
+    // in one again.
+    let mut fixed = p.clone();
+    fixed.lower[j] = x[j];
+    fixed.upper[j] = x[j];
+    check(&fixed, true, Some(2));
+    let mut idle = p.clone();
+    for i in 0..6 {
+        idle.a[(i, j)] = 0.0;
+    }
+    idle.b = &idle.a * DVector::from_column_slice(&x);
+    idle.b[0] -= 0.1;
+    check(&idle, true, Some(2));
+    check(&rescaled(&idle, &x, 1.0), false, Some(2));
+    check(&p, true, Some(2));
+    // Other shapes and friction models, each twice; no equations at all; a
+    // problem Newton does not answer.
+    for seed in 0..12u64 {
+        let (m, nb, nc) = (1 + seed as usize % 7, 5 + seed as usize, seed as usize % 3);
+        let (mut q, xq) = random_problem(seed, m, nb, nc, 0.5);
+        q.friction = MODELS[seed as usize % 3];
+        check(&q, true, None);
+        check(&rescaled(&q, &xq, 0.5), false, None);
+    }
+    let empty = problem(
+        DMatrix::zeros(0, 2),
+        vec![],
+        vec![1.0; 2],
+        vec![0.5, -1.0],
+        vec![1.0, 1.0],
+    );
+    check(&empty, true, Some(0));
+    let infeasible = problem(
+        DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 1.0, 1.0]),
+        vec![1.0, 1.0],
+        vec![1.0; 2],
+        vec![-INF; 2],
+        vec![INF; 2],
+    );
+    check(&infeasible, true, None);
+    check(&p, true, Some(2));
+}

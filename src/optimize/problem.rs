@@ -194,8 +194,12 @@ impl FrameProblem {
                 self.exponent
             ));
         }
-        // (A is stored by column.)
-        if let Some(k) = self.a.as_slice().iter().position(|v| !v.is_finite()) {
+        // (A is stored by column.) A count without early exit first (it
+        // vectorises; A is the bulk of a frame's data), the position only
+        // when it is not 0.
+        let a = self.a.as_slice();
+        if a.iter().map(|v| usize::from(!v.is_finite())).sum::<usize>() > 0 {
+            let k = a.iter().position(|v| !v.is_finite()).unwrap_or(0);
             let (i, j) = (k % m, k / m);
             return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
         }
