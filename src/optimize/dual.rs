@@ -57,7 +57,7 @@
 //! limit) the residual is the rounding of x(y) itself: a cheap contact
 //! (weight 1/w0) barely loaded while its column meets large multipliers
 //! has (Aᵀy)_j as the small sum of large terms, and one ulp of y moves F by
-//! more than the tolerance. `Block::polish` then refines in the primal:
+//! more than the tolerance. `Block::refine` then refines in the primal:
 //! x is carried explicitly and corrected by D Mᵀδy/2w with H δy = F.
 //!
 //! Linear algebra: A's columns are kept with their nonzero entries only;
@@ -128,8 +128,8 @@ const MAX_LINE_SEARCH: u32 = 60;
 const CURVATURE: f64 = 0.5;
 /// A residual at most this · max(1, ‖b‖∞) that a full Newton step fails to
 /// cut is taken for the rounding floor of x(y) and refined in the primal
-/// (`Block::polish`).
-const POLISH_BELOW: f64 = 1e-6;
+/// (`Block::refine`).
+const REFINE_BELOW: f64 = 1e-6;
 /// An undamped Newton step longer than this · max(1, ‖y‖∞) is recomputed
 /// with the damping.
 const HUGE_STEP: f64 = 1e6;
@@ -580,7 +580,7 @@ struct Newton {
     h_free_diag: Vec<f64>,
     /// Scratch of the block's row count.
     u: Vec<f64>,
-    /// x, y and F before a primal refinement (`Block::polish`).
+    /// x, y and F before a primal refinement (`Block::refine`).
     keep_x: Vec<f64>,
     keep_y: Vec<f64>,
     keep_f: Vec<f64>,
@@ -873,7 +873,7 @@ impl Block<'_> {
     /// precision), and evaluates F = b − M x from that x. Stops at
     /// `target`, after three rounds, or when F no longer halves. The answer
     /// stays in s.x and s.y; returns max |F|.
-    fn polish(&self, s: &mut Newton, target: f64) -> f64 {
+    fn refine(&self, s: &mut Newton, target: f64) -> f64 {
         let mut fmax = amax(&s.f);
         s.keep_x.copy_from_slice(&s.x);
         s.keep_y.copy_from_slice(&s.y);
@@ -1042,8 +1042,8 @@ impl Block<'_> {
         // a primal refinement when the residual is small.
         let give_up = |s: &mut Newton, solves: u32, why: &'static str| {
             let mut f = amax(&s.f);
-            if f > target && f <= POLISH_BELOW * bscale {
-                f = self.polish(s, target);
+            if f > target && f <= REFINE_BELOW * bscale {
+                f = self.refine(s, target);
             }
             if f <= accept {
                 Ok(solves)
@@ -1066,10 +1066,10 @@ impl Block<'_> {
             if fmax <= target {
                 return Ok(solves);
             }
-            if full_step && fmax > 0.25 * last_fmax && fmax <= POLISH_BELOW * bscale {
+            if full_step && fmax > 0.25 * last_fmax && fmax <= REFINE_BELOW * bscale {
                 // A full step that did not cut a small residual: at the
-                // rounding floor of x(y) (see `polish`).
-                let f = self.polish(s, target);
+                // rounding floor of x(y) (see `refine`).
+                let f = self.refine(s, target);
                 if f <= accept {
                     return Ok(solves + 1);
                 }
