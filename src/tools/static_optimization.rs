@@ -641,7 +641,7 @@ fn resume_point(
 
 /// One run's outputs of a frame: the solution, its joint-reaction rows and
 /// its log messages.
-type FrameOutput = (FrameResult, Vec<Vec<f64>>, FrameMessages);
+type FrameOutput = (FrameResult, Vec<Vec<f64>>);
 
 /// One run of a sweep: its contact weight, the prefix of its tables and the
 /// prefixes of its joint-reaction tables.
@@ -1123,11 +1123,15 @@ fn run_sweep(
     // next chunk of frames is solved.
     let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<FrameOutput>>(FRAMES_IN_FLIGHT);
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
+        let log_names = &log_names;
         let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
             let mut writers = writers;
             for results in rx {
-                for (w, (r, rows, messages)) in writers.iter_mut().zip(&results) {
-                    w.write(r, rows, messages)?;
+                for ((w, names), (r, rows)) in writers.iter_mut().zip(log_names).zip(&results) {
+                    // The log's JSON is encoded here, beside the tables'
+                    // formatting, off the solving threads.
+                    let messages = names.encode(problem, r, rows)?;
+                    w.write(r, rows, &messages)?;
                 }
             }
             Ok(writers)
@@ -1152,7 +1156,7 @@ fn run_sweep(
                     &weights,
                 );
                 let mut out = Vec::with_capacity(results.len());
-                for (r, (spec, names)) in results.into_iter().zip(runs.iter().zip(&log_names)) {
+                for (r, spec) in results.into_iter().zip(runs) {
                     let mut rows = Vec::with_capacity(spec.reactions.len());
                     for (_, specs) in &spec.reactions {
                         let mut row = vec![0.0; 9 * specs.len()];
@@ -1166,8 +1170,7 @@ fn run_sweep(
                         )?;
                         rows.push(row);
                     }
-                    let messages = names.encode(problem, &r, &rows)?;
-                    out.push((r, rows, messages));
+                    out.push((r, rows));
                 }
                 Ok(Some(out))
             },
