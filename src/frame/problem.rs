@@ -316,10 +316,9 @@ impl SoProblem {
         let nv = self.controls.len();
         let nc = self.contacts.len();
         let a = &mut problem.a;
+        // Every column is written below, whole: no need to clear them.
         if a.shape() != (nr, nv + 3 * nc) {
             *a = DMatrix::zeros(nr, nv + 3 * nc);
-        } else {
-            a.fill(0.0);
         }
         let b = &mut problem.b;
         if b.len() != nr {
@@ -367,8 +366,9 @@ impl SoProblem {
                 a.set_column(v, &col);
                 continue;
             }
-            for (r, cv) in couplings.iter().enumerate() {
-                a[(r, v)] = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
+            let column = &mut a.as_mut_slice()[v * nr..(v + 1) * nr];
+            for (e, cv) in column.iter_mut().zip(couplings.iter()) {
+                *e = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
             }
         }
         // Contacts (Krüger & Wartzack eqs. 1-3, 10, 15-16): three multipliers
@@ -403,8 +403,9 @@ impl SoProblem {
                     a.set_column(v0 + k, &column);
                     continue;
                 }
-                for (r, cv) in couplings.iter().enumerate() {
-                    a[(r, v0 + k)] = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
+                let column = &mut a.as_mut_slice()[(v0 + k) * nr..(v0 + k + 1) * nr];
+                for (e, cv) in column.iter_mut().zip(couplings.iter()) {
+                    *e = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
                 }
             }
             let shear = if kinetic {
