@@ -71,3 +71,67 @@ where
     }
     Ok(true)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One block of `n` rows (times only: the work below reads nothing else).
+    struct Rows(Option<usize>);
+
+    impl FrameSource for Rows {
+        fn next_block(&mut self) -> Result<Option<StateBlock>> {
+            Ok(self.0.take().map(|n| StateBlock {
+                first: 0,
+                time: (0..n).map(|i| i as f64).collect(),
+                ..StateBlock::default()
+            }))
+        }
+    }
+
+    /// The sink (the writer thread's feed) gets the first results while
+    /// frames are still being solved, not after all of them: with chunks of
+    /// 256, a 151-frame run handed its first row over only once every frame
+    /// was solved, so the writer never worked beside the solver.
+    #[test]
+    fn results_reach_the_sink_before_the_last_frame_is_solved() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let events = std::sync::Mutex::new(Vec::new());
+        let n = 151;
+        let done = pool.install(|| {
+            for_each_frame(
+                &mut Rows(Some(n)),
+                0,
+                n - 1,
+                1,
+                || (),
+                |_, _, i| {
+                    events.lock().unwrap().push(("solve", i));
+                    Ok(i)
+                },
+                |i| {
+                    events.lock().unwrap().push(("sink", i));
+                    Ok(())
+                },
+            )
+        });
+        assert!(done.unwrap());
+        let events = events.into_inner().unwrap();
+        let first_sink = events.iter().position(|e| e.0 == "sink").unwrap();
+        let last_solve = events.iter().rposition(|e| e.0 == "solve").unwrap();
+        assert!(
+            first_sink < last_solve,
+            "the first result reached the sink only after every frame was solved"
+        );
+        // In order, every frame once.
+        let sunk: Vec<usize> = events
+            .iter()
+            .filter(|e| e.0 == "sink")
+            .map(|e| e.1)
+            .collect();
+        assert_eq!(sunk, (0..n).collect::<Vec<_>>());
+    }
+}
