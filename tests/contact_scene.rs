@@ -12,6 +12,8 @@
 //! `scene_fallback_report` prints, per friction model, how many frames fall
 //! back and why. Needs ../shared/models (prints SKIP otherwise).
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -23,19 +25,6 @@ use statopt::optimize::{
 use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::static_optimization::{Control, SoProblem, StaticOptimizationSetup};
-
-const CONTACTS: [(&str, &str); 10] = [
-    ("calcn_r", "0 -0.01 0"),
-    ("calcn_r", "0.18 -0.01 0.02"),
-    ("toes_r", "0.04 -0.005 0"),
-    ("calcn_l", "0 -0.01 0"),
-    ("calcn_l", "0.18 -0.01 -0.02"),
-    ("toes_l", "0.04 -0.005 0"),
-    ("pelvis", "-0.1 -0.1 0.08"),
-    ("pelvis", "-0.1 -0.1 -0.08"),
-    ("femur_r", "0 -0.3 0"),
-    ("femur_l", "0 -0.3 0"),
-];
 
 /// One frame of the scene: time, problem, the controls' force scales, and
 /// the number of contacts in the kinetic regime.
@@ -57,52 +46,10 @@ struct Scene {
 /// (`"cone"` or `"pyramid"`), every `step`-th row; None when ../shared is
 /// absent.
 fn scene(test: &str, friction: &str, step: usize) -> Option<Scene> {
-    let root =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/gait2392/subject01_walk");
-    if !root.is_dir() {
-        eprintln!("SKIP {test}: ../shared/models is absent");
-        return None;
-    }
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
         .join(format!("contact-scene-{friction}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let model =
-        std::fs::read_to_string(root.join("inputs/subject01_simbody_adjusted.osim")).unwrap();
-    let contacts: String = CONTACTS
-        .iter()
-        .enumerate()
-        .map(|(k, (body, p))| {
-            format!(
-                "<PointOnPlaneContact name=\"c{k}\"><point_body>{body}</point_body><point_location>{p}</point_location><plane_body>ground</plane_body><plane_origin>0 0 0</plane_origin><plane_normal>0 1 0</plane_normal></PointOnPlaneContact>"
-            )
-        })
-        .collect();
-    let pos = model
-        .find("</objects>\n\t\t</ForceSet>")
-        .or_else(|| {
-            model
-                .rfind("</ForceSet>")
-                .map(|p| model[..p].rfind("</objects>").unwrap())
-        })
-        .unwrap();
-    std::fs::write(
-        dir.join("model.osim"),
-        format!("{}{}{}", &model[..pos], contacts, &model[pos..]),
-    )
-    .unwrap();
-    let setup_text = std::fs::read_to_string(root.join("setup_SO.xml")).unwrap();
-    let setup_text = setup_text
-        .replace(
-            "<model_file>inputs/subject01_simbody_adjusted.osim</model_file>",
-            &format!(
-                "<model_file>{}</model_file>",
-                dir.join("model.osim").display()
-            ),
-        )
-        .replace(">inputs/", &format!(">{}/inputs/", root.display()))
-        .replace(" inputs/", &format!(" {}/inputs/", root.display()));
-    std::fs::write(dir.join("setup.xml"), setup_text).unwrap();
-    let setup = match Setup::read(&dir.join("setup.xml")).unwrap() {
+    let file = common::contact_scene::write_scene(test, &dir)?;
+    let setup = match Setup::read(&file).unwrap() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub mod contact_scene;
+
 /// `../shared/validation` beside the repository, or None (with a clear SKIP
 /// line) when it is absent.
 pub fn validation_dir(test: &str) -> Option<PathBuf> {
