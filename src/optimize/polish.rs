@@ -115,7 +115,6 @@ pub fn polish(p: &FrameProblem, x: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         });
     }
 
-    let m = p.n_eq();
     for _ in 0..MAX_ROUNDS {
         let (xp, y) = solve_active(p, &friction, &vars, &mut contacts)?;
         let aty = p.a.tr_mul(&DVector::from_column_slice(&y));
@@ -155,8 +154,7 @@ pub fn polish(p: &FrameProblem, x: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
             continue;
         }
         let bmax = p.b.amax();
-        let ok = y.len() == m
-            && p.eq_residual(&xp) <= RESIDUAL_TOLERANCE * bmax.max(1.0)
+        let ok = p.eq_residual(&xp) <= RESIDUAL_TOLERANCE * bmax.max(1.0)
             && optimality_violation(p, &xp, &y) <= OPTIMALITY_TOLERANCE
             && (0..n).all(|j| xp[j] >= p.lower[j] && xp[j] <= p.upper[j])
             && friction
