@@ -121,21 +121,8 @@ impl Perturbation {
             l.apply(t, data);
         }
         let mut g = vec![0.0; nq];
-        for p in &problem.passive {
-            g.iter_mut().for_each(|x| *x = 0.0);
-            p.add_generalized_force(model, data, t, &mut g);
-            for k in 0..nq {
-                data.applied_gen[k] += g[k];
-            }
-        }
-        if problem.settings.passive_fiber_forces {
-            for (m, f) in mf.unit_force.iter().enumerate() {
-                let fp = mf.passive_force[m];
-                for k in 0..nq {
-                    data.applied_gen[k] += fp * f[k];
-                }
-            }
-        }
+        problem.add_passive_forces(t, data, &mut g, None);
+        problem.add_passive_fiber_forces(data, mf);
         for (k, x) in gen.iter().enumerate() {
             data.applied_gen[k] += scale * x;
         }

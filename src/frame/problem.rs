@@ -290,23 +290,9 @@ impl SoProblem {
         passive_values.clear();
         g.clear();
         g.resize(nq, 0.0);
-        for p in &self.passive {
-            g.iter_mut().for_each(|x| *x = 0.0);
-            p.add_generalized_force(model, data, t, g);
-            for k in 0..nq {
-                data.applied_gen[k] += g[k];
-            }
-            passive_values.extend(p.record_values(data, t));
-        }
+        self.add_passive_forces(t, data, g, Some(passive_values));
         mf.evaluate(&self.muscles, model, data);
-        if self.settings.passive_fiber_forces {
-            for (m, f) in mf.unit_force.iter().enumerate() {
-                let fp = mf.passive_force[m];
-                for k in 0..nq {
-                    data.applied_gen[k] += fp * f[k];
-                }
-            }
-        }
+        self.add_passive_fiber_forces(data, mf);
         let perturb = self.settings.constraint_matrix == ConstraintMatrix::Perturbation;
         if !perturb {
             rnea::inverse_dynamics_after_kinematics(model, data, true);
@@ -436,6 +422,40 @@ impl SoProblem {
             solver: self.settings.solver,
         };
         fd.map(|fd| fd.finish(model, data))
+    }
+
+    /// Adds the passive force elements' generalized forces to
+    /// `data.applied_gen` (`g`: scratch of nq entries), appending their
+    /// record values to `record` when given.
+    pub(crate) fn add_passive_forces(
+        &self,
+        t: f64,
+        data: &mut Data,
+        g: &mut [f64],
+        mut record: Option<&mut Vec<f64>>,
+    ) {
+        for p in &self.passive {
+            g.iter_mut().for_each(|x| *x = 0.0);
+            p.add_generalized_force(&self.model, data, t, g);
+            for (a, gk) in data.applied_gen.iter_mut().zip(g.iter()) {
+                *a += gk;
+            }
+            if let Some(r) = record.as_deref_mut() {
+                r.extend(p.record_values(data, t));
+            }
+        }
+    }
+
+    /// Adds the muscles' passive fiber forces (rigid tendon) to
+    /// `data.applied_gen` when the setup asks for them.
+    pub(crate) fn add_passive_fiber_forces(&self, data: &mut Data, mf: &MuscleFrame) {
+        if self.settings.passive_fiber_forces {
+            for (f, fp) in mf.unit_force.iter().zip(&mf.passive_force) {
+                for (a, fk) in data.applied_gen.iter_mut().zip(f) {
+                    *a += fp * fk;
+                }
+            }
+        }
     }
 
     /// Bodies that receive contact forces, in body order.
