@@ -1,8 +1,8 @@
 //! statopt: static optimization of muscle and frictional contact forces for
 //! OpenSim models, after Krueger & Wartzack (2017).
 //!
-//! The pipeline, one module per stage (docs/architecture.md): [`parse`]
-//! (XML documents) → [`model`] (compiled once, immutable) → [`motion`]
+//! The pipeline, one module per stage (docs/architecture.md): [`functions`]
+//! (OpenSim Functions) → [`parse`] (XML documents) → [`model`] (compiled once, immutable) → [`motion`]
 //! (coordinates filtered and splined into per-frame q, u, u̇) → per frame,
 //! over a per-thread workspace ([`frame::Workspace`]): [`dynamics`]
 //! (kinematics, inverse and forward dynamics) → [`paths`] and [`muscles`]
@@ -13,7 +13,9 @@
 //! [`reactions`] (joint reactions from the frame's forces) → [`tools`] (thin
 //! drivers: the analyses a setup names, studies, predict-grf, bench) →
 //! [`storage`], [`output`], [`plots`] (tables, logs, figures). A module
-//! imports only from earlier stages.
+//! imports only from earlier stages; the readers and writers ([`storage`],
+//! [`output`], [`plots`]) import nothing from the pipeline, and any stage
+//! may use them (tests/architecture.rs checks both).
 pub mod contacts;
 pub mod dynamics;
 pub mod error;

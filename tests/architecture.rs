@@ -1,0 +1,182 @@
+//! Data flows one way (docs/architecture.md): each stage of the pipeline
+//! (a folder of `src/`) imports only from the stages before it, and the
+//! readers and writers (`storage`, `output`, `plots`) and the crate's
+//! foundations (`error`, `xml`) import nothing from the pipeline. Checked on
+//! the source text: every `crate::<module>` path (and every module of a
+//! `use crate::{...}` group) outside comments and test code.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// The pipeline, in order: a stage may import from the stages before it.
+const PIPELINE: [&str; 14] = [
+    "functions",
+    "parse",
+    "model",
+    "motion",
+    "dynamics",
+    "wrapping",
+    "paths",
+    "muscles",
+    "forces",
+    "contacts",
+    "optimize",
+    "frame",
+    "reactions",
+    "tools",
+];
+/// Modules any stage may use; they import only each other.
+const BASE: [&str; 5] = ["error", "xml", "storage", "output", "plots"];
+/// Items the crate root re-exports from `error`.
+const ROOT_ITEMS: [(&str, &str); 3] = [
+    ("Error", "error"),
+    ("Result", "error"),
+    ("Location", "error"),
+];
+
+/// The modules of the crate a source text refers to (`crate::m`, and each
+/// `m` of `use crate::{m::..., ...}`), outside `//` comments and from the
+/// first `#[cfg(test)]` on.
+fn referenced_modules(source: &str) -> BTreeSet<String> {
+    let code = match source.find("#[cfg(test)]") {
+        Some(i) => &source[..i],
+        None => source,
+    };
+    let mut out = BTreeSet::new();
+    for line in code.lines() {
+        let line = match line.find("//") {
+            Some(i) => &line[..i],
+            None => line,
+        };
+        let mut rest = line;
+        while let Some(i) = rest.find("crate::") {
+            rest = &rest[i + "crate::".len()..];
+            if let Some(group) = rest.strip_prefix('{') {
+                // Top-level names of the group (nested groups skipped).
+                let mut depth = 0;
+                let mut name = String::new();
+                let mut at_start = true;
+                for ch in group.chars() {
+                    match ch {
+                        '{' => depth += 1,
+                        '}' if depth == 0 => break,
+                        '}' => depth -= 1,
+                        ',' if depth == 0 => at_start = true,
+                        c if depth == 0 && at_start && (c.is_alphanumeric() || c == '_') => {
+                            name.push(c)
+                        }
+                        _ => {
+                            if !name.is_empty() {
+                                out.insert(std::mem::take(&mut name));
+                            }
+                            if !ch.is_whitespace() {
+                                at_start = false;
+                            }
+                        }
+                    }
+                }
+                if !name.is_empty() {
+                    out.insert(name);
+                }
+            } else {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if !name.is_empty() {
+                    out.insert(name);
+                }
+            }
+        }
+    }
+    out.into_iter()
+        .map(|m| {
+            ROOT_ITEMS
+                .iter()
+                .find(|(item, _)| *item == m)
+                .map_or(m, |(_, module)| module.to_string())
+        })
+        .collect()
+}
+
+/// Which modules `module` may import.
+fn allowed(module: &str) -> Option<BTreeSet<&'static str>> {
+    let mut ok: BTreeSet<&str> = BASE.iter().copied().collect();
+    if BASE.contains(&module) {
+        return Some(ok);
+    }
+    let k = PIPELINE.iter().position(|s| *s == module)?;
+    ok.extend(&PIPELINE[..k]);
+    Some(ok)
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn the_scanner_finds_paths_and_groups_outside_comments_and_tests() {
+    let src = "use crate::model::Model;\n\
+               use crate::{dynamics::Data, error::Result, Error};\n\
+               let x = crate::tools::loading::load(); // crate::plots::x\n\
+               /// [`crate::frame::Workspace`]\n\
+               #[cfg(test)]\nmod tests { use crate::reactions::x; }";
+    let found: Vec<String> = referenced_modules(src).into_iter().collect();
+    assert_eq!(found, ["dynamics", "error", "model", "tools"]);
+    assert!(allowed("frame").unwrap().contains("optimize"));
+    assert!(!allowed("optimize").unwrap().contains("frame"));
+    assert!(!allowed("storage").unwrap().contains("model"));
+}
+
+#[test]
+fn every_stage_imports_only_from_the_stages_before_it() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut violations = Vec::new();
+    let mut checked = 0;
+    for file in &files {
+        let rel = file.strip_prefix(&src).unwrap();
+        let first = rel
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy();
+        let module = first.trim_end_matches(".rs").to_string();
+        if module == "lib" || module == "bin" {
+            continue;
+        }
+        let name = file.file_name().unwrap().to_string_lossy();
+        if name == "tests.rs" || name.ends_with("_tests.rs") {
+            continue;
+        }
+        let ok = allowed(&module).unwrap_or_else(|| {
+            panic!(
+                "src/{}: module '{module}' is in neither PIPELINE nor BASE of tests/architecture.rs",
+                rel.display()
+            )
+        });
+        checked += 1;
+        let source = std::fs::read_to_string(file).unwrap();
+        for m in referenced_modules(&source) {
+            if m != module && !ok.contains(m.as_str()) {
+                violations.push(format!("src/{} imports crate::{m}", rel.display()));
+            }
+        }
+    }
+    assert!(checked > 50, "only {checked} source files checked");
+    assert!(
+        violations.is_empty(),
+        "imports against the pipeline's order:\n{}",
+        violations.join("\n")
+    );
+}
