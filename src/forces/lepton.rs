@@ -13,7 +13,13 @@
 //! numbers are all floats and whose functions are Lepton's, with Lepton's
 //! definitions (`step(x)` = 1 for x ≥ 0, `delta(x)` = 1 for x = 0, …). That
 //! string is compiled once with [`evalexpr::build_operator_tree`] and
-//! evaluated with a small stack-allocated context holding `q` and `qdot`.
+//! evaluated with a small stack-allocated context holding `q` and `qdot`:
+//! at load, where it must agree with the parsed tree, and in the tests,
+//! which hold the two to the same bits on every expression. Per frame the
+//! parsed tree itself is evaluated (`Expression::eval`): evalexpr collects
+//! each operator's arguments in a fresh vector, a few allocations per call,
+//! and a frame of static optimization allocates nothing
+//! (tests/allocations.rs).
 //!
 //! Not reproduced: Lepton's `optimize()` algebraic rewrites (constant
 //! folding, `0*x` → 0, `x-x` → 0, merged constant factors). They change
@@ -32,7 +38,6 @@ pub struct Expression {
     /// The evalexpr translation (for diagnostics).
     pub translated: String,
     tree: Node<DefaultNumericTypes>,
-    #[cfg_attr(not(test), allow(dead_code))]
     ast: Ast,
 }
 
@@ -535,11 +540,18 @@ impl Expression {
             ast,
         };
         // Evaluate once so that a translation problem shows at load time.
-        expr.try_eval(0.0, 0.0)?;
+        let (a, b) = (expr.eval_evalexpr(0.0, 0.0)?, expr.eval(0.0, 0.0));
+        if !(a == b || (a.is_nan() && b.is_nan())) {
+            return Err(format!(
+                "internal: '{}' evaluates to {b} but its translation '{}' to {a}",
+                expr.source, expr.translated
+            ));
+        }
         Ok(expr)
     }
 
-    fn try_eval(&self, q: f64, qdot: f64) -> Result<f64, String> {
+    /// The evalexpr translation's value (the reference for [`Self::eval`]).
+    fn eval_evalexpr(&self, q: f64, qdot: f64) -> Result<f64, String> {
         let ctx = Ctx {
             q: Value::Float(q),
             qdot: Value::Float(qdot),
@@ -549,17 +561,10 @@ impl Expression {
             .map_err(|e| format!("cannot evaluate '{}': {e}", self.source))
     }
 
-    /// Value at coordinate value `q` and speed `qdot`.
+    /// Value at coordinate value `q` and speed `qdot`: the parsed tree
+    /// evaluated directly (no allocation). A NaN is reported downstream as
+    /// a non-finite force.
     pub fn eval(&self, q: f64, qdot: f64) -> f64 {
-        // Every identifier, function and literal was checked at compile time
-        // and the context always supplies floats, so evaluation cannot fail;
-        // a NaN would be reported downstream as a non-finite force.
-        self.try_eval(q, qdot).unwrap_or(f64::NAN)
-    }
-
-    /// Direct evaluation of the parsed tree in Rust (reference for tests).
-    #[cfg(test)]
-    pub(crate) fn eval_direct(&self, q: f64, qdot: f64) -> f64 {
         fn ev(a: &Ast, q: f64, qd: f64) -> f64 {
             match a {
                 Ast::Num(v) => *v,
@@ -648,14 +653,14 @@ mod tests {
 
     fn ev(s: &str, q: f64, qdot: f64) -> f64 {
         let e = Expression::compile(s).unwrap_or_else(|m| panic!("{s}: {m}"));
-        let a = e.eval(q, qdot);
-        let b = e.eval_direct(q, qdot);
+        let a = e.eval_evalexpr(q, qdot).unwrap();
+        let b = e.eval(q, qdot);
         assert!(
             a == b || (a.is_nan() && b.is_nan()),
             "{s}: evalexpr {a} vs direct {b} ({})",
             e.translated
         );
-        a
+        b
     }
 
     #[test]

@@ -383,10 +383,17 @@ impl PassiveForce {
     }
 
     /// Record values matching [`Self::record_labels`], at the state in `data`.
-    pub fn record_values(&self, data: &Data, _t: f64) -> Vec<f64> {
+    pub fn record_values(&self, data: &Data, t: f64) -> Vec<f64> {
+        let mut v = Vec::with_capacity(self.record_size());
+        self.record_values_into(data, t, &mut v);
+        v
+    }
+
+    /// [`Self::record_values`] appended to `out`.
+    pub fn record_values_into(&self, data: &Data, _t: f64, out: &mut Vec<f64>) {
         match self {
             PassiveForce::CoordinateLimit { .. } => {
-                vec![self.coordinate_force(data).1, self.potential_energy(data)]
+                out.extend([self.coordinate_force(data).1, self.potential_energy(data)]);
             }
             PassiveForce::PointToPointSpring {
                 body1,
@@ -398,14 +405,12 @@ impl PassiveForce {
                 let (f1, _) = self.spring_force(data);
                 let p1 = data.station_position(*body1, point1);
                 let p2 = data.station_position(*body2, point2);
-                let mut v = Vec::with_capacity(12);
-                v.extend(f1.iter());
-                v.extend(p1.iter());
-                v.extend((-f1).iter());
-                v.extend(p2.iter());
-                v
+                out.extend(f1.iter());
+                out.extend(p1.iter());
+                out.extend((-f1).iter());
+                out.extend(p2.iter());
             }
-            _ => vec![self.coordinate_force(data).1],
+            _ => out.push(self.coordinate_force(data).1),
         }
     }
 }

@@ -218,14 +218,20 @@ impl GcvSpline {
 
     /// [`value`](Self::value) bit for bit, for arguments that seldom come
     /// back to a segment (a data series read at increasing times): a
-    /// segment not made yet is made for this call only, not kept (its basis
-    /// is, shared with the fitter's other splines).
+    /// segment not made yet is made for this call only, not kept, and so is
+    /// its basis when no call has kept it yet; nothing is allocated.
     pub fn value_transient(&self, x: f64) -> f64 {
         let deg = self.degree();
         let (s, base) = self.locate(x);
         match self.seg[s].get() {
             Some(a) => horner(a, deg, x - base, 0),
-            None => horner(&self.make_segment(s), deg, x - base, 0),
+            None => {
+                let a = match self.basis.seg[s].get() {
+                    Some(basis) => self.make_segment_from(s, basis),
+                    None => self.make_segment_from(s, &self.compute_basis(s)),
+                };
+                horner(&a, deg, x - base, 0)
+            }
         }
     }
 
@@ -246,18 +252,23 @@ impl GcvSpline {
     }
 
     fn make_segment(&self, s: usize) -> [f64; MAX_COEF] {
+        self.make_segment_from(s, self.span_basis(s))
+    }
+
+    /// Segment `s` from its basis derivatives `basis` ([`Self::span_basis`]).
+    fn make_segment_from(&self, s: usize, basis: &Ders) -> [f64; MAX_COEF] {
         let (m, x, y) = (self.half_order, &self.x, &self.y);
         let k = 2 * m - 1;
         let n = x.len();
         if s == n {
             // Right extrapolation: Taylor polynomial of degree m-1 at x_{n-1}.
             let span = k + n - 2;
-            let mut a = taylor_of(self.span_basis(s), &self.coef[span - k..], k, m - 1);
+            let mut a = taylor_of(basis, &self.coef[span - k..], k, m - 1);
             a[0] = y[n - 1];
             return a;
         }
         let i = s.max(1) - 1;
-        let mut a = taylor_of(self.span_basis(s), &self.coef[i..], k, k);
+        let mut a = taylor_of(basis, &self.coef[i..], k, k);
         a[0] = y[i]; // interpolation is exact; avoid solve round-off at knots
         if s == 0 {
             // Left extrapolation: Taylor polynomial of degree m-1 at x0.
@@ -269,16 +280,19 @@ impl GcvSpline {
     /// The basis derivatives segment `s` is made from ([`basis_x`] at the
     /// segment's span, base and order), shared by the splines of one fitter.
     fn span_basis(&self, s: usize) -> &Ders {
-        self.basis.seg[s].get_or_init(|| {
-            let (k, n) = (self.degree(), self.x.len());
-            let m = self.half_order;
-            Box::new(if s == n {
-                basis_x(&self.x, k, k + n - 2, self.x[n - 1], m - 1)
-            } else {
-                let i = s.max(1) - 1;
-                basis_x(&self.x, k, k + i, self.x[i], k)
-            })
-        })
+        self.basis.seg[s].get_or_init(|| Box::new(self.compute_basis(s)))
+    }
+
+    /// [`Self::span_basis`] computed afresh (not kept).
+    fn compute_basis(&self, s: usize) -> Ders {
+        let (k, n) = (self.degree(), self.x.len());
+        let m = self.half_order;
+        if s == n {
+            basis_x(&self.x, k, k + n - 2, self.x[n - 1], m - 1)
+        } else {
+            let i = s.max(1) - 1;
+            basis_x(&self.x, k, k + i, self.x[i], k)
+        }
     }
 
     /// (value, first, second derivative) with one interval search.
@@ -1076,12 +1090,17 @@ mod tests {
             let mut f = SplineFitter::new(degree, &x);
             let fresh = f.spline(&y).unwrap();
             let kept = f.spline(&y).unwrap();
+            // A spline of another fitter: no basis kept either.
+            let lone = SplineFitter::new(degree, &x).spline(&y).unwrap();
             for &t in &ts {
                 let want = kept.value(t);
                 assert_eq!(fresh.value_transient(t).to_bits(), want.to_bits(), "t {t}");
                 assert_eq!(kept.value_transient(t).to_bits(), want.to_bits(), "t {t}");
+                assert_eq!(lone.value_transient(t).to_bits(), want.to_bits(), "t {t}");
             }
             assert!(fresh.seg.iter().all(|s| s.get().is_none()));
+            assert!(lone.seg.iter().all(|s| s.get().is_none()));
+            assert!(lone.basis.seg.iter().all(|s| s.get().is_none()));
         }
     }
 
