@@ -66,6 +66,9 @@ pub struct Data {
     pub joint_force: Vec<BodyForce>,
     /// RNEA output: generalized forces.
     pub tau: Vec<f64>,
+    /// Buffers of constrained forward dynamics (`forward::ForwardBuffers`),
+    /// sized on first use.
+    pub forward: super::forward::ForwardBuffers,
 }
 
 impl Data {
@@ -89,6 +92,7 @@ impl Data {
             applied_gen: vec![0.0; nq],
             joint_force: vec![BodyForce::default(); nb],
             tau: vec![0.0; nq],
+            forward: Default::default(),
         }
     }
 

@@ -12,8 +12,55 @@
 //! reduced mass matrix M_r = Cᵀ M C ([`free_accelerations`]).
 use nalgebra::{DMatrix, DVector};
 
-use super::{mass_matrix, Data};
+use super::mass_matrix::{self, MassMatrixBuffers};
+use super::Data;
 use crate::model::Model;
+
+/// The buffers of [`free_accelerations_in`] (kept in [`Data::forward`]):
+/// a frame's forward dynamics allocates nothing once they have the model's
+/// sizes.
+#[derive(Debug, Clone)]
+pub struct ForwardBuffers {
+    /// M, and its buffers.
+    m: DMatrix<f64>,
+    mass: MassMatrixBuffers,
+    /// Cᵀ M, and M_r = Cᵀ M C.
+    ctm: DMatrix<f64>,
+    pub m_r: DMatrix<f64>,
+    /// M_r's Cholesky factor.
+    factor: DMatrix<f64>,
+    /// The free accelerations y.
+    pub y: DVector<f64>,
+    /// For callers (joint reactions): the free coordinates, their coupling
+    /// vectors as the columns of C.
+    pub free: Vec<usize>,
+    pub coupling: DMatrix<f64>,
+    pub coupling_vector: Vec<(usize, f64)>,
+}
+
+impl Default for ForwardBuffers {
+    fn default() -> Self {
+        let empty = || DMatrix::zeros(0, 0);
+        ForwardBuffers {
+            m: empty(),
+            mass: MassMatrixBuffers::default(),
+            ctm: empty(),
+            m_r: empty(),
+            factor: empty(),
+            y: DVector::zeros(0),
+            free: Vec::new(),
+            coupling: empty(),
+            coupling_vector: Vec::new(),
+        }
+    }
+}
+
+/// A buffer of `rows` × `cols` (reallocated only when its shape changes).
+pub fn shaped(a: &mut DMatrix<f64>, rows: usize, cols: usize) {
+    if a.shape() != (rows, cols) {
+        *a = DMatrix::zeros(rows, cols);
+    }
+}
 
 /// Accelerations of the constrained coordinates with every free
 /// coordinate's acceleration 0, written into `udot` (which is zeroed first;
@@ -57,12 +104,78 @@ pub fn free_accelerations(
     data: &Data,
     c: &DMatrix<f64>,
 ) -> (Option<DVector<f64>>, DMatrix<f64>) {
-    let m = mass_matrix::mass_matrix(model, data);
-    let m_r = c.transpose() * m * c;
-    let rhs = -(c.transpose() * DVector::from_column_slice(&data.tau));
-    let y = match m_r.clone().cholesky() {
-        Some(ch) => Some(ch.solve(&rhs)),
-        None => m_r.clone().lu().solve(&rhs),
-    };
-    (y, m_r)
+    let mut buf = ForwardBuffers::default();
+    let solved = free_accelerations_in(model, data, c, &mut buf);
+    (solved.then_some(buf.y), buf.m_r)
+}
+
+/// [`free_accelerations`] into `buf.m_r` and `buf.y`; false when M_r is
+/// singular. No allocation once the buffers have their sizes, except where
+/// M_r is not positive definite (LU).
+pub fn free_accelerations_in(
+    model: &Model,
+    data: &Data,
+    c: &DMatrix<f64>,
+    buf: &mut ForwardBuffers,
+) -> bool {
+    let (nq, nr) = c.shape();
+    mass_matrix::mass_matrix_into(model, data, &mut buf.m, &mut buf.mass);
+    // The products by C skip its zeros (C holds one coupling vector per
+    // column, mostly a single 1): plain loops, no packing buffers.
+    shaped(&mut buf.ctm, nr, nq);
+    for j in 0..nq {
+        for r in 0..nr {
+            let mut sum = 0.0;
+            for k in 0..nq {
+                let ckr = c[(k, r)];
+                if ckr != 0.0 {
+                    sum += ckr * buf.m[(k, j)];
+                }
+            }
+            buf.ctm[(r, j)] = sum;
+        }
+    }
+    shaped(&mut buf.m_r, nr, nr);
+    for s in 0..nr {
+        for r in 0..nr {
+            let mut sum = 0.0;
+            for k in 0..nq {
+                let cks = c[(k, s)];
+                if cks != 0.0 {
+                    sum += buf.ctm[(r, k)] * cks;
+                }
+            }
+            buf.m_r[(r, s)] = sum;
+        }
+    }
+    if buf.y.len() != nr {
+        buf.y = DVector::zeros(nr);
+    }
+    for r in 0..nr {
+        let mut sum = 0.0;
+        for k in 0..nq {
+            let ckr = c[(k, r)];
+            if ckr != 0.0 {
+                sum += ckr * data.tau[k];
+            }
+        }
+        buf.y[r] = -sum;
+    }
+    shaped(&mut buf.factor, nr, nr);
+    buf.factor.copy_from(&buf.m_r);
+    let factor = std::mem::replace(&mut buf.factor, DMatrix::zeros(0, 0));
+    match factor.cholesky() {
+        Some(ch) => {
+            ch.solve_mut(&mut buf.y);
+            buf.factor = ch.unpack_dirty();
+            true
+        }
+        None => match buf.m_r.clone().lu().solve(&buf.y) {
+            Some(y) => {
+                buf.y = y;
+                true
+            }
+            None => false,
+        },
+    }
 }

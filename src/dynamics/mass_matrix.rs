@@ -12,14 +12,59 @@ use crate::model::Model;
 /// it and ground, so each body adds m J_cᵀ J_c + J_ωᵀ I J_ω on those columns
 /// alone: O(Σ_b k_b²) for k_b such columns, instead of O(bodies × n²).
 pub fn mass_matrix(model: &Model, data: &Data) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(0, 0);
+    mass_matrix_into(model, data, &mut m, &mut MassMatrixBuffers::default());
+    m
+}
+
+/// The working buffers of [`mass_matrix_into`].
+#[derive(Debug, Clone)]
+pub struct MassMatrixBuffers {
+    jc: DMatrix<f64>,
+    jw: DMatrix<f64>,
+    cols: Vec<usize>,
+    /// Per chain column: m J_c and I J_ω.
+    mjc: Vec<Vector3<f64>>,
+    ijw: Vec<Vector3<f64>>,
+}
+
+impl Default for MassMatrixBuffers {
+    fn default() -> Self {
+        MassMatrixBuffers {
+            jc: DMatrix::zeros(0, 0),
+            jw: DMatrix::zeros(0, 0),
+            cols: Vec::new(),
+            mjc: Vec::new(),
+            ijw: Vec::new(),
+        }
+    }
+}
+
+/// [`mass_matrix`] into `m`, with the buffers `buf` (no allocation once
+/// they have the model's sizes).
+pub fn mass_matrix_into(
+    model: &Model,
+    data: &Data,
+    m: &mut DMatrix<f64>,
+    buf: &mut MassMatrixBuffers,
+) {
     let n = model.nq();
-    let mut m = DMatrix::zeros(n, n);
-    let mut jc = DMatrix::zeros(3, n);
-    let mut jw = DMatrix::zeros(3, n);
-    let mut cols: Vec<usize> = Vec::with_capacity(n);
-    // Per chain column: m J_c and I J_ω.
-    let mut mjc: Vec<Vector3<f64>> = Vec::with_capacity(n);
-    let mut ijw: Vec<Vector3<f64>> = Vec::with_capacity(n);
+    if m.shape() != (n, n) {
+        *m = DMatrix::zeros(n, n);
+    } else {
+        m.fill(0.0);
+    }
+    let MassMatrixBuffers {
+        jc,
+        jw,
+        cols,
+        mjc,
+        ijw,
+    } = buf;
+    if jc.shape() != (3, n) {
+        *jc = DMatrix::zeros(3, n);
+        *jw = DMatrix::zeros(3, n);
+    }
     for b in 1..model.nbodies() {
         let body = &model.bodies[b];
         if body.mass == 0.0 {
@@ -32,33 +77,32 @@ pub fn mass_matrix(model: &Model, data: &Data) -> DMatrix<f64> {
             cols.extend(j.q_start..j.q_start + j.nq);
             up = j.parent_body;
         }
-        for &c in &cols {
+        for &c in cols.iter() {
             for r in 0..3 {
                 jc[(r, c)] = 0.0;
                 jw[(r, c)] = 0.0;
             }
         }
         let c = data.station_position(b, &body.mass_center);
-        jacobian::add_station_jacobian(model, data, b, &c, 1.0, &mut jc);
-        angular_jacobian(model, data, b, &mut jw);
+        jacobian::add_station_jacobian(model, data, b, &c, 1.0, jc);
+        angular_jacobian(model, data, b, jw);
         let r = data.rotation[b];
         let i_g = r * body.inertia * r.transpose();
         let col3 =
             |mat: &DMatrix<f64>, c: usize| Vector3::new(mat[(0, c)], mat[(1, c)], mat[(2, c)]);
         mjc.clear();
         ijw.clear();
-        for &c in &cols {
-            mjc.push(body.mass * col3(&jc, c));
-            ijw.push(i_g * col3(&jw, c));
+        for &c in cols.iter() {
+            mjc.push(body.mass * col3(jc, c));
+            ijw.push(i_g * col3(jw, c));
         }
-        for &ca in &cols {
-            let (jca, jwa) = (col3(&jc, ca), col3(&jw, ca));
+        for &ca in cols.iter() {
+            let (jca, jwa) = (col3(jc, ca), col3(jw, ca));
             for (k, &ck) in cols.iter().enumerate() {
                 m[(ca, ck)] += mjc[k].dot(&jca) + ijw[k].dot(&jwa);
             }
         }
     }
-    m
 }
 
 /// ∂ω_b/∂u (3 × nu).

@@ -57,27 +57,40 @@ pub fn forward_dynamics(model: &Model, data: &mut Data, t: f64) -> Result<()> {
     forward::constrained_accelerations(model, &data.q, &data.u, t, &mut data.udot);
     kinematics::full(model, data);
     rnea::inverse_dynamics_after_kinematics(model, data, true);
-    let rows: Vec<usize> = (0..nq)
-        .filter(|&c| !model.coordinates[c].is_constrained())
-        .collect();
-    let nr = rows.len();
-    if nr == 0 {
-        return Ok(());
-    }
-    let mut cm: DMatrix<f64> = DMatrix::zeros(nq, nr);
-    for (r, &k) in rows.iter().enumerate() {
-        for (i, c) in coupling::coupling_vector(model, &data.q, k) {
-            cm[(i, r)] += c;
+    // The buffers (data.forward) are taken out for the call and put back.
+    let mut buf = std::mem::take(&mut data.forward);
+    let mut cm = std::mem::replace(&mut buf.coupling, DMatrix::zeros(0, 0));
+    buf.free.clear();
+    buf.free
+        .extend((0..nq).filter(|&c| !model.coordinates[c].is_constrained()));
+    let nr = buf.free.len();
+    let mut solved = true;
+    if nr > 0 {
+        forward::shaped(&mut cm, nq, nr);
+        cm.fill(0.0);
+        for (r, &k) in buf.free.iter().enumerate() {
+            coupling::coupling_vector_into(model, &data.q, k, &mut buf.coupling_vector);
+            for &(i, c) in buf.coupling_vector.iter() {
+                cm[(i, r)] += c;
+            }
+        }
+        solved = forward::free_accelerations_in(model, data, &cm, &mut buf);
+        if solved {
+            for (r, yr) in buf.y.iter().enumerate() {
+                for (k, ckr) in cm.column(r).iter().enumerate() {
+                    if *ckr != 0.0 {
+                        data.udot[k] += ckr * yr;
+                    }
+                }
+            }
         }
     }
-    let y = forward::free_accelerations(model, data, &cm).0.ok_or_else(|| {
-        Error::msg(format!(
+    buf.coupling = cm;
+    data.forward = buf;
+    if !solved {
+        return Err(Error::msg(format!(
             "forward dynamics at t = {t}: the mass matrix is singular (a body chain without mass or inertia?)"
-        ))
-    })?;
-    let du = &cm * y;
-    for c in 0..nq {
-        data.udot[c] += du[c];
+        )));
     }
     Ok(())
 }
