@@ -37,6 +37,11 @@ const CHUNK: usize = 32;
 /// `step_interval`), in parallel chunks of [`CHUNK`] with a per-thread workspace
 /// from `init`, and hand each result to `sink` in frame order — so tables
 /// hold every finished frame and memory stays bounded by the block.
+/// Workspaces are made once and kept for the whole run (rayon may run a
+/// chunk as several jobs; each takes a workspace from the run's pool and
+/// gives it back), and the chunk's results are collected into one reused
+/// buffer: the driver allocates nothing per frame or per chunk
+/// (tests/allocations.rs).
 /// Returns false when a stop was requested ([`crate::frame::interrupt`]):
 /// the frames handed to `sink` so far are complete, no later one is.
 pub fn for_each_frame<W, T>(
@@ -50,26 +55,62 @@ pub fn for_each_frame<W, T>(
 ) -> Result<bool>
 where
     T: Send,
+    W: Send,
 {
     use rayon::prelude::*;
+    let pool = Pool(std::sync::Mutex::new(Vec::new()));
+    let mut sel: Vec<usize> = Vec::new();
+    let mut results: Vec<Result<T>> = Vec::new();
     while let Some(block) = stream.next_block()? {
-        let sel: Vec<usize> = (0..block.time.len())
-            .filter(|&k| is_frame(block.first + k, i0, i1, step_interval))
-            .collect();
+        sel.clear();
+        sel.reserve(block.time.len());
+        sel.extend(
+            (0..block.time.len()).filter(|&k| is_frame(block.first + k, i0, i1, step_interval)),
+        );
         for chunk in sel.chunks(CHUNK.max(4 * rayon::current_num_threads())) {
             if crate::frame::interrupt::requested().is_some() {
                 return Ok(false);
             }
-            let results: Vec<Result<T>> = chunk
+            chunk
                 .par_iter()
-                .map_init(&init, |w, &i| work(w, &block, i))
-                .collect();
-            for r in results {
+                .map_init(
+                    || Lease {
+                        pool: &pool,
+                        ws: Some(pool.take().unwrap_or_else(&init)),
+                    },
+                    |lease, &i| work(lease.ws.as_mut().expect("leased"), &block, i),
+                )
+                .collect_into_vec(&mut results);
+            for r in results.drain(..) {
                 sink(r?)?;
             }
         }
     }
     Ok(true)
+}
+
+/// The run's workspaces not in use.
+struct Pool<W>(std::sync::Mutex<Vec<W>>);
+
+impl<W> Pool<W> {
+    fn take(&self) -> Option<W> {
+        self.0.lock().ok()?.pop()
+    }
+}
+
+/// A workspace taken from the pool for one rayon job, given back when the
+/// job ends.
+struct Lease<'p, W> {
+    pool: &'p Pool<W>,
+    ws: Option<W>,
+}
+
+impl<W> Drop for Lease<'_, W> {
+    fn drop(&mut self) {
+        if let (Some(ws), Ok(mut pool)) = (self.ws.take(), self.pool.0.lock()) {
+            pool.push(ws);
+        }
+    }
 }
 
 #[cfg(test)]

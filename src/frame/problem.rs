@@ -76,20 +76,37 @@ pub fn force_file_row<T: Clone>(
     passive_after: &[usize],
 ) -> Vec<T> {
     let mut row = Vec::with_capacity(controls.len() + passive.len());
+    force_file_row_into(
+        controls,
+        passive,
+        passive_sizes.iter().copied(),
+        passive_after,
+        &mut row,
+    );
+    row
+}
+
+/// [`force_file_row`] appended to `row`.
+pub fn force_file_row_into<T: Clone>(
+    controls: &[T],
+    passive: &[T],
+    passive_sizes: impl Iterator<Item = usize>,
+    passive_after: &[usize],
+    row: &mut Vec<T>,
+) {
     let mut next_control = 0;
     let mut next_passive = 0;
-    for (&size, &after) in passive_sizes.iter().zip(passive_after) {
+    for (size, &after) in passive_sizes.zip(passive_after) {
         row.extend_from_slice(&controls[next_control..after]);
         next_control = after;
         row.extend_from_slice(&passive[next_passive..next_passive + size]);
         next_passive += size;
     }
     row.extend_from_slice(&controls[next_control..]);
-    row
 }
 
 /// Result of one frame.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct FrameResult {
     pub time: f64,
     pub solution: FrameSolution,
@@ -162,6 +179,17 @@ pub struct Assembly {
     couplings: Vec<Vec<(usize, f64)>>,
     g: Vec<f64>,
     cols: [Vec<f64>; 3],
+    /// The outputs' working buffers ([`SoProblem::frame_result_into`]).
+    scratch: ResultScratch,
+}
+
+/// Buffers of a frame's outputs: generalized forces by source, before and
+/// after M_r, and the bodies contacts touch.
+#[derive(Debug, Clone, Default)]
+struct ResultScratch {
+    parts: [DVector<f64>; 4],
+    product: DVector<f64>,
+    bodies: Vec<usize>,
 }
 
 impl Default for Assembly {
@@ -190,6 +218,7 @@ impl Default for Assembly {
             couplings: Vec::new(),
             g: Vec::new(),
             cols: Default::default(),
+            scratch: Default::default(),
         }
     }
 }
@@ -286,6 +315,7 @@ impl SoProblem {
             couplings,
             g,
             cols,
+            scratch: _,
         } = asm;
         passive_values.clear();
         g.clear();
@@ -441,7 +471,7 @@ impl SoProblem {
                 *a += gk;
             }
             if let Some(r) = record.as_deref_mut() {
-                r.extend(p.record_values(data, t));
+                p.record_values_into(data, t, r);
             }
         }
     }
@@ -460,14 +490,21 @@ impl SoProblem {
 
     /// Bodies that receive contact forces, in body order.
     pub fn contact_bodies(&self) -> Vec<usize> {
-        let mut b: Vec<usize> = self
-            .contacts
-            .iter()
-            .flat_map(|c| [c.point_body, c.plane_body])
-            .collect();
+        let mut b = Vec::new();
+        self.contact_bodies_into(&mut b);
+        b
+    }
+
+    /// [`contact_bodies`](Self::contact_bodies) into `b` (cleared first).
+    fn contact_bodies_into(&self, b: &mut Vec<usize>) {
+        b.clear();
+        b.extend(
+            self.contacts
+                .iter()
+                .flat_map(|c| [c.point_body, c.plane_body]),
+        );
         b.sort_unstable();
         b.dedup();
-        b
     }
 
     /// Columns of the generalized-forces-by-source table.
@@ -532,16 +569,28 @@ impl SoProblem {
         v
     }
 
-    fn contact_outputs(&self, states: &[ContactState], lambda: &[f64], data: &Data) -> ContactRows {
-        let mut rows = ContactRows::default();
-        let bodies = self.contact_bodies();
-        let mut sums = vec![[0.0; 6]; bodies.len()];
+    /// A frame's contact rows into `rows` (its buffers reused); `bodies`
+    /// is a buffer for the bodies contacts touch.
+    fn contact_outputs_into(
+        &self,
+        states: &[ContactState],
+        lambda: &[f64],
+        data: &Data,
+        bodies: &mut Vec<usize>,
+        rows: &mut ContactRows,
+    ) {
+        self.contact_bodies_into(bodies);
+        rows.contact.clear();
+        rows.loads.clear();
+        rows.bodies.clear();
+        rows.bodies.resize(6 * bodies.len(), 0.0);
+        let sums = &mut rows.bodies;
         let mut add = |b: usize, f: &nalgebra::Vector3<f64>, p: &nalgebra::Vector3<f64>| {
             let k = bodies.iter().position(|&x| x == b).unwrap_or(0);
             let m = (p - data.position[b]).cross(f);
             for i in 0..3 {
-                sums[k][i] += f[i];
-                sums[k][3 + i] += m[i];
+                sums[6 * k + i] += f[i];
+                sums[6 * k + 3 + i] += m[i];
             }
         };
         for (ci, (c, st)) in self.contacts.iter().zip(states).enumerate() {
@@ -568,8 +617,6 @@ impl SoProblem {
                 rows.loads.extend(st.projection_ground.iter());
             }
         }
-        rows.bodies = sums.into_iter().flatten().collect();
-        rows
     }
 
     /// Solve one frame. `data` and `mf` are per-thread workspaces.
@@ -604,7 +651,19 @@ impl SoProblem {
         weights: &[f64],
     ) -> Vec<FrameResult> {
         let mut asm = Assembly::default();
-        self.solve_weights_in(t, q, u, udot_target, data, mf, &mut asm, weights)
+        let mut out = vec![FrameResult::default(); weights.len()];
+        self.solve_weights_in(
+            t,
+            q,
+            u,
+            udot_target,
+            data,
+            mf,
+            &mut asm,
+            weights,
+            out.iter_mut(),
+        );
+        out
     }
 
     /// [`solve_frame_weights`](Self::solve_frame_weights) in a per-thread
@@ -619,16 +678,36 @@ impl SoProblem {
         ws: &mut crate::frame::Workspace,
         weights: &[f64],
     ) -> Vec<FrameResult> {
+        let mut out = vec![FrameResult::default(); weights.len()];
+        self.solve_frame_into(t, q, u, udot_target, ws, weights, out.iter_mut());
+        out
+    }
+
+    /// [`solve_frame_in`](Self::solve_frame_in) into `out` (one result per
+    /// weight, in order; extra results are left alone), whose buffers are
+    /// reused: with the dual Newton solver a frame allocates nothing once
+    /// the workspace and the results have their sizes (tests/allocations.rs).
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_frame_into<'r>(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        ws: &mut crate::frame::Workspace,
+        weights: &[f64],
+        out: impl IntoIterator<Item = &'r mut FrameResult>,
+    ) {
         let crate::frame::Workspace {
             data,
             muscles,
             assembly,
         } = ws;
-        self.solve_weights_in(t, q, u, udot_target, data, muscles, assembly, weights)
+        self.solve_weights_in(t, q, u, udot_target, data, muscles, assembly, weights, out)
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn solve_weights_in(
+    fn solve_weights_in<'r>(
         &self,
         t: f64,
         q: &[f64],
@@ -638,76 +717,80 @@ impl SoProblem {
         mf: &mut MuscleFrame,
         asm: &mut Assembly,
         weights: &[f64],
-    ) -> Vec<FrameResult> {
+        out: impl IntoIterator<Item = &'r mut FrameResult>,
+    ) {
         let m_r = self.assemble(t, q, u, udot_target, data, mf, asm);
         let nv = self.controls.len();
-        weights
-            .iter()
-            .map(|&w0| {
-                // Every variable after the controls is a contact multiplier.
-                asm.problem.weights[nv..]
-                    .iter_mut()
-                    .for_each(|w| *w = 1.0 / w0);
-                let solution = optimize::solve(&asm.problem);
-                self.frame_result(
-                    t,
-                    &asm.problem,
-                    solution,
-                    &asm.scale,
-                    &asm.passive,
-                    &asm.external,
-                    &asm.states,
-                    m_r.as_ref(),
-                    data,
-                    mf,
-                )
-            })
-            .collect()
+        for (&w0, result) in weights.iter().zip(out) {
+            // Every variable after the controls is a contact multiplier.
+            asm.problem.weights[nv..]
+                .iter_mut()
+                .for_each(|w| *w = 1.0 / w0);
+            optimize::solve_into(&asm.problem, None, &mut result.solution);
+            self.frame_result_into(t, asm, m_r.as_ref(), data, mf, result);
+        }
     }
 
-    /// The outputs of a solved frame problem.
-    #[allow(clippy::too_many_arguments)]
-    fn frame_result(
+    /// The outputs of the frame problem in `asm`, solved in
+    /// `out.solution`, into `out` (its buffers reused).
+    fn frame_result_into(
         &self,
         t: f64,
-        problem: &FrameProblem,
-        solution: optimize::FrameSolution,
-        scale: &[f64],
-        passive_values: &[f64],
-        external: &[f64],
-        states: &[ContactState],
+        asm: &mut Assembly,
         m_r: Option<&DMatrix<f64>>,
         data: &Data,
         mf: &MuscleFrame,
-    ) -> FrameResult {
+        out: &mut FrameResult,
+    ) {
+        let Assembly {
+            problem,
+            scale,
+            passive: passive_values,
+            states,
+            external,
+            scratch,
+            ..
+        } = asm;
+        let solution = &out.solution;
         let bmax = problem.b.amax();
-        let relative_residual = if bmax > 0.0 {
+        out.relative_residual = if bmax > 0.0 {
             solution.eq_residual / bmax
         } else {
             solution.eq_residual
         };
         let nv = self.controls.len();
-        let forces: Vec<f64> = solution.x[..nv]
-            .iter()
-            .zip(scale)
-            .map(|(x, f)| x * f)
-            .collect();
-        let friction_violation = problem
+        out.forces.clear();
+        out.forces.extend(
+            solution.x[..nv]
+                .iter()
+                .zip(scale.iter())
+                .map(|(x, f)| x * f),
+        );
+        out.friction_violation = problem
             .static_contacts
             .iter()
             .map(|c| self.settings.friction.violation(c, &solution.x))
             .fold(0.0, f64::max);
-        let contacts = self.contact_outputs(states, &solution.x[nv..], data);
+        self.contact_outputs_into(
+            states,
+            &solution.x[nv..],
+            data,
+            &mut scratch.bodies,
+            &mut out.contacts,
+        );
         // Generalized forces by source on each free coordinate (reduced rows):
         // required, muscles, other actuators, contacts. Perturbation rows are
         // accelerations: M_r turns them into generalized forces.
         let nr = self.rows.len();
-        let mut parts = [
-            problem.b.clone(),
-            DVector::zeros(nr),
-            DVector::zeros(nr),
-            DVector::zeros(nr),
-        ];
+        let parts = &mut scratch.parts;
+        for p in parts.iter_mut() {
+            if p.len() != nr {
+                *p = DVector::zeros(nr);
+            } else {
+                p.fill(0.0);
+            }
+        }
+        parts[0].copy_from(&problem.b);
         for v in 0..problem.a.ncols() {
             let k = match self.controls.get(v) {
                 Some(Control::Muscle(_)) => 1,
@@ -717,42 +800,44 @@ impl SoProblem {
             parts[k].axpy(solution.x[v], &problem.a.column(v), 1.0);
         }
         if let Some(m) = m_r {
+            let product = &mut scratch.product;
+            if product.len() != nr {
+                *product = DVector::zeros(nr);
+            }
             for p in parts.iter_mut() {
-                *p = m * &*p;
+                product.gemv(1.0, m, p, 0.0);
+                p.copy_from(product);
             }
         }
-        let mut by_source = Vec::with_capacity(4 * nr);
+        out.by_source.clear();
         for r in 0..nr {
-            by_source.extend(parts.iter().map(|p| p[r]));
+            out.by_source.extend(parts.iter().map(|p| p[r]));
         }
         // Mechanical power of each muscle: tension x shortening speed.
-        let muscle_power: Vec<f64> = self
-            .controls
-            .iter()
-            .zip(&forces)
-            .filter_map(|(c, f)| match c {
-                Control::Muscle(m) => Some(-f * mf.speed[*m]),
-                Control::Actuator(_) => None,
-            })
-            .collect();
-        let passive_sizes: Vec<usize> = self.passive.iter().map(|p| p.record_size()).collect();
-        let mut force_row =
-            force_file_row(&forces, passive_values, &passive_sizes, &self.passive_after);
-        force_row.extend_from_slice(external);
-        FrameResult {
-            time: t,
-            solution,
-            forces,
-            force_row,
-            relative_residual,
-            friction_violation,
-            contacts,
-            by_source,
-            muscle_power,
-            q: data.q.clone(),
-            u: data.u.clone(),
-            udot: data.udot.clone(),
-        }
+        out.muscle_power.clear();
+        out.muscle_power
+            .extend(
+                self.controls
+                    .iter()
+                    .zip(&out.forces)
+                    .filter_map(|(c, f)| match c {
+                        Control::Muscle(m) => Some(-f * mf.speed[*m]),
+                        Control::Actuator(_) => None,
+                    }),
+            );
+        out.force_row.clear();
+        force_file_row_into(
+            &out.forces,
+            passive_values,
+            self.passive.iter().map(|p| p.record_size()),
+            &self.passive_after,
+            &mut out.force_row,
+        );
+        out.force_row.extend_from_slice(external);
+        out.time = t;
+        out.q.clone_from(&data.q);
+        out.u.clone_from(&data.u);
+        out.udot.clone_from(&data.udot);
     }
 }
 

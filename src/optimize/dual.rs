@@ -153,6 +153,15 @@ pub struct DualSolution {
     pub eq_residual: f64,
 }
 
+/// What [`DualWorkspace::solve_into`] reports besides x and y (as in
+/// [`DualSolution`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DualInfo {
+    pub iterations: u32,
+    pub blocks: usize,
+    pub eq_residual: f64,
+}
+
 /// Why [`solve_dual`] gave no answer.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DualFailure {
@@ -1484,6 +1493,27 @@ impl DualWorkspace {
         p: &FrameProblem,
         y0: Option<&[f64]>,
     ) -> Result<DualSolution, DualFailure> {
+        let (mut x, mut y) = (Vec::new(), Vec::new());
+        let info = self.solve_into(p, y0, &mut x, &mut y)?;
+        Ok(DualSolution {
+            x,
+            y,
+            iterations: info.iterations,
+            blocks: info.blocks,
+            eq_residual: info.eq_residual,
+        })
+    }
+
+    /// [`solve`](Self::solve) into the caller's `x` and `y` (resized to
+    /// the problem; no allocation once they and the workspace have their
+    /// sizes). On failure their contents are unspecified.
+    pub fn solve_into(
+        &mut self,
+        p: &FrameProblem,
+        y0: Option<&[f64]>,
+        x: &mut Vec<f64>,
+        y: &mut Vec<f64>,
+    ) -> Result<DualInfo, DualFailure> {
         use DualFailure::NotHandled;
         if p.exponent != 2.0 {
             return Err(NotHandled("activation exponent other than 2"));
@@ -1567,7 +1597,8 @@ impl DualWorkspace {
         let b = &mut self.b;
         b.clear();
         b.extend_from_slice(p.b.as_slice());
-        let mut x = vec![0.0; n];
+        x.clear();
+        x.resize(n, 0.0);
         for (j, v) in fixed.iter().enumerate() {
             if let Some(v) = *v {
                 x[j] = v;
@@ -1608,7 +1639,8 @@ impl DualWorkspace {
         self.block_b.clear();
         self.block_b.extend(layout.rows.iter().map(|&r| b[r]));
 
-        let mut y = vec![0.0; m];
+        y.clear();
+        y.resize(m, 0.0);
         let mut iterations = 0u32;
         let n_blocks = layout.n_blocks();
         for k in 0..n_blocks {
@@ -1658,7 +1690,7 @@ impl DualWorkspace {
         r.clear();
         r.extend(p.b.iter().map(|b| -b));
         if m > 0 {
-            for (column, &xj) in a.chunks_exact(m).zip(&x) {
+            for (column, &xj) in a.chunks_exact(m).zip(x.iter()) {
                 if xj != 0.0 {
                     for (ri, aij) in r.iter_mut().zip(column) {
                         *ri += aij * xj;
@@ -1673,9 +1705,7 @@ impl DualWorkspace {
                 reason: "residual of the assembled solution",
             });
         }
-        Ok(DualSolution {
-            x,
-            y,
+        Ok(DualInfo {
             iterations,
             blocks: n_blocks,
             eq_residual: residual,

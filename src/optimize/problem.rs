@@ -157,6 +157,29 @@ pub struct FrameSolution {
     /// ([`super::polish`]); always false for Newton, whose answers are
     /// exact.
     pub polished: bool,
+    /// One multiplier per equation, with which `x` meets the optimality
+    /// conditions ([`super::dual::optimality_violation`]): Newton's, or the
+    /// polish's. Empty when Clarabel's answer was not polished.
+    pub y: Vec<f64>,
+}
+
+impl Default for FrameSolution {
+    /// An empty answer (no variables), to be filled by
+    /// [`super::solve_into`].
+    fn default() -> Self {
+        FrameSolution {
+            x: Vec::new(),
+            // (Nothing solved yet.)
+            status: SolveStatus::InvalidProblem,
+            iterations: 0,
+            objective: f64::NAN,
+            eq_residual: f64::NAN,
+            solve_time: Duration::ZERO,
+            solver: SolverKind::Newton,
+            polished: false,
+            y: Vec::new(),
+        }
+    }
 }
 
 impl FrameProblem {
@@ -222,7 +245,9 @@ impl FrameProblem {
                 ));
             }
         }
-        let mut used = vec![false; n];
+        // (Distinct indices checked pairwise: contacts are few, and a
+        // frame's validation allocates nothing.)
+        let indices = |c: &StaticContact| [c.normal, c.shear[0], c.shear[1]];
         for (k, c) in self.static_contacts.iter().enumerate() {
             if !(c.mu.is_finite() && c.mu >= 0.0) {
                 return bad(format!(
@@ -230,18 +255,21 @@ impl FrameProblem {
                     c.mu
                 ));
             }
-            for idx in [c.normal, c.shear[0], c.shear[1]] {
+            for (i, idx) in indices(c).into_iter().enumerate() {
                 if idx >= n {
                     return bad(format!(
                         "contact {k}: variable index {idx} out of range (n_var = {n})"
                     ));
                 }
-                if used[idx] {
+                let before = self.static_contacts[..k].iter().flat_map(indices);
+                if before
+                    .chain(indices(c).into_iter().take(i))
+                    .any(|j| j == idx)
+                {
                     return bad(format!(
                         "contact {k}: variable {idx} is already used by a contact"
                     ));
                 }
-                used[idx] = true;
             }
         }
         let s = &self.settings;

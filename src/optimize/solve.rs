@@ -57,41 +57,50 @@ const NONE: usize = usize::MAX;
 /// handle the problem or does not converge, and with
 /// `SolverChoice::Clarabel`, [`solve_clarabel`] answers.
 pub fn solve(p: &FrameProblem) -> FrameSolution {
+    let mut out = FrameSolution::default();
+    solve_into(p, None, &mut out);
+    out
+}
+
+/// [`solve`] into `out`, whose buffers are reused: a Newton answer
+/// allocates nothing once `out` and this thread's Newton workspace have
+/// their sizes (a frame Clarabel answers allocates: Clarabel builds its
+/// solver on every call). Newton starts from `y0` (one multiplier per
+/// equation, e.g. the previous frame's `out.y`) when given, else cold.
+pub fn solve_into(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution) {
     if p.settings.solver == SolverChoice::Clarabel || p.validate().is_err() {
-        return solve_clarabel(p);
+        *out = solve_clarabel(p);
+        return;
     }
     let start = Instant::now();
     thread_local! {
-        // Buffers only: an answer never depends on the frames solved before.
+        // Buffers only: an answer depends only on the problem and y0.
         static WORKSPACE: std::cell::RefCell<dual::DualWorkspace> = Default::default();
     }
     let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         WORKSPACE.with(|ws| match ws.try_borrow_mut() {
-            Ok(mut ws) => ws.solve(p, None),
+            Ok(mut ws) => ws.solve_into(p, y0, &mut out.x, &mut out.y),
             // (Only if a solve were re-entered.)
-            Err(_) => dual::solve_dual(p, None),
+            Err(_) => dual::DualWorkspace::new().solve_into(p, y0, &mut out.x, &mut out.y),
         })
     }));
     let spent = match newton {
         Ok(Ok(d)) => {
-            return FrameSolution {
-                objective: p.objective(&d.x),
-                eq_residual: d.eq_residual,
-                x: d.x,
-                status: SolveStatus::Solved,
-                iterations: d.iterations,
-                solve_time: start.elapsed(),
-                solver: SolverKind::Newton,
-                polished: false,
-            }
+            out.objective = p.objective(&out.x);
+            out.eq_residual = d.eq_residual;
+            out.status = SolveStatus::Solved;
+            out.iterations = d.iterations;
+            out.solve_time = start.elapsed();
+            out.solver = SolverKind::Newton;
+            out.polished = false;
+            return;
         }
         Ok(Err(f)) => f.iterations(),
         Err(_) => 0,
     };
-    let mut sol = solve_clarabel(p);
-    sol.iterations += spent;
-    sol.solve_time = start.elapsed();
-    sol
+    *out = solve_clarabel(p);
+    out.iterations += spent;
+    out.solve_time = start.elapsed();
 }
 
 /// Solves one frame with Clarabel. Never panics.
@@ -134,6 +143,7 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
             solve_time: start.elapsed(),
             solver: SolverKind::Clarabel,
             polished: false,
+            y: Vec::new(),
         };
     }
 
@@ -177,11 +187,13 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
         status = SolveStatus::NumericalError;
     }
     let mut polished = false;
+    let mut y = Vec::new();
     if matches!(status, SolveStatus::Solved | SolveStatus::AlmostSolved) {
         // To the exact optimum when its active set can be identified and
         // the answer passes the optimality certificate ([`polish`]).
-        if let Some((xp, _)) = polish::polish(p, &x) {
+        if let Some((xp, yp)) = polish::polish(p, &x) {
             x = xp;
+            y = yp;
             status = SolveStatus::Solved;
             polished = true;
         }
@@ -195,6 +207,7 @@ pub fn solve_clarabel(p: &FrameProblem) -> FrameSolution {
         solve_time: start.elapsed(),
         solver: SolverKind::Clarabel,
         polished,
+        y,
     }
 }
 

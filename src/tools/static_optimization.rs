@@ -639,9 +639,42 @@ fn resume_point(
     }))
 }
 
-/// One run's outputs of a frame: the solution, its joint-reaction rows and
-/// its log messages.
-type FrameOutput = (FrameResult, Vec<Vec<f64>>);
+/// One run's outputs of a frame: the solution and its joint-reaction rows
+/// (one per coupled JointReaction).
+pub type FrameOutput = (FrameResult, Vec<Vec<f64>>);
+
+/// The work of one frame of a static optimization run: the frame solved
+/// once per contact weight in `weights` ([`SoProblem::solve_frame_into`])
+/// and, for each weight, the joint reactions of each set of `reactions`
+/// (`static_optimization_reactions`), into `out` (one entry per weight;
+/// its buffers are reused, so that a frame allocates nothing once they
+/// have their sizes: tests/allocations.rs).
+#[allow(clippy::too_many_arguments)]
+pub fn frame_outputs(
+    problem: &SoProblem,
+    weights: &[f64],
+    reactions: &[&[ReactionSpec]],
+    ws: &mut Workspace,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+    udot: &[f64],
+    out: &mut Vec<FrameOutput>,
+) -> Result<()> {
+    if out.len() != weights.len() {
+        out.resize_with(weights.len(), Default::default);
+    }
+    problem.solve_frame_into(t, q, u, udot, ws, weights, out.iter_mut().map(|(r, _)| r));
+    for (r, rows) in out.iter_mut() {
+        rows.resize_with(reactions.len(), Vec::new);
+        for (row, specs) in rows.iter_mut().zip(reactions) {
+            row.clear();
+            row.resize(9 * specs.len(), 0.0);
+            static_optimization_reactions(problem, t, r, ws, specs, row)?;
+        }
+    }
+    Ok(())
+}
 
 /// One run of a sweep: its contact weight, the prefix of its tables and the
 /// prefixes of its joint-reaction tables.
@@ -1122,8 +1155,18 @@ fn run_sweep(
     // thread owns them and takes each frame's results in order, while the
     // next chunk of frames is solved.
     let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<FrameOutput>>(FRAMES_IN_FLIGHT);
+    // Every run has the same joint reactions (only their tables differ).
+    let reactions: Vec<&[ReactionSpec]> = runs
+        .first()
+        .map(|r| r.reactions.iter().map(|(_, s)| *s).collect())
+        .unwrap_or_default();
+    // Output buffers the writer has finished with, for the solving threads
+    // to fill again: a frame allocates nothing once there are enough of
+    // them (at most the frames in flight).
+    let recycled: std::sync::Mutex<Vec<Vec<FrameOutput>>> = Default::default();
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
+        let recycled = &recycled;
         let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
             let mut writers = writers;
             for results in rx {
@@ -1132,6 +1175,9 @@ fn run_sweep(
                     // formatting, off the solving threads.
                     let messages = names.encode(problem, r, rows)?;
                     w.write(r, rows, &messages)?;
+                }
+                if let Ok(mut pool) = recycled.lock() {
+                    pool.push(results);
                 }
             }
             Ok(writers)
@@ -1147,31 +1193,22 @@ fn run_sweep(
                 if block.time[i] <= skip_until {
                     return Ok(None);
                 }
-                let results = problem.solve_frame_in(
+                let mut out = recycled
+                    .lock()
+                    .ok()
+                    .and_then(|mut pool| pool.pop())
+                    .unwrap_or_default();
+                frame_outputs(
+                    problem,
+                    &weights,
+                    &reactions,
+                    ws,
                     block.time[i],
                     &block.q[i],
                     &block.u[i],
                     &block.udot[i],
-                    ws,
-                    &weights,
-                );
-                let mut out = Vec::with_capacity(results.len());
-                for (r, spec) in results.into_iter().zip(runs) {
-                    let mut rows = Vec::with_capacity(spec.reactions.len());
-                    for (_, specs) in &spec.reactions {
-                        let mut row = vec![0.0; 9 * specs.len()];
-                        static_optimization_reactions(
-                            problem,
-                            block.time[i],
-                            &r,
-                            ws,
-                            specs,
-                            &mut row,
-                        )?;
-                        rows.push(row);
-                    }
-                    out.push((r, rows));
-                }
+                    &mut out,
+                )?;
                 Ok(Some(out))
             },
             |item| {
