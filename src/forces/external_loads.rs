@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 
 use crate::dynamics::{BodyForce, Data};
 use crate::error::Result;
-use crate::functions::{GcvSpline, SplineFitter};
+use crate::functions::{GcvSpline, SplineFitter, TransientBasis};
 use crate::model::Model;
 use crate::storage::{self, Storage};
 use crate::xml::{self, Element};
@@ -33,7 +33,7 @@ impl Series {
             _ => Series::Spline(fit.spline(y)?),
         })
     }
-    fn value(&self, x: f64) -> f64 {
+    fn value(&self, x: f64, cache: &mut TransientBasis) -> f64 {
         match self {
             Series::Constant(c) => *c,
             Series::Linear(t, y) => {
@@ -48,7 +48,7 @@ impl Series {
             }
             // Frames advance through the data: its segments are rarely
             // revisited, so none is kept.
-            Series::Spline(s) => s.value_transient(x),
+            Series::Spline(s) => s.value_transient_with(x, cache),
         }
     }
 }
@@ -57,8 +57,12 @@ impl Series {
 struct Vec3Series([Series; 3]);
 
 impl Vec3Series {
-    fn value(&self, t: f64) -> Vector3<f64> {
-        Vector3::new(self.0[0].value(t), self.0[1].value(t), self.0[2].value(t))
+    fn value(&self, t: f64, cache: &mut TransientBasis) -> Vector3<f64> {
+        Vector3::new(
+            self.0[0].value(t, cache),
+            self.0[1].value(t, cache),
+            self.0[2].value(t, cache),
+        )
     }
 }
 
@@ -243,8 +247,9 @@ impl ExternalLoads {
 
     /// Add every load at time `t` to `data.applied` (body positions must be current).
     pub fn apply(&self, t: f64, data: &mut Data) {
+        let mut cache = TransientBasis::default();
         for ef in &self.forces {
-            let (f_g, p_g, t_g) = ef.evaluate(t, data);
+            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache);
             ef.add_to(data, f_g, p_g, t_g);
         }
     }
@@ -253,8 +258,9 @@ impl ExternalLoads {
     /// reporter records of each load ([`ExternalForce::record`] in order):
     /// the values are evaluated once for both.
     pub fn apply_recording(&self, t: f64, data: &mut Data, record: &mut Vec<f64>) {
+        let mut cache = TransientBasis::default();
         for ef in &self.forces {
-            let (f_g, p_g, t_g) = ef.evaluate(t, data);
+            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache);
             ef.record_into(&f_g, &p_g, &t_g, data, record);
             ef.add_to(data, f_g, p_g, t_g);
         }
@@ -306,19 +312,30 @@ impl ExternalForce {
 
     /// Force, point of application and torque in ground at time `t`.
     pub fn evaluate(&self, t: f64, data: &Data) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        self.evaluate_with(t, data, &mut TransientBasis::default())
+    }
+
+    /// [`evaluate`](Self::evaluate), the splines' segment basis shared
+    /// through `cache` (the loads of one file share their time column).
+    fn evaluate_with(
+        &self,
+        t: f64,
+        data: &Data,
+        cache: &mut TransientBasis,
+    ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let r_f = data.rotation[self.force_expressed_in];
         let f_g = self
             .force
             .as_ref()
-            .map(|s| r_f * s.value(t))
+            .map(|s| r_f * s.value(t, cache))
             .unwrap_or_else(Vector3::zeros);
         let t_g = self
             .torque
             .as_ref()
-            .map(|s| r_f * s.value(t))
+            .map(|s| r_f * s.value(t, cache))
             .unwrap_or_else(Vector3::zeros);
         let p_g = match &self.point {
-            Some(s) => data.station_position(self.point_expressed_in, &s.value(t)),
+            Some(s) => data.station_position(self.point_expressed_in, &s.value(t, cache)),
             None => data.position[self.applied_to_body],
         };
         (f_g, p_g, t_g)

@@ -69,6 +69,24 @@ struct SpanBasis {
 
 type Ders = [[f64; MAX_COEF]; MAX_COEF];
 
+/// The last segment basis [`GcvSpline::value_transient_with`] computed,
+/// keyed by the splines' shared basis table and the segment: one per
+/// evaluation time, on the stack.
+#[derive(Debug, Clone)]
+pub struct TransientBasis {
+    key: Option<(usize, usize)>,
+    ders: Ders,
+}
+
+impl Default for TransientBasis {
+    fn default() -> Self {
+        TransientBasis {
+            key: None,
+            ders: [[0.0; MAX_COEF]; MAX_COEF],
+        }
+    }
+}
+
 impl SpanBasis {
     fn new(n: usize) -> Arc<SpanBasis> {
         Arc::new(SpanBasis {
@@ -221,6 +239,14 @@ impl GcvSpline {
     /// segment not made yet is made for this call only, not kept, and so is
     /// its basis when no call has kept it yet; nothing is allocated.
     pub fn value_transient(&self, x: f64) -> f64 {
+        self.value_transient_with(x, &mut TransientBasis::default())
+    }
+
+    /// [`value_transient`](Self::value_transient), taking a segment's basis
+    /// from `cache` when it holds that of the same abscissae and segment
+    /// (the splines of one [`SplineFitter`] evaluated at one time, e.g. the
+    /// columns of an external loads file) and leaving it there otherwise.
+    pub fn value_transient_with(&self, x: f64, cache: &mut TransientBasis) -> f64 {
         let deg = self.degree();
         let (s, base) = self.locate(x);
         match self.seg[s].get() {
@@ -228,7 +254,14 @@ impl GcvSpline {
             None => {
                 let a = match self.basis.seg[s].get() {
                     Some(basis) => self.make_segment_from(s, basis),
-                    None => self.make_segment_from(s, &self.compute_basis(s)),
+                    None => {
+                        let key = (Arc::as_ptr(&self.basis) as *const u8 as usize, s);
+                        if cache.key != Some(key) {
+                            cache.ders = self.compute_basis(s);
+                            cache.key = Some(key);
+                        }
+                        self.make_segment_from(s, &cache.ders)
+                    }
                 };
                 horner(&a, deg, x - base, 0)
             }
@@ -1097,6 +1130,21 @@ mod tests {
                 assert_eq!(fresh.value_transient(t).to_bits(), want.to_bits(), "t {t}");
                 assert_eq!(kept.value_transient(t).to_bits(), want.to_bits(), "t {t}");
                 assert_eq!(lone.value_transient(t).to_bits(), want.to_bits(), "t {t}");
+            }
+            // Through one cache, two splines of one fitter at each time
+            // (the first computes the basis, the second reuses it), and a
+            // spline of another fitter (whose key differs).
+            let other = SplineFitter::new(degree, &x).spline(&y).unwrap();
+            let mut cache = TransientBasis::default();
+            for &t in &ts {
+                let want = kept.value(t).to_bits();
+                for sp in [&lone, &fresh, &other, &lone] {
+                    assert_eq!(
+                        sp.value_transient_with(t, &mut cache).to_bits(),
+                        want,
+                        "t {t}"
+                    );
+                }
             }
             assert!(fresh.seg.iter().all(|s| s.get().is_none()));
             assert!(lone.seg.iter().all(|s| s.get().is_none()));

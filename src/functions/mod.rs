@@ -11,7 +11,7 @@ mod piecewise_linear;
 mod simm_spline;
 mod simple;
 
-pub use gcv_spline::{GcvSpline, SplineFitter};
+pub use gcv_spline::{GcvSpline, SplineFitter, TransientBasis};
 pub use piecewise_linear::PiecewiseLinear;
 pub use simm_spline::SimmSpline;
 
