@@ -9,9 +9,12 @@
 //! unconstrained coordinates with the coupling vectors C_k:
 //! `C_kᵀ Σ_i x_i f_i g_i = C_kᵀ τ_required`, which is OpenSim's
 //! acceleration-level constraint `u̇_I(x) = u̇_target` multiplied by the
-//! (constraint-reduced) mass matrix. Every frame is solved from a cold start
-//! (no warm start from the previous frame), so results do not depend on how
-//! frames are spread over threads or on where a resumed run starts.
+//! (constraint-reduced) mass matrix. A frame is solved from a cold start, or
+//! ([`SoProblem::solve_frame_in_warm`]) from the previous frame's multipliers
+//! when the frame driver says it follows that frame in a fixed group
+//! ([`crate::frame::driver::for_each_frame_grouped`]), so results do not
+//! depend on how frames are spread over threads or on where a resumed run
+//! starts.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -619,12 +622,62 @@ impl SoProblem {
         ws: &mut crate::frame::Workspace,
         weights: &[f64],
     ) -> Vec<FrameResult> {
+        self.solve_frame_in_warm(t, q, u, udot_target, ws, weights, false)
+    }
+
+    /// [`solve_frame_in`](Self::solve_frame_in), each weight's problem
+    /// warm-started (`warm`) from the multipliers the workspace kept from
+    /// the last frame it solved with that weight ([`optimize::solve_warm`];
+    /// cold when there are none, or when `warm` is false). The answers
+    /// differ from cold ones by rounding only, but the caller must make the
+    /// previous frame a fixed one (the frame driver's groups) for results
+    /// to be reproducible.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_frame_in_warm(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot_target: &[f64],
+        ws: &mut crate::frame::Workspace,
+        weights: &[f64],
+        warm: bool,
+    ) -> Vec<FrameResult> {
         let crate::frame::Workspace {
             data,
             muscles,
             assembly,
+            warm: multipliers,
         } = ws;
-        self.solve_weights_in(t, q, u, udot_target, data, muscles, assembly, weights)
+        let m_r = self.assemble(t, q, u, udot_target, data, muscles, assembly);
+        multipliers.resize_with(weights.len(), Vec::new);
+        let nv = self.controls.len();
+        weights
+            .iter()
+            .zip(multipliers.iter_mut())
+            .map(|(&w0, y)| {
+                assembly.problem.weights[nv..]
+                    .iter_mut()
+                    .for_each(|w| *w = 1.0 / w0);
+                // The previous frame's multipliers, taken out so that the
+                // answer's can be written in their place.
+                let y0 = std::mem::take(y);
+                let y0 = (warm && !y0.is_empty()).then_some(y0.as_slice());
+                let solution = optimize::solve_warm(&assembly.problem, y0, Some(y));
+                self.frame_result(
+                    t,
+                    &assembly.problem,
+                    solution,
+                    &assembly.scale,
+                    &assembly.passive,
+                    &assembly.external,
+                    &assembly.states,
+                    m_r.as_ref(),
+                    data,
+                    muscles,
+                )
+            })
+            .collect()
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -34,7 +34,7 @@ pub use problem::{
     FrameProblem, FrameSolution, SolveSettings, SolveStatus, SolverChoice, SolverKind,
     StaticContact,
 };
-pub use solve::{solve, solve_clarabel};
+pub use solve::{solve, solve_clarabel, solve_warm};
 
 #[cfg(test)]
 mod tests;

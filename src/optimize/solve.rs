@@ -57,37 +57,74 @@ const NONE: usize = usize::MAX;
 /// handle the problem or does not converge, and with
 /// `SolverChoice::Clarabel`, [`solve_clarabel`] answers.
 pub fn solve(p: &FrameProblem) -> FrameSolution {
+    solve_warm(p, None, None)
+}
+
+/// As [`solve`], with Newton started from the multipliers `y0` (one per
+/// equation: the previous frame's, a warm start) when given, and the
+/// answer's multipliers left in `y_out` (emptied when Newton did not
+/// answer, so that the next frame starts cold). A `y0` of the wrong length
+/// is ignored. When the warm-started Newton fails, the frame is solved as
+/// [`solve`] solves it (Newton from the cold start, then Clarabel), so a
+/// warm start changes an answer by rounding at most; `iterations` then
+/// counts the failed attempt's linear solves too.
+pub fn solve_warm(
+    p: &FrameProblem,
+    y0: Option<&[f64]>,
+    mut y_out: Option<&mut Vec<f64>>,
+) -> FrameSolution {
+    if let Some(y) = y_out.as_deref_mut() {
+        y.clear();
+    }
     if p.settings.solver == SolverChoice::Clarabel || p.validate().is_err() {
         return solve_clarabel(p);
     }
+    let y0 = y0.filter(|y| y.len() == p.n_eq());
     let start = Instant::now();
     thread_local! {
-        // Buffers only: an answer never depends on the frames solved before.
+        // Buffers only: an answer depends on nothing but the problem and
+        // the warm start.
         static WORKSPACE: std::cell::RefCell<dual::DualWorkspace> = Default::default();
     }
-    let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        WORKSPACE.with(|ws| match ws.try_borrow_mut() {
-            Ok(mut ws) => ws.solve(p, None),
-            // (Only if a solve were re-entered.)
-            Err(_) => dual::solve_dual(p, None),
-        })
-    }));
-    let spent = match newton {
+    let attempt = |y0: Option<&[f64]>| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            WORKSPACE.with(|ws| match ws.try_borrow_mut() {
+                Ok(mut ws) => ws.solve(p, y0),
+                // (Only if a solve were re-entered.)
+                Err(_) => dual::solve_dual(p, y0),
+            })
+        }))
+    };
+    let spent_on = |r: &std::thread::Result<Result<dual::DualSolution, dual::DualFailure>>| match r
+    {
+        Ok(Err(f)) => f.iterations(),
+        _ => 0,
+    };
+    let mut newton = attempt(y0);
+    let mut spent = 0;
+    if y0.is_some() && !matches!(newton, Ok(Ok(_))) {
+        spent = spent_on(&newton);
+        newton = attempt(None);
+    }
+    match newton {
         Ok(Ok(d)) => {
-            return FrameSolution {
+            let sol = FrameSolution {
                 objective: p.objective(&d.x),
                 eq_residual: d.eq_residual,
                 x: d.x,
                 status: SolveStatus::Solved,
-                iterations: d.iterations,
+                iterations: d.iterations + spent,
                 solve_time: start.elapsed(),
                 solver: SolverKind::Newton,
                 polished: false,
+            };
+            if let Some(y) = y_out {
+                *y = d.y;
             }
+            return sol;
         }
-        Ok(Err(f)) => f.iterations(),
-        Err(_) => 0,
-    };
+        ref r => spent += spent_on(r),
+    }
     let mut sol = solve_clarabel(p);
     sol.iterations += spent;
     sol.solve_time = start.elapsed();

@@ -14,6 +14,7 @@ use crate::error::{Error, Location, Result};
 use crate::forces::actuators::{Actuator, ActuatorKind};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
+use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
 use crate::output::mcap_log;
@@ -22,7 +23,7 @@ use crate::reactions::{
     column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
 };
 use crate::storage::StoWriter;
-use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream_with, results_dir};
+use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
 use crate::tools::joint_reaction::{
     resolve_reactions, JointReactionSetup, DESCRIPTION as JR_DESCRIPTION,
 };
@@ -1136,25 +1137,34 @@ fn run_sweep(
             }
             Ok(writers)
         });
-        let completed = for_each_frame(
+        // Frames in fixed groups (frame::driver::GROUP): the first of a
+        // group solved cold, the others warm-started from the frame before.
+        let completed = for_each_frame_grouped(
             &mut stream,
             i0,
             i1,
             step_interval,
             || Workspace::new(&problem.model, &problem.muscles),
-            |ws, block, i| {
-                // Frames every resumed run already holds are not computed again.
-                if block.time[i] <= skip_until {
+            |ws, block, i, pos| {
+                // Groups every resumed run already holds whole are not
+                // computed again; a group the resume point falls in is solved
+                // from its start (for the same warm starts as an
+                // uninterrupted run), its frames written from that point on.
+                if block.time[pos.last] <= skip_until {
                     return Ok(None);
                 }
-                let results = problem.solve_frame_in(
+                let results = problem.solve_frame_in_warm(
                     block.time[i],
                     &block.q[i],
                     &block.u[i],
                     &block.udot[i],
                     ws,
                     &weights,
+                    !pos.first,
                 );
+                if block.time[i] <= skip_until {
+                    return Ok(None);
+                }
                 let mut out = Vec::with_capacity(results.len());
                 for (r, spec) in results.into_iter().zip(runs) {
                     let mut rows = Vec::with_capacity(spec.reactions.len());
