@@ -114,6 +114,8 @@ fn check_setup(setup_file: &Path) -> usize {
                 &states.q[i],
                 &states.u[i],
                 &udot[i],
+                // Warm-started, as the run's frames after a group's first.
+                true,
                 &mut out,
             )
             .unwrap();

@@ -79,15 +79,38 @@ fn results_do_not_depend_on_thread_count() {
     let out = common::out_dir("so_threads");
     let setup = arm26_setup(&root, &out, 1.0, "");
     let mut files = Vec::new();
+    let mut diagnostics = Vec::new();
     for threads in [1, 2] {
         let o = out.join(format!("t{threads}"));
         run(&setup, &o, Some(threads));
         files.push(std::fs::read(o.join("arm26_StaticOptimization_activation.sto")).unwrap());
+        // Every column but the solve time: the Newton iterations show
+        // which frames were warm-started, and from which frame.
+        let t = storage::read(&o.join("arm26_StaticOptimization_diagnostics.sto")).unwrap();
+        let j = t.column_index("solve_time_ms").unwrap();
+        let rows: Vec<Vec<f64>> = t
+            .rows
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .enumerate()
+                    .filter(|e| e.0 != j)
+                    .map(|e| *e.1)
+                    .collect()
+            })
+            .collect();
+        diagnostics.push((t.time.clone(), rows));
     }
     assert!(
         files[0] == files[1],
         "activation files differ between 1 and 2 threads"
     );
+    assert!(
+        diagnostics[0] == diagnostics[1],
+        "diagnostics differ between 1 and 2 threads"
+    );
+    // Frames beyond the first group, so warm-started frames took part.
+    assert!(diagnostics[0].0.len() > 2 * statopt::frame::driver::GROUP);
 }
 
 #[test]

@@ -51,6 +51,83 @@ pub fn for_each_frame<W, T>(
     step_interval: usize,
     init: impl Fn() -> W + Sync + Send,
     work: impl Fn(&mut W, &StateBlock, usize) -> Result<T> + Sync + Send,
+    sink: impl FnMut(T) -> Result<()>,
+) -> Result<bool>
+where
+    T: Send,
+    W: Send,
+{
+    drive(
+        stream,
+        i0,
+        i1,
+        step_interval,
+        1,
+        init,
+        |w, b, i, _| work(w, b, i),
+        sink,
+    )
+}
+
+/// Frames per warm-start group ([`for_each_frame_grouped`]): the first
+/// frame of a group is solved cold, each other from the previous frame's
+/// answer. Groups are counted by the frame's ordinal among the analysed
+/// frames of its block (from the block's first analysed row), so they do
+/// not depend on the thread count or the chunk size.
+pub const GROUP: usize = 8;
+
+/// Where a frame stands in its warm-start group.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GroupPos {
+    /// The first frame of its group: solved cold.
+    pub first: bool,
+    /// Index in the block of the group's last frame (the frame itself when
+    /// it is the last): a resumed run re-solves a group, without writing
+    /// it, up to its first frame not yet written.
+    pub last: usize,
+}
+
+/// Frames per chunk for groups of `group` frames: [`CHUNK`], or four frames
+/// and one group per thread when more, rounded up to a multiple of `group`
+/// (chunks start at group starts).
+fn chunk_len(threads: usize, group: usize) -> usize {
+    CHUNK.max(4 * threads).max(group * threads).div_ceil(group) * group
+}
+
+/// As [`for_each_frame`], with the frames taken in fixed groups of [`GROUP`]
+/// consecutive analysed frames of a block: a group runs in order on one
+/// thread, in one workspace, so `work` may warm-start a frame from the one
+/// before it (`GroupPos::first` false); the groups of a chunk run in
+/// parallel. Which frames share a group depends on the stream's blocks
+/// alone (a fixed number of rows from the start of the stream), never on
+/// the thread count or the chunking, so warm-started results stay
+/// identical for any thread count.
+pub fn for_each_frame_grouped<W, T>(
+    stream: &mut impl FrameSource,
+    i0: usize,
+    i1: usize,
+    step_interval: usize,
+    init: impl Fn() -> W + Sync + Send,
+    work: impl Fn(&mut W, &StateBlock, usize, GroupPos) -> Result<T> + Sync + Send,
+    sink: impl FnMut(T) -> Result<()>,
+) -> Result<bool>
+where
+    T: Send,
+    W: Send,
+{
+    drive(stream, i0, i1, step_interval, GROUP, init, work, sink)
+}
+
+/// The frame loop of both drivers, with groups of `group` frames.
+#[allow(clippy::too_many_arguments)]
+fn drive<W, T>(
+    stream: &mut impl FrameSource,
+    i0: usize,
+    i1: usize,
+    step_interval: usize,
+    group: usize,
+    init: impl Fn() -> W + Sync + Send,
+    work: impl Fn(&mut W, &StateBlock, usize, GroupPos) -> Result<T> + Sync + Send,
     mut sink: impl FnMut(T) -> Result<()>,
 ) -> Result<bool>
 where
@@ -60,28 +137,47 @@ where
     use rayon::prelude::*;
     let pool = Pool(std::sync::Mutex::new(Vec::new()));
     let mut sel: Vec<usize> = Vec::new();
-    let mut results: Vec<Result<T>> = Vec::new();
+    // One slot per frame of a chunk; a group stops at its first error, so
+    // its later slots stay empty (and the error is handed on first).
+    let mut results: Vec<Option<Result<T>>> = Vec::new();
     while let Some(block) = stream.next_block()? {
         sel.clear();
         sel.reserve(block.time.len());
         sel.extend(
             (0..block.time.len()).filter(|&k| is_frame(block.first + k, i0, i1, step_interval)),
         );
-        for chunk in sel.chunks(CHUNK.max(4 * rayon::current_num_threads())) {
+        for chunk in sel.chunks(chunk_len(rayon::current_num_threads(), group)) {
             if crate::frame::interrupt::requested().is_some() {
                 return Ok(false);
             }
+            results.clear();
+            results.resize_with(chunk.len(), || None);
             chunk
-                .par_iter()
-                .map_init(
+                .par_chunks(group)
+                .zip(results.par_chunks_mut(group))
+                .for_each_init(
                     || Lease {
                         pool: &pool,
                         ws: Some(pool.take().unwrap_or_else(&init)),
                     },
-                    |lease, &i| work(lease.ws.as_mut().expect("leased"), &block, i),
-                )
-                .collect_into_vec(&mut results);
-            for r in results.drain(..) {
+                    |lease, (frames, slots)| {
+                        let ws = lease.ws.as_mut().expect("leased");
+                        let last = frames[frames.len() - 1];
+                        for (k, (&i, slot)) in frames.iter().zip(slots).enumerate() {
+                            let pos = GroupPos {
+                                first: k == 0,
+                                last,
+                            };
+                            let r = work(ws, &block, i, pos);
+                            let failed = r.is_err();
+                            *slot = Some(r);
+                            if failed {
+                                break;
+                            }
+                        }
+                    },
+                );
+            for r in results.drain(..).flatten() {
                 sink(r?)?;
             }
         }
@@ -174,5 +270,74 @@ mod tests {
             .map(|e| e.1)
             .collect();
         assert_eq!(sunk, (0..n).collect::<Vec<_>>());
+    }
+
+    /// Warm-start groups are fixed by the frame's ordinal in its block:
+    /// with 1, 2 or 16 threads (chunks of 32 or 128 frames) the same frames
+    /// start a group, every group's frames run in order on one thread, and
+    /// the sink gets every frame once, in order.
+    #[test]
+    fn groups_do_not_depend_on_threads_or_chunks() {
+        let n = 203;
+        let step = 2;
+        let frames = frame_rows(
+            &(0..n).map(|i| i as f64).collect::<Vec<_>>(),
+            0.0,
+            (n - 1) as f64,
+            step,
+        );
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let events = std::sync::Mutex::new(Vec::new());
+            let mut sunk = Vec::new();
+            let done = pool.install(|| {
+                for_each_frame_grouped(
+                    &mut Rows(Some(n)),
+                    0,
+                    n - 1,
+                    step,
+                    || (),
+                    |_, _, i, pos| {
+                        let thread = std::thread::current().id();
+                        events.lock().unwrap().push((i, pos, thread));
+                        Ok(i)
+                    },
+                    |i| {
+                        sunk.push(i);
+                        Ok(())
+                    },
+                )
+            });
+            assert!(done.unwrap());
+            assert_eq!(sunk, frames, "{threads} threads");
+            let events = events.into_inner().unwrap();
+            let mut positions: Vec<(usize, GroupPos)> = events.iter().map(|e| (e.0, e.1)).collect();
+            positions.sort_by_key(|e| e.0);
+            // Within a group: consecutive frames, one thread, in order.
+            for (k, &(i, pos)) in positions.iter().enumerate() {
+                assert_eq!(i, frames[k]);
+                assert_eq!(pos.first, k % GROUP == 0, "frame {i}");
+                assert_eq!(
+                    pos.last,
+                    frames[(k / GROUP * GROUP + GROUP - 1).min(frames.len() - 1)]
+                );
+                if !pos.first {
+                    let at = |f: usize| events.iter().position(|e| e.0 == f).unwrap();
+                    let (before, this) = (at(frames[k - 1]), at(i));
+                    assert!(before < this, "frame {i} ran before its predecessor");
+                    assert_eq!(events[before].2, events[this].2, "frame {i} changed thread");
+                }
+            }
+            positions
+        };
+        let one = run(1);
+        assert_eq!(run(2), one);
+        assert_eq!(run(16), one);
+        assert_eq!(chunk_len(1, GROUP), 32);
+        assert_eq!(chunk_len(16, GROUP), 128);
+        assert_eq!(chunk_len(5, GROUP), 40);
     }
 }

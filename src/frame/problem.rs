@@ -9,9 +9,12 @@
 //! unconstrained coordinates with the coupling vectors C_k:
 //! `C_kᵀ Σ_i x_i f_i g_i = C_kᵀ τ_required`, which is OpenSim's
 //! acceleration-level constraint `u̇_I(x) = u̇_target` multiplied by the
-//! (constraint-reduced) mass matrix. Every frame is solved from a cold start
-//! (no warm start from the previous frame), so results do not depend on how
-//! frames are spread over threads or on where a resumed run starts.
+//! (constraint-reduced) mass matrix. A frame is solved from a cold start, or
+//! ([`SoProblem::solve_frame_into`] with `warm`) from the previous frame's
+//! multipliers when the frame driver says it follows that frame in a fixed
+//! group ([`crate::frame::driver::for_each_frame_grouped`]), so results do
+//! not depend on how frames are spread over threads or on where a resumed
+//! run starts.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -662,6 +665,7 @@ impl SoProblem {
             &mut asm,
             weights,
             out.iter_mut(),
+            None,
         );
         out
     }
@@ -679,7 +683,7 @@ impl SoProblem {
         weights: &[f64],
     ) -> Vec<FrameResult> {
         let mut out = vec![FrameResult::default(); weights.len()];
-        self.solve_frame_into(t, q, u, udot_target, ws, weights, out.iter_mut());
+        self.solve_frame_into(t, q, u, udot_target, ws, weights, out.iter_mut(), false);
         out
     }
 
@@ -687,6 +691,12 @@ impl SoProblem {
     /// weight, in order; extra results are left alone), whose buffers are
     /// reused: with the dual Newton solver a frame allocates nothing once
     /// the workspace and the results have their sizes (tests/allocations.rs).
+    /// With `warm`, each weight's problem is warm-started from the
+    /// multipliers the workspace kept from the last frame it solved with
+    /// that weight (`Workspace::warm`; cold when there are none); the
+    /// answers differ from cold ones by rounding only, but the caller must
+    /// make that previous frame a fixed one (the frame driver's groups) for
+    /// results to be reproducible. The multipliers are kept either way.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_frame_into<'r>(
         &self,
@@ -697,13 +707,29 @@ impl SoProblem {
         ws: &mut crate::frame::Workspace,
         weights: &[f64],
         out: impl IntoIterator<Item = &'r mut FrameResult>,
+        warm: bool,
     ) {
         let crate::frame::Workspace {
             data,
             muscles,
             assembly,
+            warm: multipliers,
         } = ws;
-        self.solve_weights_in(t, q, u, udot_target, data, muscles, assembly, weights, out)
+        if multipliers.len() != weights.len() {
+            multipliers.resize_with(weights.len(), Vec::new);
+        }
+        self.solve_weights_in(
+            t,
+            q,
+            u,
+            udot_target,
+            data,
+            muscles,
+            assembly,
+            weights,
+            out,
+            Some((multipliers, warm)),
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -718,15 +744,26 @@ impl SoProblem {
         asm: &mut Assembly,
         weights: &[f64],
         out: impl IntoIterator<Item = &'r mut FrameResult>,
+        // Per weight, the multipliers kept from the previous frame, and
+        // whether to start from them.
+        mut warm: Option<(&mut [Vec<f64>], bool)>,
     ) {
         let m_r = self.assemble(t, q, u, udot_target, data, mf, asm);
         let nv = self.controls.len();
-        for (&w0, result) in weights.iter().zip(out) {
+        for (k, (&w0, result)) in weights.iter().zip(out).enumerate() {
             // Every variable after the controls is a contact multiplier.
             asm.problem.weights[nv..]
                 .iter_mut()
                 .for_each(|w| *w = 1.0 / w0);
-            optimize::solve_into(&asm.problem, None, &mut result.solution);
+            let y0 = match &warm {
+                Some((kept, true)) if !kept[k].is_empty() => Some(kept[k].as_slice()),
+                _ => None,
+            };
+            optimize::solve_into(&asm.problem, y0, &mut result.solution);
+            if let Some((kept, _)) = warm.as_mut() {
+                kept[k].clear();
+                kept[k].extend_from_slice(&result.solution.y);
+            }
             self.frame_result_into(t, asm, m_r.as_ref(), data, mf, result);
         }
     }

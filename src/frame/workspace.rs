@@ -15,6 +15,10 @@ pub struct Workspace {
     pub muscles: MuscleFrame,
     /// The buffers static optimization assembles a frame's problem in.
     pub assembly: Assembly,
+    /// Per contact weight of a sweep: the multipliers of the last frame
+    /// solved here by dual Newton (empty when it was not), the next frame's
+    /// warm start ([`SoProblem::solve_frame_into`](crate::frame::SoProblem::solve_frame_into)).
+    pub warm: Vec<Vec<f64>>,
 }
 
 impl Workspace {
@@ -23,6 +27,7 @@ impl Workspace {
             data: Data::new(model),
             muscles: MuscleFrame::new(muscles, model),
             assembly: Assembly::default(),
+            warm: Vec::new(),
         }
     }
 }

@@ -77,10 +77,18 @@
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
-//! static optimization solves every frame from this cold start, so a frame's
-//! answer never depends on which frames were solved before it or on which
-//! thread (results are bit-identical for any thread count and when a run is
-//! resumed).
+//! Static optimization warm-starts a frame from the previous frame's
+//! multipliers (`optimize::solve_into`), deterministically: the frame driver
+//! takes frames in fixed groups of `frame::driver::GROUP` consecutive
+//! analysed frames, each group in order on one thread; the first frame of a
+//! group starts cold, and a resumed run solves its resume point's group
+//! again from the start (`for_each_frame_grouped`). So a frame's answer
+//! depends only on its group's earlier frames, never on the thread count,
+//! and a resumed run equals an uninterrupted one bit for bit. A warm start
+//! that fails (or does not fit the problem's shape) is retried cold before
+//! Clarabel takes over. On gait2392 warm starts cut the Newton linear
+//! solves from 2,347 to 1,431 over the 151 frames; the answers moved by
+//! rounding (≤ 1e-10 of each column's largest value).
 //!
 //! Block splitting: equations that share no free variable (a contact's three
 //! variables count as one) are independent; they are grouped by union-find

@@ -66,41 +66,63 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
 /// allocates nothing once `out` and this thread's Newton workspace have
 /// their sizes (a frame Clarabel answers allocates: Clarabel builds its
 /// solver on every call). Newton starts from `y0` (one multiplier per
-/// equation, e.g. the previous frame's `out.y`) when given, else cold.
+/// equation, e.g. the previous frame's `out.y`: a warm start) when given,
+/// else cold; a `y0` of the wrong length is ignored. When the warm-started
+/// Newton fails, the frame is solved as [`solve`] solves it (Newton from the
+/// cold start, then Clarabel), so a warm start changes an answer by
+/// rounding at most; `iterations` then counts the failed attempt's linear
+/// solves too. `out.y` receives the answer's multipliers (empty when
+/// Clarabel answered without a polish).
 pub fn solve_into(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution) {
     if p.settings.solver == SolverChoice::Clarabel || p.validate().is_err() {
         *out = solve_clarabel(p);
         return;
     }
+    let y0 = y0.filter(|y| y.len() == p.n_eq());
     let start = Instant::now();
     thread_local! {
-        // Buffers only: an answer depends only on the problem and y0.
+        // Buffers only: an answer depends on nothing but the problem and
+        // the warm start.
         static WORKSPACE: std::cell::RefCell<dual::DualWorkspace> = Default::default();
     }
-    let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        WORKSPACE.with(|ws| match ws.try_borrow_mut() {
-            Ok(mut ws) => ws.solve_into(p, y0, &mut out.x, &mut out.y),
-            // (Only if a solve were re-entered.)
-            Err(_) => dual::DualWorkspace::new().solve_into(p, y0, &mut out.x, &mut out.y),
-        })
-    }));
-    let spent = match newton {
-        Ok(Ok(d)) => {
+    let mut attempt = |y0: Option<&[f64]>| {
+        let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            WORKSPACE.with(|ws| match ws.try_borrow_mut() {
+                Ok(mut ws) => ws.solve_into(p, y0, &mut out.x, &mut out.y),
+                // (Only if a solve were re-entered.)
+                Err(_) => dual::DualWorkspace::new().solve_into(p, y0, &mut out.x, &mut out.y),
+            })
+        }));
+        match newton {
+            Ok(Ok(d)) => Ok(d),
+            Ok(Err(f)) => Err(f.iterations()),
+            Err(_) => Err(0),
+        }
+    };
+    let mut spent = 0;
+    let mut newton = attempt(y0);
+    if y0.is_some() {
+        if let Err(it) = newton {
+            spent = it;
+            newton = attempt(None);
+        }
+    }
+    match newton {
+        Ok(d) => {
             out.objective = p.objective(&out.x);
             out.eq_residual = d.eq_residual;
             out.status = SolveStatus::Solved;
-            out.iterations = d.iterations;
+            out.iterations = d.iterations + spent;
             out.solve_time = start.elapsed();
             out.solver = SolverKind::Newton;
             out.polished = false;
-            return;
         }
-        Ok(Err(f)) => f.iterations(),
-        Err(_) => 0,
-    };
-    *out = solve_clarabel(p);
-    out.iterations += spent;
-    out.solve_time = start.elapsed();
+        Err(it) => {
+            *out = solve_clarabel(p);
+            out.iterations += spent + it;
+            out.solve_time = start.elapsed();
+        }
+    }
 }
 
 /// Solves one frame with Clarabel. Never panics.

@@ -14,6 +14,7 @@ use crate::error::{Error, Location, Result};
 use crate::forces::actuators::{Actuator, ActuatorKind};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
+use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
 use crate::output::mcap_log;
@@ -22,7 +23,7 @@ use crate::reactions::{
     column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
 };
 use crate::storage::StoWriter;
-use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream_with, results_dir};
+use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
 use crate::tools::joint_reaction::{
     resolve_reactions, JointReactionSetup, DESCRIPTION as JR_DESCRIPTION,
 };
@@ -644,8 +645,9 @@ fn resume_point(
 pub type FrameOutput = (FrameResult, Vec<Vec<f64>>);
 
 /// The work of one frame of a static optimization run: the frame solved
-/// once per contact weight in `weights` ([`SoProblem::solve_frame_into`])
-/// and, for each weight, the joint reactions of each set of `reactions`
+/// once per contact weight in `weights` ([`SoProblem::solve_frame_into`],
+/// warm-started from the workspace's previous frame with `warm`) and, for
+/// each weight, the joint reactions of each set of `reactions`
 /// (`static_optimization_reactions`), into `out` (one entry per weight;
 /// its buffers are reused, so that a frame allocates nothing once they
 /// have their sizes: tests/allocations.rs).
@@ -659,12 +661,22 @@ pub fn frame_outputs(
     q: &[f64],
     u: &[f64],
     udot: &[f64],
+    warm: bool,
     out: &mut Vec<FrameOutput>,
 ) -> Result<()> {
     if out.len() != weights.len() {
         out.resize_with(weights.len(), Default::default);
     }
-    problem.solve_frame_into(t, q, u, udot, ws, weights, out.iter_mut().map(|(r, _)| r));
+    problem.solve_frame_into(
+        t,
+        q,
+        u,
+        udot,
+        ws,
+        weights,
+        out.iter_mut().map(|(r, _)| r),
+        warm,
+    );
     for (r, rows) in out.iter_mut() {
         rows.resize_with(reactions.len(), Vec::new);
         for (row, specs) in rows.iter_mut().zip(reactions) {
@@ -1182,15 +1194,20 @@ fn run_sweep(
             }
             Ok(writers)
         });
-        let completed = for_each_frame(
+        // Frames in fixed groups (frame::driver::GROUP): the first of a
+        // group solved cold, the others warm-started from the frame before.
+        let completed = for_each_frame_grouped(
             &mut stream,
             i0,
             i1,
             step_interval,
             || Workspace::new(&problem.model, &problem.muscles),
-            |ws, block, i| {
-                // Frames every resumed run already holds are not computed again.
-                if block.time[i] <= skip_until {
+            |ws, block, i, pos| {
+                // Groups every resumed run already holds whole are not
+                // computed again; a group the resume point falls in is solved
+                // from its start (for the same warm starts as an
+                // uninterrupted run), its frames written from that point on.
+                if block.time[pos.last] <= skip_until {
                     return Ok(None);
                 }
                 let mut out = recycled
@@ -1207,8 +1224,15 @@ fn run_sweep(
                     &block.q[i],
                     &block.u[i],
                     &block.udot[i],
+                    !pos.first,
                     &mut out,
                 )?;
+                if block.time[i] <= skip_until {
+                    if let Ok(mut pool) = recycled.lock() {
+                        pool.push(out);
+                    }
+                    return Ok(None);
+                }
                 Ok(Some(out))
             },
             |item| {
