@@ -8,6 +8,8 @@
 //! `optimize::solve`: a frame Newton leaves to Clarabel allocates
 //! (Clarabel builds its solver each call); such frames are skipped here.
 
+mod common;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
@@ -15,12 +17,10 @@ use std::path::{Path, PathBuf};
 use statopt::frame::Workspace;
 use statopt::motion::stream::{FrameSource, StateBlock};
 use statopt::optimize::SolverKind;
-use statopt::parse::setup::{Analysis, Setup};
+use statopt::parse::setup::Analysis;
 use statopt::tools::analyze;
 use statopt::tools::joint_reaction::{resolve_reactions, JointReactionSetup};
-use statopt::tools::static_optimization::{
-    frame_outputs, FrameOutput, SoProblem, StaticOptimizationSetup,
-};
+use statopt::tools::static_optimization::{frame_outputs, FrameOutput};
 
 struct Counting;
 
@@ -62,16 +62,7 @@ static GLOBAL: Counting = Counting;
 /// weights, the coupled JointReactions), counting each frame's allocations.
 /// Returns the frames checked.
 fn check_setup(setup_file: &Path) -> usize {
-    let setup = match Setup::read(setup_file).unwrap() {
-        Setup::Analyze(s) => s,
-        _ => unreachable!(),
-    };
-    let (el, common) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    let so = StaticOptimizationSetup::from_xml(&el, common).unwrap();
-    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+    let (setup, so, problem) = common::so_case(setup_file, None);
     let dir = setup_file.parent().unwrap();
     let mut reactions = Vec::new();
     for a in &setup.analyses {

@@ -29,9 +29,8 @@ use statopt::muscles::set::MuscleFrame;
 use statopt::optimize::{
     self, dual, FrameSolution, FrictionModel, SolveStatus, SolverChoice, SolverKind,
 };
-use statopt::parse::setup::{AnalyzeSetup, Setup};
 use statopt::tools::analyze;
-use statopt::tools::static_optimization::{Control, SoProblem, StaticOptimizationSetup};
+use statopt::tools::static_optimization::Control;
 
 #[derive(Default)]
 struct Stats {
@@ -57,27 +56,6 @@ struct Stats {
     failures: Vec<String>,
 }
 
-/// The setup, its StaticOptimization element and the compiled problem.
-fn so_case(
-    setup_file: &Path,
-    friction: Option<FrictionModel>,
-) -> (AnalyzeSetup, StaticOptimizationSetup, SoProblem) {
-    let setup = match Setup::read(setup_file).unwrap() {
-        Setup::Analyze(s) => s,
-        _ => unreachable!(),
-    };
-    let (el, common_) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    let mut so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
-    if let Some(f) = friction {
-        so.friction = f;
-    }
-    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
-    (setup, so, problem)
-}
-
 /// gait2392's walking setup, or None (with a SKIP line naming `test`).
 fn gait2392(test: &str) -> Option<PathBuf> {
     let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -91,7 +69,7 @@ fn gait2392(test: &str) -> Option<PathBuf> {
 }
 
 fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, stats: &mut Stats) {
-    let (setup, so, mut problem) = so_case(setup_file, friction);
+    let (setup, so, mut problem) = common::so_case(setup_file, friction);
     let states = analyze::load_states(&setup, &problem.model).unwrap();
     let udot = states
         .speed_derivatives(setup.coordinates_file.as_ref().unwrap())
@@ -339,7 +317,7 @@ fn gait2392_muscles_leave_the_pelvis_rows_alone_and_the_equations_split() {
     else {
         return;
     };
-    let (setup, _, problem) = so_case(&file, None);
+    let (setup, _, problem) = common::so_case(&file, None);
     let model = &problem.model;
     let states = analyze::load_states(&setup, model).unwrap();
     let udot = states

@@ -115,3 +115,31 @@ pub fn block_model(extra_forces: &str) -> String {
         act("side", "0 0 1")
     )
 }
+
+/// The setup, its StaticOptimization settings (the friction model replaced
+/// when given) and the compiled problem.
+pub fn so_case(
+    setup_file: &std::path::Path,
+    friction: Option<statopt::optimize::FrictionModel>,
+) -> (
+    statopt::parse::setup::AnalyzeSetup,
+    statopt::tools::static_optimization::StaticOptimizationSetup,
+    statopt::tools::static_optimization::SoProblem,
+) {
+    use statopt::parse::setup::Setup;
+    use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
+    let setup = match Setup::read(setup_file).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let (el, common_) = setup
+        .analysis_element("StaticOptimization")
+        .map(|(e, c)| (e.clone(), c.clone()))
+        .unwrap();
+    let mut so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    if let Some(f) = friction {
+        so.friction = f;
+    }
+    let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+    (setup, so, problem)
+}
