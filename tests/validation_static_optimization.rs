@@ -10,7 +10,6 @@ use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
 use statopt::parse::setup::Setup;
 use statopt::storage;
-use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
 use statopt::tools::{analyze, RunOptions};
 
 #[test]
@@ -166,16 +165,7 @@ fn statopt_optimum_is_never_worse_than_opensims_on_the_same_equations() {
     };
     for case in common::CASES {
         let dir = root.join(case);
-        let setup = match Setup::read(&dir.join("setup_SO.xml")).unwrap() {
-            Setup::Analyze(s) => s,
-            _ => unreachable!(),
-        };
-        let (el, common_) = setup
-            .analysis_element("StaticOptimization")
-            .map(|(e, c)| (e.clone(), c.clone()))
-            .unwrap();
-        let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
-        let (problem, _) = SoProblem::build(&setup, &so).unwrap();
+        let (setup, so, problem) = common::so_case(&dir.join("setup_SO.xml"), None);
         let states = statopt::tools::analyze::load_states(&setup, &problem.model).unwrap();
         let udot = states
             .speed_derivatives(setup.coordinates_file.as_ref().unwrap())
