@@ -1004,20 +1004,39 @@ impl<'a> RunWriters<'a> {
         shared: usize,
     ) -> Result<RunSummary> {
         let problem = self.problem;
-        self.act_w.finish()?;
-        self.force_w.finish()?;
-        self.diag_w.finish()?;
-        self.log.finish()?;
-        self.src_w.finish()?;
-        self.power_w.finish()?;
-        for w in self.jr_w {
-            w.finish()?;
-        }
+        let mut tables = vec![
+            self.act_w,
+            self.force_w,
+            self.diag_w,
+            self.src_w,
+            self.power_w,
+        ];
+        tables.extend(self.jr_w);
         if let Some((cw, bw, lw)) = self.contact_w {
-            cw.finish()?;
-            bw.finish()?;
-            lw.finish()?;
+            tables.extend([cw, bw, lw]);
         }
+        // Each file is written out and synced to disk on a thread of its
+        // own: the syncs overlap (the file system commits them together)
+        // instead of waiting for one another, about 1 ms each on this
+        // machine's disk. The run returns once every file is on disk, as
+        // before.
+        let log = self.log;
+        std::thread::scope(|scope| -> Result<()> {
+            let handles: Vec<_> = tables
+                .into_iter()
+                .map(|w| scope.spawn(move || w.finish()))
+                .collect();
+            let mut result = log.finish();
+            for h in handles {
+                let r = h
+                    .join()
+                    .unwrap_or_else(|_| Err(Error::internal("a table writer panicked")));
+                if result.is_ok() {
+                    result = r;
+                }
+            }
+            result
+        })?;
         let mut warnings = Vec::new();
         let failures = self.failures;
         if !failures.is_empty() {
