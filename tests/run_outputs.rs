@@ -583,3 +583,46 @@ fn resume_after_a_kill_equals_an_uninterrupted_run() {
     }
     println!("killed after {kept} of {rows} frames; resumed run equals the uninterrupted one");
 }
+
+/// `--sync` waits for the files to reach the disk and changes nothing in
+/// them: the tables of a synced run equal an unsynced run's (solve times
+/// aside), and a file that cannot be synced is an error naming it.
+#[test]
+fn sync_writes_the_same_tables_and_names_a_file_it_cannot_sync() {
+    let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization>";
+    let (plain_setup, plain_out) = write_case("outputs_sync_plain", 400, so);
+    let (synced_setup, synced_out) = write_case("outputs_sync_synced", 400, so);
+    let cli = |setup: &Path, extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+            .arg(setup)
+            .arg("-q")
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    cli(&plain_setup, &[]);
+    cli(&synced_setup, &["--sync"]);
+    for table in ["activation", "force", "ContactForces"] {
+        let name = format!("block_SO_{table}.sto");
+        let a = std::fs::read(plain_out.join(&name)).unwrap();
+        let b = std::fs::read(synced_out.join(&name)).unwrap();
+        let strip = |v: &[u8]| {
+            String::from_utf8_lossy(v)
+                .lines()
+                .filter(|l| !l.starts_with("statopt_setup="))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        assert_eq!(strip(&a), strip(&b), "{name}");
+    }
+    let missing = synced_out.join("no_such_file.sto");
+    let e = statopt::tools::sync_files(&[synced_out.join("block_SO_activation.sto"), missing])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no_such_file.sto"), "{e}");
+}

@@ -110,7 +110,7 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
 /// run cleanly (the tables keep the frames solved) and raises
 /// KeyboardInterrupt.
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, progress=None))]
+#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -121,6 +121,7 @@ fn run<'py>(
     threads: Option<usize>,
     reduce: bool,
     resume: bool,
+    sync: bool,
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
@@ -131,6 +132,7 @@ fn run<'py>(
         threads,
         resume,
         reduce,
+        sync,
         progress: Some(hook),
     };
     let result = py.allow_threads(|| match &text {

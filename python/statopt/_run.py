@@ -257,6 +257,7 @@ def run(
     precision: Optional[int] = None,
     reduce: bool = False,
     resume: bool = False,
+    sync: bool = False,
     tables: bool = True,
     **overrides: Any,
 ) -> Result:
@@ -289,8 +290,8 @@ def run(
       are relative to the working directory; the setup's own paths still
       resolve against its folder.
 
-    ``threads``, ``precision``, ``reduce``, ``resume`` are the CLI's ``-j``,
-    ``--precision``, ``--reduce`` and ``--resume``.
+    ``threads``, ``precision``, ``reduce``, ``resume``, ``sync`` are the
+    CLI's ``-j``, ``--precision``, ``--reduce``, ``--resume`` and ``--sync``.
 
     Raises :class:`statopt.InputError` (bad input; the CLI's message naming
     the file, line and element) or :class:`statopt.StatoptError`. Frames
@@ -300,7 +301,8 @@ def run(
     if resume and results_dir is None:
         raise ValueError("resume=True continues the run in results_dir: give results_dir")
     return _execute(_native.run, setup, results_dir, progress, tables, overrides,
-                    dict(precision=precision, threads=threads, reduce=reduce, resume=resume))
+                    dict(precision=precision, threads=threads, reduce=reduce, resume=resume,
+                         sync=sync))
 
 
 def predict_grf(

@@ -64,6 +64,10 @@ struct RunArgs {
     /// log hold completely and computes the rest (tables equal an uninterrupted run's).
     #[arg(long)]
     resume: bool,
+    /// Return only once every output file is on the disk itself (fsync), so that it survives a
+    /// power cut; without it files are closed as OpenSim closes them.
+    #[arg(long)]
+    sync: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -299,6 +303,7 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         threads: a.threads.map(usize::from),
         resume: a.resume,
         reduce: a.reduce,
+        sync: a.sync,
         progress: None,
     };
     let setup = a

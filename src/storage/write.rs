@@ -547,11 +547,12 @@ impl StoWriter {
         self.n_rows
     }
 
-    /// Flush to disk and close.
+    /// Write the pending rows and close the file, as OpenSim closes its
+    /// tables: the bytes are in the file (a process killed after this loses
+    /// nothing), the operating system puts them on the disk when it will.
     pub fn finish(mut self) -> Result<()> {
         self.write_pending()?;
-        self.file.flush().map_err(|e| Error::io(&self.path, e))?;
-        self.file.sync_all().map_err(|e| Error::io(&self.path, e))
+        self.file.flush().map_err(|e| Error::io(&self.path, e))
     }
 }
 

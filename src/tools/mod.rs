@@ -39,6 +39,11 @@ pub struct RunOptions {
     /// needs, whatever the setup's `<reduce_model>` says (`--reduce`;
     /// AnalyzeTool setups).
     pub reduce: bool,
+    /// Wait, before returning, until every output file is on the disk
+    /// itself (`fsync`, `--sync`): they survive a power cut from then on.
+    /// Without it files are closed as OpenSim closes them; a killed or
+    /// failed process loses nothing either way.
+    pub sync: bool,
     /// Told how frame loops advance (embedding callers; see [`progress`]).
     pub progress: Option<progress::ProgressHook>,
 }
@@ -46,10 +51,51 @@ pub struct RunOptions {
 /// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
 /// study document, an InverseDynamicsTool or an AnalyzeTool setup.
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
-    if study::is_study(setup) {
-        return study::run(setup, opts);
+    let summary = if study::is_study(setup) {
+        study::run(setup, opts)?
+    } else {
+        run_parsed(crate::parse::setup::Setup::read(setup)?, opts)?
+    };
+    synced(summary, opts)
+}
+
+/// The summary, once its files are on the disk when `opts.sync` asks.
+pub fn synced(summary: RunSummary, opts: &RunOptions) -> crate::Result<RunSummary> {
+    if opts.sync {
+        sync_files(&summary.files)?;
     }
-    run_parsed(crate::parse::setup::Setup::read(setup)?, opts)
+    Ok(summary)
+}
+
+/// Wait until every file of `files` is on the disk itself (`fsync`; the
+/// `--sync` option), each on a thread of its own so that the syncs overlap
+/// (the file system commits them together) instead of queueing. A stopped
+/// run's files are left as they are (they are complete up to their last
+/// row either way).
+pub fn sync_files(files: &[std::path::PathBuf]) -> crate::Result<()> {
+    use crate::error::Error;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = files
+            .iter()
+            .map(|f| {
+                scope.spawn(move || {
+                    std::fs::File::open(f)
+                        .and_then(|file| file.sync_all())
+                        .map_err(|e| Error::io(f, e))
+                })
+            })
+            .collect();
+        let mut result = Ok(());
+        for h in handles {
+            let r = h
+                .join()
+                .unwrap_or_else(|_| Err(Error::internal("syncing a file panicked")));
+            if result.is_ok() {
+                result = r;
+            }
+        }
+        result
+    })
 }
 
 /// [`run_setup`] for a tool setup (not a study) given as text, read as if it
@@ -59,7 +105,10 @@ pub fn run_setup_text(
     text: &str,
     opts: &RunOptions,
 ) -> crate::Result<RunSummary> {
-    run_parsed(crate::parse::setup::Setup::parse(text, setup)?, opts)
+    synced(
+        run_parsed(crate::parse::setup::Setup::parse(text, setup)?, opts)?,
+        opts,
+    )
 }
 
 fn run_parsed(setup: crate::parse::setup::Setup, opts: &RunOptions) -> crate::Result<RunSummary> {

@@ -1015,28 +1015,10 @@ impl<'a> RunWriters<'a> {
         if let Some((cw, bw, lw)) = self.contact_w {
             tables.extend([cw, bw, lw]);
         }
-        // Each file is written out and synced to disk on a thread of its
-        // own: the syncs overlap (the file system commits them together)
-        // instead of waiting for one another, about 1 ms each on this
-        // machine's disk. The run returns once every file is on disk, as
-        // before.
-        let log = self.log;
-        std::thread::scope(|scope| -> Result<()> {
-            let handles: Vec<_> = tables
-                .into_iter()
-                .map(|w| scope.spawn(move || w.finish()))
-                .collect();
-            let mut result = log.finish();
-            for h in handles {
-                let r = h
-                    .join()
-                    .unwrap_or_else(|_| Err(Error::internal("a table writer panicked")));
-                if result.is_ok() {
-                    result = r;
-                }
-            }
-            result
-        })?;
+        for w in tables {
+            w.finish()?;
+        }
+        self.log.finish()?;
         let mut warnings = Vec::new();
         let failures = self.failures;
         if !failures.is_empty() {

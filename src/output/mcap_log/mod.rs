@@ -68,6 +68,7 @@
 
 use std::collections::{BTreeMap, HashSet};
 use std::fs::File;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -338,14 +339,16 @@ impl McapLog {
 
     /// Closes the last chunk, writes the summary (schemas, channels,
     /// statistics, chunk and metadata indexes), the footer and the end
-    /// magic, and syncs the file to disk.
+    /// magic, and closes the file (as `StoWriter::finish`: the bytes are
+    /// in the file, on the disk itself once the system writes them back or
+    /// `--sync` asks, `tools::sync_files`).
     pub fn finish(mut self) -> Result<()> {
         self.writer
             .finish()
             .map_err(|e| mcap_error(&self.path, None, e))?;
         let path = self.path;
-        let file = self.writer.into_inner();
-        file.sync_all().map_err(|e| Error::io(&path, e))
+        let mut file = self.writer.into_inner();
+        file.flush().map_err(|e| Error::io(&path, e))
     }
 }
 
