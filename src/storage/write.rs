@@ -54,7 +54,7 @@ fn eight_digits(v: u32) -> [u8; 8] {
 
 /// Write `v` as exactly `out.len()` decimal digits (leading zeros; `v`
 /// must be below 10^len).
-#[inline]
+#[inline(always)]
 fn put_digits(out: &mut [u8], mut v: u64) {
     let mut i = out.len();
     while i >= 8 {
