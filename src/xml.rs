@@ -36,12 +36,7 @@ pub fn parse_file(path: &Path) -> Result<Element> {
 pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
     let file: Arc<Path> = Arc::from(file);
     let line_starts: Vec<usize> = std::iter::once(0)
-        .chain(
-            text.bytes()
-                .enumerate()
-                .filter(|(_, b)| *b == b'\n')
-                .map(|(i, _)| i + 1),
-        )
+        .chain(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1))
         .collect();
     let line_of = |pos: u64| -> usize {
         let pos = pos as usize;
@@ -116,7 +111,16 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
             }
             Event::Text(t) => {
                 if let Some(top) = stack.last_mut() {
-                    top.text.push_str(&t.xml_content(version));
+                    // Whitespace before an element's first text (the
+                    // indentation between child elements) is never read:
+                    // `text()` trims it.
+                    if !(top.text.is_empty()
+                        && AsRef::<[u8]>::as_ref(&*t)
+                            .iter()
+                            .all(u8::is_ascii_whitespace))
+                    {
+                        top.text.push_str(&t.xml_content(version));
+                    }
                 }
             }
             Event::CData(t) => {
@@ -396,6 +400,19 @@ pub fn parse_number(t: &str) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Text around comments and child elements concatenates as read; the
+    /// indentation before an element's first text is dropped (`text()`
+    /// trims it anyway), whitespace between two pieces of text is kept.
+    #[test]
+    fn text_pieces_and_indentation() {
+        let src = "<A>\n  <B/>\n  1 <!--c--> 2\n  <C>3<!--x--> <!--y-->4</C>\n</A>";
+        let root = parse_str(src, Path::new("t.xml")).unwrap();
+        assert_eq!(root.text(), "1  2");
+        assert_eq!(root.child("C").unwrap().text(), "3 4");
+        assert_eq!(root.child("B").unwrap().text, "");
+        assert_eq!(root.child("C").unwrap().line, 4);
+    }
 
     #[test]
     fn tree_with_lines_and_text() {
