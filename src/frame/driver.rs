@@ -185,6 +185,32 @@ where
     Ok(true)
 }
 
+/// A source whose first block was computed ahead (while the run's output
+/// files were being opened), then the rest of `source`.
+pub struct Prefetched<'s, S> {
+    first: Option<Option<StateBlock>>,
+    source: &'s mut S,
+}
+
+impl<'s, S: FrameSource> Prefetched<'s, S> {
+    /// `first`: what `source.next_block()` returned.
+    pub fn new(first: Option<StateBlock>, source: &'s mut S) -> Self {
+        Prefetched {
+            first: Some(first),
+            source,
+        }
+    }
+}
+
+impl<S: FrameSource> FrameSource for Prefetched<'_, S> {
+    fn next_block(&mut self) -> Result<Option<StateBlock>> {
+        match self.first.take() {
+            Some(first) => Ok(first),
+            None => self.source.next_block(),
+        }
+    }
+}
+
 /// The run's workspaces not in use.
 struct Pool<W>(std::sync::Mutex<Vec<W>>);
 
@@ -224,6 +250,47 @@ mod tests {
                 ..StateBlock::default()
             }))
         }
+    }
+
+    /// A prefetched first block comes first, then the source's own blocks,
+    /// and the frames run over both as over the source alone.
+    #[test]
+    fn prefetched_first_block_then_the_source() {
+        struct Two(usize);
+        impl FrameSource for Two {
+            fn next_block(&mut self) -> Result<Option<StateBlock>> {
+                self.0 += 1;
+                Ok((self.0 <= 2).then(|| StateBlock {
+                    first: 10 * (self.0 - 1),
+                    time: (0..10).map(|i| (10 * (self.0 - 1) + i) as f64).collect(),
+                    ..StateBlock::default()
+                }))
+            }
+        }
+        let mut source = Two(0);
+        let first = source.next_block().unwrap();
+        let mut pre = Prefetched::new(first, &mut source);
+        let mut seen = Vec::new();
+        let done = for_each_frame(
+            &mut pre,
+            0,
+            19,
+            3,
+            || (),
+            |_, b, i| Ok(b.time[i]),
+            |t| {
+                seen.push(t);
+                Ok(())
+            },
+        );
+        assert!(done.unwrap());
+        // Every third row from the first, and the last (as OpenSim steps).
+        assert_eq!(seen, [0.0, 3.0, 6.0, 9.0, 12.0, 15.0, 18.0, 19.0]);
+        // An exhausted source prefetched: nothing, and no second call
+        // that would start it over.
+        let mut empty = Two(2);
+        let mut pre = Prefetched::new(None, &mut empty);
+        assert!(pre.next_block().unwrap().is_none());
     }
 
     /// The sink (the writer thread's feed) gets the first results while

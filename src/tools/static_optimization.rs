@@ -1147,20 +1147,33 @@ fn run_sweep(
         .iter()
         .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
         .collect();
-    let writers = runs
-        .iter()
-        .zip(&log_names)
-        .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))
-        .collect::<Result<Vec<_>>>()?;
+    let (i0, i1) = (stream.first_row, stream.last_row);
+    let nframes = frame_count(i0, i1, step_interval);
+    let start = Instant::now();
+    // The output files are created (an existing file's truncation waits on
+    // the disk) and their headers and the log's schemas written on a thread
+    // of their own while the first block of states is computed.
+    let (writers, first) = std::thread::scope(|scope| {
+        let opening = scope.spawn(|| {
+            runs.iter()
+                .zip(&log_names)
+                .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))
+                .collect::<Result<Vec<_>>>()
+        });
+        let first = stream.next_block();
+        let writers = opening
+            .join()
+            .unwrap_or_else(|_| Err(Error::internal("opening the output files panicked")));
+        (writers, first)
+    });
+    let writers = writers?;
+    let mut stream = crate::frame::driver::Prefetched::new(first?, &mut stream);
     let skip_until = writers
         .iter()
         .map(|w| w.skip_until)
         .fold(f64::INFINITY, f64::min);
     let weights: Vec<f64> = runs.iter().map(|r| r.w0).collect();
-    let (i0, i1) = (stream.first_row, stream.last_row);
-    let nframes = frame_count(i0, i1, step_interval);
     let mut progress = crate::tools::progress::bar(nframes as u64, opts, label);
-    let start = Instant::now();
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
