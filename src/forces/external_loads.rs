@@ -91,17 +91,40 @@ fn given(id: Option<&str>) -> Option<&str> {
         .filter(|s| !s.is_empty() && *s != "Unassigned")
 }
 
-impl ExternalLoads {
-    /// Read an ExternalLoads XML file and its data file and bind them to `model`.
-    /// `setup_dir` is the folder of the setup that named the file (OpenSim
-    /// looks for the data file there first, then beside the XML).
-    pub fn load(path: &Path, setup_dir: &Path, model: &Model) -> Result<ExternalLoads> {
-        let root = xml::parse_file(path)?;
+/// An ExternalLoads file and its data file read, and every applied
+/// ExternalForce's data fitted, before a model is known: the part of
+/// [`ExternalLoads::load`] that can run while the model is being read.
+/// [`ExternalLoadsFiles::bind`] finishes it against the model.
+#[derive(Debug)]
+pub struct ExternalLoadsFiles {
+    data_path: PathBuf,
+    /// Per ExternalForce element, in order: the element and its series
+    /// (None when it applies no force), or the first error reading them.
+    forces: Vec<(Element, Result<Option<ForceSeries>>)>,
+}
+
+/// What an applied ExternalForce's identifiers name, fitted.
+#[derive(Debug)]
+struct ForceSeries {
+    force: Result<Option<Vec3Series>>,
+    point: Result<Option<Vec3Series>>,
+    torque: Result<Option<Vec3Series>>,
+}
+
+impl ExternalLoadsFiles {
+    /// Read an ExternalLoads XML file and its data file. `setup_dir` is the
+    /// folder of the setup that named the file (OpenSim looks for the data
+    /// file there first, then beside the XML).
+    pub fn read(path: &Path, setup_dir: &Path) -> Result<ExternalLoadsFiles> {
+        let mut root = xml::parse_file(path)?;
         let el = if root.name == "ExternalLoads" {
-            &root
+            &mut root
         } else {
-            root.child("ExternalLoads")
-                .ok_or_else(|| root.error("no <ExternalLoads> element in file"))?
+            let at = root.error("no <ExternalLoads> element in file");
+            root.children
+                .iter_mut()
+                .find(|c| c.name == "ExternalLoads")
+                .ok_or(at)?
         };
         let datafile = el
             .child_text("datafile")
@@ -127,28 +150,29 @@ impl ExternalLoads {
                     .unwrap_or_else(|e| e)
             })?;
         let table = storage::read(&data_path)?;
-        let mut forces = Vec::new();
         let mut fit = SplineFitter::new(3, &table.time);
-        if let Some(objs) = el.child("objects") {
-            for f in objs.children_named("ExternalForce") {
-                if let Some(ef) = Self::read_force(f, &table, &mut fit, &data_path, model)? {
-                    forces.push(ef);
+        let mut forces = Vec::new();
+        if let Some(objs) = el.children.iter_mut().find(|c| c.name == "objects") {
+            for f in std::mem::take(&mut objs.children) {
+                if f.name != "ExternalForce" {
+                    continue;
                 }
+                let series = Self::read_series(&f, &table, &mut fit, &data_path);
+                forces.push((f, series));
             }
         }
-        Ok(ExternalLoads {
-            forces,
-            data_file: data_path,
-        })
+        Ok(ExternalLoadsFiles { data_path, forces })
     }
 
-    fn read_force(
+    /// Whether `f` applies its force and, if so, its series (each kept
+    /// with its own error: [`Self::bind`] reports them in
+    /// [`ExternalLoads::load`]'s order).
+    fn read_series(
         f: &Element,
         table: &Storage,
         fit: &mut SplineFitter,
         data_path: &Path,
-        model: &Model,
-    ) -> Result<Option<ExternalForce>> {
+    ) -> Result<Option<ForceSeries>> {
         let applies = match f.child("appliesForce") {
             Some(a) if !a.text().is_empty() => a.bool()?,
             _ => !f.child_bool_or("isDisabled", false)?,
@@ -156,20 +180,6 @@ impl ExternalLoads {
         if !applies {
             return Ok(None);
         }
-        let name = f.name_attr().to_string();
-        let body_name = f.child_text("applied_to_body").unwrap_or("");
-        let find_body = |n: &str| -> Option<usize> {
-            let n = n.trim_start_matches('/').trim_start_matches("bodyset/");
-            model.body_index(n)
-        };
-        let applied_to_body = find_body(body_name).ok_or_else(|| {
-            f.error(format!(
-                "applied_to_body '{body_name}' is not a body of model '{}'",
-                model.name
-            ))
-        })?;
-        let expressed =
-            |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
         let mut series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
             let Some(id) = given(id) else { return Ok(None) };
             let cols: Vec<usize> = table
@@ -213,9 +223,64 @@ impl ExternalLoads {
             };
             Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
         };
-        let force = series(f.child_text("force_identifier"))?;
-        let point = series(f.child_text("point_identifier"))?;
-        let torque = series(f.child_text("torque_identifier"))?;
+        let force = series(f.child_text("force_identifier"));
+        // As OpenSim (and ExternalLoads::load before): a force identifier's
+        // error ends the reading of this force.
+        if force.is_err() {
+            return Ok(Some(ForceSeries {
+                force,
+                point: Ok(None),
+                torque: Ok(None),
+            }));
+        }
+        let point = series(f.child_text("point_identifier"));
+        if point.is_err() {
+            return Ok(Some(ForceSeries {
+                force,
+                point,
+                torque: Ok(None),
+            }));
+        }
+        let torque = series(f.child_text("torque_identifier"));
+        Ok(Some(ForceSeries {
+            force,
+            point,
+            torque,
+        }))
+    }
+
+    /// Bind the loads to `model`: the bodies each force names, then each
+    /// force's first error in the order [`ExternalLoads::load`] reports it.
+    pub fn bind(self, model: &Model) -> Result<ExternalLoads> {
+        let mut forces = Vec::new();
+        for (f, series) in self.forces {
+            let Some(series) = series? else { continue };
+            forces.push(Self::bind_force(&f, series, model)?);
+        }
+        Ok(ExternalLoads {
+            forces,
+            data_file: self.data_path,
+        })
+    }
+
+    fn bind_force(f: &Element, series: ForceSeries, model: &Model) -> Result<ExternalForce> {
+        let name = f.name_attr().to_string();
+        let body_name = f.child_text("applied_to_body").unwrap_or("");
+        let find_body = |n: &str| -> Option<usize> {
+            let n = n.trim_start_matches('/').trim_start_matches("bodyset/");
+            model.body_index(n)
+        };
+        let applied_to_body = find_body(body_name).ok_or_else(|| {
+            f.error(format!(
+                "applied_to_body '{body_name}' is not a body of model '{}'",
+                model.name
+            ))
+        })?;
+        let expressed =
+            |prop: &str| -> usize { f.child_text(prop).and_then(find_body).unwrap_or(0) };
+        let force = series.force?;
+        let point = series.point?;
+        let torque = series.torque?;
         if force.is_none() && torque.is_none() {
             return Err(f.error("ExternalForce needs a force_identifier or a torque_identifier"));
         }
@@ -233,7 +298,7 @@ impl ExternalLoads {
                 labels.extend(suffix.iter().map(|s| format!("{body}_{name}{s}")));
             }
         }
-        Ok(Some(ExternalForce {
+        Ok(ExternalForce {
             name,
             applied_to_body,
             force_expressed_in: expressed("force_expressed_in_body"),
@@ -242,7 +307,16 @@ impl ExternalLoads {
             point,
             torque,
             labels,
-        }))
+        })
+    }
+}
+
+impl ExternalLoads {
+    /// Read an ExternalLoads XML file and its data file and bind them to `model`.
+    /// `setup_dir` is the folder of the setup that named the file (OpenSim
+    /// looks for the data file there first, then beside the XML).
+    pub fn load(path: &Path, setup_dir: &Path, model: &Model) -> Result<ExternalLoads> {
+        ExternalLoadsFiles::read(path, setup_dir)?.bind(model)
     }
 
     /// Add every load at time `t` to `data.applied` (body positions must be current).

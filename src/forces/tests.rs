@@ -1017,3 +1017,59 @@ fn external_loads_apply_recording_matches_apply_and_record() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The first error of an ExternalLoads file is the one reading it force by
+/// force would meet: a force's disabled flag, then its body, then its
+/// force, point and torque identifiers, and a later force's error only
+/// after every earlier force is fine (the files are read before the model
+/// is known, the bodies bound after).
+#[test]
+fn external_loads_report_the_first_error_in_reading_order() {
+    use crate::forces::external_loads::ExternalLoads;
+    let model = test_model();
+    let dir = std::env::temp_dir().join(format!("statopt_extload_err_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut mot = "grf.mot\nversion=1\nnRows=5\nnColumns=4\ninDegrees=no\nendheader\ntime\tf_vx\tf_vy\tf_vz\n".to_string();
+    for i in 0..5 {
+        mot.push_str(&format!("{}\t1\t2\t3\n", 0.01 * i as f64));
+    }
+    std::fs::write(dir.join("grf.mot"), mot).unwrap();
+    let force = |name: &str, body: &str, f: &str, p: &str| {
+        format!("<ExternalForce name=\"{name}\"><applied_to_body>{body}</applied_to_body><force_identifier>{f}</force_identifier><point_identifier>{p}</point_identifier></ExternalForce>")
+    };
+    let cases = [
+        // bad body and bad force identifier: the body
+        (vec![force("a", "nobody", "zz", "")], "applied_to_body 'nobody'"),
+        // bad force identifier and bad point identifier: the force's
+        (vec![force("a", "link2", "zz", "yy")], "identifier 'zz'"),
+        // the first force's identifier before the second force's body
+        (
+            vec![force("a", "link2", "f_v", "yy"), force("b", "nobody", "f_v", "")],
+            "identifier 'yy'",
+        ),
+        (
+            vec![force("a", "nobody", "f_v", ""), force("b", "link2", "zz", "")],
+            "applied_to_body 'nobody'",
+        ),
+        // disabled forces are not read
+        (
+            vec![
+                "<ExternalForce name=\"a\"><appliesForce>false</appliesForce><applied_to_body>nobody</applied_to_body><force_identifier>zz</force_identifier></ExternalForce>".to_string(),
+                force("b", "link2", "f_v", "qq"),
+            ],
+            "identifier 'qq'",
+        ),
+    ];
+    for (forces, want) in cases {
+        let xml = format!(
+            r#"<?xml version="1.0"?><OpenSimDocument Version="40000"><ExternalLoads name="x"><objects>{}</objects><datafile>grf.mot</datafile></ExternalLoads></OpenSimDocument>"#,
+            forces.join("")
+        );
+        let xpath = dir.join("grf.xml");
+        std::fs::write(&xpath, xml).unwrap();
+        let e = ExternalLoads::load(&xpath, &dir, &model)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "want '{want}', got: {e}");
+    }
+}

@@ -12,7 +12,7 @@ use std::time::Instant;
 use crate::contacts::Contact;
 use crate::error::{Error, Location, Result};
 use crate::forces::actuators::{Actuator, ActuatorKind};
-use crate::forces::external_loads::ExternalLoads;
+use crate::forces::external_loads::ExternalLoadsFiles;
 use crate::forces::passive::PassiveForce;
 use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
@@ -54,6 +54,14 @@ fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -
     }
 }
 
+/// The folder of the setup file (relative paths in it start there).
+fn setup_dir(setup: &AnalyzeSetup) -> &std::path::Path {
+    setup
+        .setup_file
+        .parent()
+        .unwrap_or(std::path::Path::new("."))
+}
+
 /// Root residual force, as a share of body weight, above which a run warns.
 pub const ROOT_RESIDUAL_WARNING: f64 = 0.05;
 
@@ -62,7 +70,23 @@ impl SoProblem {
         setup: &AnalyzeSetup,
         so: &StaticOptimizationSetup,
     ) -> Result<(SoProblem, Vec<String>)> {
-        Self::build_from(setup, so, load_analysis_model(setup)?)
+        // The external loads' files are read (and their data splined) on a
+        // thread of their own while the model is read and compiled; they are
+        // bound to the model where `build_from` reads them, so errors come
+        // in the same order.
+        let (am, loads) = std::thread::scope(|scope| {
+            let loads = setup
+                .external_loads_file
+                .as_deref()
+                .map(|p| scope.spawn(move || ExternalLoadsFiles::read(p, setup_dir(setup))));
+            let am = load_analysis_model(setup);
+            let loads = loads.map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(Error::internal("reading the external loads panicked")))
+            });
+            (am, loads)
+        });
+        Self::build_with_loads(setup, so, am?, move || loads)
     }
 
     /// [`SoProblem::build`] on an already loaded model (e.g. a reduced one,
@@ -71,6 +95,22 @@ impl SoProblem {
         setup: &AnalyzeSetup,
         so: &StaticOptimizationSetup,
         am: crate::tools::loading::AnalysisModel,
+    ) -> Result<(SoProblem, Vec<String>)> {
+        Self::build_with_loads(setup, so, am, || {
+            setup
+                .external_loads_file
+                .as_deref()
+                .map(|p| ExternalLoadsFiles::read(p, setup_dir(setup)))
+        })
+    }
+
+    /// [`SoProblem::build_from`], the setup's external loads' files read by
+    /// `loads` (None: the setup names none) where they are bound.
+    fn build_with_loads(
+        setup: &AnalyzeSetup,
+        so: &StaticOptimizationSetup,
+        am: crate::tools::loading::AnalysisModel,
+        loads: impl FnOnce() -> Option<Result<ExternalLoadsFiles>>,
     ) -> Result<(SoProblem, Vec<String>)> {
         let model = am.model;
         let mut warnings = am.warnings;
@@ -182,12 +222,8 @@ impl SoProblem {
                 ),
             ));
         }
-        let setup_dir = setup
-            .setup_file
-            .parent()
-            .unwrap_or(std::path::Path::new("."));
-        let loads = match &setup.external_loads_file {
-            Some(p) => Some(ExternalLoads::load(p, setup_dir, &model)?),
+        let loads = match loads() {
+            Some(files) => Some(files?.bind(&model)?),
             None => None,
         };
         let passive_labels: Vec<String> = passive.iter().flat_map(|p| p.record_labels()).collect();
