@@ -1185,23 +1185,27 @@ fn run_sweep(
         .collect();
     let (i0, i1) = (stream.first_row, stream.last_row);
     let nframes = frame_count(i0, i1, step_interval);
-    let start = Instant::now();
     // The output files are created (an existing file's truncation waits on
     // the disk) and their headers and the log's schemas written on a thread
-    // of their own while the first block of states is computed.
-    let (writers, first) = std::thread::scope(|scope| {
+    // of their own while the first block of states is computed. The loop's
+    // time counts that block, not the wait for the files.
+    let (writers, first, first_block) = std::thread::scope(|scope| {
         let opening = scope.spawn(|| {
             runs.iter()
                 .zip(&log_names)
                 .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))
                 .collect::<Result<Vec<_>>>()
         });
+        let t = Instant::now();
         let first = stream.next_block();
+        let first_block = t.elapsed();
         let writers = opening
             .join()
             .unwrap_or_else(|_| Err(Error::internal("opening the output files panicked")));
-        (writers, first)
+        (writers, first, first_block)
     });
+    let now = Instant::now();
+    let start = now.checked_sub(first_block).unwrap_or(now);
     let writers = writers?;
     let mut stream = crate::frame::driver::Prefetched::new(first?, &mut stream);
     let skip_until = writers
