@@ -41,6 +41,10 @@
 //! chunk) rows, whatever the length of the file and whichever part of it
 //! (padding included) is analysed.
 //!
+//! The InverseDynamicsTool's states ([`StatesKind::InverseDynamics`]) come
+//! from the same windows: q = S, u = S′, u̇ = S″ of each coordinate's spline
+//! at the rows, no assembly.
+//!
 //! u and u̇ at the rows are the splines' slopes at their knots
 //! ([`SplineFitter::knot_slopes_columns`]: one spline system per window,
 //! shared by the columns, the bits of `GcvSpline::derivative(t_i, 1)`).
@@ -90,6 +94,19 @@ impl FrameSource for StateStream<'_> {
     }
 }
 
+/// How a [`StateStream`]'s states follow from the coordinates' splines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StatesKind {
+    /// AnalyzeTool (opensim-semantics.md §9.2): q the (filtered) rows,
+    /// assembled; u = S_q′ at the knots; u̇ = S_u′ at the knots; coordinates
+    /// the file lacks at 0.
+    Analyze,
+    /// InverseDynamicsTool: q = S_q, u = S_q′, u̇ = S_q″ at the rows (one
+    /// quintic spline per coordinate, differentiated), not assembled;
+    /// coordinates the file lacks at their default values, u = u̇ = 0.
+    InverseDynamics,
+}
+
 /// Rows of the states table, in order, for the rows `first_row..=last_row`.
 pub struct StateStream<'m> {
     model: &'m Model,
@@ -108,6 +125,8 @@ pub struct StateStream<'m> {
     pub rows: usize,
     pub first_time: f64,
     pub last_time: f64,
+    /// The first and last times of the file itself (before any padding).
+    pub file_times: (f64, f64),
     /// OpenSim's `findIndex` of the initial and final times in the table.
     pub first_row: usize,
     pub last_row: usize,
@@ -125,6 +144,10 @@ pub struct StateStream<'m> {
     memory: Option<StateBlock>,
     /// Degree of the interpolating splines for u and u̇ (5: OpenSim's).
     degree: usize,
+    kind: StatesKind,
+    /// What the file's dependent-coordinate columns say against their
+    /// couplers (AnalyzeTool; [`Self::motion_warnings`]).
+    dependent_warnings: Vec<String>,
 }
 
 impl<'m> StateStream<'m> {
@@ -139,6 +162,11 @@ impl<'m> StateStream<'m> {
             .cloned()
             .collect();
         let mut out = self.warnings.clone();
+        if self.kind == StatesKind::Analyze {
+            // The InverseDynamicsTool splines the file's values of
+            // dependent coordinates as they are: nothing to say.
+            out.extend(self.dependent_warnings.iter().cloned());
+        }
         out.extend(super::checks::unmatched_columns_warning(
             &self.file, &unmatched,
         ));
@@ -229,8 +257,8 @@ impl<'m> StateStream<'m> {
             Ok(())
         };
         let index = index_file(reader, &sel, &mut check, block)?;
-        let mut warnings = super::checks::time_warnings(file, &steps, cutoff)?;
-        warnings.extend(dependent.warnings(model, file));
+        let warnings = super::checks::time_warnings(file, &steps, cutoff)?;
+        let dependent_warnings = dependent.warnings(model, file);
         let unmatched_columns = super::checks::unmatched_columns(model, &all_labels);
         let (n, t0, tl) = (index.n, index.first.0, index.last.0);
         let p = if filtering && n >= 1 { n / 2 } else { 0 };
@@ -414,6 +442,7 @@ impl<'m> StateStream<'m> {
             rows,
             first_time,
             last_time,
+            file_times: (t0, tl),
             first_row,
             last_row,
             filter,
@@ -426,6 +455,8 @@ impl<'m> StateStream<'m> {
             block,
             memory: None,
             degree: 5,
+            kind: StatesKind::Analyze,
+            dependent_warnings,
         })
     }
 
@@ -468,6 +499,7 @@ impl<'m> StateStream<'m> {
             rows,
             first_time,
             last_time,
+            file_times: (first_time, last_time),
             first_row,
             last_row,
             filter: None,
@@ -480,6 +512,8 @@ impl<'m> StateStream<'m> {
             block: rows.max(1),
             memory,
             degree: 5,
+            kind: StatesKind::Analyze,
+            dependent_warnings: Vec::new(),
         }
     }
 
@@ -489,6 +523,18 @@ impl<'m> StateStream<'m> {
     pub fn with_spline_degree(mut self, degree: usize) -> Self {
         self.degree = degree;
         self
+    }
+
+    /// The InverseDynamicsTool's states instead of the AnalyzeTool's
+    /// ([`StatesKind::InverseDynamics`]).
+    pub fn for_inverse_dynamics(mut self) -> Self {
+        self.kind = StatesKind::InverseDynamics;
+        self
+    }
+
+    /// Which states this stream hands out.
+    pub fn kind(&self) -> StatesKind {
+        self.kind
     }
 
     /// The next block of rows, in order; None after `last_row`.
@@ -544,6 +590,11 @@ impl<'m> StateStream<'m> {
             a.saturating_sub(2 * s).max(w0) - w0,
             (b + 2 * s).min(w1) - w0,
         );
+        if self.kind == StatesKind::InverseDynamics {
+            let block = self.inverse_dynamics_block(a, b, w0, &time, &cols, (qa, qb))?;
+            self.next_out = b;
+            return Ok(Some(block));
+        }
         let (ua, ub) = (a.saturating_sub(s).max(w0) - w0, (b + s).min(w1) - w0);
         let nq = self.model.nq();
         let nu = ub - ua;
@@ -606,6 +657,69 @@ impl<'m> StateStream<'m> {
             u: u[oa..ob].to_vec(),
             udot,
         }))
+    }
+}
+
+impl StateStream<'_> {
+    /// Rows `a..b` of the InverseDynamicsTool's states from the window
+    /// starting at row `w0` (`time`, the filtered `cols` in file units):
+    /// each coordinate's spline through the window's rows `qa..qb`, and its
+    /// value and first two derivatives at the rows (`GcvSpline::value`,
+    /// `derivative`: a motion in one window gives the bits of one spline
+    /// through all of it).
+    fn inverse_dynamics_block(
+        &self,
+        a: usize,
+        b: usize,
+        w0: usize,
+        time: &[f64],
+        cols: &[Vec<f64>],
+        (qa, qb): (usize, usize),
+    ) -> Result<StateBlock> {
+        let nq = self.model.nq();
+        let n = b - a;
+        let mut q = vec![vec![0.0; nq]; n];
+        let u = vec![vec![0.0; nq]; n];
+        let udot = vec![vec![0.0; nq]; n];
+        let (mut u, mut udot) = (u, udot);
+        for (c, cc) in self.coord_cols.iter().enumerate() {
+            if cc.is_none() {
+                let v = self.model.coordinates[c].default_value;
+                q.iter_mut().for_each(|r| r[c] = v);
+            }
+        }
+        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
+            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
+            .collect();
+        let vs: Vec<Vec<f64>> = picked
+            .iter()
+            .map(|&(_, j, scale)| cols[j][qa..qb].iter().map(|x| x * scale).collect())
+            .collect();
+        let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
+        let splines = SplineFitter::new(self.degree, &time[qa..qb])
+            .splines(&ys)
+            .map_err(|(i, e)| {
+                e.context(format!(
+                    "{}: column '{}'",
+                    self.file.display(),
+                    self.labels[picked[i].1]
+                ))
+            })?;
+        let times = &time[a - w0..b - w0];
+        for (&(c, _, _), sp) in picked.iter().zip(&splines) {
+            for (i, &t) in times.iter().enumerate() {
+                q[i][c] = sp.value(t);
+                u[i][c] = sp.derivative(t, 1);
+                udot[i][c] = sp.derivative(t, 2);
+            }
+        }
+        Ok(StateBlock {
+            first: a,
+            time: times.to_vec(),
+            q,
+            u,
+            udot,
+        })
     }
 }
 

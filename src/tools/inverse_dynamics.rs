@@ -1,19 +1,20 @@
 //! OpenSim's InverseDynamicsTool: q, u, u̇ from one quintic spline per
 //! coordinate (S, S', S''), external loads and gravity applied, generalized
 //! forces from RNEA ignoring constraints, written in multibody-tree order as
-//! `<coordinate>_moment` (rotational) or `<coordinate>_force`.
+//! `<coordinate>_moment` (rotational) or `<coordinate>_force`. The states are
+//! streamed window by window (`motion::stream`, `StatesKind::InverseDynamics`):
+//! memory does not grow with the trial.
 
 use crate::dynamics::{kinematics, rnea, Data};
 use crate::error::{Error, Result};
 use crate::forces::external_loads::ExternalLoads;
 use crate::model::{Model, MotionType};
-use crate::motion::coordinates::{find_index, CoordinateSplines, MissingCoordinate};
+use crate::motion::coordinates::CoordinateSplines;
+use crate::motion::stream::StateStream;
 use crate::parse::osim::ModelSpec;
 use crate::parse::setup::InverseDynamicsSetup;
 use crate::storage::StoWriter;
-use crate::tools::loading::{
-    applies_force, filter_coordinates, force_kind, load_composed_model, ForceKind,
-};
+use crate::tools::loading::{applies_force, force_kind, load_composed_model, ForceKind};
 use crate::tools::{RunOptions, RunSummary};
 
 /// Output column labels, tree order.
@@ -104,41 +105,36 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
         _ => None,
     };
-    let raw = crate::storage::read(&setup.coordinates_file)?;
-    warnings.extend(crate::motion::checks::motion_warnings(
+    // q, u, u̇ streamed window by window from the (filtered) coordinates'
+    // quintic splines (`StatesKind::InverseDynamics`): memory stays flat
+    // however long the trial.
+    let (t0, t1) = setup.time_range;
+    let mut stream = StateStream::open(
         &model,
         &setup.coordinates_file,
-        &raw.labels,
-        &crate::motion::checks::TimeSteps::of(&raw.time),
         setup.lowpass_cutoff,
-    )?);
-    if let (Some(&first), Some(&last)) = (raw.time.first(), raw.time.last()) {
-        warnings.extend(crate::motion::checks::time_range_warnings(
-            &setup.setup_file,
-            &setup.coordinates_file,
-            setup.time_range.0,
-            setup.time_range.1,
-            first,
-            last,
-        ));
-    }
-    let table = filter_coordinates(raw, &setup.coordinates_file, setup.lowpass_cutoff)?;
-    let splines = CoordinateSplines::new(
-        &model,
-        &table,
-        MissingCoordinate::DefaultValue,
+        t0,
+        t1,
+    )?
+    .for_inverse_dynamics();
+    warnings.extend(stream.motion_warnings(&[]));
+    let (file_first, file_last) = stream.file_times;
+    warnings.extend(crate::motion::checks::time_range_warnings(
+        &setup.setup_file,
         &setup.coordinates_file,
-    )?;
-    if !splines.missing.is_empty() {
+        t0,
+        t1,
+        file_first,
+        file_last,
+    ));
+    if !stream.missing.is_empty() {
         warnings.push(format!(
             "{}: no column for coordinates {:?}; using their default values, as OpenSim's InverseDynamicsTool does",
             setup.coordinates_file.display(),
-            splines.missing
+            stream.missing
         ));
     }
-    let time = &splines.time;
-    let (first, last) = (time[0], time[time.len() - 1]);
-    let (t0, t1) = setup.time_range;
+    let (first, last) = (stream.first_time, stream.last_time);
     if t0 > last || t1 < first {
         return Err(Error::input(
             crate::Location::file(&setup.setup_file).with_element("<time_range>"),
@@ -148,8 +144,11 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
             ),
         ));
     }
-    let i0 = find_index(time, t0.max(first));
-    let i1 = find_index(time, t1.min(last));
+    let (i0, i1) = (stream.first_row, stream.last_row);
+    // The first block before the output file is created: what the splines
+    // refuse is said before an earlier run's table is overwritten.
+    let first_block = stream.next_block()?;
+    let mut frames = crate::frame::driver::Prefetched::new(first_block, &mut stream);
 
     let dir = opts
         .results_dir
@@ -173,7 +172,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     // written in order; a stop request ends the run after a whole chunk.
     let mut last_t = None;
     let completed = crate::frame::driver::for_each_frame(
-        &mut splines.frames(i0, i1),
+        &mut frames,
         i0,
         i1,
         1,
