@@ -115,3 +115,103 @@ pub fn close_contacts(
     }
     Ok(())
 }
+
+/// [`close_contacts`] as the state stream's row transform
+/// (`motion::stream::RowTransform`): each row of the (filtered) table is
+/// closed as it is streamed, with the same arithmetic as [`close_contacts`]
+/// on the whole table. A coordinate the file lacks starts each row from the
+/// row before's solution (its first row from its default value), so the
+/// solutions of the current window are kept: a window starts within the
+/// previous one and takes its first row's start from there.
+pub struct StreamClosure<'m> {
+    model: &'m Model,
+    closures: Vec<(Contact, usize)>,
+    /// Per closure: its coordinate is not in the file.
+    continued: Vec<bool>,
+    /// Per model coordinate: its column in a row's values and the factor
+    /// to model units (`StateStream::carried_columns`).
+    columns: Vec<Option<(usize, f64)>>,
+    data: Data,
+    q: Vec<f64>,
+    /// Rows `base..` of the current window: the continued closures' values.
+    base: usize,
+    solved: std::collections::VecDeque<Vec<f64>>,
+    context: String,
+}
+
+impl<'m> StreamClosure<'m> {
+    /// `columns`: the stream's carried columns after the continued
+    /// coordinates were added; `continued[k]`: closure k's coordinate is not
+    /// in the file; `context` is prefixed to errors.
+    pub fn new(
+        model: &'m Model,
+        closures: Vec<(Contact, usize)>,
+        continued: Vec<bool>,
+        columns: Vec<Option<(usize, f64)>>,
+        context: String,
+    ) -> Self {
+        StreamClosure {
+            model,
+            closures,
+            continued,
+            columns,
+            data: Data::new(model),
+            q: vec![0.0; model.nq()],
+            base: 0,
+            solved: std::collections::VecDeque::new(),
+            context,
+        }
+    }
+}
+
+impl crate::motion::stream::RowTransform for StreamClosure<'_> {
+    fn begin_window(&mut self, first: usize) {
+        // Keep the row before the window's first: its solution starts it.
+        while self.base + 1 < first && !self.solved.is_empty() {
+            self.solved.pop_front();
+            self.base += 1;
+        }
+    }
+
+    fn apply(&mut self, row: usize, t: f64, values: &mut [f64]) -> Result<()> {
+        let model = self.model;
+        for (c, col) in self.columns.iter().enumerate() {
+            self.q[c] = match col {
+                Some((j, scale)) => values[*j] * scale,
+                None => model.coordinates[c].default_value,
+            };
+        }
+        let mut mine = Vec::with_capacity(self.closures.len());
+        for (k, (contact, c)) in self.closures.iter().enumerate() {
+            let (j, scale) = self.columns[*c].expect("a closed coordinate has a column");
+            if self.continued[k] && row > 0 {
+                let prev = row
+                    .checked_sub(1 + self.base)
+                    .and_then(|i| self.solved.get(i))
+                    .ok_or_else(|| {
+                        Error::internal(format!(
+                            "closing contacts: row {row} came without the row before it"
+                        ))
+                    })?;
+                self.q[*c] = prev[k] * scale;
+            }
+            close_contact(model, &mut self.data, contact, *c, &mut self.q, t)
+                .map_err(|e| e.context(self.context.clone()))?;
+            values[j] = self.q[*c] / scale;
+            mine.push(values[j]);
+        }
+        if self.solved.is_empty() {
+            self.base = row;
+        }
+        match row.checked_sub(self.base) {
+            Some(i) if i < self.solved.len() => self.solved[i] = mine,
+            Some(i) if i == self.solved.len() => self.solved.push_back(mine),
+            _ => {
+                return Err(Error::internal(format!(
+                    "closing contacts: row {row} out of order"
+                )))
+            }
+        }
+        Ok(())
+    }
+}

@@ -94,6 +94,20 @@ impl FrameSource for StateStream<'_> {
     }
 }
 
+/// A change made to every row of the (filtered) coordinates table before it
+/// is splined, e.g. `<close_contacts>` solving a coordinate so that a contact
+/// closes (`contacts::closure::StreamClosure`; it lives in a later stage,
+/// hence the trait). Rows come window by window, in order within a window;
+/// a window starts at or after the previous one's start, so rows near a
+/// window's start are given again (see [`StateStream::with_row_transform`]).
+pub trait RowTransform: Send {
+    /// A window of rows from `first` on begins.
+    fn begin_window(&mut self, first: usize);
+    /// Change row `row` (time `t`): the carried columns in the file's units,
+    /// in [`StateStream::carried_columns`]' order.
+    fn apply(&mut self, row: usize, t: f64, values: &mut [f64]) -> Result<()>;
+}
+
 /// How a [`StateStream`]'s states follow from the coordinates' splines.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StatesKind {
@@ -142,6 +156,12 @@ pub struct StateStream<'m> {
     block: usize,
     /// Rows computed in memory, handed out as one block ([`Self::in_memory`]).
     memory: Option<StateBlock>,
+    /// Columns added for coordinates the file lacks and a row transform
+    /// sets (their value before it: the default value, in file units).
+    synthetic: Vec<f64>,
+    transform: Option<Box<dyn RowTransform + 'm>>,
+    /// The file's `inDegrees`.
+    in_degrees: bool,
     /// Degree of the interpolating splines for u and u̇ (5: OpenSim's).
     degree: usize,
     kind: StatesKind,
@@ -454,6 +474,9 @@ impl<'m> StateStream<'m> {
             next_out: first_row,
             block,
             memory: None,
+            synthetic: Vec::new(),
+            transform: None,
+            in_degrees,
             degree: 5,
             kind: StatesKind::Analyze,
             dependent_warnings,
@@ -511,6 +534,9 @@ impl<'m> StateStream<'m> {
             next_out: first_row,
             block: rows.max(1),
             memory,
+            synthetic: Vec::new(),
+            transform: None,
+            in_degrees: false,
             degree: 5,
             kind: StatesKind::Analyze,
             dependent_warnings: Vec::new(),
@@ -535,6 +561,60 @@ impl<'m> StateStream<'m> {
     /// Which states this stream hands out.
     pub fn kind(&self) -> StatesKind {
         self.kind
+    }
+
+    /// Per model coordinate, its carried column (index into a row's values)
+    /// and the factor from the file's units to the model's.
+    pub fn carried_columns(&self) -> &[Option<(usize, f64)>] {
+        &self.coord_cols
+    }
+
+    /// Whether a row transform changes the rows ([`Self::with_row_transform`]).
+    pub fn transforms_rows(&self) -> bool {
+        self.transform.is_some()
+    }
+
+    /// Apply `transform` to every row of the table, from its first row (the
+    /// stream then hands out the rows before `first_row` too; frames are
+    /// chosen by row index), after the filter and before the splines, as
+    /// the in-memory path changes its table. `added` are coordinates the file
+    /// lacks and the transform sets: each gets a carried column holding its
+    /// default value (in the file's units) before the transform runs, and is
+    /// no longer missing; `transform` is made from the carried columns with
+    /// those added. Err (the stream unchanged) when the motion is
+    /// resampled (a non-uniform time column, filtered): the caller then
+    /// computes the states in memory. Call before the first block.
+    pub fn with_row_transform(
+        mut self,
+        added: &[usize],
+        transform: impl FnOnce(&[Option<(usize, f64)>]) -> Box<dyn RowTransform + 'm>,
+    ) -> std::result::Result<Self, Self> {
+        let GSource::Direct(src) = &mut self.g else {
+            return Err(self);
+        };
+        if !self.gbuf.is_empty() || self.next_out != self.first_row {
+            return Err(self);
+        }
+        src.j = 0;
+        self.gbuf_start = 0;
+        self.next_out = 0;
+        for &c in added {
+            if self.coord_cols[c].is_some() {
+                continue;
+            }
+            let coordinate = &self.model.coordinates[c];
+            let scale = if self.in_degrees && coordinate.motion_type == MotionType::Rotational {
+                std::f64::consts::PI / 180.0
+            } else {
+                1.0
+            };
+            self.coord_cols[c] = Some((self.labels.len(), scale));
+            self.labels.push(coordinate.name.clone());
+            self.synthetic.push(coordinate.default_value / scale);
+            self.missing.retain(|m| *m != coordinate.name);
+        }
+        self.transform = Some(transform(&self.coord_cols));
+        Ok(self)
     }
 
     /// The next block of rows, in order; None after `last_row`.
@@ -572,7 +652,7 @@ impl<'m> StateStream<'m> {
         let len = w1 - w0;
         let time: Vec<f64> = self.gbuf.iter().take(len).map(|r| r.0).collect();
         // F on the window, per carried column.
-        let ncol = self.labels.len();
+        let ncol = self.labels.len() - self.synthetic.len();
         let mut cols: Vec<Vec<f64>> = (0..ncol)
             .map(|j| self.gbuf.iter().take(len).map(|r| r.1[j]).collect())
             .collect();
@@ -583,6 +663,20 @@ impl<'m> StateStream<'m> {
                 let mut back = iir_pass(fa, fb, &fwd);
                 back.reverse();
                 *col = back;
+            }
+        }
+        cols.extend(self.synthetic.iter().map(|&v| vec![v; len]));
+        if let Some(tr) = self.transform.as_mut() {
+            tr.begin_window(w0);
+            let mut row = vec![0.0; cols.len()];
+            for i in 0..len {
+                for (x, col) in row.iter_mut().zip(&cols) {
+                    *x = col[i];
+                }
+                tr.apply(w0 + i, time[i], &mut row)?;
+                for (x, col) in row.iter().zip(cols.iter_mut()) {
+                    col[i] = *x;
+                }
             }
         }
         // q and u on [ua, ub), u̇ on [a, b) (indices relative to w0).

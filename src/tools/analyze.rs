@@ -85,9 +85,11 @@ pub fn load_states_with(
 /// The setup's motion as a [`StateStream`] over the frames from
 /// `initial_time` to `final_time` (the same states as [`load_states`] and
 /// `States::speed_derivatives`, block by block; see `motion::stream`).
-/// With `<close_contacts>` the states are computed in memory
-/// ([`load_states`]) and handed out as one block: the closure is not
-/// streamed yet.
+/// With `<close_contacts>` the closure is applied to the rows as they are
+/// streamed (`contacts::closure::StreamClosure`, from the file's first row:
+/// a coordinate the file lacks starts each row from the row before); only a
+/// resampled motion (non-uniform times, filtered) computes its states in
+/// memory ([`load_states`]) and hands them out as one block.
 pub fn open_state_stream<'m>(
     setup: &AnalyzeSetup,
     model: &'m crate::model::Model,
@@ -103,7 +105,41 @@ pub fn open_state_stream_with<'m>(
     contacts: &[Contact],
 ) -> Result<StateStream<'m>> {
     let file = coordinates_file(setup)?;
-    let mut stream = if !setup.close_contacts.is_empty() {
+    let mut closing = None;
+    if !setup.close_contacts.is_empty() {
+        // The closure streamed with the states (`contacts::closure::
+        // StreamClosure`), unless the motion is resampled (then in memory).
+        let opened = StateStream::open(
+            model,
+            file,
+            setup.lowpass_cutoff,
+            setup.initial_time,
+            setup.final_time,
+        )?
+        .with_spline_degree(setup.coordinate_spline);
+        check_time_range(setup, file, opened.first_time, opened.last_time)?;
+        let closures = setup_closures(setup, model, contacts)?;
+        let continued: Vec<bool> = closures
+            .iter()
+            .map(|(_, c)| opened.carried_columns()[*c].is_none())
+            .collect();
+        let added: Vec<usize> = closures.iter().map(|(_, c)| *c).collect();
+        let context = format!("{}: <close_contacts>", setup.setup_file.display());
+        closing = opened
+            .with_row_transform(&added, move |columns| {
+                Box::new(crate::contacts::closure::StreamClosure::new(
+                    model,
+                    closures,
+                    continued,
+                    columns.to_vec(),
+                    context,
+                ))
+            })
+            .ok();
+    }
+    let mut stream = if let Some(stream) = closing {
+        stream
+    } else if !setup.close_contacts.is_empty() {
         let states = load_states_with(setup, model, contacts)?;
         let udot = states.speed_derivatives(file)?;
         let mut stream =
@@ -265,6 +301,19 @@ fn close_setup_contacts(
     known: &[Contact],
     table: &mut crate::storage::Storage,
 ) -> Result<()> {
+    let closures = setup_closures(setup, model, known)?;
+    crate::contacts::closure::close_contacts(model, table, &closures)
+        .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
+}
+
+/// The setup's `<close_contacts>`: each contact (from `known`, the run's
+/// compiled contacts, or else from the model's and the force-set files'
+/// force elements, read only when needed) and the coordinate it closes.
+fn setup_closures(
+    setup: &AnalyzeSetup,
+    model: &crate::model::Model,
+    known: &[Contact],
+) -> Result<Vec<(Contact, usize)>> {
     let at = || {
         setup
             .close_contacts_loc
@@ -306,6 +355,5 @@ fn close_setup_contacts(
             .ok_or_else(|| Error::input(at(), format!("no coordinate named '{coordinate}'")))?;
         closures.push((c, k));
     }
-    crate::contacts::closure::close_contacts(model, table, &closures)
-        .map_err(|e| e.context(format!("{}: <close_contacts>", setup.setup_file.display())))
+    Ok(closures)
 }

@@ -1189,6 +1189,15 @@ fn run_sweep(
     // the disk) and their headers and the log's schemas written on a thread
     // of their own while the first block of states is computed. The loop's
     // time counts that block, not the wait for the files.
+    // With `<close_contacts>` the first block (which closes the contacts on
+    // the rows up to it, and says where a closure fails) is computed before
+    // any output file is touched.
+    let early = if stream.transforms_rows() {
+        let t = Instant::now();
+        Some((stream.next_block()?, t.elapsed()))
+    } else {
+        None
+    };
     let (writers, first, first_block) = std::thread::scope(|scope| {
         let opening = scope.spawn(|| {
             runs.iter()
@@ -1197,8 +1206,10 @@ fn run_sweep(
                 .collect::<Result<Vec<_>>>()
         });
         let t = Instant::now();
-        let first = stream.next_block();
-        let first_block = t.elapsed();
+        let (first, first_block) = match early {
+            Some((block, took)) => (Ok(block), took),
+            None => (stream.next_block(), t.elapsed()),
+        };
         let writers = opening
             .join()
             .unwrap_or_else(|_| Err(Error::internal("opening the output files panicked")));
