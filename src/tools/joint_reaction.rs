@@ -33,7 +33,7 @@
 //! OpenSim reads only the first n_act columns (a warning says when that
 //! would differ); actuators with `appliesForce=false` need no column.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location, Result};
 use crate::forces::actuators::Actuator;
@@ -269,6 +269,116 @@ pub fn values_at_time_in(st: &Storage, t: f64, cols: &[usize], sorted: bool) -> 
         .collect()
 }
 
+/// A JointReaction's forces file, read as the frames need it: when its
+/// times never decrease, only the rows around the frames being computed are
+/// held (the frame loop moves the window forward a block at a time,
+/// [`ForcesFile::prepare`]; memory does not grow with the trial), else the
+/// whole table (the storage reader refuses times that go back, so that is
+/// a safeguard). Values are [`values_at_time`]'s either way.
+pub struct ForcesFile {
+    /// The header and the rows held; rows `offset..` of the file.
+    window: std::sync::RwLock<Storage>,
+    /// Where the rows after the window come from (None: all read).
+    reader: std::sync::Mutex<Option<storage::RowReader>>,
+    offset: std::sync::atomic::AtomicUsize,
+    path: Option<PathBuf>,
+    sorted: bool,
+}
+
+impl ForcesFile {
+    /// The whole table, held.
+    pub fn whole(table: Storage) -> Self {
+        ForcesFile {
+            window: std::sync::RwLock::new(table),
+            reader: std::sync::Mutex::new(None),
+            offset: 0.into(),
+            path: None,
+            sorted: false,
+        }
+    }
+
+    /// `path`, whose times never decrease, read as the frames need it;
+    /// `header` is its table without rows.
+    fn streamed(path: &Path, header: Storage) -> Self {
+        ForcesFile {
+            window: std::sync::RwLock::new(header),
+            reader: std::sync::Mutex::new(None),
+            offset: 0.into(),
+            path: Some(path.to_path_buf()),
+            sorted: true,
+        }
+    }
+
+    /// Hold the rows frames from `t_first` to `t_last` need: from the last
+    /// row at or before `t_first` to the first after `t_last` (at least two
+    /// rows, the file's last two at its end). Times must not go back from
+    /// one call to the next: an earlier `t_first` starts the file over.
+    pub fn prepare(&self, t_first: f64, t_last: f64) -> Result<()> {
+        let Some(path) = &self.path else {
+            return Ok(());
+        };
+        let poisoned = || Error::internal("the forces file's window was poisoned");
+        let mut w = self.window.write().map_err(|_| poisoned())?;
+        let mut reader = self.reader.lock().map_err(|_| poisoned())?;
+        let mut offset = self.offset.load(std::sync::atomic::Ordering::Relaxed);
+        let started = offset > 0 || !w.time.is_empty();
+        if !started || (offset > 0 && w.time.first().is_some_and(|&t0| t_first < t0)) {
+            // (Re)start at the file's first row.
+            w.time.clear();
+            w.rows.clear();
+            offset = 0;
+            *reader = Some(storage::open_rows(path)?);
+        }
+        if let Some(r) = reader.as_mut() {
+            let mut row = Vec::new();
+            while w.time.len() < 2 || w.time.last().is_some_and(|&t| t <= t_last) {
+                match r.next_row(&mut row)? {
+                    Some(t) => {
+                        w.time.push(t);
+                        w.rows.push(row.clone());
+                    }
+                    None => {
+                        *reader = None;
+                        break;
+                    }
+                }
+            }
+        }
+        let mut k = 0;
+        while w.time.len() - k > 2 && w.time[k + 1] <= t_first {
+            k += 1;
+        }
+        w.time.drain(..k);
+        w.rows.drain(..k);
+        self.offset
+            .store(offset + k, std::sync::atomic::Ordering::Relaxed);
+        Ok(())
+    }
+
+    /// [`values_at_time`] of the columns `cols` at `t`.
+    fn values_at(&self, t: f64, cols: &[usize]) -> Result<Vec<f64>> {
+        let covered = |w: &Storage| {
+            let (Some(&first), Some(&last)) = (w.time.first(), w.time.last()) else {
+                return false;
+            };
+            let offset = self.offset.load(std::sync::atomic::Ordering::Relaxed);
+            let at_end = self.reader.lock().map(|r| r.is_none()).unwrap_or(false);
+            (offset == 0 || first <= t) && (at_end || (last > t && w.time.len() >= 2))
+        };
+        let poisoned = || Error::internal("the forces file's window was poisoned");
+        {
+            let w = self.window.read().map_err(|_| poisoned())?;
+            if self.path.is_none() || covered(&w) {
+                return Ok(values_at_time_in(&w, t, cols, self.sorted));
+            }
+        }
+        // A frame outside the window (a caller that does not prepare).
+        self.prepare(t, t)?;
+        let w = self.window.read().map_err(|_| poisoned())?;
+        Ok(values_at_time_in(&w, t, cols, self.sorted))
+    }
+}
+
 /// Everything a JointReaction frame needs, compiled once.
 pub struct JointReactionProblem {
     pub model: Model,
@@ -278,9 +388,7 @@ pub struct JointReactionProblem {
     pub passive: Vec<PassiveForce>,
     pub loads: Option<ExternalLoads>,
     /// The forces file and, per control, its data column.
-    pub forces: Storage,
-    /// The forces file's times never decrease ([`values_at_time_in`]).
-    pub forces_sorted: bool,
+    pub forces: ForcesFile,
     pub columns: Vec<usize>,
     pub specs: Vec<ReactionSpec>,
 }
@@ -332,8 +440,8 @@ impl JointReactionProblem {
             }
         }
         let el = &jr.element;
-        let (forces_table, columns) = if controls.is_empty() {
-            (Storage::default(), Vec::new())
+        let (forces, columns) = if controls.is_empty() {
+            (ForcesFile::whole(Storage::default()), Vec::new())
         } else {
             let Some(file) = &jr.forces_file else {
                 return Err(el.error(format!(
@@ -343,9 +451,19 @@ impl JointReactionProblem {
                     names.join(", ")
                 )));
             };
-            let table = storage::read(file).map_err(|e| {
-                e.context(format!("forces_file of JointReaction '{}'", jr.common.name))
-            })?;
+            let context =
+                |e: Error| e.context(format!("forces_file of JointReaction '{}'", jr.common.name));
+            // One pass over the rows (all read, none kept): errors, the row
+            // count, whether the times never decrease.
+            let mut pass = storage::open_rows(file).map_err(context)?;
+            let (mut rows, mut sorted, mut prev) = (0usize, true, f64::NEG_INFINITY);
+            let mut row = Vec::new();
+            while let Some(t) = pass.next_row(&mut row).map_err(context)? {
+                sorted &= t >= prev;
+                prev = t;
+                rows += 1;
+            }
+            let table = pass.table.clone();
             let missing: Vec<&str> = names
                 .iter()
                 .filter(|n| table.column_index(n).is_none())
@@ -361,7 +479,7 @@ impl JointReactionProblem {
                     ),
                 ));
             }
-            if table.time.is_empty() {
+            if rows == 0 {
                 return Err(Error::input(
                     Location::file(file),
                     "the forces file has no rows",
@@ -385,7 +503,12 @@ impl JointReactionProblem {
                     names.len()
                 ));
             }
-            (table, columns)
+            let forces = if sorted {
+                ForcesFile::streamed(file, table)
+            } else {
+                ForcesFile::whole(storage::read(file).map_err(context)?)
+            };
+            (forces, columns)
         };
         let setup_dir = setup
             .setup_file
@@ -404,8 +527,7 @@ impl JointReactionProblem {
                 controls,
                 passive,
                 loads,
-                forces_sorted: forces_table.time.windows(2).all(|w| w[0] <= w[1]),
-                forces: forces_table,
+                forces,
                 columns,
                 specs,
             },
@@ -423,7 +545,7 @@ impl JointReactionProblem {
         let values = if self.columns.is_empty() {
             Vec::new()
         } else {
-            values_at_time_in(&self.forces, t, &self.columns, self.forces_sorted)
+            self.forces.values_at(t, &self.columns)?
         };
         apply_forces(
             model,
@@ -492,7 +614,10 @@ pub fn run(
     let start = std::time::Instant::now();
     let mut last = None;
     let completed = for_each_frame(
-        &mut stream,
+        &mut WithForces {
+            inner: &mut stream,
+            forces: &problem.forces,
+        },
         i0,
         i1,
         step,
@@ -521,6 +646,27 @@ pub fn run(
         loop_seconds: start.elapsed().as_secs_f64(),
         ..Default::default()
     })
+}
+
+/// The states' blocks, the forces file's window moved to each block's
+/// times before its frames are computed.
+struct WithForces<'a, S> {
+    inner: &'a mut S,
+    forces: &'a ForcesFile,
+}
+
+impl<S: crate::motion::stream::FrameSource> crate::motion::stream::FrameSource
+    for WithForces<'_, S>
+{
+    fn next_block(&mut self) -> Result<Option<crate::motion::stream::StateBlock>> {
+        let block = self.inner.next_block()?;
+        if let Some(b) = &block {
+            if let (Some(&first), Some(&last)) = (b.time.first(), b.time.last()) {
+                self.forces.prepare(first, last)?;
+            }
+        }
+        Ok(block)
+    }
 }
 
 #[cfg(test)]
@@ -832,6 +978,54 @@ mod tests {
                     a.kind
                 );
             }
+        }
+    }
+
+    /// A forces file read window by window gives the values of the whole
+    /// table: frames in blocks moving forward (the window drops the rows
+    /// behind), frames asked without `prepare`, times before the first row,
+    /// past the last and back to the start (the file is read again).
+    #[test]
+    fn forces_file_window_equals_the_whole_table() {
+        let dir = std::env::temp_dir().join(format!("statopt_jr_window_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("forces.sto");
+        let mut st = Storage {
+            name: "forces".into(),
+            labels: vec!["a".into(), "b".into()],
+            ..Storage::default()
+        };
+        for i in 0..1000 {
+            let t = 0.01 * i as f64 + if i % 7 == 0 { 0.0 } else { 0.003 };
+            st.time.push(t);
+            st.rows.push(vec![(3.0 * t).sin(), t * t]);
+        }
+        storage::write(&path, &st, 16).unwrap();
+        let whole = storage::read(&path).unwrap();
+        let mut pass = storage::open_rows(&path).unwrap();
+        let mut row = Vec::new();
+        while pass.next_row(&mut row).unwrap().is_some() {}
+        let f = ForcesFile::streamed(&path, pass.table.clone());
+        let check = |t: f64| {
+            assert_eq!(
+                f.values_at(t, &[0, 1]).unwrap(),
+                values_at_time(&whole, t, &[0, 1]),
+                "t = {t}"
+            );
+        };
+        for b in 0..25 {
+            let (t0, t1) = (
+                -0.05 + 0.43 * b as f64,
+                -0.05 + 0.43 * (b + 1) as f64 - 1e-3,
+            );
+            f.prepare(t0, t1).unwrap();
+            for k in 0..=20 {
+                check(t0 + (t1 - t0) * k as f64 / 20.0);
+            }
+            assert!(f.window.read().unwrap().time.len() < 60, "block {b}");
+        }
+        for t in [10.5, 0.0, -1.0, 4.995, 4.99, 7.0, 0.005] {
+            check(t);
         }
     }
 
