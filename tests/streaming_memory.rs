@@ -20,9 +20,8 @@ fn model() -> String {
     common::block_model("")
 }
 
-fn write_case(name: &str, rows: usize, cutoff: f64) -> PathBuf {
-    let dir = common::out_dir(name);
-    std::fs::write(dir.join("block.osim"), model()).unwrap();
+/// The block's motion: `rows` rows 0.01 s apart, tx and ty moving.
+fn motion_text(rows: usize) -> String {
     let mut s = format!(
         "block\nversion=1\nnRows={rows}\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n"
     );
@@ -34,6 +33,13 @@ fn write_case(name: &str, rows: usize, cutoff: f64) -> PathBuf {
             0.01 * (t * 3.0).sin()
         ));
     }
+    s
+}
+
+fn write_case(name: &str, rows: usize, cutoff: f64) -> PathBuf {
+    let dir = common::out_dir(name);
+    std::fs::write(dir.join("block.osim"), model()).unwrap();
+    let s = motion_text(rows);
     std::fs::write(dir.join("motion.mot"), s).unwrap();
     let setup = format!(
         r#"<OpenSimDocument Version="40000"><AnalyzeTool name="block"><model_file>block.osim</model_file><results_directory>out</results_directory>
@@ -259,17 +265,7 @@ fn inverse_dynamics_peak_memory_does_not_grow_with_trial_length() {
     std::fs::write(dir.join("block.osim"), model()).unwrap();
     let mut peaks = Vec::new();
     for (rows, cutoff) in [(1000usize, -1.0), (100_000, -1.0), (100_000, 6.0)] {
-        let mut s = format!(
-            "block\nversion=1\nnRows={rows}\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n"
-        );
-        for k in 0..rows {
-            let t = k as f64 * 0.01;
-            s.push_str(&format!(
-                "{t:.6}\t{:.12}\t{:.12}\t0\n",
-                0.2 * (t * 0.5).sin(),
-                0.01 * (t * 3.0).sin()
-            ));
-        }
+        let s = motion_text(rows);
         let motion = format!("motion_{rows}.mot");
         std::fs::write(dir.join(&motion), s).unwrap();
         let setup = dir.join(format!("id_{rows}_{cutoff}.xml"));

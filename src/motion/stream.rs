@@ -698,23 +698,11 @@ impl<'m> StateStream<'m> {
         // abscissae, shared by the columns (the same bits as splining each).
         let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
         let mut slopes = Vec::new();
-        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
-            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
-            .collect();
-        let vs: Vec<Vec<f64>> = picked
-            .iter()
-            .map(|&(_, j, scale)| cols[j][qa..qb].iter().map(|x| x * scale).collect())
-            .collect();
+        let (picked, vs) = self.model_columns(&cols, qa..qb);
         let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
         fit_q
             .knot_slopes_columns(&ys, &mut slopes)
-            .map_err(|(i, e)| {
-                e.context(format!(
-                    "{}: column '{}'",
-                    self.file.display(),
-                    self.labels[picked[i].1]
-                ))
-            })?;
+            .map_err(|(i, e)| self.column_error(picked[i].1, e))?;
         for ((&(c, _, _), v), sl) in picked.iter().zip(&vs).zip(&slopes) {
             for i in 0..nu {
                 q[i][c] = v[ua + i - qa];
@@ -755,6 +743,34 @@ impl<'m> StateStream<'m> {
 }
 
 impl StateStream<'_> {
+    /// The coordinates the file has, as (coordinate, carried column,
+    /// factor to model units), and their values in model units on the
+    /// window's rows `rows` of the (filtered) columns `cols`.
+    #[allow(clippy::type_complexity)]
+    fn model_columns(
+        &self,
+        cols: &[Vec<f64>],
+        rows: std::ops::Range<usize>,
+    ) -> (Vec<(usize, usize, f64)>, Vec<Vec<f64>>) {
+        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
+            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
+            .collect();
+        let vs = picked
+            .iter()
+            .map(|&(_, j, scale)| cols[j][rows.clone()].iter().map(|x| x * scale).collect())
+            .collect();
+        (picked, vs)
+    }
+
+    /// `e`, said of the file's carried column `j`.
+    fn column_error(&self, j: usize, e: Error) -> Error {
+        e.context(format!(
+            "{}: column '{}'",
+            self.file.display(),
+            self.labels[j]
+        ))
+    }
+
     /// Rows `a..b` of the InverseDynamicsTool's states from the window
     /// starting at row `w0` (`time`, the filtered `cols` in file units):
     /// each coordinate's spline through the window's rows `qa..qb`, and its
@@ -782,23 +798,11 @@ impl StateStream<'_> {
                 q.iter_mut().for_each(|r| r[c] = v);
             }
         }
-        let picked: Vec<(usize, usize, f64)> = (self.coord_cols.iter().enumerate())
-            .filter_map(|(c, cc)| cc.map(|(j, scale)| (c, j, scale)))
-            .collect();
-        let vs: Vec<Vec<f64>> = picked
-            .iter()
-            .map(|&(_, j, scale)| cols[j][qa..qb].iter().map(|x| x * scale).collect())
-            .collect();
+        let (picked, vs) = self.model_columns(cols, qa..qb);
         let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
         let splines = SplineFitter::new(self.degree, &time[qa..qb])
             .splines(&ys)
-            .map_err(|(i, e)| {
-                e.context(format!(
-                    "{}: column '{}'",
-                    self.file.display(),
-                    self.labels[picked[i].1]
-                ))
-            })?;
+            .map_err(|(i, e)| self.column_error(picked[i].1, e))?;
         let times = &time[a - w0..b - w0];
         for (&(c, _, _), sp) in picked.iter().zip(&splines) {
             for (i, &t) in times.iter().enumerate() {

@@ -105,19 +105,20 @@ pub fn open_state_stream_with<'m>(
     contacts: &[Contact],
 ) -> Result<StateStream<'m>> {
     let file = coordinates_file(setup)?;
-    let mut closing = None;
-    if !setup.close_contacts.is_empty() {
+    let opened = StateStream::open(
+        model,
+        file,
+        setup.lowpass_cutoff,
+        setup.initial_time,
+        setup.final_time,
+    )?
+    .with_spline_degree(setup.coordinate_spline);
+    check_time_range(setup, file, opened.first_time, opened.last_time)?;
+    let mut stream = if setup.close_contacts.is_empty() {
+        opened
+    } else {
         // The closure streamed with the states (`contacts::closure::
         // StreamClosure`), unless the motion is resampled (then in memory).
-        let opened = StateStream::open(
-            model,
-            file,
-            setup.lowpass_cutoff,
-            setup.initial_time,
-            setup.final_time,
-        )?
-        .with_spline_degree(setup.coordinate_spline);
-        check_time_range(setup, file, opened.first_time, opened.last_time)?;
         let closures = setup_closures(setup, model, contacts)?;
         let continued: Vec<bool> = closures
             .iter()
@@ -125,44 +126,38 @@ pub fn open_state_stream_with<'m>(
             .collect();
         let added: Vec<usize> = closures.iter().map(|(_, c)| *c).collect();
         let context = format!("{}: <close_contacts>", setup.setup_file.display());
-        closing = opened
-            .with_row_transform(&added, move |columns| {
-                Box::new(crate::contacts::closure::StreamClosure::new(
+        let streamed = opened.with_row_transform(&added, move |columns| {
+            Box::new(crate::contacts::closure::StreamClosure::new(
+                model,
+                closures,
+                continued,
+                columns.to_vec(),
+                context,
+            ))
+        });
+        match streamed {
+            Ok(stream) => stream,
+            Err(_) => {
+                let states = load_states_with(setup, model, contacts)?;
+                let udot = states.speed_derivatives(file)?;
+                let mut stream = StateStream::in_memory(
                     model,
-                    closures,
-                    continued,
-                    columns.to_vec(),
-                    context,
-                ))
-            })
-            .ok();
-    }
-    let mut stream = if let Some(stream) = closing {
-        stream
-    } else if !setup.close_contacts.is_empty() {
-        let states = load_states_with(setup, model, contacts)?;
-        let udot = states.speed_derivatives(file)?;
-        let mut stream =
-            StateStream::in_memory(model, states, udot, setup.initial_time, setup.final_time);
-        let raw = crate::storage::read(file)?;
-        stream.warnings = crate::motion::checks::time_warnings(
-            file,
-            &crate::motion::checks::TimeSteps::of(&raw.time),
-            setup.lowpass_cutoff,
-        )?;
-        stream.unmatched_columns = crate::motion::checks::unmatched_columns(model, &raw.labels);
-        stream
-    } else {
-        let stream = StateStream::open(
-            model,
-            file,
-            setup.lowpass_cutoff,
-            setup.initial_time,
-            setup.final_time,
-        )?
-        .with_spline_degree(setup.coordinate_spline);
-        check_time_range(setup, file, stream.first_time, stream.last_time)?;
-        stream
+                    states,
+                    udot,
+                    setup.initial_time,
+                    setup.final_time,
+                );
+                let raw = crate::storage::read(file)?;
+                stream.warnings = crate::motion::checks::time_warnings(
+                    file,
+                    &crate::motion::checks::TimeSteps::of(&raw.time),
+                    setup.lowpass_cutoff,
+                )?;
+                stream.unmatched_columns =
+                    crate::motion::checks::unmatched_columns(model, &raw.labels);
+                stream
+            }
+        }
     };
     let range = crate::motion::checks::time_range_warnings(
         &setup.setup_file,
