@@ -588,12 +588,12 @@ impl<'m> StateStream<'m> {
         mut self,
         added: &[usize],
         transform: impl FnOnce(&[Option<(usize, f64)>]) -> Box<dyn RowTransform + 'm>,
-    ) -> std::result::Result<Self, Self> {
+    ) -> std::result::Result<Self, Box<Self>> {
         let GSource::Direct(src) = &mut self.g else {
-            return Err(self);
+            return Err(Box::new(self));
         };
         if !self.gbuf.is_empty() || self.next_out != self.first_row {
-            return Err(self);
+            return Err(Box::new(self));
         }
         src.j = 0;
         self.gbuf_start = 0;
