@@ -133,9 +133,10 @@ pub struct StreamClosure<'m> {
     columns: Vec<Option<(usize, f64)>>,
     data: Data,
     q: Vec<f64>,
-    /// Rows `base..` of the current window: the continued closures' values.
+    /// Rows `base..` of the current window: each closure's value (file
+    /// units), `closures.len()` per row.
     base: usize,
-    solved: std::collections::VecDeque<Vec<f64>>,
+    solved: std::collections::VecDeque<f64>,
     context: String,
 }
 
@@ -167,10 +168,10 @@ impl<'m> StreamClosure<'m> {
 impl crate::motion::stream::RowTransform for StreamClosure<'_> {
     fn begin_window(&mut self, first: usize) {
         // Keep the row before the window's first: its solution starts it.
-        while self.base + 1 < first && !self.solved.is_empty() {
-            self.solved.pop_front();
-            self.base += 1;
-        }
+        let drop =
+            (first.saturating_sub(self.base + 1) * self.closures.len()).min(self.solved.len());
+        self.solved.drain(..drop);
+        self.base += drop / self.closures.len().max(1);
     }
 
     fn apply(&mut self, row: usize, t: f64, values: &mut [f64]) -> Result<()> {
@@ -181,35 +182,38 @@ impl crate::motion::stream::RowTransform for StreamClosure<'_> {
                 None => model.coordinates[c].default_value,
             };
         }
-        let mut mine = Vec::with_capacity(self.closures.len());
+        let n = self.closures.len();
+        if self.solved.is_empty() {
+            self.base = row;
+        }
+        // This row's place in `solved` (overwritten when a window gives it again).
+        let at = match row.checked_sub(self.base) {
+            Some(i) if i * n <= self.solved.len() => i * n,
+            _ => {
+                return Err(Error::internal(format!(
+                    "closing contacts: row {row} out of order"
+                )))
+            }
+        };
         for (k, (contact, c)) in self.closures.iter().enumerate() {
             let (j, scale) = self.columns[*c].expect("a closed coordinate has a column");
             if self.continued[k] && row > 0 {
-                let prev = row
-                    .checked_sub(1 + self.base)
-                    .and_then(|i| self.solved.get(i))
+                let prev = at
+                    .checked_sub(n)
+                    .and_then(|i| self.solved.get(i + k))
                     .ok_or_else(|| {
                         Error::internal(format!(
                             "closing contacts: row {row} came without the row before it"
                         ))
                     })?;
-                self.q[*c] = prev[k] * scale;
+                self.q[*c] = prev * scale;
             }
             close_contact(model, &mut self.data, contact, *c, &mut self.q, t)
                 .map_err(|e| e.context(self.context.clone()))?;
             values[j] = self.q[*c] / scale;
-            mine.push(values[j]);
-        }
-        if self.solved.is_empty() {
-            self.base = row;
-        }
-        match row.checked_sub(self.base) {
-            Some(i) if i < self.solved.len() => self.solved[i] = mine,
-            Some(i) if i == self.solved.len() => self.solved.push_back(mine),
-            _ => {
-                return Err(Error::internal(format!(
-                    "closing contacts: row {row} out of order"
-                )))
+            match self.solved.get_mut(at + k) {
+                Some(v) => *v = values[j],
+                None => self.solved.push_back(values[j]),
             }
         }
         Ok(())

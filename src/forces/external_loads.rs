@@ -120,11 +120,10 @@ impl ExternalLoadsFiles {
         let el = if root.name == "ExternalLoads" {
             &mut root
         } else {
-            let at = root.error("no <ExternalLoads> element in file");
-            root.children
-                .iter_mut()
-                .find(|c| c.name == "ExternalLoads")
-                .ok_or(at)?
+            match root.children.iter().position(|c| c.name == "ExternalLoads") {
+                Some(i) => &mut root.children[i],
+                None => return Err(root.error("no <ExternalLoads> element in file")),
+            }
         };
         let datafile = el
             .child_text("datafile")
@@ -223,25 +222,17 @@ impl ExternalLoadsFiles {
             };
             Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
         };
+        // As OpenSim (and ExternalLoads::load before): an identifier's error
+        // ends the reading of this force.
         let force = series(f.child_text("force_identifier"));
-        // As OpenSim (and ExternalLoads::load before): a force identifier's
-        // error ends the reading of this force.
-        if force.is_err() {
-            return Ok(Some(ForceSeries {
-                force,
-                point: Ok(None),
-                torque: Ok(None),
-            }));
-        }
-        let point = series(f.child_text("point_identifier"));
-        if point.is_err() {
-            return Ok(Some(ForceSeries {
-                force,
-                point,
-                torque: Ok(None),
-            }));
-        }
-        let torque = series(f.child_text("torque_identifier"));
+        let point = match force {
+            Ok(_) => series(f.child_text("point_identifier")),
+            Err(_) => Ok(None),
+        };
+        let torque = match (&force, &point) {
+            (Ok(_), Ok(_)) => series(f.child_text("torque_identifier")),
+            _ => Ok(None),
+        };
         Ok(Some(ForceSeries {
             force,
             point,

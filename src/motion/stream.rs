@@ -789,9 +789,8 @@ impl StateStream<'_> {
         let nq = self.model.nq();
         let n = b - a;
         let mut q = vec![vec![0.0; nq]; n];
-        let u = vec![vec![0.0; nq]; n];
-        let udot = vec![vec![0.0; nq]; n];
-        let (mut u, mut udot) = (u, udot);
+        let mut u = q.clone();
+        let mut udot = q.clone();
         for (c, cc) in self.coord_cols.iter().enumerate() {
             if cc.is_none() {
                 let v = self.model.coordinates[c].default_value;

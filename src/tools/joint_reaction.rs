@@ -269,43 +269,46 @@ pub fn values_at_time_in(st: &Storage, t: f64, cols: &[usize], sorted: bool) -> 
         .collect()
 }
 
-/// A JointReaction's forces file, read as the frames need it: when its
-/// times never decrease, only the rows around the frames being computed are
-/// held (the frame loop moves the window forward a block at a time,
-/// [`ForcesFile::prepare`]; memory does not grow with the trial), else the
-/// whole table (the storage reader refuses times that go back, so that is
-/// a safeguard). Values are [`values_at_time`]'s either way.
+/// A JointReaction's forces file, read as the frames need it: only the rows
+/// around the frames being computed are held (the frame loop moves the
+/// window forward a block at a time, [`ForcesFile::prepare`]; memory does
+/// not grow with the trial). The storage reader refuses times that go back,
+/// so the row for a time is found by bisection. Values are
+/// [`values_at_time`]'s.
 pub struct ForcesFile {
-    /// The header and the rows held; rows `offset..` of the file.
-    window: std::sync::RwLock<Storage>,
-    /// Where the rows after the window come from (None: all read).
-    reader: std::sync::Mutex<Option<storage::RowReader>>,
-    offset: std::sync::atomic::AtomicUsize,
+    /// None: no forces file (a model without actuators).
     path: Option<PathBuf>,
-    sorted: bool,
+    window: std::sync::RwLock<ForcesWindow>,
+}
+
+/// The rows of a forces file held, and where the next ones come from.
+struct ForcesWindow {
+    /// The header and rows `offset..` of the file.
+    table: Storage,
+    offset: usize,
+    /// The reader of the rows after the window (None: all read).
+    reader: Option<storage::RowReader>,
 }
 
 impl ForcesFile {
-    /// The whole table, held.
-    pub fn whole(table: Storage) -> Self {
-        ForcesFile {
-            window: std::sync::RwLock::new(table),
-            reader: std::sync::Mutex::new(None),
-            offset: 0.into(),
-            path: None,
-            sorted: false,
-        }
+    /// No forces file.
+    pub fn none() -> Self {
+        Self::with(None, Storage::default())
     }
 
-    /// `path`, whose times never decrease, read as the frames need it;
-    /// `header` is its table without rows.
+    /// `path`, read as the frames need it; `header` is its table without rows.
     fn streamed(path: &Path, header: Storage) -> Self {
+        Self::with(Some(path.to_path_buf()), header)
+    }
+
+    fn with(path: Option<PathBuf>, header: Storage) -> Self {
         ForcesFile {
-            window: std::sync::RwLock::new(header),
-            reader: std::sync::Mutex::new(None),
-            offset: 0.into(),
-            path: Some(path.to_path_buf()),
-            sorted: true,
+            path,
+            window: std::sync::RwLock::new(ForcesWindow {
+                table: header,
+                offset: 0,
+                reader: None,
+            }),
         }
     }
 
@@ -317,66 +320,65 @@ impl ForcesFile {
         let Some(path) = &self.path else {
             return Ok(());
         };
-        let poisoned = || Error::internal("the forces file's window was poisoned");
-        let mut w = self.window.write().map_err(|_| poisoned())?;
-        let mut reader = self.reader.lock().map_err(|_| poisoned())?;
-        let mut offset = self.offset.load(std::sync::atomic::Ordering::Relaxed);
-        let started = offset > 0 || !w.time.is_empty();
-        if !started || (offset > 0 && w.time.first().is_some_and(|&t0| t_first < t0)) {
+        let mut guard = self.window.write().map_err(|_| poisoned())?;
+        let w = &mut *guard;
+        let started = w.offset > 0 || !w.table.time.is_empty();
+        if !started || (w.offset > 0 && w.table.time.first().is_some_and(|&t0| t_first < t0)) {
             // (Re)start at the file's first row.
-            w.time.clear();
-            w.rows.clear();
-            offset = 0;
-            *reader = Some(storage::open_rows(path)?);
+            w.table.time.clear();
+            w.table.rows.clear();
+            w.offset = 0;
+            w.reader = Some(storage::open_rows(path)?);
         }
-        if let Some(r) = reader.as_mut() {
+        if let Some(r) = w.reader.as_mut() {
             let mut row = Vec::new();
-            while w.time.len() < 2 || w.time.last().is_some_and(|&t| t <= t_last) {
+            while w.table.time.len() < 2 || w.table.time.last().is_some_and(|&t| t <= t_last) {
                 match r.next_row(&mut row)? {
                     Some(t) => {
-                        w.time.push(t);
-                        w.rows.push(row.clone());
+                        w.table.time.push(t);
+                        w.table.rows.push(row.clone());
                     }
                     None => {
-                        *reader = None;
+                        w.reader = None;
                         break;
                     }
                 }
             }
         }
         let mut k = 0;
-        while w.time.len() - k > 2 && w.time[k + 1] <= t_first {
+        while w.table.time.len() - k > 2 && w.table.time[k + 1] <= t_first {
             k += 1;
         }
-        w.time.drain(..k);
-        w.rows.drain(..k);
-        self.offset
-            .store(offset + k, std::sync::atomic::Ordering::Relaxed);
+        w.table.time.drain(..k);
+        w.table.rows.drain(..k);
+        w.offset += k;
         Ok(())
     }
 
     /// [`values_at_time`] of the columns `cols` at `t`.
     fn values_at(&self, t: f64, cols: &[usize]) -> Result<Vec<f64>> {
-        let covered = |w: &Storage| {
-            let (Some(&first), Some(&last)) = (w.time.first(), w.time.last()) else {
+        let covered = |w: &ForcesWindow| {
+            let time = &w.table.time;
+            let (Some(&first), Some(&last)) = (time.first(), time.last()) else {
                 return false;
             };
-            let offset = self.offset.load(std::sync::atomic::Ordering::Relaxed);
-            let at_end = self.reader.lock().map(|r| r.is_none()).unwrap_or(false);
-            (offset == 0 || first <= t) && (at_end || (last > t && w.time.len() >= 2))
+            (w.offset == 0 || first <= t) && (w.reader.is_none() || (last > t && time.len() >= 2))
         };
-        let poisoned = || Error::internal("the forces file's window was poisoned");
         {
             let w = self.window.read().map_err(|_| poisoned())?;
             if self.path.is_none() || covered(&w) {
-                return Ok(values_at_time_in(&w, t, cols, self.sorted));
+                return Ok(values_at_time_in(&w.table, t, cols, true));
             }
         }
         // A frame outside the window (a caller that does not prepare).
         self.prepare(t, t)?;
         let w = self.window.read().map_err(|_| poisoned())?;
-        Ok(values_at_time_in(&w, t, cols, self.sorted))
+        Ok(values_at_time_in(&w.table, t, cols, true))
     }
+}
+
+fn poisoned() -> Error {
+    Error::internal("the forces file's window was poisoned")
 }
 
 /// Everything a JointReaction frame needs, compiled once.
@@ -441,7 +443,7 @@ impl JointReactionProblem {
         }
         let el = &jr.element;
         let (forces, columns) = if controls.is_empty() {
-            (ForcesFile::whole(Storage::default()), Vec::new())
+            (ForcesFile::none(), Vec::new())
         } else {
             let Some(file) = &jr.forces_file else {
                 return Err(el.error(format!(
@@ -453,14 +455,12 @@ impl JointReactionProblem {
             };
             let context =
                 |e: Error| e.context(format!("forces_file of JointReaction '{}'", jr.common.name));
-            // One pass over the rows (all read, none kept): errors, the row
-            // count, whether the times never decrease.
+            // One pass over the rows (all read, none kept): their errors
+            // before the run, and the row count.
             let mut pass = storage::open_rows(file).map_err(context)?;
-            let (mut rows, mut sorted, mut prev) = (0usize, true, f64::NEG_INFINITY);
+            let mut rows = 0usize;
             let mut row = Vec::new();
-            while let Some(t) = pass.next_row(&mut row).map_err(context)? {
-                sorted &= t >= prev;
-                prev = t;
+            while pass.next_row(&mut row).map_err(context)?.is_some() {
                 rows += 1;
             }
             let table = pass.table.clone();
@@ -503,12 +503,7 @@ impl JointReactionProblem {
                     names.len()
                 ));
             }
-            let forces = if sorted {
-                ForcesFile::streamed(file, table)
-            } else {
-                ForcesFile::whole(storage::read(file).map_err(context)?)
-            };
-            (forces, columns)
+            (ForcesFile::streamed(file, table), columns)
         };
         let setup_dir = setup
             .setup_file
@@ -1022,7 +1017,7 @@ mod tests {
             for k in 0..=20 {
                 check(t0 + (t1 - t0) * k as f64 / 20.0);
             }
-            assert!(f.window.read().unwrap().time.len() < 60, "block {b}");
+            assert!(f.window.read().unwrap().table.time.len() < 60, "block {b}");
         }
         for t in [10.5, 0.0, -1.0, 4.995, 4.99, 7.0, 0.005] {
             check(t);
