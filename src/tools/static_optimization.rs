@@ -751,7 +751,8 @@ struct RunWriters<'a> {
     src_w: StoWriter,
     power_w: StoWriter,
     jr_w: Vec<StoWriter>,
-    log: FrameLog,
+    /// The log, until the run's log thread takes it (`run_sweep`).
+    log: Option<FrameLog>,
     /// Frames a resumed run already holds (t <= this) are not written again.
     skip_until: f64,
     failures: Vec<String>,
@@ -951,7 +952,7 @@ impl<'a> RunWriters<'a> {
             src_w,
             power_w,
             jr_w,
-            log,
+            log: Some(log),
             skip_until,
             failures: Vec::new(),
             reserve_vars,
@@ -965,13 +966,9 @@ impl<'a> RunWriters<'a> {
         })
     }
 
-    /// Write one frame (in frame order).
-    fn write(
-        &mut self,
-        r: &FrameResult,
-        jr_rows: &[Vec<f64>],
-        messages: &FrameMessages,
-    ) -> Result<()> {
+    /// Write one frame's tables (in frame order; the log is written by
+    /// the log thread, [`FrameLog::write_frame`]).
+    fn write(&mut self, r: &FrameResult, jr_rows: &[Vec<f64>]) -> Result<()> {
         let problem = self.problem;
         if r.time <= self.skip_until {
             return Ok(());
@@ -979,7 +976,6 @@ impl<'a> RunWriters<'a> {
         for (w, row) in self.jr_w.iter_mut().zip(jr_rows) {
             w.write_row(r.time, row)?;
         }
-        self.log.write(r.time, messages)?;
         self.src_w.write_row(r.time, &r.by_source)?;
         self.power_w.write_row(r.time, &r.muscle_power)?;
         if !r.solution.status.is_ok() {
@@ -1054,7 +1050,9 @@ impl<'a> RunWriters<'a> {
         for w in tables {
             w.finish()?;
         }
-        self.log.finish()?;
+        if let Some(log) = self.log {
+            log.finish()?;
+        }
         let mut warnings = Vec::new();
         let failures = self.failures;
         if !failures.is_empty() {
@@ -1228,36 +1226,69 @@ fn run_sweep(
     // States block by block; frames in chunks: solved in parallel, written
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
-    // Tables are formatted and written off the solving threads: a writer
-    // thread owns them and takes each frame's results in order, while the
-    // next chunk of frames is solved.
-    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<FrameOutput>>(FRAMES_IN_FLIGHT);
+    // Tables and the log are formatted and written off the solving threads,
+    // on two threads of their own (each about as much work, together about
+    // as much as the solving on gait2392): the table writer owns the
+    // tables, the log thread encodes each frame's messages and owns the
+    // logs. Both take each frame's results in order, while the next chunk
+    // of frames is solved, from one shared buffer.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Shared>(FRAMES_IN_FLIGHT);
+    let (log_tx, log_rx) = std::sync::mpsc::sync_channel::<Shared>(FRAMES_IN_FLIGHT);
     // Every run has the same joint reactions (only their tables differ).
     let reactions: Vec<&[ReactionSpec]> = runs
         .first()
         .map(|r| r.reactions.iter().map(|(_, s)| *s).collect())
         .unwrap_or_default();
-    // Output buffers the writer has finished with, for the solving threads
-    // to fill again: a frame allocates nothing once there are enough of
-    // them (at most the frames in flight).
-    let recycled: std::sync::Mutex<Vec<Vec<FrameOutput>>> = Default::default();
+    // Output buffers both writers have finished with, for the solving
+    // threads to fill again: a frame's results allocate nothing once there
+    // are enough of them (at most the frames in flight).
+    let recycled: std::sync::Mutex<Vec<Shared>> = Default::default();
+    // The last of the two writers to let go of a frame's buffer hands it
+    // back. Under the pool's lock: the first one drops its reference there,
+    // so the second sees the count fall to 1.
+    let release = |results: Shared| {
+        if let Ok(mut pool) = recycled.lock() {
+            if std::sync::Arc::strong_count(&results) == 1 {
+                pool.push(results);
+            } else {
+                drop(results);
+            }
+            drop(pool);
+        }
+    };
+    let mut writers = writers;
+    let mut logs: Vec<(FrameLog, f64)> = writers
+        .iter_mut()
+        .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
+        .collect();
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
-        let recycled = &recycled;
+        let release = &release;
         let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
-            let mut writers = writers;
             for results in rx {
-                for ((w, names), (r, rows)) in writers.iter_mut().zip(log_names).zip(&results) {
-                    // The log's JSON is encoded here, beside the tables'
-                    // formatting, off the solving threads.
-                    let messages = names.encode(problem, r, rows)?;
-                    w.write(r, rows, &messages)?;
+                for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
+                    w.write(r, rows)?;
                 }
-                if let Ok(mut pool) = recycled.lock() {
-                    pool.push(results);
-                }
+                release(results);
             }
             Ok(writers)
+        });
+        let log_writer = scope.spawn(move || -> Result<()> {
+            for results in log_rx {
+                for (((log, skip_until), names), (r, rows)) in
+                    logs.iter_mut().zip(log_names).zip(results.iter())
+                {
+                    if r.time > *skip_until {
+                        log.write_frame(names, problem, r, rows)?;
+                    }
+                }
+                release(results);
+            }
+            // The logs' last chunks and summaries, beside the tables' ends.
+            for (log, _) in logs {
+                log.finish()?;
+            }
+            Ok(())
         });
         // Frames in fixed groups (frame::driver::GROUP): the first of a
         // group solved cold, the others warm-started from the frame before.
@@ -1275,11 +1306,17 @@ fn run_sweep(
                 if block.time[pos.last] <= skip_until {
                     return Ok(None);
                 }
-                let mut out = recycled
+                let mut shared = recycled
                     .lock()
                     .ok()
                     .and_then(|mut pool| pool.pop())
                     .unwrap_or_default();
+                if std::sync::Arc::get_mut(&mut shared).is_none() {
+                    // (Only a buffer still held elsewhere; never pooled.)
+                    shared = Shared::default();
+                }
+                let out = std::sync::Arc::get_mut(&mut shared)
+                    .ok_or_else(|| Error::internal("a shared frame buffer"))?;
                 frame_outputs(
                     problem,
                     &weights,
@@ -1290,23 +1327,21 @@ fn run_sweep(
                     &block.u[i],
                     &block.udot[i],
                     !pos.first,
-                    &mut out,
+                    out,
                 )?;
                 if block.time[i] <= skip_until {
-                    if let Ok(mut pool) = recycled.lock() {
-                        pool.push(out);
-                    }
+                    release(shared);
                     return Ok(None);
                 }
-                Ok(Some(out))
+                Ok(Some(shared))
             },
             |item| {
                 let Some(results) = item else {
                     return Ok(());
                 };
-                // The writer thread formats and writes in frame order; a closed
-                // channel means it stopped on an error, reported below.
-                if tx.send(results).is_err() {
+                // The writers format and write in frame order; a closed
+                // channel means one stopped on an error, reported below.
+                if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
                     return Err(Error::internal("the table writer stopped"));
                 }
                 progress.inc(1);
@@ -1314,11 +1349,16 @@ fn run_sweep(
             },
         );
         drop(tx);
+        drop(log_tx);
         let written = writer
             .join()
             .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-        // The writer's own error says more than the loop's closed channel.
+        let logged = log_writer
+            .join()
+            .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
+        // The writers' own errors say more than the loop's closed channel.
         let writers = written?;
+        logged?;
         Ok((completed?, writers))
     })?;
     progress.finish_and_clear();
@@ -1333,6 +1373,9 @@ fn run_sweep(
         })
         .collect()
 }
+
+/// One frame's results, shared by the table writer and the log thread.
+type Shared = std::sync::Arc<Vec<FrameOutput>>;
 
 /// Frames handed to the table writer and not yet written, at most: the
 /// solving threads run ahead of the formatting by this much (memory stays
@@ -1488,6 +1531,19 @@ impl FrameLog {
         Ok(FrameLog {
             log: mcap_log::McapLog::create(path, &channels.specs()?)?,
         })
+    }
+
+    /// Encode one frame's messages ([`LogNames::encode`]) and log them (in
+    /// frame order).
+    fn write_frame(
+        &mut self,
+        names: &LogNames,
+        problem: &SoProblem,
+        r: &FrameResult,
+        jr_rows: &[Vec<f64>],
+    ) -> Result<()> {
+        let messages = names.encode(problem, r, jr_rows)?;
+        self.write(r.time, &messages)
     }
 
     fn write(&mut self, t: f64, messages: &FrameMessages) -> Result<()> {
