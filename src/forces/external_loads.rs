@@ -2,16 +2,31 @@
 //! forces, points and torques read from a data file, interpolated in time
 //! (constant for 1 row, linear for 2–3, natural cubic GCV spline for ≥ 4)
 //! and applied to bodies.
+//!
+//! A data file of at most [`WINDOW_ROWS`] rows is read whole and each
+//! column splined through all of it, as OpenSim does. A longer one (force
+//! plates sampled at 1–2 kHz over minutes) is never held whole: its rows are
+//! read once to check them and to record where every window of
+//! [`WINDOW_ROWS`] rows starts, and the columns the loads use are splined
+//! window by window as frames need them ([`Windows`]), a few windows held at
+//! a time. A natural interpolating cubic spline's value on a knot interval
+//! depends on data k knots away with weight ≈ 0.27ᵏ, so a window fitted
+//! [`WINDOW_OVERLAP`] rows past each side of its rows (clipped only at the
+//! file's true ends, where the natural end conditions then apply exactly)
+//! equals the spline through the whole file to rounding there. Which
+//! window serves a time depends on the time alone, so results do not depend
+//! on the order frames are computed in or on the thread count.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, RwLock};
 
 use nalgebra::Vector3;
 
 use crate::dynamics::{BodyForce, Data};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::functions::{GcvSpline, SplineFitter, TransientBasis};
 use crate::model::Model;
-use crate::storage::{self, Storage};
+use crate::storage::{self, RowMark, Storage};
 use crate::xml::{self, Element};
 
 /// One column of load data as a function of time.
@@ -21,7 +36,20 @@ enum Series {
     /// Linear interpolation with linear extrapolation (PiecewiseLinearFunction).
     Linear(Vec<f64>, Vec<f64>),
     Spline(GcvSpline),
+    /// Column `j` of the splines of the window that covers the time
+    /// ([`Windows`]).
+    Windowed(usize),
 }
+
+/// Rows of a data file splined through at once: a file of at most this
+/// many rows is splined whole, a longer one window by window.
+pub const WINDOW_ROWS: usize = 4096;
+/// Rows past each side of a window that its splines are fitted through:
+/// 0.27⁶⁰ ≈ 10⁻³⁴.
+pub const WINDOW_OVERLAP: usize = 60;
+/// Fitted windows held at once (frames solved in parallel are close in
+/// time: at most two windows are in use at a time).
+const WINDOWS_HELD: usize = 3;
 
 impl Series {
     /// `fit`: cubic splines on `t` (one spline system for all columns).
@@ -33,7 +61,7 @@ impl Series {
             _ => Series::Spline(fit.spline(y)?),
         })
     }
-    fn value(&self, x: f64, cache: &mut TransientBasis) -> f64 {
+    fn value(&self, x: f64, cache: &mut TransientBasis, window: Option<&Window>) -> f64 {
         match self {
             Series::Constant(c) => *c,
             Series::Linear(t, y) => {
@@ -49,6 +77,12 @@ impl Series {
             // Frames advance through the data: its segments are rarely
             // revisited, so none is kept.
             Series::Spline(s) => s.value_transient_with(x, cache),
+            Series::Windowed(j) => match window.and_then(|w| w.splines.get(*j)) {
+                Some(s) => s.value_transient_with(x, cache),
+                // (A windowed series is always evaluated with its window:
+                // `ExternalLoads::window_at`.)
+                None => f64::NAN,
+            },
         }
     }
 }
@@ -57,11 +91,11 @@ impl Series {
 struct Vec3Series([Series; 3]);
 
 impl Vec3Series {
-    fn value(&self, t: f64, cache: &mut TransientBasis) -> Vector3<f64> {
+    fn value(&self, t: f64, cache: &mut TransientBasis, window: Option<&Window>) -> Vector3<f64> {
         Vector3::new(
-            self.0[0].value(t, cache),
-            self.0[1].value(t, cache),
-            self.0[2].value(t, cache),
+            self.0[0].value(t, cache, window),
+            self.0[1].value(t, cache, window),
+            self.0[2].value(t, cache, window),
         )
     }
 }
@@ -78,12 +112,138 @@ pub struct ExternalForce {
     torque: Option<Vec3Series>,
     /// Labels for the force reporter (`<body>_<name>_Fx`, ...).
     pub labels: Vec<String>,
+    /// The data file's windows, when it is long.
+    windows: Option<Arc<Windows>>,
 }
 
 #[derive(Debug, Clone, Default)]
 pub struct ExternalLoads {
     pub forces: Vec<ExternalForce>,
     pub data_file: PathBuf,
+    /// A long data file's windows (None: every series fitted whole).
+    windows: Option<Arc<Windows>>,
+}
+
+/// The windows of a long data file (see the module documentation): window
+/// k serves the times from row k·[`WINDOW_ROWS`] up to the next window's
+/// first row (the first window everything before, the last everything
+/// after), and is fitted through the rows [`WINDOW_OVERLAP`] past each side.
+#[derive(Debug)]
+struct Windows {
+    path: PathBuf,
+    /// Data columns the loads use, in the order of the `Series::Windowed`
+    /// indices, and their labels.
+    columns: Vec<usize>,
+    labels: Vec<String>,
+    rows: usize,
+    window_rows: usize,
+    /// Time of the first row of each window, k·window_rows.
+    starts: Vec<f64>,
+    /// Positions in the file to read a window's rows from: (row, mark).
+    marks: Vec<(usize, RowMark)>,
+    held: RwLock<Vec<Arc<Window>>>,
+    /// The first error fitting a window outside the prepared range.
+    failure: std::sync::Mutex<Option<Error>>,
+}
+
+fn poisoned() -> Error {
+    Error::internal("the external loads' windows were poisoned")
+}
+
+/// One window's splines, one per used column.
+#[derive(Debug)]
+struct Window {
+    k: usize,
+    splines: Vec<GcvSpline>,
+}
+
+impl Windows {
+    /// The window that serves time `t`.
+    fn index(&self, t: f64) -> usize {
+        self.starts.partition_point(|&s| s <= t).saturating_sub(1)
+    }
+
+    /// The splines of the window that serves `t`, fitted if not held
+    /// (then held too, the window farthest from it let go when more than
+    /// the prepared ones or [`WINDOWS_HELD`] are held).
+    fn at(&self, t: f64) -> Result<Arc<Window>> {
+        let k = self.index(t);
+        if let Some(w) = self.held.read().map_err(|_| poisoned())?.iter().find(|w| w.k == k) {
+            return Ok(w.clone());
+        }
+        let mut held = self.held.write().map_err(|_| poisoned())?;
+        if let Some(w) = held.iter().find(|w| w.k == k) {
+            return Ok(w.clone());
+        }
+        let w = Arc::new(self.fit(k)?);
+        if held.len() >= WINDOWS_HELD {
+            if let Some(far) = (0..held.len()).max_by_key(|&i| held[i].k.abs_diff(k)) {
+                held.swap_remove(far);
+            }
+        }
+        held.push(w.clone());
+        Ok(w)
+    }
+
+    /// Hold exactly the windows serving `t_first` to `t_last`.
+    fn prepare(&self, t_first: f64, t_last: f64) -> Result<()> {
+        let (k0, k1) = (self.index(t_first), self.index(t_last.max(t_first)));
+        let mut held = self.held.write().map_err(|_| poisoned())?;
+        held.retain(|w| w.k >= k0 && w.k <= k1);
+        for k in k0..=k1 {
+            if !held.iter().any(|w| w.k == k) {
+                held.push(Arc::new(self.fit(k)?));
+            }
+        }
+        Ok(())
+    }
+
+    fn keep(&self, e: Error) {
+        if let Ok(mut f) = self.failure.lock() {
+            f.get_or_insert(e);
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        match self.failure.lock() {
+            Ok(mut f) => f.take().map_or(Ok(()), Err),
+            Err(_) => Err(poisoned()),
+        }
+    }
+
+    /// Read window k's rows and spline its columns.
+    fn fit(&self, k: usize) -> Result<Window> {
+        let r0 = (k * self.window_rows).saturating_sub(WINDOW_OVERLAP);
+        let r1 = ((k + 1) * self.window_rows + WINDOW_OVERLAP + 1).min(self.rows);
+        let mut reader = storage::open_rows(&self.path)?;
+        reader.seek_row(r0, &self.marks)?;
+        let mut time = Vec::with_capacity(r1 - r0);
+        let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(r1 - r0); self.columns.len()];
+        let mut row = Vec::new();
+        while time.len() < r1 - r0 {
+            let Some(t) = reader.next_row(&mut row)? else {
+                return Err(Error::msg(format!(
+                    "{}: the file changed while it was read (row {} missing)",
+                    self.path.display(),
+                    r0 + time.len()
+                )));
+            };
+            time.push(t);
+            for (c, &j) in cols.iter_mut().zip(&self.columns) {
+                c.push(row[j]);
+            }
+        }
+        let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let splines = SplineFitter::new(3, &time).splines(&ys).map_err(|(i, e)| {
+            e.context(format!(
+                "column '{}' of {}, rows {r0} to {}",
+                self.labels[i],
+                self.path.display(),
+                r1 - 1
+            ))
+        })?;
+        Ok(Window { k, splines })
+    }
 }
 
 fn given(id: Option<&str>) -> Option<&str> {
@@ -101,6 +261,58 @@ pub struct ExternalLoadsFiles {
     /// Per ExternalForce element, in order: the element and its series
     /// (None when it applies no force), or the first error reading them.
     forces: Vec<(Element, Result<Option<ForceSeries>>)>,
+    /// A long data file's windows.
+    windows: Option<Arc<Windows>>,
+}
+
+/// What the one pass over a long data file's rows learns. (The row reader
+/// refuses values that are not finite numbers and times that do not
+/// increase, naming the file, line and column, as it does for a file read
+/// whole: what the splines check of their data holds for every window.)
+struct Pass {
+    rows: usize,
+    starts: Vec<f64>,
+    marks: Vec<(usize, RowMark)>,
+}
+
+impl Pass {
+    /// Windowed series of three columns, registered in `columns`.
+    fn series(
+        &self,
+        cols: &[usize],
+        columns: &mut Vec<usize>,
+    ) -> std::result::Result<Vec3Series, (usize, Error)> {
+        let mut index = |c: usize| match columns.iter().position(|&u| u == c) {
+            Some(j) => Series::Windowed(j),
+            None => {
+                columns.push(c);
+                Series::Windowed(columns.len() - 1)
+            }
+        };
+        Ok(Vec3Series([index(cols[0]), index(cols[1]), index(cols[2])]))
+    }
+}
+
+/// The series of three columns of a table held whole: the three cubic
+/// splines solved together (at least 4 rows), else constants or linear
+/// interpolation; or the column (0, 1, 2) whose data fails.
+fn whole_series(
+    table: &Storage,
+    fit: &mut SplineFitter,
+    cols: &[usize],
+) -> std::result::Result<Vec3Series, (usize, Error)> {
+    if table.time.len() >= 4 {
+        let ys: Vec<Vec<f64>> = cols.iter().map(|&c| table.column(c)).collect();
+        let ys: Vec<&[f64]> = ys.iter().map(|y| y.as_slice()).collect();
+        let splines = fit.splines(&ys)?;
+        let mut it = splines.into_iter().map(Series::Spline);
+        return match (it.next(), it.next(), it.next()) {
+            (Some(a), Some(b), Some(c)) => Ok(Vec3Series([a, b, c])),
+            _ => Err((0, Error::internal("three splines for three columns"))),
+        };
+    }
+    let mut mk = |i: usize| Series::new(&table.time, &table.column(cols[i]), fit).map_err(|e| (i, e));
+    Ok(Vec3Series([mk(0)?, mk(1)?, mk(2)?]))
 }
 
 /// What an applied ExternalForce's identifiers name, fitted.
@@ -116,6 +328,17 @@ impl ExternalLoadsFiles {
     /// folder of the setup that named the file (OpenSim looks for the data
     /// file there first, then beside the XML).
     pub fn read(path: &Path, setup_dir: &Path) -> Result<ExternalLoadsFiles> {
+        Self::read_with_window(path, setup_dir, WINDOW_ROWS)
+    }
+
+    /// [`Self::read`], with data files of more than `window_rows` rows
+    /// splined window by window (`window_rows` rows each; see the module
+    /// documentation).
+    pub fn read_with_window(
+        path: &Path,
+        setup_dir: &Path,
+        window_rows: usize,
+    ) -> Result<ExternalLoadsFiles> {
         let mut root = xml::parse_file(path)?;
         let el = if root.name == "ExternalLoads" {
             &mut root
@@ -148,29 +371,104 @@ impl ExternalLoadsFiles {
                     })
                     .unwrap_or_else(|e| e)
             })?;
-        let table = storage::read(&data_path)?;
-        let mut fit = SplineFitter::new(3, &table.time);
-        let mut forces = Vec::new();
-        if let Some(objs) = el.children.iter_mut().find(|c| c.name == "objects") {
-            for f in std::mem::take(&mut objs.children) {
-                if f.name != "ExternalForce" {
-                    continue;
+        Self::read_rows(el, data_path, window_rows.max(1))
+    }
+
+    /// The data file's rows (see [`Self::read_with_window`]) and each
+    /// ExternalForce of `el`'s series.
+    fn read_rows(el: &mut Element, data_path: PathBuf, window_rows: usize) -> Result<Self> {
+        // One pass over the rows: a file of at most `window_rows` rows is
+        // kept whole; of a longer one, where each window starts.
+        let mut reader = storage::open_rows(&data_path)?;
+        let mut table = reader.table.clone();
+        let mut pass = Pass {
+            rows: 0,
+            starts: Vec::new(),
+            marks: Vec::new(),
+        };
+        let mut row = Vec::new();
+        let mut whole = true;
+        loop {
+            let r = pass.rows;
+            if r == 0 || (r + WINDOW_OVERLAP) % window_rows == 0 {
+                if let Some(m) = reader.mark() {
+                    pass.marks.push((r, m));
                 }
-                let series = Self::read_series(&f, &table, &mut fit, &data_path);
-                forces.push((f, series));
+            }
+            let Some(t) = reader.next_row(&mut row)? else {
+                break;
+            };
+            if r % window_rows == 0 {
+                pass.starts.push(t);
+            }
+            pass.rows += 1;
+            if whole {
+                table.time.push(t);
+                table.rows.push(row.clone());
+                if pass.rows > window_rows {
+                    whole = false;
+                    table.time = Vec::new();
+                    table.rows = Vec::new();
+                }
             }
         }
-        Ok(ExternalLoadsFiles { data_path, forces })
+        let mut forces = Vec::new();
+        let objects = el.children.iter_mut().find(|c| c.name == "objects");
+        let elements: Vec<Element> = objects
+            .map(|objs| std::mem::take(&mut objs.children))
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|f| f.name == "ExternalForce")
+            .collect();
+        if whole {
+            let mut fit = SplineFitter::new(3, &table.time);
+            for f in elements {
+                let series = Self::read_series(&f, &table.labels, &data_path, |cols| {
+                    whole_series(&table, &mut fit, cols)
+                });
+                forces.push((f, series));
+            }
+            return Ok(ExternalLoadsFiles {
+                data_path,
+                forces,
+                windows: None,
+            });
+        }
+        let mut columns: Vec<usize> = Vec::new();
+        for f in elements {
+            let series = Self::read_series(&f, &table.labels, &data_path, |cols| {
+                pass.series(cols, &mut columns)
+            });
+            forces.push((f, series));
+        }
+        let labels = columns.iter().map(|&c| table.labels[c].clone()).collect();
+        let windows = Windows {
+            path: data_path.clone(),
+            columns,
+            labels,
+            rows: pass.rows,
+            window_rows,
+            starts: pass.starts,
+            marks: pass.marks,
+            held: RwLock::new(Vec::new()),
+            failure: Default::default(),
+        };
+        Ok(ExternalLoadsFiles {
+            data_path,
+            forces,
+            windows: Some(Arc::new(windows)),
+        })
     }
 
     /// Whether `f` applies its force and, if so, its series (each kept
     /// with its own error: [`Self::bind`] reports them in
-    /// [`ExternalLoads::load`]'s order).
+    /// [`ExternalLoads::load`]'s order). `make` makes the series of three
+    /// data columns, or says which of them (0, 1, 2) it fails on.
     fn read_series(
         f: &Element,
-        table: &Storage,
-        fit: &mut SplineFitter,
+        labels: &[String],
         data_path: &Path,
+        mut make: impl FnMut(&[usize]) -> std::result::Result<Vec3Series, (usize, Error)>,
     ) -> Result<Option<ForceSeries>> {
         let applies = match f.child("appliesForce") {
             Some(a) if !a.text().is_empty() => a.bool()?,
@@ -181,8 +479,7 @@ impl ExternalLoadsFiles {
         }
         let mut series = |id: Option<&str>| -> Result<Option<Vec3Series>> {
             let Some(id) = given(id) else { return Ok(None) };
-            let cols: Vec<usize> = table
-                .labels
+            let cols: Vec<usize> = labels
                 .iter()
                 .enumerate()
                 .filter(|(_, l)| l.starts_with(id))
@@ -195,32 +492,13 @@ impl ExternalLoadsFiles {
                     data_path.display()
                 )));
             }
-            let context = |c: usize, e: crate::error::Error| {
+            make(&cols).map(Some).map_err(|(i, e)| {
                 e.context(format!(
                     "column '{}' of {}",
-                    table.labels[c],
+                    labels[cols[i]],
                     data_path.display()
                 ))
-            };
-            if table.time.len() >= 4 {
-                // the three cubic splines solved together
-                let ys: Vec<Vec<f64>> = cols.iter().map(|&c| table.column(c)).collect();
-                let ys: Vec<&[f64]> = ys.iter().map(|y| y.as_slice()).collect();
-                let [a, b, c]: [GcvSpline; 3] = fit
-                    .splines(&ys)
-                    .map_err(|(i, e)| context(cols[i], e))?
-                    .try_into()
-                    .expect("three columns");
-                return Ok(Some(Vec3Series([
-                    Series::Spline(a),
-                    Series::Spline(b),
-                    Series::Spline(c),
-                ])));
-            }
-            let mut mk = |c: usize| {
-                Series::new(&table.time, &table.column(c), fit).map_err(|e| context(c, e))
-            };
-            Ok(Some(Vec3Series([mk(cols[0])?, mk(cols[1])?, mk(cols[2])?])))
+            })
         };
         // As OpenSim (and ExternalLoads::load before): an identifier's error
         // ends the reading of this force.
@@ -246,11 +524,14 @@ impl ExternalLoadsFiles {
         let mut forces = Vec::new();
         for (f, series) in self.forces {
             let Some(series) = series? else { continue };
-            forces.push(Self::bind_force(&f, series, model)?);
+            let mut force = Self::bind_force(&f, series, model)?;
+            force.windows = self.windows.clone();
+            forces.push(force);
         }
         Ok(ExternalLoads {
             forces,
             data_file: self.data_path,
+            windows: self.windows,
         })
     }
 
@@ -298,6 +579,7 @@ impl ExternalLoadsFiles {
             point,
             torque,
             labels,
+            windows: None,
         })
     }
 }
@@ -310,13 +592,49 @@ impl ExternalLoads {
         ExternalLoadsFiles::read(path, setup_dir)?.bind(model)
     }
 
-    /// Add every load at time `t` to `data.applied` (body positions must be current).
+    /// Add every load at time `t` to `data.applied` (body positions must
+    /// be current). With a long data file, `t` should lie in the range last
+    /// [`prepare`](Self::prepare)d; otherwise its window is fitted here,
+    /// and if that fails (the file changed or went since it was read) the
+    /// loads are NaN and the error is kept for the next `prepare` or
+    /// [`check`](Self::check) to return.
     pub fn apply(&self, t: f64, data: &mut Data) {
         let mut cache = TransientBasis::default();
+        let window = self.window_or_keep(t);
         for ef in &self.forces {
-            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache);
+            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache, window.as_deref());
             ef.add_to(data, f_g, p_g, t_g);
         }
+    }
+
+    /// The window serving `t`, or None (a file splined whole, or a window
+    /// that could not be fitted: its error kept in the windows).
+    fn window_or_keep(&self, t: f64) -> Option<Arc<Window>> {
+        let w = self.windows.as_ref()?;
+        match w.at(t) {
+            Ok(window) => Some(window),
+            Err(e) => {
+                w.keep(e);
+                None
+            }
+        }
+    }
+
+    /// Fit and hold the windows of a long data file that serve the times
+    /// from `t_first` to `t_last` (the frame drivers call it before each
+    /// block of frames: `frame::driver::PreparingLoads`), letting the
+    /// others go. Returns an error kept by an earlier [`apply`](Self::apply).
+    pub fn prepare(&self, t_first: f64, t_last: f64) -> Result<()> {
+        let Some(w) = &self.windows else {
+            return Ok(());
+        };
+        w.check()?;
+        w.prepare(t_first, t_last)
+    }
+
+    /// The error an earlier [`apply`](Self::apply) kept, if any.
+    pub fn check(&self) -> Result<()> {
+        self.windows.as_ref().map_or(Ok(()), |w| w.check())
     }
 
     /// [`apply`](Self::apply), and append to `record` what the force
@@ -324,12 +642,25 @@ impl ExternalLoads {
     /// the values are evaluated once for both.
     pub fn apply_recording(&self, t: f64, data: &mut Data, record: &mut Vec<f64>) {
         let mut cache = TransientBasis::default();
+        let window = self.window_or_keep(t);
         for ef in &self.forces {
-            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache);
+            let (f_g, p_g, t_g) = ef.evaluate_with(t, data, &mut cache, window.as_deref());
             ef.record_into(&f_g, &p_g, &t_g, data, record);
             ef.add_to(data, f_g, p_g, t_g);
         }
     }
+
+    /// Whether the data file is splined window by window (it has more than
+    /// [`WINDOW_ROWS`] rows, or the window the reader was given).
+    pub fn windowed(&self) -> bool {
+        self.windows.is_some()
+    }
+}
+
+/// The window serving `t` of a long data file (None for a file splined
+/// whole), or the error fitting it.
+fn window_at(windows: &Option<Arc<Windows>>, t: f64) -> Result<Option<Arc<Window>>> {
+    windows.as_ref().map(|w| w.at(t)).transpose()
 }
 
 impl ExternalForce {
@@ -376,8 +707,14 @@ impl ExternalForce {
     }
 
     /// Force, point of application and torque in ground at time `t`.
-    pub fn evaluate(&self, t: f64, data: &Data) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
-        self.evaluate_with(t, data, &mut TransientBasis::default())
+    /// Fails only as [`ExternalLoads::apply`] does.
+    pub fn evaluate(
+        &self,
+        t: f64,
+        data: &Data,
+    ) -> Result<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> {
+        let window = window_at(&self.windows, t)?;
+        Ok(self.evaluate_with(t, data, &mut TransientBasis::default(), window.as_deref()))
     }
 
     /// [`evaluate`](Self::evaluate), the splines' segment basis shared
@@ -387,20 +724,21 @@ impl ExternalForce {
         t: f64,
         data: &Data,
         cache: &mut TransientBasis,
+        window: Option<&Window>,
     ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let r_f = data.rotation[self.force_expressed_in];
         let f_g = self
             .force
             .as_ref()
-            .map(|s| r_f * s.value(t, cache))
+            .map(|s| r_f * s.value(t, cache, window))
             .unwrap_or_else(Vector3::zeros);
         let t_g = self
             .torque
             .as_ref()
-            .map(|s| r_f * s.value(t, cache))
+            .map(|s| r_f * s.value(t, cache, window))
             .unwrap_or_else(Vector3::zeros);
         let p_g = match &self.point {
-            Some(s) => data.station_position(self.point_expressed_in, &s.value(t, cache)),
+            Some(s) => data.station_position(self.point_expressed_in, &s.value(t, cache, window)),
             None => data.position[self.applied_to_body],
         };
         (f_g, p_g, t_g)

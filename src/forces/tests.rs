@@ -1006,7 +1006,7 @@ fn external_loads_apply_recording_matches_apply_and_record() {
             loads.apply_recording(t, &mut d2, &mut record);
             let mut want = vec![1.5];
             for ef in &loads.forces {
-                let (f, p, tq) = ef.evaluate(t, &d1);
+                let (f, p, tq) = ef.evaluate(t, &d1).unwrap();
                 want.extend(ef.record(&f, &p, &tq, &d1));
             }
             assert_eq!(want.len(), 1 + 9 + 3);
@@ -1072,4 +1072,130 @@ fn external_loads_report_the_first_error_in_reading_order() {
             .to_string();
         assert!(e.contains(want), "want '{want}', got: {e}");
     }
+}
+
+/// A data file of `rows` rows with uneven times and a NaN at `nan` (row,
+/// column) if given, and the ExternalLoads XML of two forces on it.
+fn long_grf(dir: &std::path::Path, rows: usize, nan: Option<(usize, usize)>) -> std::path::PathBuf {
+    let mut mot = format!(
+        "grf.mot\nversion=1\nnRows={rows}\nnColumns=10\ninDegrees=no\nendheader\n\
+         time\tf_vx\tf_vy\tf_vz\tf_px\tf_py\tf_pz\tt_x\tt_y\tt_z\n"
+    );
+    let mut t = 0.0;
+    for i in 0..rows {
+        t += 0.001 * (1.0 + 0.3 * ((i * 7919) % 13) as f64 / 13.0);
+        let v: Vec<String> = (0..9)
+            .map(|c| {
+                if nan == Some((i, c)) {
+                    return "nan".to_string();
+                }
+                let x = ((c + 1) as f64 * 3.1 * t + c as f64).sin() * 400.0
+                    + (((i * 31 + c * 17) % 23) as f64 - 11.0);
+                format!("{x}")
+            })
+            .collect();
+        mot.push_str(&format!("{t}\t{}\n", v.join("\t")));
+    }
+    std::fs::write(dir.join("grf.mot"), mot).unwrap();
+    let xml = r#"<?xml version="1.0"?><OpenSimDocument Version="40000"><ExternalLoads name="x"><objects>
+<ExternalForce name="a"><applied_to_body>link2</applied_to_body><force_expressed_in_body>link1</force_expressed_in_body><point_expressed_in_body>ground</point_expressed_in_body><force_identifier>f_v</force_identifier><point_identifier>f_p</point_identifier><torque_identifier>t_</torque_identifier></ExternalForce>
+<ExternalForce name="b"><applied_to_body>cart</applied_to_body><force_expressed_in_body>ground</force_expressed_in_body><force_identifier>f_p</force_identifier></ExternalForce>
+</objects><datafile>grf.mot</datafile></ExternalLoads></OpenSimDocument>"#;
+    let xpath = dir.join("grf.xml");
+    std::fs::write(&xpath, xml).unwrap();
+    xpath
+}
+
+/// A data file splined window by window (64-row windows, so 1,000 rows
+/// make 16) gives the loads of the spline through the whole file to
+/// rounding, at times before, in and after the data, at knots and window
+/// starts, in order, out of order (windows fitted and let go on demand)
+/// and after `prepare`; the recorded values too.
+#[test]
+fn external_loads_windowed_equal_the_whole_file() {
+    use crate::forces::external_loads::{ExternalLoads, ExternalLoadsFiles};
+    let model = test_model();
+    let dir = std::env::temp_dir().join(format!("statopt_extload_win_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let xpath = long_grf(&dir, 1000, None);
+    let whole = ExternalLoads::load(&xpath, &dir, &model).unwrap();
+    assert!(!whole.windowed());
+    let windowed = ExternalLoadsFiles::read_with_window(&xpath, &dir, 64)
+        .unwrap()
+        .bind(&model)
+        .unwrap();
+    assert!(windowed.windowed());
+    let table = crate::storage::read(&dir.join("grf.mot")).unwrap();
+    let (t0, t1) = (table.time[0], table.time[999]);
+    let mut times: Vec<f64> = (0..400).map(|i| t0 - 0.05 + (t1 - t0 + 0.1) * i as f64 / 399.0).collect();
+    // knots, window starts and the rows next to them
+    for r in [0, 1, 63, 64, 65, 127, 128, 500, 511, 512, 960, 998, 999] {
+        times.push(table.time[r]);
+    }
+    // out of order: far back and forth
+    times.extend([table.time[900], table.time[3] + 1e-4, table.time[700] - 1e-5, t0 - 1.0, t1 + 1.0]);
+    let mut worst = 0.0f64;
+    let mut check = |t: f64, i: usize| {
+        let q = [0.3 + 0.01 * (i % 17) as f64, -0.7, 0.2];
+        let mut d1 = data_at(&model, &q, &[0.0; 3]);
+        let mut d2 = d1.clone();
+        let (mut r1, mut r2) = (Vec::new(), Vec::new());
+        whole.apply_recording(t, &mut d1, &mut r1);
+        windowed.apply_recording(t, &mut d2, &mut r2);
+        assert_eq!(r1.len(), r2.len());
+        for (a, b) in r1.iter().zip(&r2) {
+            let d = (a - b).abs() / a.abs().max(1.0);
+            assert!(d <= 1e-11, "t {t}: whole {a}, windowed {b}");
+            worst = worst.max(d);
+        }
+    };
+    for (i, &t) in times.iter().enumerate() {
+        check(t, i);
+    }
+    // prepared block by block, as the frame drivers do
+    for k in 0..10 {
+        let (a, b) = (table.time[100 * k], table.time[(100 * k + 99).min(999)]);
+        windowed.prepare(a, b).unwrap();
+        for i in 0..25 {
+            check(a + (b - a) * i as f64 / 24.0, i);
+        }
+    }
+    windowed.check().unwrap();
+    eprintln!("windowed external loads: worst relative difference {worst:e}");
+    // Windows are read when needed: with the file gone, a time whose window
+    // is not held gets NaN loads and the error is said by the next check
+    // (once), and by prepare.
+    std::fs::remove_file(dir.join("grf.mot")).unwrap();
+    let mut d = data_at(&model, &[0.3, -0.7, 0.2], &[0.0; 3]);
+    let mut rec = Vec::new();
+    windowed.apply_recording(table.time[300], &mut d, &mut rec);
+    assert!(rec[..3].iter().all(|v| v.is_nan()), "{rec:?}");
+    let e = windowed.check().unwrap_err().to_string();
+    assert!(e.contains("grf.mot"), "{e}");
+    windowed.check().unwrap();
+    assert!(windowed.prepare(table.time[10], table.time[20]).is_err());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A long data file's bad value is said when it is read, in the same words
+/// as when the file is splined whole (the file, its line and column).
+#[test]
+fn external_loads_windowed_report_bad_data_as_the_whole_file() {
+    use crate::forces::external_loads::ExternalLoadsFiles;
+    let model = test_model();
+    let dir = std::env::temp_dir().join(format!("statopt_extload_nan_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for nan in [(700, 1), (5, 4), (999, 8)] {
+        let xpath = long_grf(&dir, 1000, Some(nan));
+        let err = |window: usize| {
+            ExternalLoadsFiles::read_with_window(&xpath, &dir, window)
+                .and_then(|f| f.bind(&model))
+                .unwrap_err()
+                .to_string()
+        };
+        let (whole, windowed) = (err(100_000), err(64));
+        assert!(whole.contains(&format!("line {}", nan.0 + 8)), "{whole}");
+        assert_eq!(whole, windowed);
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

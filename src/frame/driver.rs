@@ -5,6 +5,7 @@
 //! frame and memory stays bounded by the stream's block.
 
 use crate::error::Result;
+use crate::forces::external_loads::ExternalLoads;
 use crate::motion::coordinates::find_index;
 use crate::motion::stream::{FrameSource, StateBlock};
 
@@ -208,6 +209,34 @@ impl<S: FrameSource> FrameSource for Prefetched<'_, S> {
             Some(first) => Ok(first),
             None => self.source.next_block(),
         }
+    }
+}
+
+/// A source whose blocks' times the external loads are prepared for
+/// ([`ExternalLoads::prepare`]: a long data file's windows that serve the
+/// block fitted before its frames are computed, in parallel, from them),
+/// and whose end checks that no frame's loads failed.
+pub struct PreparingLoads<'a, S> {
+    source: S,
+    loads: Option<&'a ExternalLoads>,
+}
+
+impl<'a, S: FrameSource> PreparingLoads<'a, S> {
+    pub fn new(source: S, loads: Option<&'a ExternalLoads>) -> Self {
+        PreparingLoads { source, loads }
+    }
+}
+
+impl<S: FrameSource> FrameSource for PreparingLoads<'_, S> {
+    fn next_block(&mut self) -> Result<Option<StateBlock>> {
+        let block = self.source.next_block()?;
+        if let Some(loads) = self.loads {
+            match block.as_ref().and_then(|b| Some((b.time.first()?, b.time.last()?))) {
+                Some((&first, &last)) => loads.prepare(first, last)?,
+                None => loads.check()?,
+            }
+        }
+        Ok(block)
     }
 }
 

@@ -148,7 +148,10 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     // The first block before the output file is created: what the splines
     // refuse is said before an earlier run's table is overwritten.
     let first_block = stream.next_block()?;
-    let mut frames = crate::frame::driver::Prefetched::new(first_block, &mut stream);
+    let mut frames = crate::frame::driver::PreparingLoads::new(
+        crate::frame::driver::Prefetched::new(first_block, &mut stream),
+        loads.as_ref(),
+    );
 
     let dir = opts
         .results_dir

@@ -609,10 +609,13 @@ pub fn run(
     let start = std::time::Instant::now();
     let mut last = None;
     let completed = for_each_frame(
-        &mut WithForces {
-            inner: &mut stream,
-            forces: &problem.forces,
-        },
+        &mut crate::frame::driver::PreparingLoads::new(
+            WithForces {
+                inner: &mut stream,
+                forces: &problem.forces,
+            },
+            problem.loads.as_ref(),
+        ),
         i0,
         i1,
         step,

@@ -429,7 +429,7 @@ pub fn measured_foot_loads(
         for ef in &loads.forces {
             let name = &model.bodies[ef.applied_to_body].name;
             let s = if name.ends_with("_l") { 1 } else { 0 };
-            let (fe, pe, _) = ef.evaluate(t, &data);
+            let (fe, pe, _) = ef.evaluate(t, &data)?;
             f[s] += fe;
             cop[s] = pe;
         }

@@ -1216,7 +1216,10 @@ fn run_sweep(
     let now = Instant::now();
     let start = now.checked_sub(first_block).unwrap_or(now);
     let writers = writers?;
-    let mut stream = crate::frame::driver::Prefetched::new(first?, &mut stream);
+    let mut stream = crate::frame::driver::PreparingLoads::new(
+        crate::frame::driver::Prefetched::new(first?, &mut stream),
+        problem.loads.as_ref(),
+    );
     let skip_until = writers
         .iter()
         .map(|w| w.skip_until)
