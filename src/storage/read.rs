@@ -524,18 +524,7 @@ fn tab_tokens(line: &str) -> Vec<&str> {
 
 fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage> {
     let end_line = body.first().map(|l| l.0 - 1).unwrap_or(0);
-    let (width, suffixes): (usize, &[&str]) = match &h.data_type {
-        None => (1, &[""]),
-        Some((_, t)) if t == "double" => (1, &[""]),
-        Some((_, t)) if t == "Vec3" => (3, &["_x", "_y", "_z"]),
-        Some((_, t)) if t == "SpatialVec" => (6, &["_rx", "_ry", "_rz", "_tx", "_ty", "_tz"]),
-        Some((no, t)) => {
-            return Err(Error::input(
-                loc(path, *no),
-                format!("DataType '{t}' is not supported (double, Vec3 and SpatialVec are)"),
-            ))
-        }
-    };
+    let (width, suffixes) = table_width(path, &h)?;
     let mut it = body
         .iter()
         .copied()
@@ -543,6 +532,53 @@ fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage>
     let (label_line, label_text) = it
         .next()
         .ok_or_else(|| Error::input(loc(path, end_line), "no column labels after 'endheader'"))?;
+    let (mut st, shape) = table_labels(path, h, width, suffixes, label_line, label_text)?;
+    for (no, text) in it {
+        if text.trim().is_empty() {
+            break; // TimeSeriesTable stops at the first empty line
+        }
+        let mut row = Vec::with_capacity(st.labels.len());
+        let t = table_row(path, no, text, &shape, &st.labels, &mut row)?;
+        st.time.push(t);
+        st.rows.push(row);
+        check_time(path, &st, no)?;
+    }
+    Ok(st)
+}
+
+/// Columns per element of a TimeSeriesTable of the header's `DataType`,
+/// and their label suffixes.
+fn table_width(path: &Path, h: &Header) -> Result<(usize, &'static [&'static str])> {
+    match &h.data_type {
+        None => Ok((1, &[""])),
+        Some((_, t)) if t == "double" => Ok((1, &[""])),
+        Some((_, t)) if t == "Vec3" => Ok((3, &["_x", "_y", "_z"])),
+        Some((_, t)) if t == "SpatialVec" => {
+            Ok((6, &["_rx", "_ry", "_rz", "_tx", "_ty", "_tz"]))
+        }
+        Some((no, t)) => Err(Error::input(
+            loc(path, *no),
+            format!("DataType '{t}' is not supported (double, Vec3 and SpatialVec are)"),
+        )),
+    }
+}
+
+/// A TimeSeriesTable's elements (labels as written) and columns per element.
+struct TableShape {
+    elems: Vec<String>,
+    width: usize,
+}
+
+/// The label line of a TimeSeriesTable, as an empty table (labels
+/// flattened, name, metadata) and the shape of its rows.
+fn table_labels(
+    path: &Path,
+    h: Header,
+    width: usize,
+    suffixes: &[&str],
+    label_line: usize,
+    label_text: &str,
+) -> Result<(Storage, TableShape)> {
     let raw: Vec<&str> = tab_tokens(label_text)
         .into_iter()
         .filter(|t| !t.is_empty())
@@ -561,7 +597,7 @@ fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage>
         .iter()
         .flat_map(|l| suffixes.iter().map(move |s| format!("{l}{s}")))
         .collect();
-    let mut st = Storage {
+    let st = Storage {
         name: h.name.clone().unwrap_or_default(),
         labels,
         time: Vec::new(),
@@ -569,61 +605,67 @@ fn read_table(path: &Path, h: Header, body: &[(usize, &str)]) -> Result<Storage>
         in_degrees: h.in_degrees.unwrap_or(false),
         metadata: h.metadata,
     };
-    for (no, text) in it {
-        if text.trim().is_empty() {
-            break; // TimeSeriesTable stops at the first empty line
+    Ok((st, TableShape { elems, width }))
+}
+
+/// One data line of a TimeSeriesTable (line `no`): its values into `row`
+/// (cleared first), its time returned.
+fn table_row(
+    path: &Path,
+    no: usize,
+    text: &str,
+    shape: &TableShape,
+    labels: &[String],
+    row: &mut Vec<f64>,
+) -> Result<f64> {
+    let (elems, width) = (&shape.elems, shape.width);
+    let toks = tab_tokens(text);
+    if toks.len() != elems.len() + 1 {
+        let at = if toks.len() < elems.len() + 1 && !toks.is_empty() {
+            Location::file(path)
+                .with_line(no)
+                .with_element(format!("column '{}'", elems[toks.len() - 1]))
+        } else {
+            loc(path, no)
+        };
+        return Err(Error::input(
+            at,
+            format!(
+                "row has {} tab-separated elements, expected {} (time + {} columns)",
+                toks.len(),
+                elems.len() + 1,
+                elems.len()
+            ),
+        ));
+    }
+    let t = value(path, no, "time", toks[0])?;
+    row.clear();
+    for (j, tok) in toks[1..].iter().enumerate() {
+        if width == 1 {
+            row.push(value(path, no, &labels[j], tok)?);
+            continue;
         }
-        let toks = tab_tokens(text);
-        if toks.len() != elems.len() + 1 {
-            let at = if toks.len() < elems.len() + 1 && !toks.is_empty() {
+        let comps: Vec<&str> = tok.split(',').map(str::trim).collect();
+        if comps.len() != width {
+            return Err(Error::input(
                 Location::file(path)
                     .with_line(no)
-                    .with_element(format!("column '{}'", elems[toks.len() - 1]))
-            } else {
-                loc(path, no)
-            };
-            return Err(Error::input(
-                at,
-                format!(
-                    "row has {} tab-separated elements, expected {} (time + {} columns)",
-                    toks.len(),
-                    elems.len() + 1,
-                    elems.len()
-                ),
+                    .with_element(format!("column '{}'", elems[j])),
+                format!("element '{tok}' must have {width} comma-separated components"),
             ));
         }
-        let t = value(path, no, "time", toks[0])?;
-        let mut row = Vec::with_capacity(st.labels.len());
-        for (j, tok) in toks[1..].iter().enumerate() {
-            let comps: Vec<&str> = if width == 1 {
-                vec![tok]
-            } else {
-                tok.split(',').map(str::trim).collect()
-            };
-            if comps.len() != width {
-                return Err(Error::input(
-                    Location::file(path)
-                        .with_line(no)
-                        .with_element(format!("column '{}'", elems[j])),
-                    format!("element '{tok}' must have {width} comma-separated components"),
-                ));
-            }
-            for (k, c) in comps.iter().enumerate() {
-                row.push(value(path, no, &st.labels[j * width + k], c)?);
-            }
+        for (k, c) in comps.iter().enumerate() {
+            row.push(value(path, no, &labels[j * width + k], c)?);
         }
-        st.time.push(t);
-        st.rows.push(row);
-        check_time(path, &st, no)?;
     }
-    Ok(st)
+    Ok(t)
 }
 
 /// Row-by-row reader of an OpenSim table: the header and labels are parsed
 /// (and checked) as [`read`] does, then one data row at a time, so a long
-/// legacy `.sto`/`.mot` file is never held in memory. Files in the
-/// `TimeSeriesTable` format (version ≥ 2) are read whole by [`read`] and then
-/// handed out row by row.
+/// `.sto`/`.mot` file is never held in memory, in the legacy format as in
+/// the `TimeSeriesTable` format (version ≥ 2, its rows up to the first empty
+/// line), with [`read`]'s checks and messages.
 pub struct RowReader {
     path: std::path::PathBuf,
     /// Labels, units, name and metadata of the table; no rows.
@@ -677,9 +719,27 @@ impl LineSource {
     }
 }
 
+/// A line's read error: invalid UTF-8 at `line`, or the I/O error.
+fn utf8_error(path: &Path, line: usize, e: std::io::Error) -> Error {
+    if e.kind() == std::io::ErrorKind::InvalidData {
+        Error::input(loc(path, line), "file is not valid UTF-8 text")
+    } else {
+        Error::io(path, e)
+    }
+}
+
 enum RowSource {
-    Legacy { lines: LineSource, line_no: usize },
-    Whole(Storage),
+    Legacy {
+        lines: LineSource,
+        line_no: usize,
+    },
+    /// A TimeSeriesTable (version ≥ 2): rows up to the first empty line.
+    Table {
+        lines: LineSource,
+        line_no: usize,
+        shape: TableShape,
+        ended: bool,
+    },
 }
 
 /// Open `path` for [`RowReader::next_row`].
@@ -715,24 +775,12 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
         .map(|(i, l)| (i + 1, l.as_str()))
         .collect();
     let h = parse_header(path, &numbered)?;
-    if h.version > 1 {
-        let st = read(path)?;
-        let table = Storage {
-            time: Vec::new(),
-            rows: Vec::new(),
-            ..st.clone()
-        };
-        return Ok(RowReader {
-            path: path.to_path_buf(),
-            table,
-            source: RowSource::Whole(st),
-            limit: usize::MAX,
-            count: 0,
-            last_time: f64::NEG_INFINITY,
-            last_line: 0,
-        });
-    }
-    missing_legacy_counts(path, &h)?;
+    let width = if h.version > 1 {
+        Some(table_width(path, &h)?)
+    } else {
+        missing_legacy_counts(path, &h)?;
+        None
+    };
     let is_mot = path
         .file_name()
         .map(|n| n.to_string_lossy().to_lowercase().contains(".mot"))
@@ -752,6 +800,23 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
             break (line_no, line.to_string());
         }
     };
+    if let Some((width, suffixes)) = width {
+        let (table, shape) = table_labels(path, h, width, suffixes, label_line, &label_text)?;
+        return Ok(RowReader {
+            path: path.to_path_buf(),
+            table,
+            source: RowSource::Table {
+                lines,
+                line_no,
+                shape,
+                ended: false,
+            },
+            limit: usize::MAX,
+            count: 0,
+            last_time: f64::NEG_INFINITY,
+            last_line: label_line,
+        });
+    }
     let (table, limit) = legacy_table(path, h, label_line, &label_text, is_mot)?;
     Ok(RowReader {
         path: path.to_path_buf(),
@@ -770,17 +835,24 @@ impl RowReader {
         self.count
     }
 
-    /// The position before the next row (None for whole-read tables).
+    /// The position before the next row (always given: every format is
+    /// read line by line).
     pub fn mark(&self) -> Option<RowMark> {
+        let (lines, line_no) = self.lines();
+        Some(RowMark {
+            offset: lines.offset,
+            line_no,
+            count: self.count,
+            last_time: self.last_time,
+            last_line: self.last_line,
+        })
+    }
+
+    fn lines(&self) -> (&LineSource, usize) {
         match &self.source {
-            RowSource::Legacy { lines, line_no } => Some(RowMark {
-                offset: lines.offset,
-                line_no: *line_no,
-                count: self.count,
-                last_time: self.last_time,
-                last_line: self.last_line,
-            }),
-            RowSource::Whole(_) => None,
+            RowSource::Legacy { lines, line_no } | RowSource::Table { lines, line_no, .. } => {
+                (lines, *line_no)
+            }
         }
     }
 
@@ -788,34 +860,33 @@ impl RowReader {
     /// while reading this file.
     pub fn seek(&mut self, m: &RowMark) -> Result<()> {
         use std::io::Seek;
-        if let RowSource::Legacy { lines, line_no } = &mut self.source {
-            lines
-                .reader
-                .seek(std::io::SeekFrom::Start(m.offset))
-                .map_err(|e| Error::io(&self.path, e))?;
-            lines.offset = m.offset;
-            *line_no = m.line_no;
-            self.count = m.count;
-            self.last_time = m.last_time;
-            self.last_line = m.last_line;
-        }
+        let (lines, line_no) = match &mut self.source {
+            RowSource::Legacy { lines, line_no } => (lines, line_no),
+            RowSource::Table {
+                lines,
+                line_no,
+                ended,
+                ..
+            } => {
+                *ended = false;
+                (lines, line_no)
+            }
+        };
+        lines
+            .reader
+            .seek(std::io::SeekFrom::Start(m.offset))
+            .map_err(|e| Error::io(&self.path, e))?;
+        lines.offset = m.offset;
+        *line_no = m.line_no;
+        self.count = m.count;
+        self.last_time = m.last_time;
+        self.last_line = m.last_line;
         Ok(())
-    }
-
-    /// Skip to row `k` (0-based) of a whole-read table.
-    fn whole_seek(&mut self, k: usize) {
-        if let RowSource::Whole(_) = self.source {
-            self.count = k;
-        }
     }
 
     /// Position the reader before row `k`, from the nearest of `marks`
     /// (row index, mark) at or before it, then by reading forward.
     pub fn seek_row(&mut self, k: usize, marks: &[(usize, RowMark)]) -> Result<()> {
-        if let RowSource::Whole(_) = self.source {
-            self.whole_seek(k);
-            return Ok(());
-        }
         let best = marks.iter().rev().find(|(r, _)| *r <= k);
         if let Some((_, m)) = best {
             if !(self.count <= k && self.count >= m.count) {
@@ -846,14 +917,28 @@ impl RowReader {
             return Ok(None); // OpenSim reads exactly nRows rows
         }
         let (t, no) = match &mut self.source {
-            RowSource::Whole(st) => {
-                let Some(&t) = st.time.get(self.count) else {
+            RowSource::Table {
+                lines,
+                line_no,
+                shape,
+                ended,
+            } => {
+                if *ended {
+                    return Ok(None);
+                }
+                let Some(line) = lines.next_line() else {
+                    *ended = true;
                     return Ok(None);
                 };
-                row.clear();
-                row.extend_from_slice(&st.rows[self.count]);
-                self.count += 1;
-                return Ok(Some(t));
+                *line_no += 1;
+                let line = line.map_err(|e| utf8_error(&self.path, *line_no, e))?;
+                if line.trim().is_empty() {
+                    // TimeSeriesTable stops at the first empty line.
+                    *ended = true;
+                    return Ok(None);
+                }
+                let t = table_row(&self.path, *line_no, line, shape, &self.table.labels, row)?;
+                (t, *line_no)
             }
             RowSource::Legacy { lines, line_no } => loop {
                 let Some(line) = lines.next_line() else {
@@ -868,13 +953,7 @@ impl RowReader {
                     return Ok(None);
                 };
                 *line_no += 1;
-                let line = line.map_err(|e| {
-                    if e.kind() == std::io::ErrorKind::InvalidData {
-                        Error::input(loc(&self.path, *line_no), "file is not valid UTF-8 text")
-                    } else {
-                        Error::io(&self.path, e)
-                    }
-                })?;
+                let line = line.map_err(|e| utf8_error(&self.path, *line_no, e))?;
                 if line.trim().is_empty() {
                     continue;
                 }

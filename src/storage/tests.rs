@@ -402,6 +402,58 @@ fn row_reader_equals_read() {
     println!("row reader equals read on {n} files");
 }
 
+/// TimeSeriesTable files (version ≥ 2) are read row by row, not whole:
+/// the rows `read` loads (double, Vec3 and SpatialVec columns, up to the
+/// first empty line), and a mark taken mid-file returns to the same row.
+#[test]
+fn row_reader_streams_time_series_tables() {
+    let dir = std::env::temp_dir().join(format!("statopt-rowreader-v3-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut cases = Vec::new();
+    for (name, data_type, cell) in [
+        ("double.sto", "double", "{a}"),
+        ("vec3.sto", "Vec3", "{a},{b},-{a}"),
+        ("spatial.sto", "SpatialVec", "{a},{b},1,2,3,{a}"),
+    ] {
+        let mut text = format!("name\nversion=3\nDataType={data_type}\nendheader\ntime\tp\tq\n");
+        for i in 0..300 {
+            let (a, b) = (0.25 * i as f64, 1.0 - 0.125 * i as f64);
+            let c = cell.replace("{a}", &a.to_string()).replace("{b}", &b.to_string());
+            text.push_str(&format!("{}\t{c}\t{c}\n", 0.01 * i as f64));
+        }
+        // rows after the first empty line are not data
+        text.push_str("\n9\tnot\tdata\n");
+        cases.push((name, text));
+    }
+    for (name, text) in cases {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let whole = crate::storage::read(&p).unwrap();
+        assert_eq!(whole.len(), 300, "{name}");
+        let mut r = crate::storage::open_rows(&p).unwrap();
+        assert_eq!(r.table.labels, whole.labels, "{name}");
+        let mut row = Vec::new();
+        let mut marks = Vec::new();
+        let mut i = 0;
+        loop {
+            if i % 100 == 0 {
+                marks.push((i, r.mark().expect("a position")));
+            }
+            let Some(t) = r.next_row(&mut row).unwrap() else {
+                break;
+            };
+            assert_eq!((t, &row), (whole.time[i], &whole.rows[i]), "{name} row {i}");
+            i += 1;
+        }
+        assert_eq!(i, 300, "{name}");
+        assert!(r.next_row(&mut row).unwrap().is_none());
+        r.seek_row(150, &marks).unwrap();
+        assert_eq!(r.next_row(&mut row).unwrap(), Some(whole.time[150]), "{name}");
+        assert_eq!(row, whole.rows[150]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn row_reader_errors_like_read() {
     let dir = std::env::temp_dir().join(format!("statopt-rowreader-{}", std::process::id()));
@@ -422,6 +474,23 @@ fn row_reader_errors_like_read() {
         (
             "cols.sto",
             "x\nversion=1\nnRows=2\nnColumns=2\nendheader\ntime a\n0 1 3\n1 2\n",
+        ),
+        // TimeSeriesTable files (read row by row too)
+        (
+            "v3back.sto",
+            "version=3\nendheader\ntime\ta\n0\t1\n1\t2\n0.5\t3\n",
+        ),
+        (
+            "v3bad.sto",
+            "version=3\nDataType=Vec3\nendheader\ntime\tp\n0\t1,2,3\n1\t1,zz,3\n",
+        ),
+        (
+            "v3comps.sto",
+            "version=3\nDataType=Vec3\nendheader\ntime\tp\n0\t1,2,3\n1\t1,2\n",
+        ),
+        (
+            "v3cols.sto",
+            "version=3\nendheader\ntime\ta\tb\n0\t1\t2\n1\t2\n",
         ),
     ] {
         let p = dir.join(name);
