@@ -589,6 +589,8 @@ struct Newton {
     /// that h holds.
     deriv: Vec<Deriv>,
     h_deriv: Vec<Deriv>,
+    /// h holds nothing to update (a warm start builds it afresh).
+    h_stale: bool,
     /// H = M D Mᵀ (lower triangle, by column, n×n) and its Cholesky factor.
     h: Vec<f64>,
     l: Vec<f64>,
@@ -688,6 +690,22 @@ impl Block<'_> {
         }
     }
 
+    /// The diagonal of M W⁻¹ Mᵀ/2 (every bound and cone inactive), as
+    /// [`hessian`](Self::hessian)`(None)` sums it, into `diag`.
+    fn free_diagonal(&self, diag: &mut [f64]) {
+        diag.iter_mut().for_each(|e| *e = 0.0);
+        for gi in 0..self.groups.len() {
+            let gr = &self.groups[gi];
+            let s = 0.5 / gr.w;
+            for k in 0..gr.len() {
+                let (ri, v) = self.m.col(self.group_col[gi] + k);
+                for (&r, a) in ri.iter().zip(v) {
+                    diag[r] += s * a * a;
+                }
+            }
+        }
+    }
+
     /// h += sign · M_g D_g M_gᵀ for group gi with derivative d.
     fn add_group(&self, h: &mut [f64], gi: usize, d: &Deriv, sign: f64, u: &mut [f64]) {
         let gr = &self.groups[gi];
@@ -723,7 +741,8 @@ impl Block<'_> {
             .filter(|(a, b)| a != b)
             .count();
         let nonzero = s.deriv.iter().filter(|d| **d != Deriv::Zero).count();
-        if 2 * changed >= nonzero {
+        if s.h_stale || 2 * changed >= nonzero {
+            s.h_stale = false;
             self.hessian(Some(&s.deriv), &mut s.h, &mut s.u);
             s.h_deriv.copy_from_slice(&s.deriv);
         } else if changed > 0 {
@@ -1031,13 +1050,24 @@ impl Block<'_> {
     /// the unconstrained multipliers; the answer is left in s.x and s.y.
     fn solve(&self, s: &mut Newton, warm: bool, target: f64, accept: f64) -> BlockResult {
         let nr = self.n_rows();
-        self.hessian(None, &mut s.h, &mut s.u);
-        let scale = (0..nr).map(|r| s.h[r * nr + r]).fold(0.0, f64::max);
+        if warm {
+            // Only the diagonal of the every-bound-inactive matrix: the
+            // first step builds H for its own derivative.
+            self.free_diagonal(&mut s.h_free_diag);
+            s.h_stale = true;
+        } else {
+            self.hessian(None, &mut s.h, &mut s.u);
+            for r in 0..nr {
+                s.h_free_diag[r] = s.h[r * nr + r];
+            }
+            s.h_stale = false;
+        }
+        let scale = s.h_free_diag.iter().fold(0.0, |m: f64, &d| m.max(d));
         if !(scale > 0.0 && scale.is_finite()) {
             return Err((0, "degenerate equations"));
         }
-        for r in 0..nr {
-            s.h_free_diag[r] = s.h[r * nr + r].max(1e-12 * scale);
+        for d in s.h_free_diag.iter_mut() {
+            *d = d.max(1e-12 * scale);
         }
         let bscale = accept / RESIDUAL_TOLERANCE;
         // Damping factor ν: a cold start is far from the answer (its active
