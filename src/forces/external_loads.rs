@@ -48,7 +48,9 @@ pub const WINDOW_ROWS: usize = 4096;
 /// 0.27⁶⁰ ≈ 10⁻³⁴.
 pub const WINDOW_OVERLAP: usize = 60;
 /// Fitted windows held at once (frames solved in parallel are close in
-/// time: at most two windows are in use at a time).
+/// time: at most two windows are in use at a time), however many a block
+/// of frames spans (a 4096-row motion block at 100 Hz spans 20 windows of
+/// force-plate data at 2 kHz).
 const WINDOWS_HELD: usize = 3;
 
 impl Series {
@@ -185,14 +187,24 @@ impl Windows {
         Ok(w)
     }
 
-    /// Hold exactly the windows serving `t_first` to `t_last`.
-    fn prepare(&self, t_first: f64, t_last: f64) -> Result<()> {
-        let (k0, k1) = (self.index(t_first), self.index(t_last.max(t_first)));
+    /// Hold the window serving `t_first` (fitted here, where its error can
+    /// be returned) and let the windows before it go; the later ones a
+    /// block reaches are fitted by the frames that need them (`Windows::at`), at
+    /// most [`WINDOWS_HELD`] held whatever the block's length and the
+    /// data's rate.
+    fn prepare(&self, t_first: f64) -> Result<()> {
+        let k0 = self.index(t_first);
         let mut held = self.held.write().map_err(|_| poisoned())?;
-        held.retain(|w| w.k >= k0 && w.k <= k1);
-        for k in k0..=k1 {
-            if !held.iter().any(|w| w.k == k) {
-                held.push(Arc::new(self.fit(k)?));
+        held.retain(|w| w.k >= k0);
+        if !held.iter().any(|w| w.k == k0) {
+            held.push(Arc::new(self.fit(k0)?));
+        }
+        while held.len() > WINDOWS_HELD {
+            match (0..held.len()).max_by_key(|&i| held[i].k.abs_diff(k0)) {
+                Some(far) => {
+                    held.swap_remove(far);
+                }
+                None => break,
             }
         }
         Ok(())
@@ -620,16 +632,26 @@ impl ExternalLoads {
         }
     }
 
-    /// Fit and hold the windows of a long data file that serve the times
-    /// from `t_first` to `t_last` (the frame drivers call it before each
-    /// block of frames: `frame::driver::PreparingLoads`), letting the
-    /// others go. Returns an error kept by an earlier [`apply`](Self::apply).
-    pub fn prepare(&self, t_first: f64, t_last: f64) -> Result<()> {
+    /// Before a block of frames from `t_first` on (the frame drivers call
+    /// it: `frame::driver::PreparingLoads`): a long data file's window
+    /// serving `t_first` fitted and held, the earlier ones let go (the
+    /// later ones are fitted as the frames reach them). Returns the error
+    /// of a window an earlier [`apply`](Self::apply) could not fit.
+    pub fn prepare(&self, t_first: f64) -> Result<()> {
         let Some(w) = &self.windows else {
             return Ok(());
         };
         w.check()?;
-        w.prepare(t_first, t_last)
+        w.prepare(t_first)
+    }
+
+    /// Windows held now (tests).
+    #[cfg(test)]
+    pub(crate) fn windows_held(&self) -> usize {
+        self.windows
+            .as_ref()
+            .and_then(|w| w.held.read().ok().map(|h| h.len()))
+            .unwrap_or(0)
     }
 
     /// The error an earlier [`apply`](Self::apply) kept, if any.

@@ -212,10 +212,11 @@ impl<S: FrameSource> FrameSource for Prefetched<'_, S> {
     }
 }
 
-/// A source whose blocks' times the external loads are prepared for
-/// ([`ExternalLoads::prepare`]: a long data file's windows that serve the
-/// block fitted before its frames are computed, in parallel, from them),
-/// and whose end checks that no frame's loads failed.
+/// A source whose blocks the external loads are prepared for
+/// ([`ExternalLoads::prepare`]: a long data file's window serving the
+/// block's first time fitted before its frames are computed, in parallel,
+/// and the windows before it let go), and whose end checks that no frame's
+/// loads failed.
 pub struct PreparingLoads<'a, S> {
     source: S,
     loads: Option<&'a ExternalLoads>,
@@ -231,8 +232,8 @@ impl<S: FrameSource> FrameSource for PreparingLoads<'_, S> {
     fn next_block(&mut self) -> Result<Option<StateBlock>> {
         let block = self.source.next_block()?;
         if let Some(loads) = self.loads {
-            match block.as_ref().and_then(|b| Some((b.time.first()?, b.time.last()?))) {
-                Some((&first, &last)) => loads.prepare(first, last)?,
+            match block.as_ref().and_then(|b| b.time.first()) {
+                Some(&first) => loads.prepare(first)?,
                 None => loads.check()?,
             }
         }
