@@ -1260,38 +1260,46 @@ fn run_sweep(
         }
     };
     let mut writers = writers;
-    let mut logs: Vec<(FrameLog, f64)> = writers
+    let logs: Vec<(FrameLog, f64)> = writers
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
+    // A small model's log is written by the table writer: there a thread
+    // of its own costs more in hand-offs than it saves (arm26's loop on one
+    // thread: 0.050-0.053 ms per frame with one writer, 0.056-0.072 with
+    // two).
+    let log_values = 3 * problem.model.coordinates.len()
+        + 2 * problem.labels.len()
+        + CONTACT_COLUMNS.len() * problem.contacts.len();
+    let log_thread = log_values >= LOG_THREAD_VALUES;
+    let (mut logs_here, mut logs_there) = if log_thread {
+        (Vec::new(), logs)
+    } else {
+        (logs, Vec::new())
+    };
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
         let release = &release;
         let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
             for results in rx {
+                write_logs(&mut logs_here, log_names, problem, &results)?;
                 for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
                     w.write(r, rows)?;
                 }
                 release(results);
             }
+            finish_logs(logs_here)?;
             Ok(writers)
         });
-        let log_writer = scope.spawn(move || -> Result<()> {
-            for results in log_rx {
-                for (((log, skip_until), names), (r, rows)) in
-                    logs.iter_mut().zip(log_names).zip(results.iter())
-                {
-                    if r.time > *skip_until {
-                        log.write_frame(names, problem, r, rows)?;
-                    }
+        let log_writer = log_thread.then(|| {
+            scope.spawn(move || -> Result<()> {
+                for results in log_rx {
+                    write_logs(&mut logs_there, log_names, problem, &results)?;
+                    release(results);
                 }
-                release(results);
-            }
-            // The logs' last chunks and summaries, beside the tables' ends.
-            for (log, _) in logs {
-                log.finish()?;
-            }
-            Ok(())
+                // The logs' last chunks and summaries, beside the tables' ends.
+                finish_logs(logs_there)
+            })
         });
         // Frames in fixed groups (frame::driver::GROUP): the first of a
         // group solved cold, the others warm-started from the frame before.
@@ -1344,7 +1352,9 @@ fn run_sweep(
                 };
                 // The writers format and write in frame order; a closed
                 // channel means one stopped on an error, reported below.
-                if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
+                if (log_thread && log_tx.send(results.clone()).is_err())
+                    || tx.send(results).is_err()
+                {
                     return Err(Error::internal("the table writer stopped"));
                 }
                 progress.inc(1);
@@ -1356,9 +1366,10 @@ fn run_sweep(
         let written = writer
             .join()
             .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-        let logged = log_writer
-            .join()
-            .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
+        let logged = log_writer.map_or(Ok(()), |h| {
+            h.join()
+                .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")))
+        });
         // The writers' own errors say more than the loop's closed channel.
         let writers = written?;
         logged?;
@@ -1379,6 +1390,34 @@ fn run_sweep(
 
 /// One frame's results, shared by the table writer and the log thread.
 type Shared = std::sync::Arc<Vec<FrameOutput>>;
+
+/// Values per frame in the log's messages (coordinates' q, u and u̇,
+/// activations and forces, contacts) from which the log gets a thread of
+/// its own (gait2392: 265; arm26: 18; gait10dof18musc about 80).
+const LOG_THREAD_VALUES: usize = 128;
+
+/// Each run's log messages of one frame (runs a resumed run already holds
+/// up to its `skip_until` are not logged again).
+fn write_logs(
+    logs: &mut [(FrameLog, f64)],
+    names: &[LogNames],
+    problem: &SoProblem,
+    results: &[FrameOutput],
+) -> Result<()> {
+    for (((log, skip_until), names), (r, rows)) in logs.iter_mut().zip(names).zip(results) {
+        if r.time > *skip_until {
+            log.write_frame(names, problem, r, rows)?;
+        }
+    }
+    Ok(())
+}
+
+fn finish_logs(logs: Vec<(FrameLog, f64)>) -> Result<()> {
+    for (log, _) in logs {
+        log.finish()?;
+    }
+    Ok(())
+}
 
 /// Frames handed to the table writer and not yet written, at most: the
 /// solving threads run ahead of the formatting by this much (memory stays
