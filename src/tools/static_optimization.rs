@@ -751,7 +751,7 @@ struct RunWriters<'a> {
     src_w: StoWriter,
     power_w: StoWriter,
     jr_w: Vec<StoWriter>,
-    /// The log, until the run's log thread takes it (`run_sweep`).
+    /// The log (lent to the thread that writes it while the frames run).
     log: Option<FrameLog>,
     /// Frames a resumed run already holds (t <= this) are not written again.
     skip_until: f64,
@@ -1280,7 +1280,7 @@ fn run_sweep(
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
         let release = &release;
-        let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
+        let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, Vec<(FrameLog, f64)>)> {
             for results in rx {
                 write_logs(&mut logs_here, log_names, problem, &results)?;
                 for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
@@ -1288,17 +1288,15 @@ fn run_sweep(
                 }
                 release(results);
             }
-            finish_logs(logs_here)?;
-            Ok(writers)
+            Ok((writers, logs_here))
         });
         let log_writer = log_thread.then(|| {
-            scope.spawn(move || -> Result<()> {
+            scope.spawn(move || -> Result<Vec<(FrameLog, f64)>> {
                 for results in log_rx {
                     write_logs(&mut logs_there, log_names, problem, &results)?;
                     release(results);
                 }
-                // The logs' last chunks and summaries, beside the tables' ends.
-                finish_logs(logs_there)
+                Ok(logs_there)
             })
         });
         // Frames in fixed groups (frame::driver::GROUP): the first of a
@@ -1366,13 +1364,17 @@ fn run_sweep(
         let written = writer
             .join()
             .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-        let logged = log_writer.map_or(Ok(()), |h| {
+        let logged = log_writer.map_or(Ok(Vec::new()), |h| {
             h.join()
                 .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")))
         });
         // The writers' own errors say more than the loop's closed channel.
-        let writers = written?;
-        logged?;
+        let (mut writers, logs) = written?;
+        // Each log back to its run, finished with its tables.
+        let mut logs = logs.into_iter().chain(logged?);
+        for w in writers.iter_mut() {
+            w.log = logs.next().map(|(log, _)| log);
+        }
         Ok((completed?, writers))
     })?;
     progress.finish_and_clear();
@@ -1412,12 +1414,7 @@ fn write_logs(
     Ok(())
 }
 
-fn finish_logs(logs: Vec<(FrameLog, f64)>) -> Result<()> {
-    for (log, _) in logs {
-        log.finish()?;
-    }
-    Ok(())
-}
+
 
 /// Frames handed to the table writer and not yet written, at most: the
 /// solving threads run ahead of the formatting by this much (memory stays
