@@ -986,12 +986,7 @@ fn external_loads_apply_recording_matches_apply_and_record() {
             mot.push_str(&format!("{t}\t{}\n", v.join("\t")));
         }
         std::fs::write(dir.join("grf.mot"), mot).unwrap();
-        let xml = r#"<?xml version="1.0"?><OpenSimDocument Version="40000"><ExternalLoads name="x"><objects>
-<ExternalForce name="a"><applied_to_body>link2</applied_to_body><force_expressed_in_body>link1</force_expressed_in_body><point_expressed_in_body>ground</point_expressed_in_body><force_identifier>f_v</force_identifier><point_identifier>f_p</point_identifier><torque_identifier>t_</torque_identifier></ExternalForce>
-<ExternalForce name="b"><applied_to_body>cart</applied_to_body><force_expressed_in_body>ground</force_expressed_in_body><force_identifier>f_p</force_identifier></ExternalForce>
-</objects><datafile>grf.mot</datafile></ExternalLoads></OpenSimDocument>"#;
-        let xpath = dir.join("grf.xml");
-        std::fs::write(&xpath, xml).unwrap();
+        let xpath = two_forces_xml(&dir);
         let loads = ExternalLoads::load(&xpath, &dir, &model).unwrap();
         assert_eq!(loads.forces.len(), 2);
         for (i, t) in [0.02, 0.05, -0.1, 0.05, 0.0, 0.3, 0.013, 0.0271]
@@ -1075,7 +1070,8 @@ fn external_loads_report_the_first_error_in_reading_order() {
 }
 
 /// A data file of `rows` rows with uneven times and a NaN at `nan` (row,
-/// column) if given, and the ExternalLoads XML of two forces on it.
+/// column) if given, and the ExternalLoads XML of two forces on it
+/// ([`two_forces_xml`]).
 fn long_grf(dir: &std::path::Path, rows: usize, nan: Option<(usize, usize)>) -> std::path::PathBuf {
     let mut mot = format!(
         "grf.mot\nversion=1\nnRows={rows}\nnColumns=10\ninDegrees=no\nendheader\n\
@@ -1097,6 +1093,13 @@ fn long_grf(dir: &std::path::Path, rows: usize, nan: Option<(usize, usize)>) -> 
         mot.push_str(&format!("{t}\t{}\n", v.join("\t")));
     }
     std::fs::write(dir.join("grf.mot"), mot).unwrap();
+    two_forces_xml(dir)
+}
+
+/// The ExternalLoads file of two forces on `grf.mot` (columns f_v*, f_p*,
+/// t_*) in `dir`: one with force, point and torque on link2, one with a
+/// force on the cart.
+fn two_forces_xml(dir: &std::path::Path) -> std::path::PathBuf {
     let xml = r#"<?xml version="1.0"?><OpenSimDocument Version="40000"><ExternalLoads name="x"><objects>
 <ExternalForce name="a"><applied_to_body>link2</applied_to_body><force_expressed_in_body>link1</force_expressed_in_body><point_expressed_in_body>ground</point_expressed_in_body><force_identifier>f_v</force_identifier><point_identifier>f_p</point_identifier><torque_identifier>t_</torque_identifier></ExternalForce>
 <ExternalForce name="b"><applied_to_body>cart</applied_to_body><force_expressed_in_body>ground</force_expressed_in_body><force_identifier>f_p</force_identifier></ExternalForce>
