@@ -10,7 +10,8 @@
 //! (contact geometry and friction) → [`optimize`] (the per-frame convex
 //! program) → [`frame`] (one frame of static optimization assembled from the
 //! stages before, solved and turned into outputs; the frame driver) →
-//! [`reactions`] (joint reactions from the frame's forces) → [`tools`] (thin
+//! [`reactions`] (joint reactions from the frame's forces) → [`writers`] (a
+//! frame's results as the messages of the run's log) → [`tools`] (thin
 //! drivers: the analyses a setup names, studies, predict-grf, bench) →
 //! [`storage`], [`output`], [`plots`] (tables, logs, figures). A module
 //! imports only from earlier stages; the readers and writers ([`storage`],
@@ -34,6 +35,7 @@ pub mod reactions;
 pub mod storage;
 pub mod tools;
 pub mod wrapping;
+pub mod writers;
 pub mod xml;
 
 pub use error::{Error, Location, Result};

@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The pipeline, in order: a stage may import from the stages before it.
-const PIPELINE: [&str; 14] = [
+const PIPELINE: [&str; 15] = [
     "functions",
     "parse",
     "model",
@@ -23,6 +23,7 @@ const PIPELINE: [&str; 14] = [
     "optimize",
     "frame",
     "reactions",
+    "writers",
     "tools",
 ];
 /// Modules any stage may use; they import only each other.
