@@ -1260,7 +1260,7 @@ fn run_sweep(
         }
     };
     let mut writers = writers;
-    let logs: Vec<(FrameLog, f64)> = writers
+    let logs: RunLogs = writers
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
@@ -1280,7 +1280,7 @@ fn run_sweep(
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
         let release = &release;
-        let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, Vec<(FrameLog, f64)>)> {
+        let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, RunLogs)> {
             for results in rx {
                 write_logs(&mut logs_here, log_names, problem, &results)?;
                 for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
@@ -1291,7 +1291,7 @@ fn run_sweep(
             Ok((writers, logs_here))
         });
         let log_writer = log_thread.then(|| {
-            scope.spawn(move || -> Result<Vec<(FrameLog, f64)>> {
+            scope.spawn(move || -> Result<RunLogs> {
                 for results in log_rx {
                     write_logs(&mut logs_there, log_names, problem, &results)?;
                     release(results);
@@ -1397,6 +1397,10 @@ type Shared = std::sync::Arc<Vec<FrameOutput>>;
 /// activations and forces, contacts) from which the log gets a thread of
 /// its own (gait2392: 265; arm26: 18; gait10dof18musc about 80).
 const LOG_THREAD_VALUES: usize = 128;
+
+/// Each run's log and the time up to which a resumed run already holds
+/// its frames.
+type RunLogs = Vec<(FrameLog, f64)>;
 
 /// Each run's log messages of one frame (runs a resumed run already holds
 /// up to its `skip_until` are not logged again).
