@@ -18,6 +18,9 @@ use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
 use crate::writers::frame_log::{FrameLog, LogNames};
+use crate::writers::tables::{
+    diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
+};
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::reactions::{
     column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
@@ -1133,33 +1136,6 @@ impl<'a> RunWriters<'a> {
     }
 }
 
-/// Columns of the diagnostics table.
-const DIAGNOSTICS_COLUMNS: [&str; 8] = [
-    "status",
-    "iterations",
-    "objective",
-    "equation_residual",
-    "relative_residual",
-    "friction_violation",
-    "solve_time_ms",
-    "solver",
-];
-
-const DIAGNOSTICS_DESCRIPTION: &str = "statopt solver diagnostics per frame: status 0 solved, 1 solved to reduced accuracy, -1 failed;\nequation_residual = max |A x - b| (N or N m); relative_residual = that / max |b|;\nfriction_violation = largest excess of shear over the friction limit in multiplier units (<= 0 when met);\nsolver 0 = dual Newton, 1 = Clarabel (iterations: Newton linear solves, or Clarabel iterations plus a failed Newton attempt's solves).\n";
-
-fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
-    vec![
-        status_code(r.solution.status),
-        r.solution.iterations as f64,
-        r.solution.objective,
-        r.solution.eq_residual,
-        r.relative_residual,
-        r.friction_violation,
-        r.solution.solve_time.as_secs_f64() * 1e3,
-        r.solution.solver.code(),
-    ]
-}
-
 /// Static optimization over the motion for every run of `runs` (the
 /// weights of a w0 sweep): one pass over the frames; per frame the physics
 /// is assembled once and the problem solved once per weight
@@ -1425,5 +1401,3 @@ fn write_logs(
 /// bounded).
 const FRAMES_IN_FLIGHT: usize = 512;
 
-/// OpenSim's ForceReporter description.
-pub const FORCE_DESCRIPTION: &str = "\nThis file contains the forces exerted on a model during a simulation.\n\nA force is a generalized force, meaning that it can be either a force (N) or a torque (Nm).\n\nUnits are S.I. units (second, meters, Newtons, ...)\nIf the header above contains a line with 'inDegrees', this indicates whether rotational values are in degrees (yes) or radians (no).\n\n";

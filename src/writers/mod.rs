@@ -4,5 +4,7 @@
 //! [`crate::output`]; this stage decides what of a frame goes where.
 //!
 //! - [`frame_log`]: a static-optimization run's MCAP log (channels,
-//!   messages per frame).
+//!   messages per frame);
+//! - [`tables`]: the layout of its force and diagnostics tables.
 pub mod frame_log;
+pub mod tables;
