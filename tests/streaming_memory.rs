@@ -349,7 +349,10 @@ fn external_loads_peak_memory_does_not_grow_with_trial_length() {
             let t = written.time[k];
             let want = 10.0 * (-0.09 * (3.0 * t).sin() + G) - (98.0 + 10.0 * (2.0 * t).sin());
             let got = written.rows[k][ty];
-            assert!((got - want).abs() < 1e-3, "t {t}: ty force {got}, want {want}");
+            assert!(
+                (got - want).abs() < 1e-3,
+                "t {t}: ty force {got}, want {want}"
+            );
         }
     }
     println!(

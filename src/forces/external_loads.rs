@@ -81,8 +81,8 @@ impl Series {
             Series::Spline(s) => s.value_transient_with(x, cache),
             Series::Windowed(j) => match window.and_then(|w| w.splines.get(*j)) {
                 Some(s) => s.value_transient_with(x, cache),
-                // (A windowed series is always evaluated with its window:
-                // `ExternalLoads::window_at`.)
+                // (A windowed series is always evaluated with its window,
+                // unless it could not be fitted: `ExternalLoads::apply`.)
                 None => f64::NAN,
             },
         }
@@ -148,6 +148,15 @@ struct Windows {
     failure: std::sync::Mutex<Option<Error>>,
 }
 
+/// Let the windows farthest from window `k` go until at most `keep` are held.
+fn let_go(held: &mut Vec<Arc<Window>>, k: usize, keep: usize) {
+    while held.len() > keep {
+        if let Some(far) = (0..held.len()).max_by_key(|&i| held[i].k.abs_diff(k)) {
+            held.swap_remove(far);
+        }
+    }
+}
+
 fn poisoned() -> Error {
     Error::internal("the external loads' windows were poisoned")
 }
@@ -166,11 +175,17 @@ impl Windows {
     }
 
     /// The splines of the window that serves `t`, fitted if not held
-    /// (then held too, the window farthest from it let go when more than
-    /// the prepared ones or [`WINDOWS_HELD`] are held).
+    /// (then held too, the windows farthest from it let go so that at most
+    /// [`WINDOWS_HELD`] are).
     fn at(&self, t: f64) -> Result<Arc<Window>> {
         let k = self.index(t);
-        if let Some(w) = self.held.read().map_err(|_| poisoned())?.iter().find(|w| w.k == k) {
+        if let Some(w) = self
+            .held
+            .read()
+            .map_err(|_| poisoned())?
+            .iter()
+            .find(|w| w.k == k)
+        {
             return Ok(w.clone());
         }
         let mut held = self.held.write().map_err(|_| poisoned())?;
@@ -178,11 +193,7 @@ impl Windows {
             return Ok(w.clone());
         }
         let w = Arc::new(self.fit(k)?);
-        if held.len() >= WINDOWS_HELD {
-            if let Some(far) = (0..held.len()).max_by_key(|&i| held[i].k.abs_diff(k)) {
-                held.swap_remove(far);
-            }
-        }
+        let_go(&mut held, k, WINDOWS_HELD - 1);
         held.push(w.clone());
         Ok(w)
     }
@@ -199,14 +210,7 @@ impl Windows {
         if !held.iter().any(|w| w.k == k0) {
             held.push(Arc::new(self.fit(k0)?));
         }
-        while held.len() > WINDOWS_HELD {
-            match (0..held.len()).max_by_key(|&i| held[i].k.abs_diff(k0)) {
-                Some(far) => {
-                    held.swap_remove(far);
-                }
-                None => break,
-            }
-        }
+        let_go(&mut held, k0, WINDOWS_HELD);
         Ok(())
     }
 
@@ -287,22 +291,17 @@ struct Pass {
     marks: Vec<(usize, RowMark)>,
 }
 
-impl Pass {
-    /// Windowed series of three columns, registered in `columns`.
-    fn series(
-        &self,
-        cols: &[usize],
-        columns: &mut Vec<usize>,
-    ) -> std::result::Result<Vec3Series, (usize, Error)> {
-        let mut index = |c: usize| match columns.iter().position(|&u| u == c) {
-            Some(j) => Series::Windowed(j),
-            None => {
-                columns.push(c);
-                Series::Windowed(columns.len() - 1)
-            }
-        };
-        Ok(Vec3Series([index(cols[0]), index(cols[1]), index(cols[2])]))
-    }
+/// The windowed series of three data columns, each registered in
+/// `columns` (the columns the windows fit) if not already.
+fn windowed_series(cols: &[usize], columns: &mut Vec<usize>) -> Vec3Series {
+    let mut index = |c: usize| match columns.iter().position(|&u| u == c) {
+        Some(j) => Series::Windowed(j),
+        None => {
+            columns.push(c);
+            Series::Windowed(columns.len() - 1)
+        }
+    };
+    Vec3Series([index(cols[0]), index(cols[1]), index(cols[2])])
 }
 
 /// The series of three columns of a table held whole: the three cubic
@@ -323,7 +322,8 @@ fn whole_series(
             _ => Err((0, Error::internal("three splines for three columns"))),
         };
     }
-    let mut mk = |i: usize| Series::new(&table.time, &table.column(cols[i]), fit).map_err(|e| (i, e));
+    let mut mk =
+        |i: usize| Series::new(&table.time, &table.column(cols[i]), fit).map_err(|e| (i, e));
     Ok(Vec3Series([mk(0)?, mk(1)?, mk(2)?]))
 }
 
@@ -403,9 +403,7 @@ impl ExternalLoadsFiles {
         loop {
             let r = pass.rows;
             if r == 0 || (r + WINDOW_OVERLAP) % window_rows == 0 {
-                if let Some(m) = reader.mark() {
-                    pass.marks.push((r, m));
-                }
+                pass.marks.push((r, reader.mark()));
             }
             let Some(t) = reader.next_row(&mut row)? else {
                 break;
@@ -449,7 +447,7 @@ impl ExternalLoadsFiles {
         let mut columns: Vec<usize> = Vec::new();
         for f in elements {
             let series = Self::read_series(&f, &table.labels, &data_path, |cols| {
-                pass.series(cols, &mut columns)
+                Ok(windowed_series(cols, &mut columns))
             });
             forces.push((f, series));
         }

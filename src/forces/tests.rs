@@ -1130,13 +1130,21 @@ fn external_loads_windowed_equal_the_whole_file() {
     assert!(windowed.windowed());
     let table = crate::storage::read(&dir.join("grf.mot")).unwrap();
     let (t0, t1) = (table.time[0], table.time[999]);
-    let mut times: Vec<f64> = (0..400).map(|i| t0 - 0.05 + (t1 - t0 + 0.1) * i as f64 / 399.0).collect();
+    let mut times: Vec<f64> = (0..400)
+        .map(|i| t0 - 0.05 + (t1 - t0 + 0.1) * i as f64 / 399.0)
+        .collect();
     // knots, window starts and the rows next to them
     for r in [0, 1, 63, 64, 65, 127, 128, 500, 511, 512, 960, 998, 999] {
         times.push(table.time[r]);
     }
     // out of order: far back and forth
-    times.extend([table.time[900], table.time[3] + 1e-4, table.time[700] - 1e-5, t0 - 1.0, t1 + 1.0]);
+    times.extend([
+        table.time[900],
+        table.time[3] + 1e-4,
+        table.time[700] - 1e-5,
+        t0 - 1.0,
+        t1 + 1.0,
+    ]);
     let mut worst = 0.0f64;
     let mut check = |t: f64, i: usize| {
         let q = [0.3 + 0.01 * (i % 17) as f64, -0.7, 0.2];

@@ -854,9 +854,7 @@ fn index_file(
     };
     loop {
         if idx.n % CHUNK == 0 {
-            if let Some(m) = r.mark() {
-                idx.marks.push((idx.n, m));
-            }
+            idx.marks.push((idx.n, r.mark()));
         }
         let Some(t) = r.next_row(&mut row)? else {
             break;

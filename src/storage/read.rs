@@ -553,9 +553,7 @@ fn table_width(path: &Path, h: &Header) -> Result<(usize, &'static [&'static str
         None => Ok((1, &[""])),
         Some((_, t)) if t == "double" => Ok((1, &[""])),
         Some((_, t)) if t == "Vec3" => Ok((3, &["_x", "_y", "_z"])),
-        Some((_, t)) if t == "SpatialVec" => {
-            Ok((6, &["_rx", "_ry", "_rz", "_tx", "_ty", "_tz"]))
-        }
+        Some((_, t)) if t == "SpatialVec" => Ok((6, &["_rx", "_ry", "_rz", "_tx", "_ty", "_tz"])),
         Some((no, t)) => Err(Error::input(
             loc(path, *no),
             format!("DataType '{t}' is not supported (double, Vec3 and SpatialVec are)"),
@@ -670,7 +668,10 @@ pub struct RowReader {
     path: std::path::PathBuf,
     /// Labels, units, name and metadata of the table; no rows.
     pub table: Storage,
-    source: RowSource,
+    lines: LineSource,
+    /// Number of the last line read.
+    line_no: usize,
+    format: RowFormat,
     limit: usize,
     count: usize,
     last_time: f64,
@@ -728,15 +729,11 @@ fn utf8_error(path: &Path, line: usize, e: std::io::Error) -> Error {
     }
 }
 
-enum RowSource {
-    Legacy {
-        lines: LineSource,
-        line_no: usize,
-    },
+/// How a [`RowReader`]'s data lines are read.
+enum RowFormat {
+    Legacy,
     /// A TimeSeriesTable (version ≥ 2): rows up to the first empty line.
     Table {
-        lines: LineSource,
-        line_no: usize,
         shape: TableShape,
         ended: bool,
     },
@@ -805,9 +802,9 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
         return Ok(RowReader {
             path: path.to_path_buf(),
             table,
-            source: RowSource::Table {
-                lines,
-                line_no,
+            lines,
+            line_no,
+            format: RowFormat::Table {
                 shape,
                 ended: false,
             },
@@ -821,7 +818,9 @@ pub fn open_rows(path: &Path) -> Result<RowReader> {
     Ok(RowReader {
         path: path.to_path_buf(),
         table,
-        source: RowSource::Legacy { lines, line_no },
+        lines,
+        line_no,
+        format: RowFormat::Legacy,
         limit,
         count: 0,
         last_time: f64::NEG_INFINITY,
@@ -835,24 +834,14 @@ impl RowReader {
         self.count
     }
 
-    /// The position before the next row (always given: every format is
-    /// read line by line).
-    pub fn mark(&self) -> Option<RowMark> {
-        let (lines, line_no) = self.lines();
-        Some(RowMark {
-            offset: lines.offset,
-            line_no,
+    /// The position before the next row.
+    pub fn mark(&self) -> RowMark {
+        RowMark {
+            offset: self.lines.offset,
+            line_no: self.line_no,
             count: self.count,
             last_time: self.last_time,
             last_line: self.last_line,
-        })
-    }
-
-    fn lines(&self) -> (&LineSource, usize) {
-        match &self.source {
-            RowSource::Legacy { lines, line_no } | RowSource::Table { lines, line_no, .. } => {
-                (lines, *line_no)
-            }
         }
     }
 
@@ -860,24 +849,15 @@ impl RowReader {
     /// while reading this file.
     pub fn seek(&mut self, m: &RowMark) -> Result<()> {
         use std::io::Seek;
-        let (lines, line_no) = match &mut self.source {
-            RowSource::Legacy { lines, line_no } => (lines, line_no),
-            RowSource::Table {
-                lines,
-                line_no,
-                ended,
-                ..
-            } => {
-                *ended = false;
-                (lines, line_no)
-            }
-        };
-        lines
+        if let RowFormat::Table { ended, .. } = &mut self.format {
+            *ended = false;
+        }
+        self.lines
             .reader
             .seek(std::io::SeekFrom::Start(m.offset))
             .map_err(|e| Error::io(&self.path, e))?;
-        lines.offset = m.offset;
-        *line_no = m.line_no;
+        self.lines.offset = m.offset;
+        self.line_no = m.line_no;
         self.count = m.count;
         self.last_time = m.last_time;
         self.last_line = m.last_line;
@@ -916,17 +896,13 @@ impl RowReader {
         if self.count >= self.limit {
             return Ok(None); // OpenSim reads exactly nRows rows
         }
-        let (t, no) = match &mut self.source {
-            RowSource::Table {
-                lines,
-                line_no,
-                shape,
-                ended,
-            } => {
+        let line_no = &mut self.line_no;
+        let (t, no) = match &mut self.format {
+            RowFormat::Table { shape, ended } => {
                 if *ended {
                     return Ok(None);
                 }
-                let Some(line) = lines.next_line() else {
+                let Some(line) = self.lines.next_line() else {
                     *ended = true;
                     return Ok(None);
                 };
@@ -940,8 +916,8 @@ impl RowReader {
                 let t = table_row(&self.path, *line_no, line, shape, &self.table.labels, row)?;
                 (t, *line_no)
             }
-            RowSource::Legacy { lines, line_no } => loop {
-                let Some(line) = lines.next_line() else {
+            RowFormat::Legacy => loop {
+                let Some(line) = self.lines.next_line() else {
                     if self.limit != usize::MAX {
                         return Err(too_few_rows(
                             &self.path,

@@ -17,10 +17,6 @@ use crate::forces::passive::PassiveForce;
 use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
-use crate::writers::frame_log::{FrameLog, LogNames};
-use crate::writers::tables::{
-    diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
-};
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::reactions::{
     column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
@@ -32,6 +28,10 @@ use crate::tools::joint_reaction::{
 };
 use crate::tools::loading::{applies_force, force_kind, load_analysis_model, ForceKind};
 use crate::tools::{RunOptions, RunSummary};
+use crate::writers::frame_log::{FrameLog, LogNames};
+use crate::writers::tables::{
+    diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
+};
 use crate::xml::Element;
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
@@ -969,8 +969,8 @@ impl<'a> RunWriters<'a> {
         })
     }
 
-    /// Write one frame's tables (in frame order; the log is written by
-    /// the log thread, [`FrameLog::write_frame`]).
+    /// Write one frame's tables (in frame order; the log thread writes
+    /// the log, [`FrameLog::write_frame`]).
     fn write(&mut self, r: &FrameResult, jr_rows: &[Vec<f64>]) -> Result<()> {
         let problem = self.problem;
         if r.time <= self.skip_until {
@@ -1206,8 +1206,9 @@ fn run_sweep(
     // in order, so the output holds every finished frame and memory stays
     // bounded by the block.
     // Tables and the log are formatted and written off the solving threads,
-    // on two threads of their own (each about as much work, together about
-    // as much as the solving on gait2392): the table writer owns the
+    // on two threads of their own (on gait2392 each about as much work,
+    // together about as much as the solving; one writer thread doing both
+    // ran on alone for a third of the loop): the table writer owns the
     // tables, the log thread encodes each frame's messages and owns the
     // logs. Both take each frame's results in order, while the next chunk
     // of frames is solved, from one shared buffer.
@@ -1236,44 +1237,28 @@ fn run_sweep(
         }
     };
     let mut writers = writers;
-    let logs: RunLogs = writers
+    let mut logs: RunLogs = writers
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
-    // A small model's log is written by the table writer: there a thread
-    // of its own costs more in hand-offs than it saves (arm26's loop on one
-    // thread: 0.050-0.053 ms per frame with one writer, 0.056-0.072 with
-    // two).
-    let log_values = 3 * problem.model.coordinates.len()
-        + 2 * problem.labels.len()
-        + CONTACT_COLUMNS.len() * problem.contacts.len();
-    let log_thread = log_values >= LOG_THREAD_VALUES;
-    let (mut logs_here, mut logs_there) = if log_thread {
-        (Vec::new(), logs)
-    } else {
-        (logs, Vec::new())
-    };
     let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
         let log_names = &log_names;
         let release = &release;
-        let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, RunLogs)> {
+        let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
             for results in rx {
-                write_logs(&mut logs_here, log_names, problem, &results)?;
                 for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
                     w.write(r, rows)?;
                 }
                 release(results);
             }
-            Ok((writers, logs_here))
+            Ok(writers)
         });
-        let log_writer = log_thread.then(|| {
-            scope.spawn(move || -> Result<RunLogs> {
-                for results in log_rx {
-                    write_logs(&mut logs_there, log_names, problem, &results)?;
-                    release(results);
-                }
-                Ok(logs_there)
-            })
+        let log_writer = scope.spawn(move || -> Result<RunLogs> {
+            for results in log_rx {
+                write_logs(&mut logs, log_names, problem, &results)?;
+                release(results);
+            }
+            Ok(logs)
         });
         // Frames in fixed groups (frame::driver::GROUP): the first of a
         // group solved cold, the others warm-started from the frame before.
@@ -1291,17 +1276,14 @@ fn run_sweep(
                 if block.time[pos.last] <= skip_until {
                     return Ok(None);
                 }
+                // (A pooled buffer is held by nobody else: `release`.)
                 let mut shared = recycled
                     .lock()
                     .ok()
                     .and_then(|mut pool| pool.pop())
                     .unwrap_or_default();
-                if std::sync::Arc::get_mut(&mut shared).is_none() {
-                    // (Only a buffer still held elsewhere; never pooled.)
-                    shared = Shared::default();
-                }
                 let out = std::sync::Arc::get_mut(&mut shared)
-                    .ok_or_else(|| Error::internal("a shared frame buffer"))?;
+                    .ok_or_else(|| Error::internal("a pooled frame buffer still shared"))?;
                 frame_outputs(
                     problem,
                     &weights,
@@ -1326,9 +1308,7 @@ fn run_sweep(
                 };
                 // The writers format and write in frame order; a closed
                 // channel means one stopped on an error, reported below.
-                if (log_thread && log_tx.send(results.clone()).is_err())
-                    || tx.send(results).is_err()
-                {
+                if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
                     return Err(Error::internal("the table writer stopped"));
                 }
                 progress.inc(1);
@@ -1340,16 +1320,14 @@ fn run_sweep(
         let written = writer
             .join()
             .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-        let logged = log_writer.map_or(Ok(Vec::new()), |h| {
-            h.join()
-                .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")))
-        });
+        let logged = log_writer
+            .join()
+            .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
         // The writers' own errors say more than the loop's closed channel.
-        let (mut writers, logs) = written?;
+        let mut writers = written?;
         // Each log back to its run, finished with its tables.
-        let mut logs = logs.into_iter().chain(logged?);
-        for w in writers.iter_mut() {
-            w.log = logs.next().map(|(log, _)| log);
+        for (w, (log, _)) in writers.iter_mut().zip(logged?) {
+            w.log = Some(log);
         }
         Ok((completed?, writers))
     })?;
@@ -1368,11 +1346,6 @@ fn run_sweep(
 
 /// One frame's results, shared by the table writer and the log thread.
 type Shared = std::sync::Arc<Vec<FrameOutput>>;
-
-/// Values per frame in the log's messages (coordinates' q, u and u̇,
-/// activations and forces, contacts) from which the log gets a thread of
-/// its own (gait2392: 265; arm26: 18; gait10dof18musc about 80).
-const LOG_THREAD_VALUES: usize = 128;
 
 /// Each run's log and the time up to which a resumed run already holds
 /// its frames.
@@ -1394,10 +1367,7 @@ fn write_logs(
     Ok(())
 }
 
-
-
 /// Frames handed to the table writer and not yet written, at most: the
 /// solving threads run ahead of the formatting by this much (memory stays
 /// bounded).
 const FRAMES_IN_FLIGHT: usize = 512;
-
