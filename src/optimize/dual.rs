@@ -1775,7 +1775,9 @@ pub fn optimality_violation(p: &FrameProblem, x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// [`optimality_violation`] with each variable's scale raised to at least
-/// `floor` · Σ_i |a_ij y_i|, the size of the terms whose sum is (Aᵀy)_j.
+/// `floor` · Σ_i |a_ij y_i|, the size of the terms whose sum is (Aᵀy)_j
+/// (and a contact's x, in its complementarity, to `floor` · Σ_i |a_ij y_i|
+/// / 2w, the size of the point it is projected from).
 /// Where those terms cancel to a small (Aᵀy)_j (a contact barely loaded
 /// while its column meets large multipliers), the rounding of Aᵀy alone,
 /// about 1e-16 of the terms, exceeds 1e-9 of (Aᵀy)_j, and no pair (x, y) in
@@ -1819,7 +1821,14 @@ pub fn optimality_violation_floored(p: &FrameProblem, x: &[f64], y: &[f64], floo
                 .fold(f64::NEG_INFINITY, f64::max),
         };
         worst = worst.max(polar.max(0.0) / scale);
-        let xs = v.iter().map(|&j| x[j].abs()).fold(1e-300, f64::max);
+        // x is the projection of Aᵀy/2w (the contact's rows of z + 2w x):
+        // where that point is far larger than x (a light contact, large
+        // multipliers) x carries its rounding, and the floor raises the
+        // scale of x to that point's.
+        let xs = v
+            .iter()
+            .map(|&j| x[j].abs().max(terms[j] / (2.0 * w)))
+            .fold(1e-300, f64::max);
         let dot: f64 = v.iter().zip(&z).map(|(&j, zj)| x[j] * zj).sum();
         worst = worst.max(dot.abs() / (scale * xs));
         for j in v {

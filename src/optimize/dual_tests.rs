@@ -265,7 +265,8 @@ fn random_problem(
 /// at Newton's y, any x' in the set has Σ w (x' − x)² ≤ L(x') − L(x)
 /// (strong convexity, x minimising L over the set). An interior point stops
 /// short of weakly active bounds by ~√gap, so Clarabel's x is off by up to
-/// ~1e-5 on these problems, and the direct comparison only asks 1e-4.
+/// ~1e-5 on these problems, and the direct comparison asks 1e-4 (or what
+/// that gap allows, where it is larger).
 /// Returns the largest |x difference| relative to max(1, ‖x‖∞).
 fn compare(p: &FrameProblem) -> f64 {
     let d = solve_dual(p, None).unwrap_or_else(|e| panic!("Newton failed: {e:?}"));
@@ -284,18 +285,34 @@ fn compare(p: &FrameProblem) -> f64 {
     for ct in &p.static_contacts {
         assert!(p.friction.violation(ct, &d.x) <= 1e-12);
     }
-    let kkt = optimality_violation(p, &d.x, &d.y);
-    // Rounding: a seed reached 1.03e-12 (kept in proptest-regressions/).
+    // Rounding: (Aᵀy)_j is a sum of terms a_ij y_i and is rounded by a few
+    // ε of Σ_i |a_ij y_i|; where it cancels to a small 2 w_j x_j that
+    // rounding alone is more than 1e-11 of the variable's scale (a seed
+    // reached 1.79e-11 with x_j = -3e-5 and terms of 79: 0.25 ε of them).
+    // A floor of 1e-4 on the scale admits 1e-15 of the terms (≈ 4.5 ε) at
+    // 1e-11, rounding and nothing beyond. Both seeds are kept in
+    // proptest-regressions/.
+    let kkt = optimality_violation_floored(p, &d.x, &d.y, 1e-4);
     assert!(kkt <= 1e-11, "optimality conditions violated by {kkt:.3e}");
     let c = clarabel(p);
     if c.status != SolveStatus::Solved {
         // Clarabel short of its tolerance: nothing to compare with.
         return 0.0;
     }
+    // Newton's x is feasible (above) and optimal by the optimality
+    // conditions; Clarabel's objective may undercut it only through its
+    // residual, where the multipliers are large: by up to yᵀ(A x_c − b)
+    // (weak duality at Newton's y: f(x') ≥ f* + yᵀ(A x' − b) for x' in the
+    // bounds and cones; a seed with ‖y‖₁ = 4.5e5 and a residual of 6.8e-12
+    // had Clarabel 4.5e-8 below Newton). Clarabel above Newton is its own
+    // suboptimality at its stopping test (seeds had 3.5e-8 and 1.1e-7 of
+    // the objective), which the Lagrangian test below bounds its x by.
     let (on, oc) = (p.objective(&d.x), c.objective);
+    let ynorm: f64 = d.y.iter().map(|v| v.abs()).sum();
+    let infeasible = ynorm * p.eq_residual(&c.x);
     assert!(
-        (on - oc).abs() <= 1e-8 * oc.max(1.0),
-        "Newton {on} vs Clarabel {oc}"
+        on - oc <= 1e-8 * oc.max(1.0) + infeasible,
+        "Newton {on} above Clarabel {oc} (‖y‖₁ ‖A x_c − b‖∞ = {infeasible:.3e})"
     );
     // Clarabel's x, moved into the set (it meets the cones to its tolerance).
     let mut xc = c.x.clone();
@@ -314,19 +331,25 @@ fn compare(p: &FrameProblem) -> f64 {
         .sum();
     // Rounding of the two Lagrangians: their terms are the objective and
     // yᵀ(A x − b) with A x as large as b.
-    let ynorm: f64 = d.y.iter().map(|v| v.abs()).sum();
     let slack = 1e-12 * (oc.abs().max(1.0) + ynorm * p.b.amax().max(1.0));
     assert!(
         dist2 <= gap + slack,
         "Σ w (x_clarabel - x_newton)² = {dist2:.3e} exceeds Clarabel's Lagrangian gap {gap:.3e}"
     );
+    // Directly: 1e-4 of max(1, ‖x‖∞), or as far as Clarabel's gap lets its
+    // x lie from the optimum where that is farther (a seed with
+    // ‖y‖₁ = 7.5e6 had a gap of 3.5e-8 and x off by 1.7e-4).
     let scale = d.x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-    let diff =
-        d.x.iter()
-            .zip(&c.x)
-            .map(|(a, b)| (a - b).abs() / scale)
-            .fold(0.0, f64::max);
-    assert!(diff <= 1e-4, "max |x_newton - x_clarabel| = {diff:.3e}");
+    let mut diff = 0.0f64;
+    for j in 0..p.n_var() {
+        let off = (d.x[j] - c.x[j]).abs();
+        let allowed = (1e-4 * scale).max(((gap + slack).max(0.0) / p.weights[j]).sqrt());
+        assert!(
+            off <= allowed,
+            "x[{j}]: |x_newton - x_clarabel| = {off:.3e} > {allowed:.3e}"
+        );
+        diff = diff.max(off / scale);
+    }
     diff
 }
 
@@ -342,6 +365,32 @@ proptest! {
         model in 0usize..3,
     ) {
         prop_assume!(nb + 3 * nc >= m);
+        let (mut p, _) = random_problem(seed, m, nb, nc, zero);
+        p.friction = MODELS[model];
+        compare(&p);
+    }
+}
+
+/// Random cases that failed the comparison's own measures, not Newton: the
+/// first (‖y‖₁ = 4.5e5) had Clarabel's objective 4.5e-8 below Newton's
+/// through its residual of 6.8e-12, the third and sixth 3.5e-8 and 1.1e-7
+/// above it (its suboptimality); the second
+/// had the optimality conditions at 1.79e-11 through the rounding of Aᵀy
+/// where it cancels to 2.5e-4; the fourth, a light contact (w = 0.019,
+/// x ≈ 7e-4) projected from Aᵀy/2w ≈ 1e3 onto a pyramid's face, lay off the
+/// face by that projection's rounding, 1e-14, and had its complementarity at
+/// 1.3e-11 of x; the fifth (‖y‖₁ = 7.5e6) had Clarabel's x 1.7e-4 from
+/// Newton's, as its Lagrangian gap of 3.5e-8 allows.
+#[test]
+fn random_cases_that_failed_the_measures_match_clarabel() {
+    for (seed, m, nb, nc, zero, model) in [
+        (1995728537864201054, 8, 2, 3, 0.5783711990068964, 0),
+        (2986906856549761569, 8, 8, 0, 0.08723400936379083, 0),
+        (485639437068695396, 7, 6, 2, 0.6152974332402718, 0),
+        (4606856905801956156, 5, 0, 2, 0.5064065105496275, 1),
+        (11248074277354380302, 7, 9, 0, 0.669084950769865, 0),
+        (1741564590192847721, 9, 1, 4, 0.6842874180489102, 0),
+    ] {
         let (mut p, _) = random_problem(seed, m, nb, nc, zero);
         p.friction = MODELS[model];
         compare(&p);
