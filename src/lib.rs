@@ -8,7 +8,7 @@
 //! (kinematics, inverse and forward dynamics) → [`paths`] and [`muscles`]
 //! (muscle geometry and strength) → [`forces`] (known forces) → [`contacts`]
 //! (contact geometry and friction) → [`optimize`] (the per-frame convex
-//! program) → [`frame`] (one frame of static optimization assembled from the
+//! program) → [`frame`] (the run's problem compiled once; one frame of static optimization assembled from the
 //! stages before, solved and turned into outputs; the frame driver) →
 //! [`reactions`] (joint reactions from the frame's forces) → [`writers`] (a
 //! frame's results as the messages of the run's log) → [`tools`] (thin

@@ -2,6 +2,7 @@
 //! loads from data files; and the non-muscle force elements of a model's
 //! ForceSet or of a setup's appended force-set files (opensim-semantics.md
 //! §8.2–8.4): actuators (reserves, residuals) and passive forces.
+pub mod analysis_model;
 pub mod external_loads;
 
 pub mod actuators;

@@ -1,6 +1,8 @@
 //! Stage: one frame of static optimization, and the driver that runs frames.
 //!
 //! - [`settings`]: the StaticOptimization element, compiled.
+//! - [`compile`]: [`SoProblem::build`], the run's model and force set sorted
+//!   into controls, passive forces, contacts and external loads, once.
 //! - [`problem`]: [`SoProblem`], compiled once per run, and per frame its
 //!   convex program (kinematics → muscle paths and strength → contacts → the
 //!   equations of motion) and outputs ([`FrameResult`]).
@@ -8,6 +10,7 @@
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly.
+pub mod compile;
 pub mod driver;
 pub mod interrupt;
 pub mod perturbation;

@@ -12,6 +12,7 @@
 
 mod compile;
 pub mod joint;
+pub mod load;
 
 pub use compile::compile;
 pub use joint::{JointKind, TransformAxis};

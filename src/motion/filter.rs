@@ -4,9 +4,11 @@
 //! at the smallest time step with quintic interpolating splines, and a
 //! third-order Butterworth low-pass filter run forward and backward.
 
+use std::path::Path;
+
 use crate::error::{Error, Result};
 use crate::functions::SplineFitter;
-use crate::storage::Storage;
+use crate::storage::{self, Storage};
 
 /// OpenSim's `Storage::MAX_RESAMPLE_SIZE`.
 pub const MAX_RESAMPLE_SIZE: f64 = 100_000.0;
@@ -262,6 +264,23 @@ pub fn lowpass_iir(table: &mut Storage, cutoff: f64) -> Result<()> {
         table.set_column(j, &f);
     }
     Ok(())
+}
+
+/// Read a coordinates file and, with a non-negative cutoff, pad it by half its
+/// length and low-pass filter it as OpenSim's tools do (§9.2).
+pub fn load_coordinates(path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
+    filter_coordinates(storage::read(path)?, path, lowpass_cutoff)
+}
+
+/// [`load_coordinates`] on a table already read from `path`.
+pub fn filter_coordinates(mut table: Storage, path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
+    if lowpass_cutoff >= 0.0 {
+        let n = table.time.len() / 2;
+        pad(&mut table, n);
+        lowpass_iir(&mut table, lowpass_cutoff)
+            .map_err(|e| e.context(format!("filtering {}", path.display())))?;
+    }
+    Ok(table)
 }
 
 #[cfg(test)]
