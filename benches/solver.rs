@@ -2,7 +2,8 @@
 //! frame problems of gait2392 walking (92 muscles, 23 equations; every
 //! row of the motion in the setup's time range, 1500 frames, assembled
 //! once before timing). `newton` is `optimize::solve` as the drivers call
-//! it (cold start); `newton_warm` starts each frame from the previous
+//! it for the first frame of a group (cold start); `newton_warm` starts each
+//! frame from the previous
 //! frame's multipliers. Needs ../shared/models
 //! (skips with a message otherwise). `cargo bench --bench solver`
 
@@ -79,8 +80,9 @@ fn bench(c: &mut Criterion) {
 
     // Warm start: each frame from the multipliers of the frame before
     // (computed beforehand, cold), through a reused workspace. The drivers
-    // do not do this (every frame is solved cold, so results cannot depend
-    // on the order frames are solved in); this shows what it would save.
+    // do this inside fixed groups of frames (`frame::driver::GROUP`: the
+    // first of a group cold, the others warm, so results do not depend on
+    // the order frames are solved in); `newton` above is the cold start.
     let ys: Vec<Vec<f64>> = frames
         .iter()
         .map(|p| dual::solve_dual(p, None).unwrap().y)
