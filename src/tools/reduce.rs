@@ -65,8 +65,8 @@ use crate::motion::states::assemble;
 use crate::muscles::set::MuscleSet;
 use crate::parse::setup::AnalyzeSetup;
 use crate::paths::PointKind;
+use crate::reactions::{resolve_reactions, JointReactionSetup};
 use crate::tools::analyze::{is_frame, open_state_stream};
-use crate::tools::joint_reaction::{resolve_reactions, JointReactionSetup};
 use crate::tools::loading::{applies_force, force_kind, AnalysisModel, ForceKind};
 use crate::xml::Element;
 

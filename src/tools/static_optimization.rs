@@ -16,17 +16,16 @@ use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::reactions::{
-    column_labels as jr_column_labels, static_optimization_reactions, ReactionSpec,
+    column_labels as jr_column_labels, resolve_reactions, static_optimization_reactions,
+    JointReactionSetup, ReactionSpec,
 };
 use crate::storage::StoWriter;
 use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
-use crate::tools::joint_reaction::{
-    resolve_reactions, JointReactionSetup, DESCRIPTION as JR_DESCRIPTION,
-};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
 use crate::writers::tables::{
     diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
+    JOINT_REACTION_DESCRIPTION as JR_DESCRIPTION,
 };
 use crate::xml::Element;
 

@@ -33,3 +33,6 @@ pub fn diagnostics_row(r: &FrameResult) -> Vec<f64> {
         r.solution.solver.code(),
     ]
 }
+
+/// OpenSim's storage description (`JointReaction::constructDescription`).
+pub const JOINT_REACTION_DESCRIPTION: &str = "\nThis file contains the reaction forces and moments\napplied to the specified body of a joint pair and expressed  in the specified reference frame.\n\nUnits are S.I. units (seconds, meters, Newtons, ...)";
