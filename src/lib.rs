@@ -11,7 +11,7 @@
 //! program) → [`frame`] (the run's problem compiled once; one frame of static optimization assembled from the
 //! stages before, solved and turned into outputs; the frame driver) →
 //! [`reactions`] (joint reactions from the frame's forces) → [`writers`] (a
-//! frame's results as the messages of the run's log) → [`tools`] (thin
+//! frame's results as the messages of the run's log and the rows of its tables) → [`tools`] (thin
 //! drivers: the analyses a setup names, studies, predict-grf, bench) →
 //! [`storage`], [`output`], [`plots`] (tables, logs, figures). A module
 //! imports only from earlier stages; the readers and writers ([`storage`],

@@ -4,9 +4,11 @@
 //! sorted into controls, passive forces, contacts and reserves), streams the
 //! states, hands each frame to the frame stage
 //! ([`crate::frame::problem`], through [`crate::frame::driver`]) and joint
-//! reactions to [`crate::reactions`], and writes the tables and the MCAP log
-//! on a writer thread; a w0 sweep solves each frame's physics once; a run
-//! can resume where an earlier one stopped.
+//! reactions to [`crate::reactions`], and has the tables
+//! ([`crate::writers::so_tables`]) and the MCAP log
+//! ([`crate::writers::frame_log`]) written on threads of their own while it
+//! keeps the run's statistics; a w0 sweep solves each frame's physics once;
+//! a run can resume where an earlier one stopped.
 
 use std::time::Instant;
 
@@ -16,17 +18,13 @@ use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::reactions::{
-    column_labels as jr_column_labels, resolve_reactions, static_optimization_reactions,
-    JointReactionSetup, ReactionSpec,
+    resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
 use crate::storage::StoWriter;
 use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
-use crate::writers::tables::{
-    diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
-    JOINT_REACTION_DESCRIPTION as JR_DESCRIPTION,
-};
+use crate::writers::so_tables::{SoTables, TablesSpec};
 use crate::xml::Element;
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
@@ -331,25 +329,6 @@ fn write_sweep_statistics(
     Ok(out)
 }
 
-/// OpenSim ExternalLoads document naming the exported contact-force data.
-fn external_loads_xml(problem: &SoProblem, datafile: &str) -> String {
-    use quick_xml::escape::escape;
-    let mut forces = String::new();
-    for (name, body, id) in problem.contact_load_forces() {
-        forces.push_str(&format!(
-            "\t\t\t<ExternalForce name=\"{}\">\n\t\t\t\t<appliesForce>true</appliesForce>\n\t\t\t\t<applied_to_body>{}</applied_to_body>\n\t\t\t\t<force_expressed_in_body>ground</force_expressed_in_body>\n\t\t\t\t<point_expressed_in_body>ground</point_expressed_in_body>\n\t\t\t\t<force_identifier>{}force_v</force_identifier>\n\t\t\t\t<point_identifier>{}force_p</point_identifier>\n\t\t\t\t<torque_identifier>Unassigned</torque_identifier>\n\t\t\t</ExternalForce>\n",
-            escape(name.as_str()),
-            escape(problem.model.bodies[body].name.as_str()),
-            escape(id.as_str()),
-            escape(id.as_str())
-        ));
-    }
-    format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Contact forces estimated by statopt, as OpenSim external loads: each contact's force on the point body at p and, for a plane body other than ground, the opposite force on the plane body at the projection p*. -->\n<OpenSimDocument Version=\"40000\">\n\t<ExternalLoads name=\"statopt_contact_forces\">\n\t\t<objects>\n{forces}\t\t</objects>\n\t\t<groups />\n\t\t<datafile>{}</datafile>\n\t</ExternalLoads>\n</OpenSimDocument>\n",
-        escape(datafile)
-    )
-}
-
 #[allow(clippy::too_many_arguments)]
 /// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
@@ -510,25 +489,13 @@ struct RunSpec<'a> {
     reactions: Vec<(String, &'a [ReactionSpec])>,
 }
 
-/// A run's tables are written every this many frames, and at least every
-/// [`TABLE_BATCH_AGE`] (one `write` per batch instead of per row; a killed
-/// run loses at most the open batch, as its log loses the open chunk).
-const TABLE_BATCH_ROWS: usize = 32;
-const TABLE_BATCH_AGE: std::time::Duration = std::time::Duration::from_millis(200);
-
 /// The tables, log and running statistics of one run.
 struct RunWriters<'a> {
     problem: &'a SoProblem,
     prefix: String,
     diag_path: std::path::PathBuf,
     files: Vec<std::path::PathBuf>,
-    act_w: StoWriter,
-    force_w: StoWriter,
-    diag_w: StoWriter,
-    contact_w: Option<(StoWriter, StoWriter, StoWriter)>,
-    src_w: StoWriter,
-    power_w: StoWriter,
-    jr_w: Vec<StoWriter>,
+    tables: SoTables,
     /// The log (lent to the thread that writes it while the frames run).
     log: Option<FrameLog>,
     /// Frames a resumed run already holds (t <= this) are not written again.
@@ -556,132 +523,24 @@ impl<'a> RunWriters<'a> {
         let prefix = spec.prefix.as_str();
         let reactions = &spec.reactions;
         let precision = opts.precision.unwrap_or(setup.output_precision);
-        let act_path = dir.join(format!("{prefix}activation.sto"));
-        let force_path = dir.join(format!("{prefix}force.sto"));
-        let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
-        let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
         let resume = if opts.resume {
             resume_point(dir, prefix, problem, reactions)?
         } else {
             None
         };
-        // Each table is created, or, when resuming, reopened after its kept
-        // rows; rows are written in batches (TABLE_BATCH_ROWS).
-        let open_table = |path: &std::path::Path,
-                          name: &str,
-                          desc: &str,
-                          labels: &[String],
-                          precision: usize|
-         -> Result<StoWriter> {
-            let mut w = match &resume {
-                Some(r) => StoWriter::resume(path, labels.len(), precision, r.keep),
-                None => StoWriter::create_for_setup(
-                    &setup.setup_file,
-                    path,
-                    name,
-                    desc,
-                    labels,
-                    precision,
-                    false,
-                ),
-            }?;
-            w.batch_rows(TABLE_BATCH_ROWS, TABLE_BATCH_AGE);
-            Ok(w)
-        };
-        let act_w = open_table(
-            &act_path,
-            "Static Optimization",
-            "This file contains static optimization results.\n",
-            &problem.labels,
-            precision,
-        )?;
-        let force_w = open_table(
-            &force_path,
-            "ModelForces",
-            FORCE_DESCRIPTION,
-            &problem.force_labels,
-            precision,
-        )?;
-        let diag_labels: Vec<String> = DIAGNOSTICS_COLUMNS.iter().map(|s| s.to_string()).collect();
-        let diag_w = open_table(
-            &diag_path,
-            "Static Optimization Diagnostics",
-            DIAGNOSTICS_DESCRIPTION,
-            &diag_labels,
-            16,
-        )?;
-        let mut contact_w = None;
-        if !problem.contacts.is_empty() {
-            let cpath = dir.join(format!("{prefix}ContactForces.sto"));
-            let bpath = dir.join(format!("{prefix}ContactBodyForces.sto"));
-            let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
-            let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
-            let desc = format!(
-                "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
-                spec.w0, problem.settings.friction
-            );
-            let cw = open_table(
-                &cpath,
-                "Contact Forces",
-                &desc,
-                &problem.contact_labels(),
+        let tables = SoTables::open(
+            problem,
+            &TablesSpec {
+                setup_file: &setup.setup_file,
+                dir,
+                prefix,
+                w0: spec.w0,
+                reactions,
                 precision,
-            )?;
-            let bw = open_table(&bpath, "Contact Body Forces", "Contact forces summed per body: force (N, ground) and moment about the body origin (N m, ground).\n", &problem.contact_body_labels(), precision)?;
-            let mut load_labels = Vec::new();
-            for (_, _, id) in problem.contact_load_forces() {
-                load_labels.extend(
-                    [
-                        "force_vx", "force_vy", "force_vz", "force_px", "force_py", "force_pz",
-                    ]
-                    .map(|s| format!("{id}{s}")),
-                );
-            }
-            let lw = open_table(
-                &lpath,
-                "statopt contact forces",
-                "",
-                &load_labels,
-                precision,
-            )?;
-            let datafile = lpath
-                .file_name()
-                .map(|f| f.to_string_lossy().to_string())
-                .unwrap_or_default();
-            std::fs::write(&xpath, external_loads_xml(problem, &datafile))
-                .map_err(|e| Error::io(&xpath, e))?;
-            files.extend([cpath, bpath, lpath, xpath]);
-            contact_w = Some((cw, bw, lw));
-        }
-        let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
-        let src_w = open_table(
-            &src_path,
-            "Generalized Forces By Source",
-            "Per free coordinate (after coupling): the generalized force the motion requires (N or N m) and the parts muscles, other actuators and contacts supply; their sum equals the requirement on every solved frame.\n",
-            &problem.by_source_labels(),
-            precision,
+                keep: resume.as_ref().map(|r| r.keep),
+            },
         )?;
-        let power_path = dir.join(format!("{prefix}MusclePower.sto"));
-        let power_w = open_table(
-            &power_path,
-            "Muscle Power",
-            "Mechanical power of each muscle (W): force x shortening speed of the musculotendon path; positive while shortening under tension.\n",
-            &problem.muscle_labels(),
-            precision,
-        )?;
-        files.extend([src_path, power_path]);
-        let mut jr_w = Vec::new();
-        for (p, specs) in reactions {
-            let path = dir.join(format!("{p}ReactionLoads.sto"));
-            jr_w.push(open_table(
-                &path,
-                "Joint Reaction Loads",
-                JR_DESCRIPTION,
-                &jr_column_labels(specs),
-                precision,
-            )?);
-            files.push(path);
-        }
+        let mut files = tables.files.clone();
         let log_path = dir.join(format!("{prefix}log.mcap"));
         let mut log = FrameLog::create(&log_path, log_names)?;
         if let Some(r) = &resume {
@@ -721,15 +580,9 @@ impl<'a> RunWriters<'a> {
         Ok(RunWriters {
             problem,
             prefix: prefix.to_string(),
-            diag_path,
+            diag_path: tables.diag_path.clone(),
             files,
-            act_w,
-            force_w,
-            diag_w,
-            contact_w,
-            src_w,
-            power_w,
-            jr_w,
+            tables,
             log: Some(log),
             skip_until,
             failures: Vec::new(),
@@ -751,11 +604,7 @@ impl<'a> RunWriters<'a> {
         if r.time <= self.skip_until {
             return Ok(());
         }
-        for (w, row) in self.jr_w.iter_mut().zip(jr_rows) {
-            w.write_row(r.time, row)?;
-        }
-        self.src_w.write_row(r.time, &r.by_source)?;
-        self.power_w.write_row(r.time, &r.muscle_power)?;
+        self.tables.write(r, jr_rows)?;
         if !r.solution.status.is_ok() {
             self.failures.push(format!(
                 "t={}: {:?}, equation residual {:.3e}",
@@ -795,14 +644,6 @@ impl<'a> RunWriters<'a> {
             }
         }
         self.last = Some(r.time);
-        self.act_w.write_row(r.time, &r.solution.x[..nv])?;
-        self.force_w.write_row(r.time, &r.force_row)?;
-        self.diag_w.write_row(r.time, &diagnostics_row(r))?;
-        if let Some((cw, bw, lw)) = self.contact_w.as_mut() {
-            cw.write_row(r.time, &r.contacts.contact)?;
-            bw.write_row(r.time, &r.contacts.bodies)?;
-            lw.write_row(r.time, &r.contacts.loads)?;
-        }
         Ok(())
     }
 
@@ -814,20 +655,7 @@ impl<'a> RunWriters<'a> {
         shared: usize,
     ) -> Result<RunSummary> {
         let problem = self.problem;
-        let mut tables = vec![
-            self.act_w,
-            self.force_w,
-            self.diag_w,
-            self.src_w,
-            self.power_w,
-        ];
-        tables.extend(self.jr_w);
-        if let Some((cw, bw, lw)) = self.contact_w {
-            tables.extend([cw, bw, lw]);
-        }
-        for w in tables {
-            w.finish()?;
-        }
+        self.tables.finish()?;
         if let Some(log) = self.log {
             log.finish()?;
         }

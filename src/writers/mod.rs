@@ -5,6 +5,9 @@
 //!
 //! - [`frame_log`]: a static-optimization run's MCAP log (channels,
 //!   messages per frame);
-//! - [`tables`]: the layout of its force and diagnostics tables.
+//! - [`tables`]: the layout of its force, diagnostics and joint-reaction
+//!   tables;
+//! - [`so_tables`]: its tables opened, written frame by frame and finished.
 pub mod frame_log;
+pub mod so_tables;
 pub mod tables;
