@@ -104,8 +104,7 @@ impl SoProblem {
         let mut passive = Vec::new();
         let mut passive_after = Vec::new();
         let mut contacts: Vec<Contact> = Vec::new();
-        let muscles;
-        if !so.use_model_force_set {
+        let muscles = if !so.use_model_force_set {
             // OpenSim: a CoordinateActuator "<coord>_actuator" (optimal force 1)
             // per unconstrained coordinate, then the non-muscle forces.
             for &c in &rows {
@@ -116,10 +115,10 @@ impl SoProblem {
                 upper.push(f64::INFINITY);
             }
             forces.retain(|f| force_kind(f) != ForceKind::Muscle);
-            muscles = MuscleSet::compile(&am.spec, &[], &model)?;
+            MuscleSet::compile(&am.spec, &[], &model)?
         } else {
-            muscles = MuscleSet::compile(&am.spec, &forces, &model)?;
-        }
+            MuscleSet::compile(&am.spec, &forces, &model)?
+        };
         let mut next_muscle = 0;
         for f in &forces {
             match force_kind(f) {

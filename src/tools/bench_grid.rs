@@ -688,7 +688,6 @@ pub fn write_chart(
                 }]
             })
             .unwrap_or_default(),
-        ..Scatter::default()
     };
     plots::write_scatter(&s, stem)
 }

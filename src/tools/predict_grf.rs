@@ -155,13 +155,13 @@ fn draw_comparison(
         for (s, side) in ["right", "left"].iter().enumerate() {
             let y = |l: &FootLoads| l.force[s].iter().map(|f| f[k]).collect::<Vec<f64>>();
             chart.series.push(Series::new(
-                &format!("{side}, measured"),
+                format!("{side}, measured"),
                 pred.time.clone(),
                 y(meas),
                 Style::dashed(s),
             ));
             chart.series.push(Series::new(
-                &format!("{side}, predicted"),
+                format!("{side}, predicted"),
                 pred.time.clone(),
                 y(pred),
                 Style::color(s),
@@ -481,7 +481,11 @@ pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
-fn write_foot_loads(loads: &FootLoads, path: &PathBuf, setup: &std::path::Path) -> Result<()> {
+fn write_foot_loads(
+    loads: &FootLoads,
+    path: &std::path::Path,
+    setup: &std::path::Path,
+) -> Result<()> {
     let mut labels = Vec::new();
     for side in ['r', 'l'] {
         for what in [

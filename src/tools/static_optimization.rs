@@ -329,7 +329,6 @@ fn write_sweep_statistics(
     Ok(out)
 }
 
-#[allow(clippy::too_many_arguments)]
 /// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     if i1 < i0 {
@@ -746,6 +745,7 @@ impl<'a> RunWriters<'a> {
 /// tables written from its own solution. One summary per run.
 /// `label` names the pass in progress reports (`<setup>_<analysis>`: one
 /// pass serves every w0).
+#[allow(clippy::too_many_arguments)]
 fn run_sweep(
     problem: &SoProblem,
     mut stream: crate::motion::stream::StateStream,

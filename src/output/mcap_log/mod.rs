@@ -357,7 +357,7 @@ impl McapLog {
 pub fn time_to_ns(t: f64, t0: f64) -> Option<u64> {
     let ns = ((t - t0) * 1e9).round();
     // 2^64 is exactly representable; every f64 below it fits in u64.
-    if ns.is_finite() && ns >= 0.0 && ns < 18_446_744_073_709_551_616.0 {
+    if (0.0..18_446_744_073_709_551_616.0).contains(&ns) {
         Some(ns as u64)
     } else {
         None
