@@ -31,14 +31,6 @@ fn free_coordinate_actuator(name: &str, coordinate: usize, optimal_force: f64) -
     }
 }
 
-/// The folder of the setup file (relative paths in it start there).
-fn setup_dir(setup: &AnalyzeSetup) -> &std::path::Path {
-    setup
-        .setup_file
-        .parent()
-        .unwrap_or(std::path::Path::new("."))
-}
-
 impl SoProblem {
     pub fn build(
         setup: &AnalyzeSetup,
@@ -52,7 +44,7 @@ impl SoProblem {
             let loads = setup
                 .external_loads_file
                 .as_deref()
-                .map(|p| scope.spawn(move || ExternalLoadsFiles::read(p, setup_dir(setup))));
+                .map(|p| scope.spawn(move || ExternalLoadsFiles::read(p, setup.dir())));
             let am = load_analysis_model(setup);
             let loads = loads.map(|h| {
                 h.join()
@@ -74,7 +66,7 @@ impl SoProblem {
             setup
                 .external_loads_file
                 .as_deref()
-                .map(|p| ExternalLoadsFiles::read(p, setup_dir(setup)))
+                .map(|p| ExternalLoadsFiles::read(p, setup.dir()))
         })
     }
 

@@ -76,6 +76,11 @@ pub enum Analysis {
 }
 
 impl AnalyzeSetup {
+    /// The setup file's folder, which relative paths in it start from.
+    pub fn dir(&self) -> &Path {
+        self.setup_file.parent().unwrap_or(Path::new("."))
+    }
+
     /// The first analysis kept as XML whose element is `type_name` (e.g.
     /// `StaticOptimization`), on or off: its element and common settings.
     pub fn analysis_element(&self, type_name: &str) -> Option<(&Element, &AnalysisCommon)> {
@@ -118,6 +123,13 @@ pub struct InverseDynamicsSetup {
     pub output_body_forces_file: Option<String>,
     /// Non-fatal remarks (unknown properties, see `parse::known`).
     pub warnings: Vec<String>,
+}
+
+impl InverseDynamicsSetup {
+    /// The setup file's folder, which relative paths in it start from.
+    pub fn dir(&self) -> &Path {
+        self.setup_file.parent().unwrap_or(Path::new("."))
+    }
 }
 
 /// Resolve a path from a setup relative to the setup's folder.

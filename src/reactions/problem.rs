@@ -144,10 +144,7 @@ impl JointReactionProblem {
             }
             (ForcesFile::streamed(file, table), columns)
         };
-        let setup_dir = setup
-            .setup_file
-            .parent()
-            .unwrap_or(std::path::Path::new("."));
+        let setup_dir = setup.dir();
         let loads = match &setup.external_loads_file {
             Some(p) => Some(ExternalLoads::load(p, setup_dir, &model)?),
             None => None,

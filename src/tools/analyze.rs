@@ -218,10 +218,7 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     }
     // A JointReaction without a forces_file in a setup that also runs
     // StaticOptimization takes each frame's solution directly.
-    let setup_dir = setup
-        .setup_file
-        .parent()
-        .unwrap_or(std::path::Path::new("."));
+    let setup_dir = setup.dir();
     let has_so = active.iter().any(
         |a| matches!(a, Analysis::Other { element, .. } if element.name == "StaticOptimization"),
     );

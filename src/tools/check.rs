@@ -110,7 +110,7 @@ fn check_analyze(setup: &AnalyzeSetup, report: &mut CheckReport) {
                 }
             }
             "JointReaction" => {
-                let dir = setup.setup_file.parent().unwrap_or(Path::new("."));
+                let dir = setup.dir();
                 match joint_reaction::JointReactionSetup::from_xml(element, common.clone(), dir) {
                     // Without a forces file the reactions come from the
                     // setup's own static optimization (checked above); a
@@ -146,7 +146,7 @@ fn check_inverse_dynamics(setup: &InverseDynamicsSetup, report: &mut CheckReport
     }
     report.warnings.extend(w);
     if let Some(p) = &setup.external_loads_file {
-        let dir = setup.setup_file.parent().unwrap_or(Path::new("."));
+        let dir = setup.dir();
         if let Err(e) = crate::forces::external_loads::ExternalLoads::load(p, dir, &model) {
             report.errors.push(e);
         }

@@ -97,10 +97,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         warnings.push(format!("{loc}: {what} is not supported and was ignored"));
     }
     let use_loads = check_forces(&spec, &setup.forces_to_exclude, &mut warnings)?;
-    let setup_dir = setup
-        .setup_file
-        .parent()
-        .unwrap_or(std::path::Path::new("."));
+    let setup_dir = setup.dir();
     let loads = match (&setup.external_loads_file, use_loads) {
         (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
         _ => None,

@@ -65,10 +65,7 @@ pub fn run(
     common: &AnalysisCommon,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    let setup_dir = setup
-        .setup_file
-        .parent()
-        .unwrap_or(std::path::Path::new("."));
+    let setup_dir = setup.dir();
     let jr = JointReactionSetup::from_xml(el, common.clone(), setup_dir)?;
     let (problem, mut warnings) = JointReactionProblem::build(setup, &jr)?;
     // States streamed block by block (motion::stream): flat memory.

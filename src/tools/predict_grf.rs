@@ -277,10 +277,7 @@ pub fn run_with_floor(
     let (mot, xml) = write_external_loads(&prediction.predicted, &layout, &dir, &setup)?;
     prediction.summary.files.extend([mot, xml]);
     if let Some(mf) = measured_file {
-        let setup_dir = setup
-            .setup_file
-            .parent()
-            .unwrap_or(std::path::Path::new("."));
+        let setup_dir = setup.dir();
         let loads = ExternalLoads::load(&mf, setup_dir, &model)?;
         let measured = measured_foot_loads(&loads, &model, &states, &prediction.predicted.time)?;
         prediction.metrics = compare(&prediction.predicted, &measured, body_weight);

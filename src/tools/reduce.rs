@@ -444,7 +444,7 @@ pub fn reduce(
     }
     // External loads and close_contacts coordinates.
     if let Some(p) = &setup.external_loads_file {
-        let dir = setup.setup_file.parent().unwrap_or(Path::new("."));
+        let dir = setup.dir();
         let loads = ExternalLoads::load(p, dir, model)?;
         for ef in &loads.forces {
             for b in [

@@ -492,9 +492,8 @@ struct RunSpec<'a> {
 struct RunWriters<'a> {
     problem: &'a SoProblem,
     prefix: String,
-    diag_path: std::path::PathBuf,
-    files: Vec<std::path::PathBuf>,
     tables: SoTables,
+    log_path: std::path::PathBuf,
     /// The log (lent to the thread that writes it while the frames run).
     log: Option<FrameLog>,
     /// Frames a resumed run already holds (t <= this) are not written again.
@@ -539,14 +538,12 @@ impl<'a> RunWriters<'a> {
                 keep: resume.as_ref().map(|r| r.keep),
             },
         )?;
-        let mut files = tables.files.clone();
         let log_path = dir.join(format!("{prefix}log.mcap"));
         let mut log = FrameLog::create(&log_path, log_names)?;
         if let Some(r) = &resume {
             log.replay(&r.messages)?;
         }
         let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
-        files.push(log_path);
         let reserve_vars: Vec<usize> = problem
             .labels
             .iter()
@@ -579,9 +576,8 @@ impl<'a> RunWriters<'a> {
         Ok(RunWriters {
             problem,
             prefix: prefix.to_string(),
-            diag_path: tables.diag_path.clone(),
-            files,
             tables,
+            log_path,
             log: Some(log),
             skip_until,
             failures: Vec::new(),
@@ -654,7 +650,9 @@ impl<'a> RunWriters<'a> {
         shared: usize,
     ) -> Result<RunSummary> {
         let problem = self.problem;
-        self.tables.finish()?;
+        let diag_path = self.tables.diag_path.clone();
+        let mut files = self.tables.finish()?;
+        files.push(self.log_path);
         if let Some(log) = self.log {
             log.finish()?;
         }
@@ -666,7 +664,7 @@ impl<'a> RunWriters<'a> {
                 failures.len(),
                 nframes,
                 failures[0],
-                self.diag_path.display()
+                diag_path.display()
             ));
         }
         if !self.at_bound.is_empty() {
@@ -713,14 +711,14 @@ impl<'a> RunWriters<'a> {
         };
         Ok(RunSummary {
             frames: nframes,
-            files: self.files,
+            files,
             warnings,
             loop_seconds,
             solves: nframes,
             failed: failures.len(),
             first_failure: failures
                 .first()
-                .map(|f| format!("{f}; see {}", self.diag_path.display())),
+                .map(|f| format!("{f}; see {}", diag_path.display())),
             worst_residual: self.worst_residual,
             reserve_peak: (!self.reserve_vars.is_empty()).then_some(self.reserve_peak),
             root_body_weight,

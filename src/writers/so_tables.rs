@@ -215,8 +215,9 @@ impl SoTables {
         Ok(())
     }
 
-    /// Writes the rows still batched and each table's final row count.
-    pub fn finish(self) -> Result<()> {
+    /// Writes the rows still batched and each table's final row count;
+    /// returns [`Self::files`].
+    pub fn finish(self) -> Result<Vec<PathBuf>> {
         let mut tables = vec![
             self.act_w,
             self.force_w,
@@ -231,7 +232,7 @@ impl SoTables {
         for w in tables {
             w.finish()?;
         }
-        Ok(())
+        Ok(self.files)
     }
 }
 
