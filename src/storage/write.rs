@@ -56,6 +56,19 @@ fn eight_digits(v: u32) -> [u8; 8] {
 /// must be below 10^len).
 #[inline(always)]
 fn put_digits(out: &mut [u8], mut v: u64) {
+    // The usual fraction groups (8 and 16 digits) without the loops.
+    match out.len() {
+        8 => {
+            out.copy_from_slice(&eight_digits(v as u32));
+            return;
+        }
+        16 => {
+            out[..8].copy_from_slice(&eight_digits((v / 100_000_000) as u32));
+            out[8..].copy_from_slice(&eight_digits((v % 100_000_000) as u32));
+            return;
+        }
+        _ => {}
+    }
     let mut i = out.len();
     while i >= 8 {
         out[i - 8..i].copy_from_slice(&eight_digits((v % 100_000_000) as u32));
@@ -174,7 +187,16 @@ fn push_fixed_fast(out: &mut Vec<u8>, x: f64, width: usize, prec: usize) -> bool
         }
     };
     // Fraction digits in (at most) two groups, then the rounding remainder.
-    let (k1, k2) = if p <= 19 { (p, 0) } else { (p / 2, p - p / 2) };
+    // The second step multiplies a remainder below 2^(s-k1) <= 2^(120-k1)
+    // by 5^k2: below 2^128 while 2.33·k2 <= 8 + k1, so a first group of 16
+    // (written as two blocks of eight) serves up to 26 decimals.
+    let (k1, k2) = if p <= 19 {
+        (p, 0)
+    } else if p <= 26 {
+        (16, p - 16)
+    } else {
+        (p / 2, p - p / 2)
+    };
     let (mut d1, rem, sh) = fraction_times_pow10(f as u128, s, k1);
     let (mut d2, rem, sh) = if k2 > 0 {
         fraction_times_pow10(rem, sh, k2)
