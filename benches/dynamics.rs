@@ -59,6 +59,17 @@ fn bench(c: &mut Criterion) {
         if !set.is_empty() {
             let mut frame = MuscleFrame::new(&set, &model);
             kinematics::full(&model, &mut data);
+            // What static optimization evaluates per frame: paths, unit
+            // tension forces, strength and passive force of every muscle.
+            c.bench_function(
+                &format!("muscle_frame_evaluate/{name} ({} muscles)", set.len()),
+                |b| {
+                    b.iter(|| {
+                        frame.evaluate(&set, &model, &data);
+                        std::hint::black_box(frame.max_active_force[0])
+                    })
+                },
+            );
             c.bench_function(
                 &format!("muscle_geometry_frame/{name} ({} muscles)", set.len()),
                 |b| {

@@ -6,7 +6,8 @@
 use crate::dynamics::Data;
 use crate::error::Result;
 use crate::model::Model;
-use crate::muscles::Muscle;
+use crate::muscles::thelen2003::{fv_inv_lockstep, FvPending, RigidTendonForces, Thelen2003};
+use crate::muscles::{Muscle, MuscleModel};
 use crate::parse::osim::ModelSpec;
 use crate::paths::coupling;
 use crate::paths::geometry::{self, PathState};
@@ -70,6 +71,12 @@ impl MuscleSet {
     }
 }
 
+/// Thelen muscles whose force–velocity curves are inverted together.
+const LANES: usize = 4;
+
+/// A Thelen muscle waiting in a lane: its index, model and strength.
+type Lane<'a> = (usize, &'a Thelen2003, FvPending);
+
 /// Per-frame muscle geometry, one entry per muscle; buffers are reused.
 #[derive(Debug, Clone, Default)]
 pub struct MuscleFrame {
@@ -106,8 +113,44 @@ impl MuscleFrame {
             let f = &mut self.unit_force[m];
             f.iter_mut().for_each(|x| *x = 0.0);
             geometry::add_unit_tension_force(model, data, st, f);
-            (self.max_active_force[m], self.passive_force[m]) =
-                pm.muscle.rigid_tendon_forces(st.length, self.speed[m]);
+        }
+        // Strengths after the paths, Thelen muscles' force–velocity
+        // inversions [`LANES`] at a time in lockstep (bit for bit each
+        // muscle's `rigid_tendon_forces`).
+        let mut lanes: [Option<Lane>; LANES] = [None; LANES];
+        let mut filled = 0;
+        for (m, pm) in set.muscles.iter().enumerate() {
+            let (length, speed) = (self.length[m], self.speed[m]);
+            let lane = match &pm.muscle.model {
+                MuscleModel::Thelen2003(t) => {
+                    match t.rigid_tendon_forces_begin(&pm.muscle.params, length, speed) {
+                        RigidTendonForces::Known(active, passive) => {
+                            (self.max_active_force[m], self.passive_force[m]) = (active, passive);
+                            continue;
+                        }
+                        RigidTendonForces::NeedsFv(pending) => (m, t, pending),
+                    }
+                }
+                MuscleModel::Millard2012(_) => {
+                    (self.max_active_force[m], self.passive_force[m]) =
+                        pm.muscle.rigid_tendon_forces(length, speed);
+                    continue;
+                }
+            };
+            lanes[filled] = Some(lane);
+            filled += 1;
+            if filled == LANES {
+                let full = lanes.map(|l| l.expect("every lane filled"));
+                let fv = fv_inv_lockstep(full.map(|(_, t, _)| t), &full.map(|(_, _, p)| p));
+                for ((m, t, pending), fv) in full.into_iter().zip(fv) {
+                    (self.max_active_force[m], self.passive_force[m]) = pending.finish(t, fv);
+                }
+                filled = 0;
+            }
+        }
+        for &(m, t, pending) in lanes[..filled].iter().flatten() {
+            let fv = t.fv_inv(1.0, pending.fal, pending.norm_fiber_velocity, 1e-6, 100);
+            (self.max_active_force[m], self.passive_force[m]) = pending.finish(t, fv);
         }
     }
 
@@ -130,6 +173,52 @@ mod tests {
     use crate::paths::geometry::Origin;
     use crate::paths::PointKind;
     use nalgebra::Vector3;
+
+    /// `MuscleFrame::evaluate`'s strengths (Thelen muscles inverted four
+    /// at a time in lockstep, the rest one by one) equal each muscle's
+    /// `rigid_tendon_forces` bit for bit, on a Thelen model and on a
+    /// Millard one, over varied states.
+    #[test]
+    fn frame_strengths_are_each_muscles_rigid_tendon_forces() {
+        let mut active = 0;
+        for name in ["human_seated.osim", "human_seated_rajagopal.osim"] {
+            let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("models/leg_extension")
+                .join(name);
+            let (spec, model) = crate::tools::loading::load_model(&file).unwrap();
+            let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+            let mut data = Data::new(&model);
+            let mut mf = MuscleFrame::new(&set, &model);
+            for trial in 0..20 {
+                let state = |k: usize, s: f64| ((k * 5 + trial * 11) as f64 * 0.29 + s).sin();
+                for (k, c) in model.coordinates.iter().enumerate() {
+                    let [lo, hi] = c.range;
+                    let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
+                    data.q[k] = lo + (hi - lo) * 0.5 * (1.0 + state(k, 0.0));
+                    data.u[k] = 3.0 * state(k, 2.1);
+                }
+                kinematics::full(&model, &mut data);
+                mf.evaluate(&set, &model, &data);
+                for (m, pm) in set.muscles.iter().enumerate() {
+                    let (a, p) = pm.muscle.rigid_tendon_forces(mf.length[m], mf.speed[m]);
+                    assert_eq!(
+                        mf.max_active_force[m].to_bits(),
+                        a.to_bits(),
+                        "{name} {}",
+                        pm.muscle.name
+                    );
+                    assert_eq!(
+                        mf.passive_force[m].to_bits(),
+                        p.to_bits(),
+                        "{name} {}",
+                        pm.muscle.name
+                    );
+                    active += usize::from(a != 0.0);
+                }
+            }
+        }
+        assert!(active > 100, "{active} nonzero strengths");
+    }
 
     /// The per-point values `geometry::evaluate` keeps (ground velocity,
     /// moving points' ∂p/∂q) equal fresh evaluations bit for bit, and so

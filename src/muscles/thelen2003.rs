@@ -182,11 +182,7 @@ impl Thelen2003 {
         let mut iter = 0;
         let mut fm = act * fal; // f_V = 1
         while ferr.abs() >= tolerance && iter < max_iterations {
-            let (v, dv) = self.dlce_n_and_slope(act, fal, fm);
-            ferr = v - norm_fiber_velocity;
-            if dv.abs() > sig {
-                fm -= ferr / dv;
-            }
+            (fm, ferr) = self.fv_inv_step(act, fal, norm_fiber_velocity, fm, sig);
             iter += 1;
         }
         if ferr.abs() < tolerance {
@@ -194,6 +190,23 @@ impl Thelen2003 {
         } else {
             None
         }
+    }
+
+    /// One Newton step of [`fv_inv`](Self::fv_inv) from `fm`: the new f
+    /// and the velocity error before it.
+    #[inline(always)]
+    fn fv_inv_step(
+        &self,
+        act: f64,
+        fal: f64,
+        norm_fiber_velocity: f64,
+        fm: f64,
+        sig: f64,
+    ) -> (f64, f64) {
+        let (v, dv) = self.dlce_n_and_slope(act, fal, fm);
+        let ferr = v - norm_fiber_velocity;
+        let fm = if dv.abs() > sig { fm - ferr / dv } else { fm };
+        (fm, ferr)
     }
 
     /// Closed-form f_V at full activation (§4.3), using this muscle's
@@ -236,17 +249,51 @@ impl Thelen2003 {
         length: f64,
         lengthening_speed: f64,
     ) -> (f64, f64) {
+        match self.rigid_tendon_forces_begin(p, length, lengthening_speed) {
+            RigidTendonForces::Known(active, passive) => (active, passive),
+            RigidTendonForces::NeedsFv(pending) => {
+                let fv = self.fv_inv(1.0, pending.fal, pending.norm_fiber_velocity, 1e-6, 100);
+                pending.finish(self, fv)
+            }
+        }
+    }
+
+    /// [`rigid_tendon_forces`](Self::rigid_tendon_forces) up to the
+    /// force–velocity inversion: the forces, or what they still need from
+    /// `fv_inv(1, f_L, ṽ, 1e-6, 100)` ([`FvPending::finish`] completes them
+    /// bit for bit). `muscles::set::MuscleFrame::evaluate` inverts several
+    /// muscles' curves in lockstep ([`fv_inv_lockstep`]).
+    pub fn rigid_tendon_forces_begin(
+        &self,
+        p: &MuscleParams,
+        length: f64,
+        lengthening_speed: f64,
+    ) -> RigidTendonForces {
         let pen = &self.pennation;
         let lce = pen.fiber_length(length, p.tendon_slack_length);
         if !(lce > pen.minimum_fiber_length) {
-            return (0.0, self.passive_fiber_force_rigid_tendon(p, length));
+            return RigidTendonForces::Known(0.0, self.passive_fiber_force_rigid_tendon(p, length));
         }
         // lce > l_min: the passive force's clamped fiber length is lce.
         let cos_phi = pen.cos_pennation(lce);
         let vce = pen.fiber_velocity(cos_phi, lengthening_speed, 0.0);
-        let active = self.active_force_along_tendon_at(p, 1.0, lce, vce, cos_phi);
         let passive = p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * cos_phi;
-        (active, passive)
+        // `active_force_along_tendon_at(p, 1.0, lce, vce, cos_phi)` up to
+        // its f_V (a = clamp(1, min(a_min, 1), 1) = 1).
+        let a = 1.0f64.clamp(self.minimum_activation.min(1.0), 1.0);
+        let lce_n = pen.clamp_fiber_length(lce) / p.optimal_fiber_length;
+        let v_n = vce / (p.optimal_fiber_length * p.max_contraction_velocity);
+        let fal = self.fal(lce_n);
+        if !(a * fal > 0.0) {
+            return RigidTendonForces::Known(0.0, passive);
+        }
+        RigidTendonForces::NeedsFv(FvPending {
+            fal,
+            norm_fiber_velocity: v_n,
+            scale: p.max_isometric_force * a * fal,
+            cos_phi,
+            passive,
+        })
     }
 
     /// `calcActiveFiberForceAlongTendon(a, l^M, v^M)`.
@@ -300,6 +347,74 @@ impl Thelen2003 {
         let lce = pen.clamp_fiber_length(pen.fiber_length(length, p.tendon_slack_length));
         p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * pen.cos_pennation(lce)
     }
+}
+
+/// [`Thelen2003::rigid_tendon_forces_begin`]'s answer.
+#[derive(Debug, Clone, Copy)]
+pub enum RigidTendonForces {
+    /// (maximum active force, passive force): no active force (fiber at
+    /// its minimum length, or f_L underflowed).
+    Known(f64, f64),
+    /// The forces but for the force–velocity multiplier.
+    NeedsFv(FvPending),
+}
+
+/// A rigid-tendon strength waiting for its f_V.
+#[derive(Debug, Clone, Copy)]
+pub struct FvPending {
+    /// f_L and ṽ, the arguments of the inversion.
+    pub fal: f64,
+    pub norm_fiber_velocity: f64,
+    /// F₀ · a · f_L (in that order), cos φ and the passive force.
+    scale: f64,
+    cos_phi: f64,
+    passive: f64,
+}
+
+impl FvPending {
+    /// (maximum active force, passive force) with `fv`, the result of
+    /// `fv_inv(1, f_L, ṽ, 1e-6, 100)` (None: its closed form instead, as
+    /// `active_force_along_tendon_at`).
+    pub fn finish(&self, muscle: &Thelen2003, fv: Option<f64>) -> (f64, f64) {
+        let fv = fv.unwrap_or_else(|| muscle.fv_full_activation(self.norm_fiber_velocity));
+        (self.scale * fv * self.cos_phi, self.passive)
+    }
+}
+
+/// `muscles[l].fv_inv(1, pending[l].fal, pending[l].norm_fiber_velocity,
+/// 1e-6, 100)` for every lane, bit for bit, with the lanes' Newton steps
+/// interleaved: each lane runs the same operations as alone and stops on
+/// its own test, but the independent chains of divisions overlap (about
+/// a sixth of static optimization's frame on gait2392 was these chains).
+pub fn fv_inv_lockstep<const L: usize>(
+    muscles: [&Thelen2003; L],
+    pending: &[FvPending; L],
+) -> [Option<f64>; L] {
+    const TOLERANCE: f64 = 1e-6;
+    const MAX_ITERATIONS: usize = 100;
+    let act = 1.0;
+    let sig = significant_real();
+    let mut ferr = [1.0f64; L];
+    let mut fm: [f64; L] = std::array::from_fn(|l| act * pending[l].fal);
+    let mut iter = 0;
+    while iter < MAX_ITERATIONS {
+        let mut any = false;
+        for l in 0..L {
+            if ferr[l].abs() >= TOLERANCE {
+                let p = &pending[l];
+                (fm[l], ferr[l]) =
+                    muscles[l].fv_inv_step(act, p.fal, p.norm_fiber_velocity, fm[l], sig);
+                any = true;
+            }
+        }
+        if !any {
+            break;
+        }
+        iter += 1;
+    }
+    std::array::from_fn(|l| {
+        (ferr[l].abs() < TOLERANCE).then(|| (fm[l] / (act * pending[l].fal)).max(0.0))
+    })
 }
 
 /// Active force–length f_L(l̃) = exp(−(l̃−1)²/γ).
@@ -424,6 +539,69 @@ mod tests {
                 "v={v}: newton {newton} closed {closed}"
             );
         }
+    }
+
+    /// The lockstep inversion equals each lane's own `fv_inv` bit for bit:
+    /// lanes of different muscles (A_f, F_len, threshold) that converge
+    /// after different numbers of steps, in the linear extrapolations on
+    /// both sides, with a NaN speed (no convergence: None) beside them.
+    #[test]
+    fn lockstep_inversion_is_each_lanes_inversion_bit_for_bit() {
+        let mut muscles = Vec::new();
+        for (af, flen, thr) in [(0.25, 1.4, 0.95), (0.3, 1.8, 0.9), (0.1, 1.2, 0.99)] {
+            let mut t = default_thelen();
+            (t.af, t.flen, t.fv_linear_extrap_threshold) = (af, flen, thr);
+            muscles.push(t);
+        }
+        let mut state = 0x9E3779B97F4A7C15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut steps_seen, mut none_seen) = (std::collections::BTreeSet::new(), 0);
+        for case in 0..20_000 {
+            let ts: [&Thelen2003; 4] = std::array::from_fn(|_| &muscles[(next() * 3.0) as usize]);
+            let pending: [FvPending; 4] = std::array::from_fn(|l| {
+                let v = if case % 97 == 0 && l == 2 {
+                    f64::NAN
+                } else {
+                    -2.0 + 5.0 * next()
+                };
+                FvPending {
+                    fal: 1e-3 + 1.2 * next(),
+                    norm_fiber_velocity: v,
+                    scale: 0.0,
+                    cos_phi: 1.0,
+                    passive: 0.0,
+                }
+            });
+            let got = fv_inv_lockstep(ts, &pending);
+            for l in 0..4 {
+                let (t, p) = (ts[l], &pending[l]);
+                let want = t.fv_inv(1.0, p.fal, p.norm_fiber_velocity, 1e-6, 100);
+                assert_eq!(
+                    got[l].map(f64::to_bits),
+                    want.map(f64::to_bits),
+                    "case {case} lane {l}"
+                );
+                none_seen += usize::from(want.is_none());
+                // Steps this lane took alone.
+                let (mut fm, mut ferr, mut k) = (p.fal, 1.0f64, 0);
+                while ferr.abs() >= 1e-6 && k < 100 {
+                    (fm, ferr) =
+                        t.fv_inv_step(1.0, p.fal, p.norm_fiber_velocity, fm, significant_real());
+                    k += 1;
+                }
+                steps_seen.insert(k);
+            }
+        }
+        assert!(none_seen > 0, "no lane without convergence");
+        assert!(
+            steps_seen.len() >= 4,
+            "iteration counts seen: {steps_seen:?}"
+        );
     }
 
     #[test]
