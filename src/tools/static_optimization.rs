@@ -7,8 +7,10 @@
 //! reactions to [`crate::reactions`], and has the tables
 //! ([`crate::writers::so_tables`]) and the MCAP log
 //! ([`crate::writers::frame_log`]) written on threads of their own while it
-//! keeps the run's statistics; a w0 sweep solves each frame's physics once;
-//! a run can resume where an earlier one stopped.
+//! keeps the run's statistics; a w0 sweep solves each frame's physics once
+//! (its mean, min and max tables: [`crate::writers::sweep_statistics`]);
+//! a run can resume where an earlier one stopped
+//! ([`crate::writers::resume`]).
 
 use std::time::Instant;
 
@@ -20,11 +22,12 @@ use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
 use crate::reactions::{
     resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
-use crate::storage::StoWriter;
 use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
+use crate::writers::resume::resume_point;
 use crate::writers::so_tables::{SoTables, TablesSpec};
+use crate::writers::sweep_statistics::write_sweep_statistics;
 use crate::xml::Element;
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
@@ -248,87 +251,6 @@ pub fn run(
     Ok(summary)
 }
 
-/// Mean, minimum and maximum over the runs of a sweep, per column and frame
-/// (the paper's uncertainty band, section 3.2). The runs' tables are read
-/// row by row in step, so memory does not grow with the trial's length.
-fn write_sweep_statistics(
-    setup_file: &std::path::Path,
-    files: &[std::path::PathBuf],
-    dir: &std::path::Path,
-    prefix: &str,
-    kind: &str,
-    weights: &[f64],
-    precision: usize,
-) -> Result<Vec<std::path::PathBuf>> {
-    let mut readers = files
-        .iter()
-        .map(|f| crate::storage::open_rows(f))
-        .collect::<Result<Vec<_>>>()?;
-    let labels = readers[0].table.labels.clone();
-    for (r, f) in readers.iter().zip(files).skip(1) {
-        if r.table.labels != labels {
-            return Err(Error::internal(format!(
-                "{}: its columns differ from {}'s",
-                f.display(),
-                files[0].display()
-            )));
-        }
-    }
-    let stats = ["mean", "min", "max"];
-    let mut out = Vec::new();
-    let mut writers = Vec::new();
-    for stat in stats {
-        let path = dir.join(format!("{prefix}{stat}_{kind}.sto"));
-        let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
-        writers.push(StoWriter::create_for_setup(
-            setup_file,
-            &path,
-            &format!("{kind} {stat}"),
-            &desc,
-            &labels,
-            precision,
-            false,
-        )?);
-        out.push(path);
-    }
-    let nl = labels.len();
-    let mut rows = vec![Vec::with_capacity(nl); readers.len()];
-    let mut row = vec![0.0; nl];
-    'frames: loop {
-        let mut time = None;
-        for (k, (r, buf)) in readers.iter_mut().zip(rows.iter_mut()).enumerate() {
-            match (r.next_row(buf)?, k) {
-                (None, 0) => break 'frames,
-                (None, _) => {
-                    return Err(Error::internal(format!(
-                        "{}: fewer rows than {}",
-                        files[k].display(),
-                        files[0].display()
-                    )))
-                }
-                (Some(t), 0) => time = Some(t),
-                (Some(_), _) => {}
-            }
-        }
-        let t = time.expect("the first table's row");
-        for (stat, w) in stats.iter().zip(writers.iter_mut()) {
-            for (j, v) in row.iter_mut().enumerate() {
-                let vals = rows.iter().map(|r| r[j]);
-                *v = match *stat {
-                    "mean" => vals.sum::<f64>() / rows.len() as f64,
-                    "min" => vals.fold(f64::INFINITY, f64::min),
-                    _ => vals.fold(f64::NEG_INFINITY, f64::max),
-                };
-            }
-            w.write_row(t, &row)?;
-        }
-    }
-    for w in writers {
-        w.finish()?;
-    }
-    Ok(out)
-}
-
 /// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     if i1 < i0 {
@@ -337,99 +259,6 @@ fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     (i0..=i1)
         .filter(|&i| is_frame(i, i0, i1, step_interval))
         .count()
-}
-
-/// Where a resumed run goes on: the frames that every table of the run and
-/// its MCAP log hold completely are kept.
-struct Resume {
-    /// Rows kept in every table.
-    keep: usize,
-    /// Time of the last kept frame.
-    last_time: f64,
-    /// The kept frames' log messages: topic, time, serialized message.
-    messages: Vec<(String, f64, Vec<u8>)>,
-}
-
-/// The [`Resume`] of a run writing with `prefix` into `dir`, or None when it
-/// has nothing to keep (no tables yet, or one of them or the log empty).
-fn resume_point(
-    dir: &std::path::Path,
-    prefix: &str,
-    problem: &SoProblem,
-    reactions: &[(String, &[ReactionSpec])],
-) -> Result<Option<Resume>> {
-    let mut tables: Vec<std::path::PathBuf> = [
-        "activation.sto",
-        "force.sto",
-        "diagnostics.sto",
-        "GeneralizedForcesBySource.sto",
-        "MusclePower.sto",
-    ]
-    .iter()
-    .map(|s| dir.join(format!("{prefix}{s}")))
-    .collect();
-    if !problem.contacts.is_empty() {
-        for s in [
-            "ContactForces.sto",
-            "ContactBodyForces.sto",
-            "ContactExternalLoads.mot",
-        ] {
-            tables.push(dir.join(format!("{prefix}{s}")));
-        }
-    }
-    for (p, _) in reactions {
-        tables.push(dir.join(format!("{p}ReactionLoads.sto")));
-    }
-    let mut keep = usize::MAX;
-    for t in &tables {
-        keep = keep.min(crate::storage::complete_rows(t)?);
-    }
-    if keep == 0 {
-        return Ok(None);
-    }
-    // The log: messages of whole frames, read as far as its chunks are
-    // complete (a killed run's last chunk may be torn).
-    let log_path = dir.join(format!("{prefix}log.mcap"));
-    let bytes = match std::fs::read(&log_path) {
-        Ok(b) => b,
-        Err(_) => return Ok(None),
-    };
-    let mut frames: Vec<Vec<(String, f64, Vec<u8>)>> = Vec::new();
-    let mut last_stamp = None;
-    if let Ok(stream) =
-        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-    {
-        for m in stream {
-            let Ok(m) = m else { break };
-            let t = serde_json::from_slice::<serde_json::Value>(&m.data)
-                .ok()
-                .and_then(|v| v.get("time").and_then(|t| t.as_f64()));
-            let Some(t) = t else { break };
-            if last_stamp != Some(m.log_time) {
-                frames.push(Vec::new());
-                last_stamp = Some(m.log_time);
-            }
-            frames.last_mut().expect("pushed above").push((
-                m.channel.topic.clone(),
-                t,
-                m.data.into_owned(),
-            ));
-        }
-    }
-    // The last frame read may be incomplete: keep only frames followed by
-    // another one.
-    let whole = frames.len().saturating_sub(1);
-    keep = keep.min(whole);
-    if keep == 0 {
-        return Ok(None);
-    }
-    frames.truncate(keep);
-    let last_time = frames[keep - 1][0].1;
-    Ok(Some(Resume {
-        keep,
-        last_time,
-        messages: frames.into_iter().flatten().collect(),
-    }))
 }
 
 /// One run's outputs of a frame: the solution and its joint-reaction rows

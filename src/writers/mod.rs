@@ -7,7 +7,13 @@
 //!   messages per frame);
 //! - [`tables`]: the layout of its force, diagnostics and joint-reaction
 //!   tables;
-//! - [`so_tables`]: its tables opened, written frame by frame and finished.
+//! - [`so_tables`]: its tables opened, written frame by frame and finished;
+//! - [`resume`]: where a run an earlier one left unfinished goes on (the
+//!   frames its tables and log hold completely);
+//! - [`sweep_statistics`]: a contact-weight sweep's mean, minimum and
+//!   maximum tables.
 pub mod frame_log;
+pub mod resume;
 pub mod so_tables;
+pub mod sweep_statistics;
 pub mod tables;
