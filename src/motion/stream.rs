@@ -732,11 +732,16 @@ impl<'m> StateStream<'m> {
             }
         }
         self.next_out = b;
+        // The block's rows, moved out of the window's (no copies).
+        q.truncate(ob);
+        q.drain(..oa);
+        u.truncate(ob);
+        u.drain(..oa);
         Ok(Some(StateBlock {
             first: a,
             time: time[a - w0..b - w0].to_vec(),
-            q: q[oa..ob].to_vec(),
-            u: u[oa..ob].to_vec(),
+            q,
+            u,
             udot,
         }))
     }
