@@ -692,12 +692,30 @@ impl<'a> SplineFitter<'a> {
         out: &mut Vec<Vec<f64>>,
     ) -> std::result::Result<(), (usize, Error)> {
         let m = self.check_columns(ys)?;
-        let coefs = self.solve_columns(m, ys);
         out.resize_with(ys.len(), Vec::new);
+        self.slopes_of_columns(m, ys, out);
+        Ok(())
+    }
+
+    /// The knot slopes of checked columns into `out`, the columns split
+    /// in halves over the current rayon pool's threads (`-j`) while there
+    /// are several threads and enough columns: each column's arithmetic is
+    /// its own, so the split changes no bit.
+    fn slopes_of_columns(&self, m: usize, ys: &[&[f64]], out: &mut [Vec<f64>]) {
+        if ys.len() >= 4 * LANES && rayon::current_num_threads() > 1 {
+            let mid = (ys.len() / 2).div_ceil(LANES) * LANES;
+            let (ya, yb) = ys.split_at(mid);
+            let (oa, ob) = out.split_at_mut(mid);
+            rayon::join(
+                || self.slopes_of_columns(m, ya, oa),
+                || self.slopes_of_columns(m, yb, ob),
+            );
+            return;
+        }
+        let coefs = self.solve_columns(m, ys);
         for ((y, coef), o) in ys.iter().zip(coefs).zip(out.iter_mut()) {
             self.slopes_of(m, y, &coef, o);
         }
-        Ok(())
     }
 
     /// `GcvSpline::interpolating(degree, x, y)`.
@@ -1174,20 +1192,42 @@ mod tests {
             }
         }
         assert!(zeros > 0, "the zero-slope path was not exercised");
-        // several columns at once (8, then 4 at a time, a partial last group)
-        for (degree, x, y) in random_cases().into_iter().take(40) {
-            let cols: Vec<Vec<f64>> = (0..19)
+        // several columns at once (8, then 4 at a time, a partial last
+        // group), on one thread and split over a pool of three (19 and 37
+        // columns: halves of 12 + 7, and 20 + 17 split again)
+        let pools: Vec<rayon::ThreadPool> = [1, 3]
+            .iter()
+            .map(|&n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
+        for (case, (degree, x, y)) in random_cases().into_iter().take(40).enumerate() {
+            let ncol = if case % 2 == 0 { 19 } else { 37 };
+            let cols: Vec<Vec<f64>> = (0..ncol)
                 .map(|c| y.iter().map(|v| v * (c as f64 - 2.5)).collect())
                 .collect();
             let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-            let mut f = SplineFitter::new(degree, &x);
-            let mut out = Vec::new();
-            f.knot_slopes_columns(&ys, &mut out).unwrap();
+            let outs: Vec<Vec<Vec<f64>>> = pools
+                .iter()
+                .map(|pool| {
+                    pool.install(|| {
+                        let mut f = SplineFitter::new(degree, &x);
+                        let mut out = Vec::new();
+                        f.knot_slopes_columns(&ys, &mut out).unwrap();
+                        out
+                    })
+                })
+                .collect();
             let splines = SplineFitter::new(degree, &x).splines(&ys).unwrap();
             for (c, y) in ys.iter().enumerate() {
                 let s = GcvSpline::interpolating(degree, &x, y).unwrap();
                 let want: Vec<f64> = x.iter().map(|&xi| s.derivative(xi, 1)).collect();
-                assert_eq!(bits(&out[c]), bits(&want));
+                for out in &outs {
+                    assert_eq!(bits(&out[c]), bits(&want), "column {c} of {ncol}");
+                }
                 assert_eq!(bits(&splines[c].coef), bits(&s.coef));
             }
         }
