@@ -25,6 +25,10 @@ fn dn() -> V3 {
 }
 
 /// Wrap segment p1→p2 (cylinder frame) over the cylinder.
+#[allow(
+    clippy::if_same_then_else,
+    reason = "the branches follow OpenSim's WrapCylinder case by case"
+)]
 pub fn wrap_cylinder(
     radius: f64,
     length: f64,

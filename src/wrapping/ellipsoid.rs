@@ -31,6 +31,10 @@ const MU_BLEND_MAX: f64 = 0.9;
 const NUM_FAN_SAMPLES: usize = 300;
 const SV_BOUNDARY_BLEND: f64 = 0.3;
 
+#[allow(
+    clippy::nonminimal_bool,
+    reason = "!(0 < l && l < 1) also refuses a NaN root, as OpenSim's test does"
+)]
 pub fn wrap_ellipsoid(
     dims: V3,
     quadrant: Quadrant,

@@ -77,6 +77,10 @@ pub fn intersect_lines(p1: &V3, p2: &V3, p3: &V3, p4: &V3) -> Option<(V3, f64, V
 
 /// `WrapMath::IntersectLineSegPlane`: intersection of segment pt1→pt2 with
 /// the plane n·x + d = 0, accepting t in [−1e-5, 1 + 1e-5].
+#[allow(
+    clippy::manual_range_contains,
+    reason = "OpenSim's two comparisons let a NaN t through; a range test would refuse it"
+)]
 pub fn intersect_line_seg_plane(pt1: &V3, pt2: &V3, plane: &V3, d: f64) -> Option<V3> {
     let vec = pt2 - pt1;
     let dotprod = vec.dot(plane);

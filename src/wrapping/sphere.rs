@@ -31,6 +31,10 @@ fn tangent_candidates(radius: f64, p: &V3, n: &V3) -> (V3, V3) {
     (p + (c * y - s * z) * k, p + (c * y + s * z) * k)
 }
 
+#[allow(
+    clippy::nonminimal_bool,
+    reason = "!(0 < l && l < 1) also refuses a NaN root, as OpenSim's test does"
+)]
 pub fn wrap_sphere(radius: f64, quadrant: Quadrant, p1: V3, p2: V3) -> WrapResult {
     let wrap_sign = quadrant.wrap_sign();
     let wrap_axis = quadrant.wrap_axis();
