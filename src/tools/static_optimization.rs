@@ -6,8 +6,9 @@
 //! ([`crate::frame::problem`], through [`crate::frame::driver`]) and joint
 //! reactions to [`crate::reactions`], and has the tables
 //! ([`crate::writers::so_tables`]) and the MCAP log
-//! ([`crate::writers::frame_log`]) written on threads of their own while it
-//! keeps the run's statistics; a w0 sweep solves each frame's physics once
+//! ([`crate::writers::frame_log`]) written on threads of their own, with the
+//! run's statistics ([`crate::writers::run_statistics`]); a w0 sweep solves
+//! each frame's physics once
 //! (its mean, min and max tables: [`crate::writers::sweep_statistics`]);
 //! a run can resume where an earlier one stopped
 //! ([`crate::writers::resume`]).
@@ -26,6 +27,7 @@ use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
 use crate::writers::resume::resume_point;
+use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
 use crate::writers::sweep_statistics::write_sweep_statistics;
 use crate::xml::Element;
@@ -39,8 +41,7 @@ pub use crate::frame::settings::{
     DEFAULT_TOLERANCE,
 };
 
-/// Root residual force, as a share of body weight, above which a run warns.
-pub const ROOT_RESIDUAL_WARNING: f64 = 0.05;
+pub use crate::writers::run_statistics::ROOT_RESIDUAL_WARNING;
 
 /// Format a contact weight for file names: `500`, `0.001`, `1e+06`.
 pub fn w0_tag(w0: f64) -> String {
@@ -327,15 +328,7 @@ struct RunWriters<'a> {
     log: Option<FrameLog>,
     /// Frames a resumed run already holds (t <= this) are not written again.
     skip_until: f64,
-    failures: Vec<String>,
-    reserve_vars: Vec<usize>,
-    reserve_peak: (f64, String),
-    worst_residual: f64,
-    root_rows: Vec<(usize, bool)>,
-    root_names: Vec<String>,
-    root_peaks: [Option<(f64, String)>; 2],
-    at_bound: Vec<(String, usize, f64)>,
-    last: Option<f64>,
+    stats: RunStatistics,
 }
 
 impl<'a> RunWriters<'a> {
@@ -373,35 +366,6 @@ impl<'a> RunWriters<'a> {
             log.replay(&r.messages)?;
         }
         let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
-        let reserve_vars: Vec<usize> = problem
-            .labels
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| {
-                problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve")
-            })
-            .map(|(i, _)| i)
-            .collect();
-        // Rows of the root joint's coordinates (a joint on ground with three or
-        // more coordinates: a person's pelvis, not a machine's lever), with
-        // whether they translate; what residual actuators supplied there.
-        let root_rows: Vec<(usize, bool)> = problem
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(_, &c)| problem.model.is_root_coordinate(c))
-            .map(|(k, &c)| {
-                (
-                    k,
-                    problem.model.coordinates[c].motion_type
-                        == crate::model::MotionType::Translational,
-                )
-            })
-            .collect();
-        let root_names: Vec<String> = root_rows
-            .iter()
-            .map(|&(k, _)| problem.model.coordinates[problem.rows[k]].name.clone())
-            .collect();
         Ok(RunWriters {
             problem,
             prefix: prefix.to_string(),
@@ -409,65 +373,18 @@ impl<'a> RunWriters<'a> {
             log_path,
             log: Some(log),
             skip_until,
-            failures: Vec::new(),
-            reserve_vars,
-            reserve_peak: (0.0, String::new()),
-            worst_residual: 0.0,
-            root_rows,
-            root_names,
-            root_peaks: [None, None],
-            at_bound: Vec::new(),
-            last: None,
+            stats: RunStatistics::new(problem),
         })
     }
 
     /// Write one frame's tables (in frame order; the log thread writes
     /// the log, [`FrameLog::write_frame`]).
     fn write(&mut self, r: &FrameResult, jr_rows: &[Vec<f64>]) -> Result<()> {
-        let problem = self.problem;
         if r.time <= self.skip_until {
             return Ok(());
         }
         self.tables.write(r, jr_rows)?;
-        if !r.solution.status.is_ok() {
-            self.failures.push(format!(
-                "t={}: {:?}, equation residual {:.3e}",
-                r.time, r.solution.status, r.solution.eq_residual
-            ));
-        } else {
-            self.worst_residual = self.worst_residual.max(r.solution.eq_residual);
-        }
-        for (k, &(row, translational)) in self.root_rows.iter().enumerate() {
-            // by_source holds, per row: required, muscles, actuators, contacts.
-            let v = r.by_source[4 * row + 2].abs();
-            let peak = &mut self.root_peaks[usize::from(!translational)];
-            if v > peak.as_ref().map_or(0.0, |p| p.0) {
-                *peak = Some((v, format!("{} at t={}", self.root_names[k], r.time)));
-            }
-        }
-        let nv = problem.controls.len();
-        for v in 0..nv {
-            let up = problem.upper[v];
-            if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
-                match self
-                    .at_bound
-                    .iter_mut()
-                    .find(|(n, _, _)| *n == problem.labels[v])
-                {
-                    Some(e) => e.1 += 1,
-                    None => self.at_bound.push((problem.labels[v].clone(), 1, r.time)),
-                }
-            }
-        }
-        for &v in &self.reserve_vars {
-            if r.forces[v].abs() > self.reserve_peak.0 {
-                self.reserve_peak = (
-                    r.forces[v].abs(),
-                    format!("{} at t={}", problem.labels[v], r.time),
-                );
-            }
-        }
-        self.last = Some(r.time);
+        self.stats.observe(self.problem, r);
         Ok(())
     }
 
@@ -485,43 +402,9 @@ impl<'a> RunWriters<'a> {
         if let Some(log) = self.log {
             log.finish()?;
         }
-        let mut warnings = Vec::new();
-        let failures = self.failures;
-        if !failures.is_empty() {
-            warnings.push(format!(
-                "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
-                failures.len(),
-                nframes,
-                failures[0],
-                diag_path.display()
-            ));
-        }
-        if !self.at_bound.is_empty() {
-            let list: Vec<String> = self
-                .at_bound
-                .iter()
-                .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
-                .collect();
-            warnings.push(format!(
-                "activations at their upper bound: {}",
-                list.join(", ")
-            ));
-        }
-        // Residual forces on the root above a few % of body weight mean the
-        // motion and the model's forces do not balance: say so.
-        let root_body_weight = self.root_rows.first().map(|&(k, _)| {
-            let body = problem.model.coordinates[problem.rows[k]].body;
-            problem.model.subtree_mass(body) * problem.model.gravity.norm()
-        });
-        if let (Some(bw), Some((f, at))) = (root_body_weight, &self.root_peaks[0]) {
-            if bw > 0.0 && *f > ROOT_RESIDUAL_WARNING * bw {
-                warnings.push(format!(
-                    "residual actuators on the root joint carried up to {f:.1} N = {:.1} % of body weight ({at}; more than {:.0} %): the motion and the model's forces do not balance there, so muscle and contact forces near those frames are doubtful",
-                    100.0 * f / bw,
-                    100.0 * ROOT_RESIDUAL_WARNING
-                ));
-            }
-        }
+        let stats = self.stats;
+        let warnings = stats.warnings(problem, nframes, &diag_path);
+        let root_body_weight = stats.root_body_weight(problem);
         let note = if shared > 1 {
             format!(
                 "static optimization ({}): {} frames in {:.3} s, shared by the {} weights of the sweep (the physics assembled once per frame)",
@@ -544,21 +427,22 @@ impl<'a> RunWriters<'a> {
             warnings,
             loop_seconds,
             solves: nframes,
-            failed: failures.len(),
-            first_failure: failures
+            failed: stats.failures.len(),
+            first_failure: stats
+                .failures
                 .first()
                 .map(|f| format!("{f}; see {}", diag_path.display())),
-            worst_residual: self.worst_residual,
-            reserve_peak: (!self.reserve_vars.is_empty()).then_some(self.reserve_peak),
+            worst_residual: stats.worst_residual,
+            reserve_peak: stats.reserve_peak(),
             root_body_weight,
-            root_force_peak: self.root_peaks[0].clone(),
-            root_moment_peak: self.root_peaks[1].clone(),
+            root_force_peak: stats.root_peaks[0].clone(),
+            root_moment_peak: stats.root_peaks[1].clone(),
             notes: vec![note],
             results_dirs: Vec::new(),
             stopped: (!completed).then(|| {
                 (
                     crate::tools::interrupt::requested().unwrap_or(130),
-                    self.last,
+                    stats.last,
                 )
             }),
         })

@@ -11,9 +11,13 @@
 //! - [`resume`]: where a run an earlier one left unfinished goes on (the
 //!   frames its tables and log hold completely);
 //! - [`sweep_statistics`]: a contact-weight sweep's mean, minimum and
-//!   maximum tables.
+//!   maximum tables;
+//! - [`run_statistics`]: what a run reports besides its tables (unsolved
+//!   frames, worst residual, bounds reached, reserve and root residual
+//!   peaks) and the warnings made from it.
 pub mod frame_log;
 pub mod resume;
+pub mod run_statistics;
 pub mod so_tables;
 pub mod sweep_statistics;
 pub mod tables;

@@ -1,0 +1,178 @@
+//! What a static-optimization run reports besides its tables: the frames
+//! the optimiser could not solve, the worst equation residual of a solved
+//! frame, activations at their upper bound, what reserve actuators and the
+//! root joint's residual actuators carried at most, and the last frame
+//! written. Gathered frame by frame, in frame order, by the table writer;
+//! turned into the run's warnings at its end.
+
+use crate::frame::problem::{FrameResult, SoProblem};
+
+/// Root residual force, as a share of body weight, above which a run warns.
+pub const ROOT_RESIDUAL_WARNING: f64 = 0.05;
+
+/// A run's statistics so far (see the module documentation).
+pub struct RunStatistics {
+    /// One line per unsolved frame: time, status, equation residual.
+    pub failures: Vec<String>,
+    /// Largest equation residual of a solved frame (N or N·m).
+    pub worst_residual: f64,
+    /// Reserve actuators' variables, and the largest force one carried
+    /// (N or N·m) with where.
+    reserve_vars: Vec<usize>,
+    reserve_peak: (f64, String),
+    /// Rows of the root joint's coordinates (a joint on ground with three
+    /// or more coordinates: a person's pelvis, not a machine's lever), with
+    /// whether they translate, their names, and what residual actuators
+    /// supplied there at most: force (N), moment (N·m), with where.
+    root_rows: Vec<(usize, bool)>,
+    root_names: Vec<String>,
+    pub root_peaks: [Option<(f64, String)>; 2],
+    /// Controls at their upper bound: name, frames, first time.
+    at_bound: Vec<(String, usize, f64)>,
+    /// Time of the last frame observed.
+    pub last: Option<f64>,
+}
+
+impl RunStatistics {
+    pub fn new(problem: &SoProblem) -> RunStatistics {
+        let reserve_vars: Vec<usize> = problem
+            .labels
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| {
+                problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve")
+            })
+            .map(|(i, _)| i)
+            .collect();
+        let root_rows: Vec<(usize, bool)> = problem
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| problem.model.is_root_coordinate(c))
+            .map(|(k, &c)| {
+                (
+                    k,
+                    problem.model.coordinates[c].motion_type
+                        == crate::model::MotionType::Translational,
+                )
+            })
+            .collect();
+        let root_names: Vec<String> = root_rows
+            .iter()
+            .map(|&(k, _)| problem.model.coordinates[problem.rows[k]].name.clone())
+            .collect();
+        RunStatistics {
+            failures: Vec::new(),
+            worst_residual: 0.0,
+            reserve_vars,
+            reserve_peak: (0.0, String::new()),
+            root_rows,
+            root_names,
+            root_peaks: [None, None],
+            at_bound: Vec::new(),
+            last: None,
+        }
+    }
+
+    /// Take in one frame's result (frames in order).
+    pub fn observe(&mut self, problem: &SoProblem, r: &FrameResult) {
+        if !r.solution.status.is_ok() {
+            self.failures.push(format!(
+                "t={}: {:?}, equation residual {:.3e}",
+                r.time, r.solution.status, r.solution.eq_residual
+            ));
+        } else {
+            self.worst_residual = self.worst_residual.max(r.solution.eq_residual);
+        }
+        for (k, &(row, translational)) in self.root_rows.iter().enumerate() {
+            // by_source holds, per row: required, muscles, actuators, contacts.
+            let v = r.by_source[4 * row + 2].abs();
+            let peak = &mut self.root_peaks[usize::from(!translational)];
+            if v > peak.as_ref().map_or(0.0, |p| p.0) {
+                *peak = Some((v, format!("{} at t={}", self.root_names[k], r.time)));
+            }
+        }
+        let nv = problem.controls.len();
+        for v in 0..nv {
+            let up = problem.upper[v];
+            if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+                match self
+                    .at_bound
+                    .iter_mut()
+                    .find(|(n, _, _)| *n == problem.labels[v])
+                {
+                    Some(e) => e.1 += 1,
+                    None => self.at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                }
+            }
+        }
+        for &v in &self.reserve_vars {
+            if r.forces[v].abs() > self.reserve_peak.0 {
+                self.reserve_peak = (
+                    r.forces[v].abs(),
+                    format!("{} at t={}", problem.labels[v], r.time),
+                );
+            }
+        }
+        self.last = Some(r.time);
+    }
+
+    /// What reserve actuators carried at most, and where (None: the run
+    /// has none).
+    pub fn reserve_peak(&self) -> Option<(f64, String)> {
+        (!self.reserve_vars.is_empty()).then(|| self.reserve_peak.clone())
+    }
+
+    /// The weight (N) of what the root joint carries, the body weight the
+    /// residual forces are compared with (None: no root joint).
+    pub fn root_body_weight(&self, problem: &SoProblem) -> Option<f64> {
+        self.root_rows.first().map(|&(k, _)| {
+            let body = problem.model.coordinates[problem.rows[k]].body;
+            problem.model.subtree_mass(body) * problem.model.gravity.norm()
+        })
+    }
+
+    /// The run's warnings: unsolved frames (of `nframes`; their
+    /// diagnostics in `diagnostics`), activations at their upper bound,
+    /// root residual forces above [`ROOT_RESIDUAL_WARNING`] of body weight.
+    pub fn warnings(
+        &self,
+        problem: &SoProblem,
+        nframes: usize,
+        diagnostics: &std::path::Path,
+    ) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if !self.failures.is_empty() {
+            warnings.push(format!(
+                "static optimization failed on {} of {} frames (first: {}); their rows hold the solver's best point, see {}",
+                self.failures.len(),
+                nframes,
+                self.failures[0],
+                diagnostics.display()
+            ));
+        }
+        if !self.at_bound.is_empty() {
+            let list: Vec<String> = self
+                .at_bound
+                .iter()
+                .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
+                .collect();
+            warnings.push(format!(
+                "activations at their upper bound: {}",
+                list.join(", ")
+            ));
+        }
+        // Residual forces on the root above a few % of body weight mean the
+        // motion and the model's forces do not balance: say so.
+        if let (Some(bw), Some((f, at))) = (self.root_body_weight(problem), &self.root_peaks[0]) {
+            if bw > 0.0 && *f > ROOT_RESIDUAL_WARNING * bw {
+                warnings.push(format!(
+                    "residual actuators on the root joint carried up to {f:.1} N = {:.1} % of body weight ({at}; more than {:.0} %): the motion and the model's forces do not balance there, so muscle and contact forces near those frames are doubtful",
+                    100.0 * f / bw,
+                    100.0 * ROOT_RESIDUAL_WARNING
+                ));
+            }
+        }
+        warnings
+    }
+}
