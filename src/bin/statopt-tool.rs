@@ -387,13 +387,17 @@ fn main() -> ExitCode {
             };
             match bench::run(setup, &opts) {
                 Ok(rows) => {
-                    println!("setup\tthreads\tframes\tloop_s\tframes_per_s\tms_per_frame\ttotal_s\tpeak_MiB");
+                    println!("setup\tthreads\tframes\tloop_s\tframes_per_s\tms_per_frame\ttotal_s\tpeak_MiB\tcpu_ms_per_frame");
                     let mem = bench::peak_memory_mib()
                         .map(|m| format!("{m:.1}"))
                         .unwrap_or_else(|| "n/a".into());
                     for r in rows {
+                        let cpu = r
+                            .cpu_seconds_per_frame
+                            .map(|c| format!("{:.4}", 1e3 * c))
+                            .unwrap_or_else(|| "n/a".into());
                         println!(
-                            "{}\t{}\t{}\t{:.4}\t{:.0}\t{:.4}\t{:.3}\t{}",
+                            "{}\t{}\t{}\t{:.4}\t{:.0}\t{:.4}\t{:.3}\t{}\t{}",
                             setup.display(),
                             r.threads,
                             r.frames,
@@ -401,7 +405,8 @@ fn main() -> ExitCode {
                             r.frames as f64 / r.loop_seconds,
                             1e3 * r.loop_seconds / r.frames as f64,
                             r.total_seconds,
-                            mem
+                            mem,
+                            cpu
                         );
                     }
                     ExitCode::SUCCESS

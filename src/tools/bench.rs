@@ -1,5 +1,6 @@
 //! `statopt-tool bench SETUP.xml`: run a setup repeatedly with several thread
-//! counts and report frames per second, and the process's peak memory.
+//! counts and report frames per second, the CPU time a frame costs (every
+//! thread, mean over the repeats), and the process's peak memory.
 //! `--tile N` repeats the setup's motion N times end to end first, to show how
 //! time and memory grow with trial length.
 
@@ -29,6 +30,18 @@ pub struct BenchRow {
     pub loop_seconds: f64,
     /// Best whole-run time (reading, splining, compiling included), seconds.
     pub total_seconds: f64,
+    /// CPU time of the process (every thread: solving, writers, setup)
+    /// over all the repeats, divided by their frames, seconds: the work a
+    /// frame costs, which a busy host inflates far less than wall time.
+    pub cpu_seconds_per_frame: Option<f64>,
+}
+
+/// CPU time this process (all its threads) has used so far, seconds;
+/// None where the OS does not tell.
+pub fn process_cpu_seconds() -> Option<f64> {
+    use nix::time::{clock_gettime, ClockId};
+    let t = clock_gettime(ClockId::CLOCK_PROCESS_CPUTIME_ID).ok()?;
+    Some(t.tv_sec() as f64 + t.tv_nsec() as f64 * 1e-9)
 }
 
 /// Peak resident memory of this process so far (VmHWM), in MiB, when the OS tells.
@@ -109,7 +122,10 @@ pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<Benc
             frames: 0,
             loop_seconds: f64::INFINITY,
             total_seconds: f64::INFINITY,
+            cpu_seconds_per_frame: None,
         };
+        let cpu_start = process_cpu_seconds();
+        let mut frames_run = 0;
         for _ in 0..opts.repeat.max(1) {
             let run_opts = RunOptions {
                 results_dir: Some(dir.clone()),
@@ -123,9 +139,41 @@ pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<Benc
             best.frames = s.frames;
             best.loop_seconds = best.loop_seconds.min(s.loop_seconds);
             best.total_seconds = best.total_seconds.min(total);
+            frames_run += s.frames;
+        }
+        if let (Some(a), Some(b)) = (cpu_start, process_cpu_seconds()) {
+            best.cpu_seconds_per_frame = (frames_run > 0).then(|| (b - a) / frames_run as f64);
         }
         rows.push(best);
     }
     let _ = std::fs::remove_dir_all(&dir);
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::process_cpu_seconds;
+
+    /// The process CPU clock counts every thread, those that have ended
+    /// included (a clock of the main thread alone, which only waits here,
+    /// would show about nothing): two threads that each spin for 60 ms of
+    /// wall time add at least 60 ms.
+    #[test]
+    fn process_cpu_time_counts_threads_that_ended() {
+        let spin = || {
+            let t = std::time::Instant::now();
+            let mut x = 0u64;
+            while t.elapsed().as_secs_f64() < 0.06 {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                std::hint::black_box(x);
+            }
+        };
+        let before = process_cpu_seconds().expect("Linux tells a process's CPU time");
+        std::thread::scope(|s| {
+            s.spawn(spin);
+            s.spawn(spin);
+        });
+        let used = process_cpu_seconds().unwrap() - before;
+        assert!((0.06..1.0).contains(&used), "{used} s of CPU");
+    }
 }
