@@ -174,6 +174,40 @@ mod tests {
     use crate::paths::PointKind;
     use nalgebra::Vector3;
 
+    /// q in each coordinate's range (clipped to ±3) at `state(k, 0)` of
+    /// the way, u = scale · state(k, phase), and the kinematics of that
+    /// state.
+    fn set_state(
+        model: &Model,
+        data: &mut Data,
+        state: impl Fn(usize, f64) -> f64,
+        (scale, phase): (f64, f64),
+    ) {
+        for (k, c) in model.coordinates.iter().enumerate() {
+            let [lo, hi] = c.range;
+            let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
+            data.q[k] = lo + (hi - lo) * 0.5 * (1.0 + state(k, 0.0));
+            data.u[k] = scale * state(k, phase);
+        }
+        kinematics::full(model, data);
+    }
+
+    /// The shipped leg extension humans (a Thelen model and a Millard
+    /// one): file name, model and muscle set.
+    fn leg_extension_models() -> Vec<(&'static str, Model, MuscleSet)> {
+        ["human_seated.osim", "human_seated_rajagopal.osim"]
+            .into_iter()
+            .map(|name| {
+                let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("models/leg_extension")
+                    .join(name);
+                let (spec, model) = crate::tools::loading::load_model(&file).unwrap();
+                let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+                (name, model, set)
+            })
+            .collect()
+    }
+
     /// `MuscleFrame::evaluate`'s strengths (Thelen muscles inverted four
     /// at a time in lockstep, the rest one by one) equal each muscle's
     /// `rigid_tendon_forces` bit for bit, on a Thelen model and on a
@@ -181,23 +215,12 @@ mod tests {
     #[test]
     fn frame_strengths_are_each_muscles_rigid_tendon_forces() {
         let mut active = 0;
-        for name in ["human_seated.osim", "human_seated_rajagopal.osim"] {
-            let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("models/leg_extension")
-                .join(name);
-            let (spec, model) = crate::tools::loading::load_model(&file).unwrap();
-            let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+        for (name, model, set) in leg_extension_models() {
             let mut data = Data::new(&model);
             let mut mf = MuscleFrame::new(&set, &model);
             for trial in 0..20 {
                 let state = |k: usize, s: f64| ((k * 5 + trial * 11) as f64 * 0.29 + s).sin();
-                for (k, c) in model.coordinates.iter().enumerate() {
-                    let [lo, hi] = c.range;
-                    let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
-                    data.q[k] = lo + (hi - lo) * 0.5 * (1.0 + state(k, 0.0));
-                    data.u[k] = 3.0 * state(k, 2.1);
-                }
-                kinematics::full(&model, &mut data);
+                set_state(&model, &mut data, state, (3.0, 2.1));
                 mf.evaluate(&set, &model, &data);
                 for (m, pm) in set.muscles.iter().enumerate() {
                     let (a, p) = pm.muscle.rigid_tendon_forces(mf.length[m], mf.speed[m]);
@@ -227,12 +250,7 @@ mod tests {
     #[test]
     fn kept_point_motion_matches_fresh_evaluation() {
         let (mut moving, mut wrapped) = (0, 0);
-        for name in ["human_seated.osim", "human_seated_rajagopal.osim"] {
-            let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("models/leg_extension")
-                .join(name);
-            let (spec, model) = crate::tools::loading::load_model(&file).unwrap();
-            let set = MuscleSet::compile(&spec, &spec.forces, &model).unwrap();
+        for (_, model, set) in leg_extension_models() {
             assert!(!set.is_empty());
             check_point_motion(&set, &model, &mut moving, &mut wrapped);
         }
@@ -247,13 +265,7 @@ mod tests {
         let mut mf = MuscleFrame::new(set, model);
         for trial in 0..6 {
             let state = |k: usize, s: f64| ((k * 7 + trial * 3) as f64 * 0.37 + s).sin();
-            for (k, c) in model.coordinates.iter().enumerate() {
-                let [lo, hi] = c.range;
-                let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
-                data.q[k] = lo + (hi - lo) * 0.5 * (1.0 + state(k, 0.0));
-                data.u[k] = state(k, 1.3);
-            }
-            kinematics::full(model, &mut data);
+            set_state(model, &mut data, state, (1.0, 1.3));
             mf.evaluate(set, model, &data);
             for (m, pm) in set.muscles.iter().enumerate() {
                 let st = mf.path_state(m);
