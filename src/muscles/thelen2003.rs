@@ -278,22 +278,10 @@ impl Thelen2003 {
         let cos_phi = pen.cos_pennation(lce);
         let vce = pen.fiber_velocity(cos_phi, lengthening_speed, 0.0);
         let passive = p.max_isometric_force * self.fpe(lce / p.optimal_fiber_length) * cos_phi;
-        // `active_force_along_tendon_at(p, 1.0, lce, vce, cos_phi)` up to
-        // its f_V (a = clamp(1, min(a_min, 1), 1) = 1).
-        let a = 1.0f64.clamp(self.minimum_activation.min(1.0), 1.0);
-        let lce_n = pen.clamp_fiber_length(lce) / p.optimal_fiber_length;
-        let v_n = vce / (p.optimal_fiber_length * p.max_contraction_velocity);
-        let fal = self.fal(lce_n);
-        if !(a * fal > 0.0) {
-            return RigidTendonForces::Known(0.0, passive);
+        match self.active_pending(p, 1.0, lce, vce, cos_phi) {
+            None => RigidTendonForces::Known(0.0, passive),
+            Some((_, pending)) => RigidTendonForces::NeedsFv(FvPending { passive, ..pending }),
         }
-        RigidTendonForces::NeedsFv(FvPending {
-            fal,
-            norm_fiber_velocity: v_n,
-            scale: p.max_isometric_force * a * fal,
-            cos_phi,
-            passive,
-        })
     }
 
     /// `calcActiveFiberForceAlongTendon(a, l^M, v^M)`.
@@ -322,21 +310,44 @@ impl Thelen2003 {
         fiber_velocity: f64,
         cos_phi: f64,
     ) -> f64 {
+        match self.active_pending(p, activation, fiber_length, fiber_velocity, cos_phi) {
+            None => 0.0,
+            Some((a, pending)) => {
+                let fv = self.fv_inv(a, pending.fal, pending.norm_fiber_velocity, 1e-6, 100);
+                pending.finish(self, fv).0
+            }
+        }
+    }
+
+    /// The active force along the tendon up to its force–velocity
+    /// multiplier: the clamped activation and the rest (no passive force),
+    /// or None when there is no active force (f_L underflowed: OpenSim
+    /// would divide 0/0).
+    fn active_pending(
+        &self,
+        p: &MuscleParams,
+        activation: f64,
+        fiber_length: f64,
+        fiber_velocity: f64,
+        cos_phi: f64,
+    ) -> Option<(f64, FvPending)> {
         let pen = &self.pennation;
         let a = activation.clamp(self.minimum_activation.min(1.0), 1.0);
         let lce_n = pen.clamp_fiber_length(fiber_length) / p.optimal_fiber_length;
         let v_n = fiber_velocity / (p.optimal_fiber_length * p.max_contraction_velocity);
         let fal = self.fal(lce_n);
-        if !(a * fal > 0.0) {
-            return 0.0; // f_L underflowed: no active force (OpenSim would divide 0/0)
-        }
-        let fv = match self.fv_inv(a, fal, v_n, 1e-6, 100) {
-            Some(fv) => fv,
-            // OpenSim throws here; at full activation the closed form is the
-            // exact inverse, which is the best available answer.
-            None => self.fv_full_activation(v_n),
-        };
-        p.max_isometric_force * a * fal * fv * cos_phi
+        (a * fal > 0.0).then(|| {
+            (
+                a,
+                FvPending {
+                    fal,
+                    norm_fiber_velocity: v_n,
+                    scale: p.max_isometric_force * a * fal,
+                    cos_phi,
+                    passive: 0.0,
+                },
+            )
+        })
     }
 
     /// Passive fiber force along the tendon with a rigid tendon: fiber length
@@ -373,8 +384,9 @@ pub struct FvPending {
 
 impl FvPending {
     /// (maximum active force, passive force) with `fv`, the result of
-    /// `fv_inv(1, f_L, ṽ, 1e-6, 100)` (None: its closed form instead, as
-    /// `active_force_along_tendon_at`).
+    /// `fv_inv(a, f_L, ṽ, 1e-6, 100)` (None, where OpenSim throws: the
+    /// closed form at full activation, the exact inverse there and the best
+    /// available answer otherwise).
     pub fn finish(&self, muscle: &Thelen2003, fv: Option<f64>) -> (f64, f64) {
         let fv = fv.unwrap_or_else(|| muscle.fv_full_activation(self.norm_fiber_velocity));
         (self.scale * fv * self.cos_phi, self.passive)
