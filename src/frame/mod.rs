@@ -6,6 +6,8 @@
 //! - [`problem`]: [`SoProblem`], compiled once per run, and per frame its
 //!   convex program (kinematics → muscle paths and strength → contacts → the
 //!   equations of motion) and outputs ([`FrameResult`]).
+//! - [`knee_contact`]: statopt's knee contact method, the knee's two
+//!   compartments as unknown contact forces of the frame's program.
 //! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
@@ -13,6 +15,7 @@
 pub mod compile;
 pub mod driver;
 pub mod interrupt;
+pub mod knee_contact;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;

@@ -6,6 +6,8 @@ use crate::optimize::{FrictionModel, SolverChoice};
 use crate::parse::setup::AnalysisCommon;
 use crate::xml::Element;
 
+pub use crate::frame::knee_contact::KneeSelection;
+
 /// The StaticOptimization element of an AnalyzeTool setup.
 #[derive(Debug, Clone)]
 pub struct StaticOptimizationSetup {
@@ -41,6 +43,14 @@ pub struct StaticOptimizationSetup {
     /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
     /// on every frame.
     pub solver: SolverChoice,
+    /// statopt `<knee_contact>`: solve the named knees (`all`/`true`: every
+    /// knee of the model) with the knee contact method
+    /// (`frame::knee_contact`, docs/knee_contact.md); off by default.
+    pub knee_contact: KneeSelection,
+    /// false when `<knee_contact>` holds the word `axial`: one axial contact
+    /// per knee instead of two compartments (the ingredient study of
+    /// docs/knee_contact.md).
+    pub knee_contact_frontal: bool,
 }
 
 /// How a frame's equality constraints are built.
@@ -136,6 +146,25 @@ impl StaticOptimizationSetup {
                     other => return Err(f.error(format!("solver must be 'auto' (or 'newton': the dual Newton solver, Clarabel where it does not apply or converge) or 'clarabel', found '{other}'"))),
                 },
                 _ => SolverChoice::Auto,
+            },
+            knee_contact_frontal: !el
+                .child("knee_contact")
+                .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
+            knee_contact: match el.child("knee_contact") {
+                None => KneeSelection::Off,
+                Some(k) => {
+                    let mut words = k.words();
+                    words.retain(|w| !w.eq_ignore_ascii_case("axial"));
+                    if words.is_empty() && !k.words().is_empty() {
+                        words.push("all".into());
+                    }
+                    match words.iter().map(|w| w.to_ascii_lowercase()).collect::<Vec<_>>().as_slice() {
+                        [] => return Err(k.error("knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'")),
+                        [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
+                        [w] if w == "true" || w == "all" => KneeSelection::All,
+                        _ => KneeSelection::Joints(words),
+                    }
+                }
             },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {

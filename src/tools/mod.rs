@@ -7,6 +7,7 @@ pub mod check;
 pub use crate::frame::interrupt;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
+pub mod knee_contact;
 pub mod knee_loads;
 pub mod loading;
 pub mod motion_gen;
