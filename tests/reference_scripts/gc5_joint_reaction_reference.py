@@ -110,7 +110,7 @@ def main():
             f.write(f"nRows={len(rb)}\nnColumns={len(keep)}\ninDegrees=no\nendheader\n")
             f.write("\t".join(lb[j] for j in keep) + "\n")
             for r in rb:
-                f.write("\t".join("%.6f" % r[j] for j in keep) + "\n")
+                f.write("\t".join(("%.8f" if j == 0 else "%.6f") % r[j] for j in keep) + "\n")
         print("stored", STORE)
 
 
