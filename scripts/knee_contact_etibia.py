@@ -50,6 +50,11 @@ def main():
             root = "walker_knee_l_on_tibia_l_in_tibia_l_"
             fx, fy, fz = col(root + "fx"), col(root + "fy"), col(root + "fz")
             series = {"total": [math.sqrt(a * a + b * b + c * c) for a, b, c in zip(fx, fy, fz)]}
+            # The split the method's rows imply (left knee: medial +z, lateral -z, 40 mm apart).
+            mx = col(root + "mx")
+            med = [(m + 0.020 * -y) / 0.040 for y, m in zip(fy, mx)]
+            series["medial"] = med
+            series["lateral"] = [-y - a for y, a in zip(fy, med)]
         print(path)
         for name, k in (("total", 3), ("medial", 1), ("lateral", 2)):
             if name in series:

@@ -34,13 +34,13 @@ use crate::model::Model;
 use crate::muscles::set::MuscleFrame;
 use crate::paths::geometry;
 
-/// Distance between the medial and lateral compartments' load centres (m):
-/// the adult male tibial plateau is about 78 mm wide, its medial and lateral
-/// plateaus 33 and 35 mm (Hartford-type CT morphometry, 26 male knees: ML
-/// width medial 33 ± 2 mm, lateral 34.8 ± 2.4 mm), so the compartment
-/// centres lie 78 − (33 + 35)/2 ≈ 44 mm apart. Lerner et al. 2015 and Winby
-/// et al. 2009 place their two contact points 40–50 mm apart.
-pub const CONDYLE_SPACING: f64 = 0.044;
+/// Distance between the medial and lateral compartments' load centres (m),
+/// each compartment loaded at its plateau's centre: the proximal tibia is
+/// 73.5 ± 5.6 mm wide (Kwak et al. 2007, CT of 100 cadavers), its medial and
+/// lateral plateaus 33 ± 2 and 34.8 ± 2.4 mm (CT of 26 male knees, J Bone Joint
+/// Surg Br 92-B Supp IV, 2010), so the
+/// centres lie 73.5 − (33 + 34.8)/2 ≈ 40 mm apart.
+pub const CONDYLE_SPACING: f64 = 0.040;
 
 /// Newtons per unit multiplier of a compartment: statopt's default
 /// `optimal_force` of a contact (`contacts::element`), so a compartment is

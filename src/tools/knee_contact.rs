@@ -55,7 +55,7 @@ pub fn labels(knees: &[Knee]) -> Vec<String> {
         .collect()
 }
 
-pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact method (docs/knee_contact.md): per knee, flexion in degrees (flexion positive); total_N = magnitude of the tibiofemoral reaction on the tibia; medial_N, lateral_N = the compartments' compressive loads (along the tibial long axis, balancing the frontal-plane moment at 44 mm apart). Units N.";
+pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact method (docs/knee_contact.md): per knee, flexion in degrees (flexion positive); total_N = magnitude of the tibiofemoral reaction on the tibia; medial_N, lateral_N = the compartments' compressive loads (along the tibial long axis, balancing the frontal-plane moment at 40 mm apart). Units N.";
 
 /// Write `out` from the knees' reaction table `reactions` (from
 /// [`reaction_specs`]), knee angles from `states` at the table's times.
