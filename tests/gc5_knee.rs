@@ -82,7 +82,10 @@ fn joint_reaction_matches_opensim_with_beta_columns_in_radians() {
     };
     let summary = analyze::run(&setup, &opts).unwrap();
     assert!(
-        !summary.warnings.iter().any(|w| w.contains("dependent coordinate")),
+        !summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("dependent coordinate")),
         "the radian columns agree with the couplers: {:?}",
         summary.warnings
     );
@@ -140,7 +143,10 @@ pub struct Agreement {
 }
 
 fn agreement(time: &[f64], y: &[f64], measured: &[(f64, f64)], bw: f64) -> Agreement {
-    let ours: Vec<f64> = measured.iter().map(|(p, _)| at_percent(time, y, *p)).collect();
+    let ours: Vec<f64> = measured
+        .iter()
+        .map(|(p, _)| at_percent(time, y, *p))
+        .collect();
     let n = measured.len() as f64;
     let rmse = (ours
         .iter()
@@ -159,8 +165,14 @@ fn agreement(time: &[f64], y: &[f64], measured: &[(f64, f64)], bw: f64) -> Agree
     };
     Agreement {
         rmse,
-        peak1: (peak(0.0, 50.0, &|i| ours[i]), peak(0.0, 50.0, &|i| measured[i].1)),
-        peak2: (peak(40.0, 80.0, &|i| ours[i]), peak(40.0, 80.0, &|i| measured[i].1)),
+        peak1: (
+            peak(0.0, 50.0, &|i| ours[i]),
+            peak(0.0, 50.0, &|i| measured[i].1),
+        ),
+        peak2: (
+            peak(40.0, 80.0, &|i| ours[i]),
+            peak(40.0, 80.0, &|i| measured[i].1),
+        ),
     }
 }
 
@@ -201,8 +213,16 @@ fn knee_contact_on_ss1_against_the_etibia() {
     );
     // The compartments only push, and they carry the axial part of the total.
     for i in 0..t.time.len() {
-        assert!(medial[i] >= -1e-3 && lateral[i] >= -1e-3, "t = {}", t.time[i]);
-        assert!(medial[i] + lateral[i] <= total[i] + 1e-3, "t = {}", t.time[i]);
+        assert!(
+            medial[i] >= -1e-3 && lateral[i] >= -1e-3,
+            "t = {}",
+            t.time[i]
+        );
+        assert!(
+            medial[i] + lateral[i] <= total[i] + 1e-3,
+            "t = {}",
+            t.time[i]
+        );
     }
     let (_, model) =
         statopt::model::load::load_model(&dir.join("Rajagopal2015-scaled.osim")).unwrap();
@@ -223,11 +243,17 @@ fn knee_contact_on_ss1_against_the_etibia() {
     // measured 0.54 BW and 3.37 BW with a margin for rounding only.
     assert!(a.rmse <= 0.56, "total RMSE {:.3} BW", a.rmse);
     assert!(a.peak1.0 <= 3.45 && a.peak2.0 <= 3.45, "peaks");
-    assert!(a.peak1.0 >= 1.69 && a.peak2.0 >= 1.59, "peaks below the eTibia's by more than 0.5 BW");
+    assert!(
+        a.peak1.0 >= 1.69 && a.peak2.0 >= 1.59,
+        "peaks below the eTibia's by more than 0.5 BW"
+    );
     let bar = a.rmse <= 0.5
         && (a.peak1.0 - a.peak1.1).abs() <= 0.5
         && (a.peak2.0 - a.peak2.1).abs() <= 0.5;
-    println!("issue 29's bar (RMSE <= 0.5 BW, both peaks within 0.5 BW): {}", if bar { "met" } else { "NOT met" });
+    println!(
+        "issue 29's bar (RMSE <= 0.5 BW, both peaks within 0.5 BW): {}",
+        if bar { "met" } else { "NOT met" }
+    );
 }
 
 /// The method's rows are the knee reaction the JointReaction computes
@@ -268,12 +294,8 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
     let specs = knee_contact::reaction_specs(&problem.model, &problem.knees);
     let nvar = problem.controls.len() + 3 * problem.contacts.len();
     let mut ws = Workspace::new(&problem.model, &problem.muscles);
-    let rows = statopt::tools::analyze::frame_rows(
-        &states.time,
-        setup.initial_time,
-        setup.final_time,
-        1,
-    );
+    let rows =
+        statopt::tools::analyze::frame_rows(&states.time, setup.initial_time, setup.final_time, 1);
     assert_eq!(rows.len(), 132);
     for &i in rows.iter().step_by(9) {
         let (t, q, u) = (states.time[i], &states.q[i], &states.u[i]);
@@ -301,4 +323,52 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
             assert!((pm - med).abs() < 1e-3 * scale && (pl - lat).abs() < 1e-3 * scale);
         }
     }
+}
+
+/// A w0 sweep of the knee contact method on a setup without contacts writes
+/// one KneeContact table per w0 and the sweep's statistics (it used to stop
+/// at the contact tables such a run does not have). The knee force falls as
+/// w0 falls (the compartments cost more).
+#[test]
+fn knee_contact_sweeps_w0_without_machine_contacts() {
+    use statopt::parse::setup::Analysis;
+    let Some(dir) = gc5_dir("knee_contact_sweeps_w0_without_machine_contacts") else {
+        return;
+    };
+    let mut setup = match Setup::read(&dir.join("setup_ss1.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    for a in setup.analyses.iter_mut() {
+        if let Analysis::Other { element, .. } = a {
+            if element.name == "StaticOptimization" {
+                for (name, text) in [
+                    ("knee_contact", "walker_knee_l"),
+                    ("contact_weight", "100 1000"),
+                ] {
+                    let mut e = element.children[0].clone();
+                    e.name = name.into();
+                    e.children.clear();
+                    e.text = text.into();
+                    element.children.push(e);
+                }
+            }
+        }
+    }
+    let out = common::out_dir("gc5_knee_contact_sweep");
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    let summary = analyze::run(&setup, &opts).unwrap();
+    assert_eq!(summary.failed, 0);
+    let peak = |w0: &str| {
+        let t = storage::read(&out.join(format!("GC5_ss1_w0_{w0}_KneeContact.sto"))).unwrap();
+        assert_eq!(t.labels.len(), 4, "walker_knee_l only");
+        let j = t.column_index("walker_knee_l_total_N").unwrap();
+        t.rows.iter().map(|r| r[j]).fold(0.0, f64::max)
+    };
+    assert!(peak("100") < peak("1000"));
+    assert!(out.join("GC5_ss1_SO_w0_mean_force.sto").is_file());
 }

@@ -457,8 +457,12 @@ impl SoProblem {
         }
         if nk > 0 {
             problem.lower.extend(std::iter::repeat(0.0).take(2 * nk));
-            problem.upper.extend(std::iter::repeat(f64::INFINITY).take(2 * nk));
-            problem.weights.extend(std::iter::repeat(1.0 / self.w0).take(2 * nk));
+            problem
+                .upper
+                .extend(std::iter::repeat(f64::INFINITY).take(2 * nk));
+            problem
+                .weights
+                .extend(std::iter::repeat(1.0 / self.w0).take(2 * nk));
             self.knee_rows(
                 data,
                 mf,
