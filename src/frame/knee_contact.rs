@@ -151,6 +151,8 @@ pub struct KneeScratch {
     /// Per knee, per variable: the reaction's change per unit variable
     /// (force, moment about the ground origin, ground frame).
     unit: Vec<BodyForce>,
+    /// Per knee: the reaction at x = 0.
+    r0: Vec<BodyForce>,
 }
 
 fn distal_sum(knee: &Knee, applied: &[BodyForce]) -> BodyForce {
@@ -218,13 +220,13 @@ impl SoProblem {
         let nk = self.knees.len();
         s.unit.clear();
         s.unit.resize(nk * nvar, BodyForce::default());
-        let mut r0 = Vec::with_capacity(nk);
+        s.r0.clear();
         for k in &self.knees {
             let mut r = data.joint_force[k.tibia];
             let p = distal_sum(k, &s.applied);
             r.force -= p.force;
             r.moment -= p.moment;
-            r0.push(r);
+            s.r0.push(r);
         }
         // Per control: its force per unit variable on the distal bodies.
         for (v, ctl) in self.controls.iter().enumerate() {
@@ -271,7 +273,7 @@ impl SoProblem {
         }
         for (ki, k) in self.knees.iter().enumerate() {
             let (ra, rb) = (row0 + 2 * ki, row0 + 2 * ki + 1);
-            let (f0, m0) = in_tibia(data, k.tibia, &r0[ki]);
+            let (f0, m0) = in_tibia(data, k.tibia, &s.r0[ki]);
             // l_med + l_lat + Σ G_y x = −F0_y ;  z·l − Σ G_mx x = M0_x.
             b[ra] = -f0.y;
             b[rb] = if k.frontal { m0.x } else { 0.0 };
@@ -307,4 +309,39 @@ pub fn compartments(knee: &Knee, fy: f64, mx: f64) -> (f64, f64) {
     let [zm, zl] = knee.z;
     let med = (mx - zl * n) / (zm - zl);
     (med, n - med)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn knee(side: f64) -> Knee {
+        let h = 0.5 * CONDYLE_SPACING;
+        Knee {
+            name: "k".into(),
+            tibia: 1,
+            femur: 0,
+            distal: vec![false, true],
+            z: [side * h, -side * h],
+            frontal: true,
+        }
+    }
+
+    /// The two rows solved for the compartments: they carry the compression
+    /// and balance the frontal moment, and a moment towards the medial side
+    /// (+z on a left knee, −z on a right one) loads the medial compartment.
+    #[test]
+    fn compartments_balance_compression_and_frontal_moment() {
+        for (side, mx) in [(1.0, 10.0), (-1.0, -10.0), (1.0, -4.0), (-1.0, 7.5)] {
+            let k = knee(side);
+            let fy = -1000.0;
+            let (med, lat) = compartments(&k, fy, mx);
+            assert!((med + lat - 1000.0).abs() < 1e-9);
+            assert!((k.z[0] * med + k.z[1] * lat - mx).abs() < 1e-9);
+            // |mx| / spacing moves from one side to the other.
+            let shift = mx.abs() / CONDYLE_SPACING;
+            let expected_med = 500.0 + if side * mx > 0.0 { shift } else { -shift };
+            assert!((med - expected_med).abs() < 1e-9, "{side} {mx}: {med}");
+        }
+    }
 }
