@@ -32,7 +32,7 @@ def mean(rows, axis, key):
 def stance(rows, key):
     seen = {}
     for r in rows:
-        if r[key] != "":
+        if r[key] not in ("", "NaN", "nan") and float(r[key]) == float(r[key]):
             seen[r["foot"]] = float(r[key])
     v = list(seen.values())
     return sum(v) / len(v) if v else float("nan")

@@ -473,6 +473,29 @@ fn treadmill_running_of_another_subject() {
         worst < predict_grf::REJECT_ROOT_RESIDUAL,
         "flight root residual {worst}"
     );
+    // The same trial forced overground (a wrong floor, as the old median
+    // found): the feet slide on a still floor, the pelvis carries the body,
+    // and the physics rejects the prediction.
+    let wrong = predict_grf::run_with(
+        &setup,
+        &RunOptions {
+            results_dir: Some(common::out_dir("predict_grf_run_s02_3_overground")),
+            verbose: false,
+            ..Default::default()
+        },
+        &predict_grf::FloorOptions {
+            height: None,
+            motion: predict_grf::FloorMotion::Overground,
+        },
+    )
+    .unwrap();
+    let line = wrong
+        .rejected
+        .as_deref()
+        .expect("a wrong floor is rejected");
+    println!("forced overground: {line}");
+    assert!(line.contains("rejected by the physics"), "{line}");
+    assert!(!wrong.metrics.is_empty(), "the comparison is still written");
     // Every time a warning names lies inside the trial.
     for w in &p.summary.warnings {
         for part in w.split("t = ").skip(1).chain(w.split("t=").skip(1)) {
