@@ -567,7 +567,13 @@ pub fn run_with(
         Some(mf) => external_forces_of(mf)?,
         None => default_layout(),
     };
-    let (mot, xml) = write_external_loads(&prediction.predicted, &layout, &dir, &setup)?;
+    let (mot, xml) = write_external_loads(
+        &prediction.predicted,
+        &layout,
+        &dir,
+        &setup.name,
+        &setup.setup_file,
+    )?;
     prediction.summary.files.extend([mot, xml]);
     if let Some(mf) = measured_file {
         let setup_dir = setup.dir();
@@ -776,32 +782,47 @@ pub fn measured_foot_loads(
         data.q.copy_from_slice(&states.q[i]);
         data.u.copy_from_slice(&states.u[i]);
         kinematics::full(model, &mut data);
-        let mut f = [Vector3::zeros(); 2];
-        // Several plates under one foot: their centres of pressure weighted
-        // by their vertical forces.
-        let mut weighted = [Vector3::zeros(); 2];
-        let mut fy = [0.0; 2];
+        let mut plates = Vec::with_capacity(loads.forces.len());
         for ef in &loads.forces {
             let name = &model.bodies[ef.applied_to_body].name;
-            let s = if name.ends_with("_l") { 1 } else { 0 };
+            let s = usize::from(name.ends_with("_l"));
             let (fe, pe, _) = ef.evaluate(t, &data)?;
-            f[s] += fe;
-            if pe.iter().all(|x| x.is_finite()) && fe.y.abs() > 1e-9 {
-                weighted[s] += pe * fe.y;
-                fy[s] += fe.y;
-            }
+            plates.push((s, fe, pe));
         }
+        let (f, cop) = per_foot(&plates);
         for s in 0..2 {
             out.force[s].push(f[s]);
-            out.cop[s].push(if fy[s].abs() > 1e-9 {
-                weighted[s] / fy[s]
-            } else {
-                Vector3::repeat(f64::NAN)
-            });
+            out.cop[s].push(cop[s]);
             out.free_moment[s].push(0.0);
         }
     }
     Ok(out)
+}
+
+/// Plates (foot 0 right / 1 left, force, centre of pressure; ground) summed
+/// per foot: the forces added, the centres of pressure weighted by the
+/// plates' vertical forces (NaN without vertical force).
+fn per_foot(
+    plates: &[(usize, Vector3<f64>, Vector3<f64>)],
+) -> ([Vector3<f64>; 2], [Vector3<f64>; 2]) {
+    let mut f = [Vector3::zeros(); 2];
+    let mut weighted = [Vector3::zeros(); 2];
+    let mut fy = [0.0; 2];
+    for &(s, fe, pe) in plates {
+        f[s] += fe;
+        if pe.iter().all(|x| x.is_finite()) && fe.y.abs() > 1e-9 {
+            weighted[s] += pe * fe.y;
+            fy[s] += fe.y;
+        }
+    }
+    let cop = [0, 1].map(|s| {
+        if fy[s].abs() > 1e-9 {
+            weighted[s] / fy[s]
+        } else {
+            Vector3::repeat(f64::NAN)
+        }
+    });
+    (f, cop)
 }
 
 /// Pearson rho, RMSE (N and % body weight) and peak error per foot and axis.
@@ -972,10 +993,11 @@ fn write_external_loads(
     loads: &FootLoads,
     layout: &[ForceLayout],
     dir: &std::path::Path,
-    setup: &AnalyzeSetup,
+    name: &str,
+    setup_file: &std::path::Path,
 ) -> Result<(PathBuf, PathBuf)> {
-    let mot = dir.join(format!("{}_predicted_grf.mot", setup.name));
-    let xml = dir.join(format!("{}_predicted_grf.xml", setup.name));
+    let mot = dir.join(format!("{name}_predicted_grf.mot"));
+    let xml = dir.join(format!("{name}_predicted_grf.xml"));
     let mut labels = Vec::new();
     for f in layout {
         for id in [
@@ -989,7 +1011,7 @@ fn write_external_loads(
         }
     }
     let mut w = StoWriter::create_for_setup(
-        &setup.setup_file,
+        setup_file,
         &mot,
         "predicted_grf",
         "Ground reactions predicted by statopt predict-grf (force N, point m, torque N m; ground frame).\n",
@@ -1236,6 +1258,82 @@ mod tests {
             .1
             .expect("rejected");
         assert!(line.contains("100 of 100"), "{line}");
+    }
+
+    /// Two plates under the right foot, one under the left: the foot's
+    /// force is their sum and its centre of pressure the plates' weighted
+    /// by their vertical forces (it was the last plate's).
+    #[test]
+    fn plates_under_one_foot_are_combined() {
+        let plates = [
+            (
+                0,
+                Vector3::new(10.0, 300.0, 0.0),
+                Vector3::new(0.0, 0.0, 0.1),
+            ),
+            (
+                0,
+                Vector3::new(5.0, 100.0, 0.0),
+                Vector3::new(0.4, 0.0, 0.1),
+            ),
+            (1, Vector3::new(0.0, 0.0, 0.0), Vector3::new(9.0, 0.0, 9.0)),
+        ];
+        let (f, cop) = per_foot(&plates);
+        assert_eq!(f[0], Vector3::new(15.0, 400.0, 0.0));
+        assert!(
+            (cop[0] - Vector3::new(0.1, 0.0, 0.1)).norm() < 1e-12,
+            "{cop:?}"
+        );
+        assert!(cop[1].x.is_nan(), "no load: no centre of pressure");
+    }
+
+    /// The predicted loads in a measured layout with three plates under the
+    /// right foot (`ground_force_calcn_r` style names) and one under the
+    /// left: each foot is loaded once (the first of its plates carries it),
+    /// not once per plate.
+    #[test]
+    fn predicted_loads_load_each_foot_once_whatever_its_plates() {
+        let dir = std::env::temp_dir().join(format!("statopt_plates_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plate = |name: &str, body: &str, id: &str| ForceLayout {
+            name: name.into(),
+            body: body.into(),
+            force_identifier: format!("{id}_v"),
+            point_identifier: format!("{id}_p"),
+            torque_identifier: format!("{id}_m"),
+        };
+        let layout = [
+            plate("r1", "calcn_r", "ground_force_calcn_r"),
+            plate("r2", "calcn_r", "1_ground_force"),
+            plate("l1", "calcn_l", "L_ground_force"),
+            plate("r3", "calcn_r", "3_ground_force"),
+        ];
+        let loads = FootLoads {
+            time: vec![0.0, 0.01],
+            force: [
+                vec![Vector3::new(1.0, 700.0, 2.0); 2],
+                vec![Vector3::new(-1.0, 100.0, 0.0); 2],
+            ],
+            cop: [
+                vec![Vector3::new(0.1, 0.0, 0.2); 2],
+                vec![Vector3::zeros(); 2],
+            ],
+            free_moment: [vec![0.5; 2], vec![0.0; 2]],
+        };
+        let (mot, _) =
+            write_external_loads(&loads, &layout, &dir, "t", &dir.join("setup.xml")).unwrap();
+        let t = storage::read(&mot).unwrap();
+        let sum = |ids: &[&str]| -> f64 {
+            ids.iter()
+                .map(|id| t.rows[0][t.column_index(&format!("{id}_vy")).unwrap()])
+                .sum()
+        };
+        assert_eq!(
+            sum(&["ground_force_calcn_r", "1_ground_force", "3_ground_force"]),
+            700.0
+        );
+        assert_eq!(sum(&["L_ground_force"]), 100.0);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
