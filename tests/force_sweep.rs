@@ -273,3 +273,20 @@ fn a_study_force_sweep_element_writes_its_metrics() {
     let e = tools::run_setup(&study_file, &RunOptions::default()).unwrap_err().to_string();
     assert!(e.contains("unknown element <Candidat>"), "{e}");
 }
+
+/// The design sweep compares its circular cam with the cam 1 setup's run,
+/// and sweeps the cam 2 setup: the two stay alike but for the cam (the
+/// cam 2 setup once titled its quadriceps power figure "cam 1").
+#[test]
+fn the_rajagopal_cam_setups_differ_only_in_the_cam() {
+    let read = |n: u8| {
+        std::fs::read_to_string(root().join(format!("setups/leg_extension_rajagopal_cam{n}.xml")))
+            .unwrap()
+    };
+    let cam1 = read(1).replace("cam1", "cam2").replace("cam 1", "cam 2");
+    let cam2 = read(2);
+    for (k, (a, b)) in cam1.lines().zip(cam2.lines()).enumerate() {
+        assert_eq!(a, b, "line {}", k + 1);
+    }
+    assert_eq!(cam1.lines().count(), cam2.lines().count());
+}

@@ -267,7 +267,8 @@ def main(argv=None):
     ax[2].scatter(pts.least_work * 100, pts.worst, s=12, c=pts.b_over_a, cmap="viridis",
                   label="ellipses b/a 0.3-1.0")
     order = pts.sort_values("least_work", ascending=False)
-    front = order[order.worst <= order.worst.cummin()]  # non-dominated: more work, less peak
+    # non-dominated: no shape with as much work or more has as low a peak
+    front = order[order.worst < order.worst.cummin().shift(fill_value=np.inf)]
     ax[2].plot(front.least_work * 100, front.worst, "k-", lw=1, label="Pareto front of the grid")
     ax[2].plot([band.loc[best_ratio].least_work * 100], [best_ellipse], "s", color="C0", ms=9,
                label=f"best feasible ellipse b/a = {best_ratio:g}")
