@@ -183,7 +183,8 @@ pub struct Assembly {
     pub states: Vec<ContactState>,
     /// The external loads' force-table values (`ExternalLoads::apply_recording`).
     pub external: Vec<f64>,
-    couplings: Vec<Vec<(usize, f64)>>,
+    /// Per equation row: the coupling vector C_k (coordinate, coefficient).
+    pub(crate) couplings: Vec<Vec<(usize, f64)>>,
     g: Vec<f64>,
     cols: [Vec<f64>; 3],
     /// The outputs' working buffers ([`SoProblem::frame_result_into`]).
@@ -801,7 +802,7 @@ impl SoProblem {
 
     /// The outputs of the frame problem in `asm`, solved in
     /// `out.solution`, into `out` (its buffers reused).
-    fn frame_result_into(
+    pub(crate) fn frame_result_into(
         &self,
         t: f64,
         asm: &mut Assembly,

@@ -440,7 +440,7 @@ impl<'a> RunWriters<'a> {
         if let Some(log) = self.log {
             log.finish()?;
         }
-        let stats = self.stats;
+        let mut stats = self.stats;
         let warnings = stats.warnings(problem, nframes, &diag_path);
         let root_body_weight = stats.root_body_weight(problem);
         let note = if shared > 1 {
@@ -475,6 +475,7 @@ impl<'a> RunWriters<'a> {
             root_body_weight,
             root_force_peak: stats.root_peaks[0].clone(),
             root_moment_peak: stats.root_peaks[1].clone(),
+            root_force_series: std::mem::take(&mut stats.root_force_series),
             notes: vec![note],
             results_dirs: Vec::new(),
             stopped: (!completed).then(|| {
