@@ -240,7 +240,17 @@ impl ReactionBasis {
                 self.columns = DMatrix::zeros(n, nv + 3 * nc);
             }
             let mut r0 = std::mem::take(&mut self.r0);
-            evaluate(problem, t, ws, &states, specs, &self.forces, None, None, &mut r0)?;
+            evaluate(
+                problem,
+                t,
+                ws,
+                &states,
+                specs,
+                &self.forces,
+                None,
+                None,
+                &mut r0,
+            )?;
             self.r0 = r0;
             // The forward dynamics of r₀ left M_r and C in data.forward.
             let c = ws.data.forward.coupling.clone();
@@ -265,7 +275,17 @@ impl ReactionBasis {
                 }
             }
             for (col, probe) in probes {
-                linear_response(problem, ws, &states, specs, &factor, &c, probe, &mut y, &mut self.row);
+                linear_response(
+                    problem,
+                    ws,
+                    &states,
+                    specs,
+                    &factor,
+                    &c,
+                    probe,
+                    &mut y,
+                    &mut self.row,
+                );
                 let size = match probe {
                     Probe::Control(_, p) => p,
                     _ => 1.0,
@@ -274,7 +294,8 @@ impl ReactionBasis {
                     self.columns[(i, col)] = r / size;
                 }
             }
-            self.mobility.resize_with(coordinates.len(), Default::default);
+            self.mobility
+                .resize_with(coordinates.len(), Default::default);
             for (m, &k) in self.mobility.iter_mut().zip(coordinates) {
                 linear_response(
                     problem,

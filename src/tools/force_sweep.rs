@@ -195,9 +195,10 @@ fn plan_metric(
         coupled[j].used = true;
     }
     let column = |c: &str| {
-        labels.iter().position(|l| l == c).ok_or_else(|| {
-            el.error(format!("{file} has no column '{c}'"))
-        })
+        labels
+            .iter()
+            .position(|l| l == c)
+            .ok_or_else(|| el.error(format!("{file} has no column '{c}'")))
     };
     let columns = el
         .attr("columns")
@@ -463,7 +464,15 @@ impl Plan {
         let problem = &self.problem;
         frame.t = t;
         let ws = &mut frame.ws;
-        let m_r = problem.assemble(t, q, u, udot, &mut ws.data, &mut ws.muscles, &mut ws.assembly);
+        let m_r = problem.assemble(
+            t,
+            q,
+            u,
+            udot,
+            &mut ws.data,
+            &mut ws.muscles,
+            &mut ws.assembly,
+        );
         if m_r.is_some() {
             return Err(Error::internal("force sweep: perturbation rows"));
         }
@@ -543,7 +552,12 @@ impl Plan {
                 }
                 let row = &mut buf.reaction_rows[j];
                 row.resize(9 * c.specs.len(), 0.0);
-                frame.bases[j].reactions_into(&r.forces, &r.solution.x[nv..], &frame.scratch.dg, row);
+                frame.bases[j].reactions_into(
+                    &r.forces,
+                    &r.solution.x[nv..],
+                    &frame.scratch.dg,
+                    row,
+                );
                 if let Some((sides, patella)) = &c.knee {
                     crate::tools::knee_loads::knee_row(
                         &frame.ws.data,
@@ -638,7 +652,12 @@ impl Collected {
         }
     }
 
-    fn outcome(self, plan: &Plan, loop_seconds: f64, warnings: Vec<String>) -> Result<SweepOutcome> {
+    fn outcome(
+        self,
+        plan: &Plan,
+        loop_seconds: f64,
+        warnings: Vec<String>,
+    ) -> Result<SweepOutcome> {
         let time = &self.time;
         let values = self
             .series
@@ -712,7 +731,9 @@ pub fn run(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    in_pool(opts.threads, || run_streamed(setup, candidates, opts, sweep))
+    in_pool(opts.threads, || {
+        run_streamed(setup, candidates, opts, sweep)
+    })
 }
 
 fn open_stream<'m>(
@@ -746,11 +767,8 @@ fn run_streamed(
     let nframes = (i0..=i1)
         .filter(|&i| crate::frame::driver::is_frame(i, i0, i1, step))
         .count();
-    let mut progress = crate::tools::progress::bar(
-        nframes as u64,
-        opts,
-        &format!("{}_force_sweep", setup.name),
-    );
+    let mut progress =
+        crate::tools::progress::bar(nframes as u64, opts, &format!("{}_force_sweep", setup.name));
     let mut collected = Collected::new(cands.len(), plan.metrics.len());
     let started = Instant::now();
     let first = stream.next_block()?;
@@ -766,7 +784,13 @@ fn run_streamed(
         step,
         || (plan_ref.new_frame(), CandidateBuffers::default()),
         |(frame, buf), block, i| {
-            plan_ref.prepare(block.time[i], &block.q[i], &block.u[i], &block.udot[i], frame)?;
+            plan_ref.prepare(
+                block.time[i],
+                &block.q[i],
+                &block.u[i],
+                &block.udot[i],
+                frame,
+            )?;
             Ok(plan_ref.solve(cands, chain_of, sweep.warm, frame, buf))
         },
         |fv| {
@@ -860,7 +884,11 @@ impl Scene {
     }
 
     /// Solve every frame for `candidates` (frames in parallel).
-    pub fn run(&mut self, candidates: &[CandidateSpec], sweep: &SweepOptions) -> Result<SweepOutcome> {
+    pub fn run(
+        &mut self,
+        candidates: &[CandidateSpec],
+        sweep: &SweepOptions,
+    ) -> Result<SweepOutcome> {
         let Scene {
             plan,
             setup,
@@ -919,7 +947,12 @@ pub fn run_element(
     let path = out.join(format!("{name}_force_sweep.csv"));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
     let mut w = csv::Writer::from_path(&path).map_err(csv_err)?;
-    let mut header = vec!["candidate".to_string(), "w0".into(), "frames".into(), "failed".into()];
+    let mut header = vec![
+        "candidate".to_string(),
+        "w0".into(),
+        "frames".into(),
+        "failed".into(),
+    ];
     header.extend(outcome.metric_names.iter().cloned());
     w.write_record(&header).map_err(csv_err)?;
     for (((n, spec), values), failed) in names
@@ -947,9 +980,9 @@ pub fn read_element(
     el: &Element,
     dir: &std::path::Path,
 ) -> Result<(AnalyzeSetup, Vec<CandidateSpec>, Vec<String>)> {
-    let file = el
-        .attr("setup")
-        .ok_or_else(|| el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)"))?;
+    let file = el.attr("setup").ok_or_else(|| {
+        el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)")
+    })?;
     let path = crate::parse::setup::resolve(dir, file);
     let Setup::Analyze(setup) = Setup::read(&path)? else {
         return Err(el.error(format!("setup=\"{file}\" is not an AnalyzeTool setup")));
@@ -957,9 +990,9 @@ pub fn read_element(
     let w0s: Vec<f64> = match el.child("contact_weight") {
         Some(c) => c.numbers()?,
         None => {
-            let (so_el, common) = setup.analysis_element("StaticOptimization").ok_or_else(|| {
-                el.error(format!("{file} has no StaticOptimization"))
-            })?;
+            let (so_el, common) = setup
+                .analysis_element("StaticOptimization")
+                .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?;
             StaticOptimizationSetup::from_xml(so_el, common.clone())?.contact_weights
         }
     };
@@ -1005,10 +1038,7 @@ pub fn read_element(
             .map(str::to_string)
             .unwrap_or_else(|| format!("candidate_{k}"));
         for &w0 in &w0s {
-            specs.push(CandidateSpec {
-                w0,
-                ..spec.clone()
-            });
+            specs.push(CandidateSpec { w0, ..spec.clone() });
             names.push(name.clone());
         }
     }

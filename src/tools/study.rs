@@ -499,7 +499,11 @@ fn prepare(
     moved_to: Option<&Path>,
 ) -> Result<(Vec<PlannedRun>, Vec<Element>, Vec<(PathBuf, Location)>)> {
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
-    let sweeps: Vec<&Element> = study.children.iter().filter(|c| c.name == "ForceSweep").collect();
+    let sweeps: Vec<&Element> = study
+        .children
+        .iter()
+        .filter(|c| c.name == "ForceSweep")
+        .collect();
     if setups.is_empty() && sweeps.is_empty() {
         return Err(study.error("the study names no <setups> (and has no <ForceSweep>)"));
     }
@@ -616,9 +620,9 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     // Force sweeps: candidates of one setup on one compiled scene, their
     // metrics in <name>_force_sweep.csv (tools::force_sweep).
     for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {
-        summary
-            .files
-            .push(crate::tools::force_sweep::run_element(sw, &dir, &out, opts)?);
+        summary.files.push(crate::tools::force_sweep::run_element(
+            sw, &dir, &out, opts,
+        )?);
     }
     summary.files.extend(draw(
         &elements,
