@@ -330,9 +330,9 @@ struct CandidateBuffers {
     reaction_rows: Vec<Vec<f64>>,
     /// Per coupled JointReaction with knee loads: the candidate's row.
     knee_rows: Vec<Vec<f64>>,
-    /// Per warm-start chain (a w0): the last two candidates' multipliers
-    /// (the last one second), and the start handed to the next.
-    chains: Vec<[Vec<f64>; 2]>,
+    /// Per warm-start chain (a w0): the last three candidates' multipliers
+    /// (the last one last), and the start handed to the next.
+    chains: Vec<[Vec<f64>; 3]>,
     start: Vec<f64>,
 }
 
@@ -506,15 +506,25 @@ impl Plan {
         for (k, cand) in cands.iter().enumerate() {
             let chain = chain_of[k];
             // Warm start: the previous candidate's multipliers, or their
-            // linear extrapolation from the two before (candidates along a
-            // line of designs move their multipliers along a curve); the
-            // answer is the same either way.
-            let [older, last] = &buf.chains[chain];
+            // extrapolation from the two or three before (candidates along a
+            // line of designs move their multipliers along a smooth curve,
+            // and where it is smooth enough Newton has nothing left to do);
+            // the answer is the same either way.
+            let [oldest, older, last] = &buf.chains[chain];
             let y0 = if !warm || last.is_empty() {
                 None
             } else {
                 buf.start.clear();
-                if older.len() == last.len() {
+                if oldest.len() == last.len() && older.len() == last.len() {
+                    // Quadratic through the last three.
+                    buf.start.extend(
+                        oldest
+                            .iter()
+                            .zip(older)
+                            .zip(last)
+                            .map(|((a, b), c)| 3.0 * (c - b) + a),
+                    );
+                } else if older.len() == last.len() {
                     buf.start
                         .extend(older.iter().zip(last).map(|(a, b)| b + (b - a)));
                 } else {
@@ -532,9 +542,9 @@ impl Plan {
             );
             let r = &buf.result;
             let kept = &mut buf.chains[chain];
-            kept.swap(0, 1);
-            kept[1].clear();
-            kept[1].extend_from_slice(&r.solution.y);
+            kept.rotate_left(1);
+            kept[2].clear();
+            kept[2].extend_from_slice(&r.solution.y);
             out.failed.push(status_code(r.solution.status) < 0.0);
             out.iterations += r.solution.iterations as u64;
             for (j, c) in self.coupled.iter().enumerate() {
