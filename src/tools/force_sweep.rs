@@ -90,7 +90,7 @@ enum Source {
     Diagnostics,
     ContactForces,
     ContactBodyForces,
-    BySource,
+    GeneralizedForces,
     MusclePower,
     /// A coupled JointReaction's ReactionLoads (index into the sweep's).
     Reactions(usize),
@@ -121,7 +121,7 @@ struct Coupled {
 }
 
 const SO_KINDS: [(&str, Source); 7] = [
-    ("GeneralizedForcesBySource", Source::BySource),
+    ("GeneralizedForcesBySource", Source::GeneralizedForces),
     ("ContactBodyForces", Source::ContactBodyForces),
     ("ContactForces", Source::ContactForces),
     ("MusclePower", Source::MusclePower),
@@ -183,7 +183,7 @@ fn plan_metric(
         Source::Diagnostics => DIAGNOSTICS_COLUMNS.iter().map(|s| s.to_string()).collect(),
         Source::ContactForces => problem.contact_labels(),
         Source::ContactBodyForces => problem.contact_body_labels(),
-        Source::BySource => problem.by_source_labels(),
+        Source::GeneralizedForces => problem.by_source_labels(),
         Source::MusclePower => problem.muscle_labels(),
         Source::Reactions(j) => coupled[j].labels.clone(),
         Source::Knee(j) => {
@@ -572,7 +572,7 @@ impl Plan {
                     Source::Diagnostics => diag.get_or_insert_with(|| diagnostics_row(r)),
                     Source::ContactForces => &r.contacts.contact,
                     Source::ContactBodyForces => &r.contacts.bodies,
-                    Source::BySource => &r.by_source,
+                    Source::GeneralizedForces => &r.by_source,
                     Source::MusclePower => &r.muscle_power,
                     Source::Reactions(j) => &buf.reaction_rows[j],
                     Source::Knee(j) => &buf.knee_rows[j],
