@@ -211,6 +211,9 @@ fn predict_grf<'py>(
         "belt_velocity",
         (p.contacts.belt_velocity.x, p.contacts.belt_velocity.z),
     )?;
+    pred.set_item("treadmill", p.contacts.decision.treadmill)?;
+    pred.set_item("floor_decision", p.contacts.decision.reason.clone())?;
+    pred.set_item("rejected", p.rejected.clone())?;
     pred.set_item("body_weight", p.body_weight)?;
     d.set_item("prediction", pred)?;
     Ok(d)
