@@ -326,15 +326,19 @@ impl ReactionBasis {
     /// the probed coordinates count) into `out`.
     pub fn reactions_into(&self, forces: &[f64], lambda: &[f64], dg: &[f64], out: &mut [f64]) {
         out.copy_from_slice(&self.r0);
-        let nv = forces.len();
-        for (j, x) in forces.iter().chain(lambda).enumerate() {
+        let n = out.len();
+        if n == 0 {
+            return;
+        }
+        // Column by column over the matrix's storage (column-major).
+        let columns = self.columns.as_slice().chunks_exact(n);
+        for (x, col) in forces.iter().chain(lambda).zip(columns) {
             if *x != 0.0 {
-                for (o, c) in out.iter_mut().zip(self.columns.column(j).iter()) {
+                for (o, c) in out.iter_mut().zip(col) {
                     *o += c * x;
                 }
             }
         }
-        debug_assert_eq!(self.columns.ncols(), nv + lambda.len());
         for (k, col) in &self.mobility {
             let d = dg.get(*k).copied().unwrap_or(0.0);
             if d != 0.0 {

@@ -157,9 +157,9 @@ mod tests {
     /// The process CPU clock counts every thread, those that have ended
     /// included (a clock of the main thread alone, which only waits here,
     /// would show about nothing): two threads that each spin until their
-    /// own CPU clock has advanced 40 ms add at least 80 ms, however busy the
-    /// host (spinning for a wall time instead failed on a loaded host: two
-    /// threads sharing a core got 34 ms of CPU in 60 ms).
+    /// own CPU clock shows 30 ms add at least 60 ms. (Spinning for 60 ms of
+    /// wall time, as this test did, failed on a loaded host, where a thread
+    /// gets less CPU than wall time.)
     #[test]
     fn process_cpu_time_counts_threads_that_ended() {
         use nix::time::{clock_gettime, ClockId};
@@ -168,9 +168,9 @@ mod tests {
             t.tv_sec() as f64 + t.tv_nsec() as f64 * 1e-9
         };
         let spin = || {
-            let t0 = thread_cpu();
+            let start = thread_cpu();
             let mut x = 0u64;
-            while thread_cpu() - t0 < 0.04 {
+            while thread_cpu() - start < 0.03 {
                 x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
                 std::hint::black_box(x);
             }
@@ -181,8 +181,6 @@ mod tests {
             s.spawn(spin);
         });
         let used = process_cpu_seconds().unwrap() - before;
-        // (Other tests of the binary run beside it and count too: the upper
-        // bound only catches a wrong unit.)
-        assert!((0.08..30.0).contains(&used), "{used} s of CPU");
+        assert!((0.06..5.0).contains(&used), "{used} s of CPU");
     }
 }

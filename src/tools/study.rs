@@ -257,11 +257,11 @@ pub fn metric_value(
                 .attr("value")
                 .and_then(|s| s.trim().parse().ok())
                 .ok_or_else(|| el.error("op at needs a numeric value attribute (the where column's value to read at)"))?;
-            crossing(&w, &y, |i| w[i] - x).unwrap_or(f64::NAN)
+            crossing(&w, y, |i| w[i] - x).unwrap_or(f64::NAN)
         }
         "crossing" => {
             let w = located()?;
-            crossing(&y, &w, |i| y[i]).unwrap_or(f64::NAN)
+            crossing(y, &w, |i| y[i]).unwrap_or(f64::NAN)
         }
         other => return Err(el.error(format!("unknown op '{other}' ({})", METRIC_OPS.join(", ")))),
     })
