@@ -153,6 +153,24 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// The setup's static optimization with statopt's knee contact method (docs/knee_contact.md):
+    /// each knee's medial and lateral compartments as unknown contact forces of the optimisation.
+    /// Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
+    /// lateral force) and its figure.
+    #[command(name = "knee-contact")]
+    KneeContact {
+        /// An AnalyzeTool setup with a StaticOptimization analysis.
+        setup: PathBuf,
+        /// Write results here instead of the setup's <results_directory>.
+        #[arg(short = 'o', long = "results-dir", value_name = "DIR")]
+        results_dir: Option<PathBuf>,
+        /// A knee joint to solve so (repeatable; default: every joint whose child is a tibia_* body).
+        #[arg(long = "joint", value_name = "J")]
+        joints: Vec<String>,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Write a .mot in which a coordinate moves from --from to --to along a minimum-jerk
     /// (bell-shaped velocity) profile; every other coordinate stays at its default value.
     Motion {
@@ -514,6 +532,38 @@ fn main() -> ExitCode {
                         ExitCode::from(tools::EXIT_FRAMES_FAILED)
                     } else {
                         ExitCode::SUCCESS
+                    }
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Some(Command::KneeContact {
+            setup,
+            results_dir,
+            joints,
+            quiet,
+        }) => {
+            let opts = RunOptions {
+                results_dir: results_dir.clone(),
+                verbose: !quiet,
+                ..Default::default()
+            };
+            match tools::knee_contact::run(setup, joints, &opts) {
+                Ok(summary) => {
+                    if !quiet {
+                        for w in &summary.warnings {
+                            eprintln!("warning: {w}");
+                        }
+                        for line in summary.report() {
+                            eprintln!("{line}");
+                        }
+                    }
+                    match summary.failure_line() {
+                        Some(line) => {
+                            eprintln!("error: {line}");
+                            ExitCode::from(tools::EXIT_FRAMES_FAILED)
+                        }
+                        None => ExitCode::SUCCESS,
                     }
                 }
                 Err(e) => fail(e),

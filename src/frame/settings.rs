@@ -6,6 +6,8 @@ use crate::optimize::{FrictionModel, SolverChoice};
 use crate::parse::setup::AnalysisCommon;
 use crate::xml::Element;
 
+pub use crate::frame::knee_contact::KneeSelection;
+
 /// The StaticOptimization element of an AnalyzeTool setup.
 #[derive(Debug, Clone)]
 pub struct StaticOptimizationSetup {
@@ -41,6 +43,14 @@ pub struct StaticOptimizationSetup {
     /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
     /// on every frame.
     pub solver: SolverChoice,
+    /// statopt `<knee_contact>`: solve the named knees (`all`/`true`: every
+    /// knee of the model) with the knee contact method
+    /// (`frame::knee_contact`, docs/knee_contact.md); off by default.
+    pub knee_contact: KneeSelection,
+    /// false when `<knee_contact>` holds the word `axial`: one axial contact
+    /// per knee instead of two compartments (the ingredient study of
+    /// docs/knee_contact.md).
+    pub knee_contact_frontal: bool,
 }
 
 /// How a frame's equality constraints are built.
@@ -137,6 +147,25 @@ impl StaticOptimizationSetup {
                 },
                 _ => SolverChoice::Auto,
             },
+            knee_contact_frontal: !el
+                .child("knee_contact")
+                .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
+            knee_contact: match el.child("knee_contact") {
+                None => KneeSelection::Off,
+                Some(k) => {
+                    let mut words = k.words();
+                    words.retain(|w| !w.eq_ignore_ascii_case("axial"));
+                    if words.is_empty() && !k.words().is_empty() {
+                        words.push("all".into());
+                    }
+                    match words.iter().map(|w| w.to_ascii_lowercase()).collect::<Vec<_>>().as_slice() {
+                        [] => return Err(k.error("knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'")),
+                        [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
+                        [w] if w == "true" || w == "all" => KneeSelection::All,
+                        _ => KneeSelection::Joints(words),
+                    }
+                }
+            },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {
                     let v = r.f64()?;
@@ -157,3 +186,52 @@ pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;
 /// The w0 statopt accepts: 1/w0 and w0 times a unit multiplier stay within
 /// ten decades of the activations' scale either way.
 pub const CONTACT_WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(body: &str) -> Result<StaticOptimizationSetup> {
+        let el = crate::xml::parse_str(
+            &format!("<StaticOptimization name=\"SO\">{body}</StaticOptimization>"),
+            std::path::Path::new("setup.xml"),
+        )
+        .unwrap();
+        let common = crate::parse::setup::AnalysisCommon {
+            name: "SO".into(),
+            on: true,
+            step_interval: 1,
+            in_degrees: false,
+        };
+        StaticOptimizationSetup::from_xml(&el, common)
+    }
+
+    /// `<knee_contact>`: off unless given; `all`/`true`, joint names, and
+    /// the word `axial`; an empty element is an error naming the choices.
+    #[test]
+    fn knee_contact_property() {
+        let s = parse("").unwrap();
+        assert_eq!(s.knee_contact, KneeSelection::Off);
+        let s = parse("<knee_contact>all</knee_contact>").unwrap();
+        assert_eq!(s.knee_contact, KneeSelection::All);
+        assert!(s.knee_contact_frontal);
+        let s = parse("<knee_contact>walker_knee_l</knee_contact>").unwrap();
+        assert_eq!(
+            s.knee_contact,
+            KneeSelection::Joints(vec!["walker_knee_l".into()])
+        );
+        let s = parse("<knee_contact>axial</knee_contact>").unwrap();
+        assert_eq!(s.knee_contact, KneeSelection::All);
+        assert!(!s.knee_contact_frontal);
+        assert_eq!(
+            parse("<knee_contact>false</knee_contact>")
+                .unwrap()
+                .knee_contact,
+            KneeSelection::Off
+        );
+        let e = parse("<knee_contact></knee_contact>")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("knee_contact is empty"), "{e}");
+    }
+}

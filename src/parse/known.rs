@@ -45,6 +45,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "constraint_matrix",
             "solver_tolerance",
             "solver",
+            "knee_contact",
         ],
     ),
 ];
