@@ -252,6 +252,20 @@ fn bad_candidates_are_input_errors() {
         ..Default::default()
     });
     assert!(e.contains("no actuator 'vasint_r'"), "{e}");
+    // The knee contact method's rows are not swept yet: said, not ignored.
+    let e = force_sweep::run_file(
+        &root().join("setups/leg_extension_rajagopal_cam1_kc.xml"),
+        None,
+        &[CandidateSpec {
+            w0: 500.0,
+            ..Default::default()
+        }],
+        &RunOptions::default(),
+        &SweepOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("<knee_contact>") && e.contains("knee contact method"), "{e}");
 }
 
 #[test]
