@@ -109,7 +109,7 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shared", default=os.path.join(here, "..", "..", "shared"))
-    ap.add_argument("--out", default="/work/notes/grf_setups")
+    ap.add_argument("--out", default="target/grf_dev_setups")
     a = ap.parse_args()
     shared = os.path.abspath(a.shared)
     if not os.path.isdir(os.path.join(shared, "models")):

@@ -3,7 +3,7 @@
 docs/grf_prediction.md (issue 27).
 
     python3 scripts/grf_dev_table.py [--tool target/release/statopt-tool]
-        [--setups /work/notes/grf_setups] [--shared ../shared] [ARGS...]
+        [--setups target/grf_dev_setups] [--shared ../shared] [ARGS...]
 
 The setups of running_hamner2013 and walk_schreiber2019 come from
 scripts/grf_dev_setups.py (written first if absent); gait2392,
@@ -50,7 +50,7 @@ def run(tool, setup, out, extra):
             name = f
     rows = list(csv.DictReader(open(os.path.join(out, name)))) if name else []
     floor = re.search(r"^floor: (\w+)", err, re.M)
-    rr = re.search(r"root residual \(every actuator on the pelvis translations\): above 25 % of body weight on (\d+) of (\d+) frames with a foot on the floor \(([\d.]+) %\), at most ([\d.]+) % of body weight there; (\d+) frames in flight \(no foot point within [\d.]+ m of the floor\), where it carried at most ([\d.]+) %", err)
+    rr = re.search(r"root residual \(every actuator on the pelvis translations\): above 25 % of body weight on (\d+) of (\d+) frames \(([\d.]+) %\); at most ([\d.]+) % of body weight on the \d+ frames with a foot on the floor, ([\d.]+) % on the (\d+) frames in flight", err)
     so = re.search(r"static optimization: (\d+) frames in ([\d.]+) s", err)
     return {
         "rc": p.returncode,
@@ -58,8 +58,8 @@ def run(tool, setup, out, extra):
         "rows": rows,
         "rr_share": float(rr.group(3)) if rr else float("nan"),
         "rr_peak": float(rr.group(4)) if rr else float("nan"),
-        "flight": int(rr.group(5)) if rr else 0,
-        "flight_peak": float(rr.group(6)) if rr else float("nan"),
+        "flight": int(rr.group(6)) if rr else 0,
+        "flight_peak": float(rr.group(5)) if rr else float("nan"),
         "frames": int(so.group(1)) if so else 0,
         "so_s": float(so.group(2)) if so else float("nan"),
         "wall": wall,
@@ -71,7 +71,7 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap = argparse.ArgumentParser()
     ap.add_argument("--tool", default=os.path.join(here, "..", "target", "release", "statopt-tool"))
-    ap.add_argument("--setups", default="/work/notes/grf_setups")
+    ap.add_argument("--setups", default="target/grf_dev_setups")
     ap.add_argument("--shared", default=os.path.join(here, "..", "..", "shared"))
     ap.add_argument("--out", default="/tmp/grf_dev_table")
     ap.add_argument("--only", default="")
@@ -95,7 +95,7 @@ def main():
     for f in sorted(os.listdir(a.setups)):
         if f.endswith(".xml"):
             trials.append((f[:-4], os.path.join(a.setups, f)))
-    print("| trial | exit | floor | vertical rho / RMSE | AP rho / RMSE | ML rho / RMSE | COP mm | HS / TO ms | root > 25 % BW (frames on the floor) / peak | flight frames / peak | frames | SO s / process s |")
+    print("| trial | exit | floor | vertical rho / RMSE | AP rho / RMSE | ML rho / RMSE | COP mm | HS / TO ms | root > 25 % BW (all frames) / peak on the floor | flight frames / peak | frames | SO s / process s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for case, setup in trials:
         if a.only and a.only not in case:
