@@ -515,3 +515,16 @@ fn row_reader_errors_like_read() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Frame times in messages read as the motion's row times, not as the
+/// float noise of a time computed on its grid.
+#[test]
+fn frame_times_print_without_float_noise() {
+    use super::fmt_time;
+    assert_eq!(fmt_time(0.5833328799999886), "0.58333288");
+    assert_eq!(fmt_time(2.4999984999999625), "2.4999985");
+    assert_eq!(fmt_time(1.31), "1.31");
+    assert_eq!(fmt_time(2.0), "2");
+    assert_eq!(fmt_time(-0.0000000001), "0");
+    assert_eq!(fmt_time(-0.25), "-0.25");
+}
