@@ -343,7 +343,7 @@ fn write_table(
 /// without running; returns (errors, warnings, files checked).
 #[pyfunction]
 fn check(py: Python<'_>, setup: PathBuf) -> (Vec<String>, Vec<String>, Vec<String>) {
-    let r = py.allow_threads(|| tools::check::run(&setup));
+    let r = py.allow_threads(|| tools::check::run(&setup, false));
     (
         r.errors.iter().map(|e| e.to_string()).collect(),
         r.warnings,

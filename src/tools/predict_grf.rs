@@ -169,7 +169,7 @@ fn draw_comparison(
         }
         panels.push(chart);
     }
-    crate::plots::write_panels(&panels, stem, Layout::row(3))
+    crate::plots::write_panels(&panels, stem, Layout::column(3))
 }
 
 /// `statopt-tool predict-grf SETUP`: read the setup file (or take it as
@@ -312,27 +312,13 @@ pub const DEFAULT_CONTACT_WEIGHT: f64 = 10.0;
 /// otherwise [`DEFAULT_CONTACT_WEIGHT`], written into the setup's analysis.
 fn use_contact_weight(setup: &mut AnalyzeSetup) -> f64 {
     for a in setup.analyses.iter_mut() {
-        if let crate::parse::setup::Analysis::Other { element, .. } = a {
-            if element.name != "StaticOptimization" {
-                continue;
-            }
-            if let Some(w) = element
-                .child("contact_weight")
-                .and_then(|w| w.numbers().ok())
-            {
-                if let Some(first) = w.first() {
+        if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
+            if so.contact_weights_given {
+                if let Some(first) = so.contact_weights.first() {
                     return *first;
                 }
             }
-            let w = crate::xml::Element {
-                name: "contact_weight".to_string(),
-                attrs: Vec::new(),
-                children: Vec::new(),
-                text: format!("{DEFAULT_CONTACT_WEIGHT}"),
-                line: element.line,
-                file: element.file.clone(),
-            };
-            element.children.push(w);
+            so.contact_weights = vec![DEFAULT_CONTACT_WEIGHT];
             return DEFAULT_CONTACT_WEIGHT;
         }
     }

@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::forces::analysis_model::load_analysis_model;
 use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
-use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
+use crate::parse::setup::AnalyzeSetup;
 use crate::reactions::{
     resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
@@ -30,7 +30,6 @@ use crate::writers::resume::resume_point;
 use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
 use crate::writers::sweep_statistics::write_sweep_statistics;
-use crate::xml::Element;
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
 pub use crate::frame::problem::{
@@ -55,13 +54,11 @@ pub fn w0_tag(w0: f64) -> String {
 
 pub fn run(
     setup: &AnalyzeSetup,
-    el: &Element,
-    common: &AnalysisCommon,
+    so: &StaticOptimizationSetup,
     reactions: &[JointReactionSetup],
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
-    let (mut problem, mut warnings, reduction) = if setup.reduce_model {
+    let (problem, mut warnings, reduction) = if setup.reduce_model {
         let am = load_analysis_model(setup)?;
         let (am, r) = crate::tools::reduce::reduce(
             setup,
@@ -70,10 +67,10 @@ pub fn run(
             so.passive_fiber_forces,
             reactions,
         )?;
-        let (p, w) = SoProblem::build_from(setup, &so, am)?;
+        let (p, w) = SoProblem::build_from(setup, so, am)?;
         (p, w, Some(r))
     } else {
-        let (p, w) = SoProblem::build(setup, &so)?;
+        let (p, w) = SoProblem::build(setup, so)?;
         (p, w, None)
     };
     // The states are streamed block by block (motion::stream): memory stays
@@ -86,18 +83,15 @@ pub fn run(
         .map(|r| r.coordinates_dropped.clone())
         .unwrap_or_default();
     warnings.extend(stream.motion_warnings(&dropped));
-    if !stream.missing.is_empty() {
-        warnings.push(format!(
-            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            stream.missing
-        ));
-    }
+    warnings.extend(crate::tools::analyze::missing_columns_warning(
+        setup,
+        &stream.missing,
+    ));
     let step_interval = so.common.step_interval;
-    let frames = frame_count(stream.first_row, stream.last_row, step_interval);
     let dir = results_dir(setup, opts)?;
     let base = format!("{}_{}_", setup.name, so.common.name);
+    // Frames come from the runs' summaries: after a stop, those written.
     let mut summary = RunSummary {
-        frames,
         warnings: Vec::new(),
         ..Default::default()
     };
@@ -147,7 +141,6 @@ pub fn run(
             }
         })
         .collect();
-    problem.w0 = weights[0];
     let summaries = run_sweep(
         &problem,
         stream,
@@ -348,6 +341,12 @@ impl<'a> RunWriters<'a> {
         } else {
             None
         };
+        let mut stats = RunStatistics::new(problem);
+        if let Some(r) = &resume {
+            // The frames an earlier run wrote count in this run's summary:
+            // read back before the tables are reopened.
+            stats.observe_tables(problem, dir, prefix, r.keep)?;
+        }
         let tables = SoTables::open(
             problem,
             &TablesSpec {
@@ -373,7 +372,7 @@ impl<'a> RunWriters<'a> {
             log_path,
             log: Some(log),
             skip_until,
-            stats: RunStatistics::new(problem),
+            stats,
         })
     }
 
@@ -403,6 +402,9 @@ impl<'a> RunWriters<'a> {
             log.finish()?;
         }
         let stats = self.stats;
+        // A stopped run counts the frames its tables hold (a resumed run's
+        // earlier frames included), not the frames it meant to solve.
+        let nframes = if completed { nframes } else { stats.frames };
         let warnings = stats.warnings(problem, nframes, &diag_path);
         let root_body_weight = stats.root_body_weight(problem);
         let note = if shared > 1 {
@@ -439,6 +441,7 @@ impl<'a> RunWriters<'a> {
             root_moment_peak: stats.root_peaks[1].clone(),
             notes: vec![note],
             results_dirs: Vec::new(),
+            unused_properties: Vec::new(),
             stopped: (!completed).then(|| {
                 (
                     crate::tools::interrupt::requested().unwrap_or(130),
