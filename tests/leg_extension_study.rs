@@ -126,6 +126,18 @@ fn study_document_draws_figures_and_metrics() {
         },
     )
     .unwrap();
+    // The README says how many files the study writes.
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let said = readme
+        .split(" files in all")
+        .next()
+        .and_then(|h| h.rsplit(' ').next())
+        .and_then(|n| n.parse::<usize>().ok());
+    assert_eq!(
+        said,
+        Some(s.files.len()),
+        "README's 'N files in all' of the study"
+    );
     for f in [
         "fig08_resistance_torque",
         "fig09_hip_flexion_share",
@@ -363,5 +375,35 @@ fn a_misspelled_property_of_the_study_setup_is_refused() {
             && e.contains("did you mean contact_weight")
             && e.contains("line 26"),
         "{e}"
+    );
+}
+
+/// docs/python.md's example result says what the cam 1 setup writes: its
+/// table count and its quadriceps work metric (they had drifted: "48
+/// tables" and 113.234417 J).
+#[test]
+fn python_docs_numbers_match_the_cam1_run() {
+    let (out, _) = run_into("cam1", "python_docs");
+    let mut tables = 0;
+    for e in std::fs::read_dir(&out).unwrap() {
+        let p = e.unwrap().path();
+        if matches!(p.extension().and_then(|x| x.to_str()), Some("sto" | "mot")) {
+            tables += 1;
+        }
+    }
+    let metrics = std::fs::read_to_string(out.join("leg_extension_cam1_metrics.csv")).unwrap();
+    let work = metrics
+        .lines()
+        .find_map(|l| l.strip_prefix("quadriceps_work_J,"))
+        .unwrap()
+        .to_string();
+    let doc = std::fs::read_to_string(root().join("docs/python.md")).unwrap();
+    assert!(
+        doc.contains(&format!("frame problems solved, {tables} tables>")),
+        "docs/python.md should say {tables} tables"
+    );
+    assert!(
+        doc.contains(&format!("'quadriceps_work_J': {work}")),
+        "docs/python.md should say quadriceps_work_J {work}"
     );
 }

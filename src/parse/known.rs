@@ -84,6 +84,9 @@ const ANY_ELEMENT: &[&str] = &["defaults"];
 /// Properties of older documents that OpenSim still reads and converts.
 pub const LEGACY_PROPERTIES: &[(&str, &[&str])] = &[
     ("Coordinate", &["motion_type"]),
+    // OpenSim 3.x setups (e.g. the arm26 example's): 4.x reads the units
+    // from the coordinates file's header instead.
+    ("InverseDynamicsTool", &["coordinates_in_degrees"]),
     ("CoordinateCouplerConstraint", &["isDisabled"]),
     (
         "Thelen2003Muscle",
@@ -184,6 +187,7 @@ pub const UNUSED_SETUP_PROPERTIES: &[(&str, &[&str])] = &[
             "ControllerSet",
         ],
     ),
+    ("InverseDynamicsTool", &["coordinates_in_degrees"]),
     ("StaticOptimization", &["start_time", "end_time", "in_degrees"]),
     ("MuscleAnalysis", &["start_time", "end_time", "in_degrees"]),
     ("JointReaction", &["start_time", "end_time", "in_degrees"]),
