@@ -1291,3 +1291,22 @@ fn a_missing_column_is_named_with_its_file() {
         .unwrap_or_else(|| panic!("{err}"));
     assert!(line.contains("motion.mot") && !line.contains("[\""), "{line}");
 }
+
+/// `--check` checks a setup's own figure references before anything runs:
+/// a table of a w0 the setup does not run, or a file that is neither the
+/// setup's nor there, is a problem naming the element and its line.
+#[test]
+fn check_finds_a_setups_bad_figure_reference() {
+    let mut f = Files::analyze();
+    let line = f.replace(
+        "setup.xml",
+        "<coordinates_file>motion.mot</coordinates_file>",
+        "<Figure name=\"fig\"><Series file=\"run_SO_w0_500_force.sto\" column=\"r1\"/></Figure>\n<coordinates_file>motion.mot</coordinates_file>",
+    );
+    let r = run_with("figure_ref_check", &f, "setup.xml", &["--check"]);
+    expect_input_error(
+        "figure_ref_check",
+        r,
+        &["setup.xml", &format!("line {line}"), "<Series>", "names w0 = 500", "a single w0"],
+    );
+}

@@ -221,7 +221,6 @@ impl SoProblem {
                 settings: so.clone(),
                 force_labels,
                 contacts,
-                w0: so.contact_weights[0],
             },
             warnings,
         ))

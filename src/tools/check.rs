@@ -133,6 +133,7 @@ fn check_analyze(setup: &AnalyzeSetup, report: &mut CheckReport) {
         }
         Err(e) => report.errors.push(e),
     }
+    check_figure_references(setup, report);
     if !setup.analyses.iter().any(|a| a.common().on) {
         report.errors.push(Error::input(
             crate::error::Location::file(&setup.setup_file).with_element("<AnalysisSet>"),
@@ -200,5 +201,59 @@ fn check_inverse_dynamics(setup: &InverseDynamicsSetup, report: &mut CheckReport
             Err(e) => report.errors.push(e),
         },
         Err(e) => report.errors.push(e),
+    }
+}
+
+/// The tables a setup's `<Figure>`s and `<Metric>`s name (relative to its
+/// results directory, drawn after the run): each must be one this setup
+/// writes (named after it; a w0 its static optimization runs) or exist
+/// already.
+fn check_figure_references(setup: &AnalyzeSetup, report: &mut CheckReport) {
+    use crate::writers::names;
+    let tags: Vec<String> = match setup.static_optimization() {
+        Some(so) if so.contact_weights.len() > 1 => so
+            .contact_weights
+            .iter()
+            .map(|w| names::w0_tag(*w))
+            .chain(names::SWEEP_STATS.map(String::from))
+            .collect(),
+        _ => Vec::new(),
+    };
+    let mut visit = |el: &crate::xml::Element| {
+        for attr in ["file", "mean", "min", "max"] {
+            let Some(value) = el.attr(attr) else { continue };
+            let path = crate::parse::setup::resolve(&setup.results_directory, value);
+            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+            let ours = file.starts_with(&format!("{}_", setup.name))
+                && path.parent() == Some(setup.results_directory.as_path());
+            if !ours {
+                if !path.is_file() {
+                    report.errors.push(el.error(format!(
+                        "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results directory)",
+                        path.display(),
+                        setup.name
+                    )));
+                }
+                continue;
+            }
+            if let Some(tag) = names::w0_tag_in(file) {
+                if !tags.iter().any(|t| t == tag) {
+                    report.errors.push(el.error(format!(
+                        "{attr}=\"{value}\": names w0 = {tag}, but the setup runs {}",
+                        if tags.is_empty() {
+                            "a single w0 (its tables carry no w0 in their names)".to_string()
+                        } else {
+                            format!("w0 = {}", tags[..tags.len() - 3].join(", "))
+                        }
+                    )));
+                }
+            }
+        }
+    };
+    for f in &setup.figures {
+        visit(f);
+        for c in &f.children {
+            visit(c);
+        }
     }
 }

@@ -42,15 +42,8 @@ pub use crate::frame::settings::{
 
 pub use crate::writers::run_statistics::ROOT_RESIDUAL_WARNING;
 
-/// Format a contact weight for file names: `500`, `0.001`, `1e+06`.
-pub fn w0_tag(w0: f64) -> String {
-    let t = format!("{w0}");
-    if t.len() <= 8 {
-        t
-    } else {
-        format!("{w0:e}")
-    }
-}
+pub use crate::writers::names::w0_tag;
+use crate::writers::names::{self, Sweep};
 
 pub fn run(
     setup: &AnalyzeSetup,
@@ -89,14 +82,19 @@ pub fn run(
     ));
     let step_interval = so.common.step_interval;
     let dir = results_dir(setup, opts)?;
-    let base = format!("{}_{}_", setup.name, so.common.name);
+    let so_name = so.common.name.as_str();
     // Frames come from the runs' summaries: after a stop, those written.
     let mut summary = RunSummary {
         warnings: Vec::new(),
         ..Default::default()
     };
     if let Some(r) = &reduction {
-        let path = dir.join(format!("{base}reduction.txt"));
+        let path = dir.join(names::file_name(
+            &setup.name,
+            so_name,
+            Sweep::Single,
+            "reduction.txt",
+        ));
         r.write(&path)?;
         summary.files.push(path);
         warnings.extend(r.summary_lines());
@@ -119,18 +117,13 @@ pub fn run(
     let specs: Vec<RunSpec> = weights
         .iter()
         .map(|&w0| {
-            let prefix = if sweep {
-                format!("{base}w0_{}_", w0_tag(w0))
+            let run = if sweep {
+                Sweep::Weight(w0)
             } else {
-                base.clone()
+                Sweep::Single
             };
-            let jr_prefix = |name: &str| {
-                if sweep {
-                    format!("{}_{name}_w0_{}_", setup.name, w0_tag(w0))
-                } else {
-                    format!("{}_{name}_", setup.name)
-                }
-            };
+            let prefix = names::prefix(&setup.name, so_name, run);
+            let jr_prefix = |name: &str| names::prefix(&setup.name, name, run);
             RunSpec {
                 w0,
                 prefix,
@@ -149,7 +142,7 @@ pub fn run(
         &dir,
         &specs,
         opts,
-        base.trim_end_matches('_'),
+        &format!("{}_{so_name}", setup.name),
     )?;
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
@@ -200,11 +193,18 @@ pub fn run(
                 .iter()
                 .map(|p| dir.join(format!("{p}{kind}.sto")))
                 .collect();
+            let stat_path = |stat: &str| {
+                dir.join(names::file_name(
+                    &setup.name,
+                    so_name,
+                    Sweep::Stat(stat),
+                    &format!("{kind}.sto"),
+                ))
+            };
             summary.files.extend(write_sweep_statistics(
                 &setup.setup_file,
                 &files,
-                &dir,
-                &format!("{base}w0_"),
+                &stat_path,
                 kind,
                 &weights,
                 precision,
@@ -220,18 +220,26 @@ pub fn run(
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
                     .map(|w0| {
-                        dir.join(format!(
-                            "{}_{name}_w0_{}_{kind}.sto",
-                            setup.name,
-                            w0_tag(*w0)
+                        dir.join(names::file_name(
+                            &setup.name,
+                            name,
+                            Sweep::Weight(*w0),
+                            &format!("{kind}.sto"),
                         ))
                     })
                     .collect();
+                let stat_path = |stat: &str| {
+                    dir.join(names::file_name(
+                        &setup.name,
+                        name,
+                        Sweep::Stat(stat),
+                        &format!("{kind}.sto"),
+                    ))
+                };
                 summary.files.extend(write_sweep_statistics(
                     &setup.setup_file,
                     &files,
-                    &dir,
-                    &format!("{}_{name}_w0_", setup.name),
+                    &stat_path,
                     kind,
                     &weights,
                     precision,

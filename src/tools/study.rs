@@ -300,9 +300,9 @@ fn plan(p: PathBuf, moved_to: Option<&Path>, allow_unknown: bool) -> Result<Plan
                     tags.extend(
                         so.contact_weights
                             .iter()
-                            .map(|w| crate::tools::static_optimization::w0_tag(*w)),
+                            .map(|w| crate::writers::names::w0_tag(*w)),
                     );
-                    tags.extend(["mean", "min", "max"].map(String::from));
+                    tags.extend(crate::writers::names::SWEEP_STATS.map(String::from));
                 }
             }
             (a.results_directory.clone(), a.name.clone(), tags)
@@ -392,8 +392,7 @@ fn check_and_move_references(
                     run.name
                 )));
             }
-            if let Some(k) = file.find("_w0_") {
-                let tag = file[k + 4..].split('_').next().unwrap_or("");
+            if let Some(tag) = crate::writers::names::w0_tag_in(file) {
                 if !run.w0_tags.iter().any(|t| t == tag) {
                     return Err(el.error(format!(
                         "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
