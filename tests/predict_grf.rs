@@ -330,3 +330,238 @@ fn a_given_floor_height_is_used_as_given() {
     assert_eq!(p.summary.failed, 0);
     assert!(predict_grf::run_with_floor(&setup, &opts, Some(f64::NAN)).is_err());
 }
+
+/// The shared models folder `../shared/models/<name>`, or None with a SKIP
+/// line.
+fn shared_models(name: &str, test: &str) -> Option<std::path::PathBuf> {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models")
+        .join(name);
+    if d.is_dir() {
+        Some(d)
+    } else {
+        println!("SKIP {test}: {} is absent", d.display());
+        None
+    }
+}
+
+/// First and last time of a motion file.
+fn time_range(path: &Path) -> (f64, f64) {
+    let t = statopt::storage::read(path).unwrap();
+    (t.time[0], *t.time.last().unwrap())
+}
+
+/// A setup as the issue's bar runs a trial (scripts/grf_dev_setups.py):
+/// StaticOptimization with reserves of optimal force `reserve`, the
+/// coordinates low-passed at `cutoff` Hz, over [t0, t1], the measured loads
+/// as the reference.
+#[allow(clippy::too_many_arguments)]
+fn bar_setup(
+    name: &str,
+    model: &Path,
+    ik: &Path,
+    loads: &Path,
+    (t0, t1): (f64, f64),
+    cutoff: f64,
+    reserve: f64,
+) -> statopt::parse::setup::AnalyzeSetup {
+    let out = common::out_dir(&format!("predict_grf_{name}"));
+    let text = format!(
+        r#"<?xml version="1.0" encoding="UTF-8" ?>
+<OpenSimDocument Version="40000">
+  <AnalyzeTool name="{name}">
+    <model_file>{}</model_file>
+    <replace_force_set>false</replace_force_set>
+    <force_set_files />
+    <results_directory>{}</results_directory>
+    <initial_time>{t0}</initial_time>
+    <final_time>{t1}</final_time>
+    <AnalysisSet name="Analyses"><objects>
+      <StaticOptimization name="StaticOptimization">
+        <step_interval>1</step_interval>
+        <use_model_force_set>true</use_model_force_set>
+        <activation_exponent>2</activation_exponent>
+        <use_muscle_physiology>true</use_muscle_physiology>
+        <reserve_actuators>{reserve}</reserve_actuators>
+      </StaticOptimization>
+    </objects><groups /></AnalysisSet>
+    <external_loads_file>{}</external_loads_file>
+    <coordinates_file>{}</coordinates_file>
+    <lowpass_cutoff_frequency_for_coordinates>{cutoff}</lowpass_cutoff_frequency_for_coordinates>
+  </AnalyzeTool>
+</OpenSimDocument>
+"#,
+        model.display(),
+        out.display(),
+        loads.display(),
+        ik.display()
+    );
+    match Setup::parse(&text, &out.join(format!("{name}.xml"))).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    }
+}
+
+/// Treadmill running (Hamner & Delp 2013, subject02 at 3 m/s: a SIMM
+/// header without inDegrees, degrees, marker columns after the
+/// coordinates, R_/L_ plates), where the method before issue 27 found the
+/// belt running forward and predicted no force at all. The floor is
+/// decided from the motion (a treadmill, belt about 3 m/s backward), the
+/// feet carry the body, and the warnings name times inside the trial.
+/// Lean: 1.5 s of the trial (the issue's bar is measured on all of it in
+/// docs/grf_prediction.md).
+#[test]
+fn treadmill_running_of_another_subject() {
+    let Some(d) = shared_models("running_hamner2013", "predict_grf running") else {
+        return;
+    };
+    let s = d.join("subject02");
+    let ik = s.join("ik/Run_3.mot");
+    let (t0, _) = time_range(&ik);
+    let setup = bar_setup(
+        "run_s02_3",
+        &s.join("model/subject02_adjusted_scaled.osim"),
+        &ik,
+        &s.join("expData/Run_3_grf.xml"),
+        (t0 + 0.1, t0 + 1.6),
+        12.0,
+        10.0,
+    );
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_run_s02_3")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    println!("floor: {}", p.contacts.decision.reason);
+    assert!(
+        p.contacts.decision.treadmill,
+        "{}",
+        p.contacts.decision.reason
+    );
+    let b = p.contacts.belt_velocity;
+    assert!(b.x < -2.7 && b.x > -3.3 && b.z.abs() < 0.3, "belt {b:?}");
+    let (rho_v, rmse_v) = mean(&p.metrics, 'y');
+    let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
+    println!("running subject02 3 m/s: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
+    // The issue's running bar: vertical 0.97 / 10 % BW (met: 0.994 / 9.0 %);
+    // anteroposterior 0.85 / 6 % (NOT met: 0.836 / 5.3 %, rho short).
+    assert!(rho_v >= 0.97 && rmse_v <= 10.0, "vertical {rho_v} {rmse_v}");
+    assert!(
+        rho_ap >= 0.80 && rmse_ap <= 6.0,
+        "anteroposterior {rho_ap} {rmse_ap}"
+    );
+    assert!(p.rejected.is_none(), "{:?}", p.rejected);
+    // Flight phases are free fall: the root residual is small where the
+    // plates measure nothing under either foot.
+    let meas = p.measured.as_ref().unwrap();
+    let mut flight = Vec::new();
+    for (i, &(t, f)) in p.root_residual.iter().enumerate() {
+        assert!((t - meas.time[i]).abs() < 1e-9);
+        if meas.force[0][i].y < 5.0 && meas.force[1][i].y < 5.0 {
+            flight.push(f / p.body_weight);
+        }
+    }
+    assert!(!flight.is_empty(), "the trial has flight phases");
+    let worst = flight.iter().cloned().fold(0.0, f64::max);
+    println!(
+        "flight: {} frames, root residual at most {:.1} % BW",
+        flight.len(),
+        100.0 * worst
+    );
+    assert!(
+        worst < predict_grf::REJECT_ROOT_RESIDUAL,
+        "flight root residual {worst}"
+    );
+    // The same trial forced overground (a wrong floor, as the old median
+    // found): the feet slide on a still floor, the pelvis carries the body,
+    // and the physics rejects the prediction.
+    let wrong = predict_grf::run_with(
+        &setup,
+        &RunOptions {
+            results_dir: Some(common::out_dir("predict_grf_run_s02_3_overground")),
+            verbose: false,
+            ..Default::default()
+        },
+        &predict_grf::FloorOptions {
+            height: None,
+            motion: predict_grf::FloorMotion::Overground,
+        },
+    )
+    .unwrap();
+    let line = wrong
+        .rejected
+        .as_deref()
+        .expect("a wrong floor is rejected");
+    println!("forced overground: {line}");
+    assert!(line.contains("rejected by the physics"), "{line}");
+    assert!(!wrong.metrics.is_empty(), "the comparison is still written");
+    // Every time a warning names lies inside the trial.
+    for w in &p.summary.warnings {
+        for part in w.split("t = ").skip(1).chain(w.split("t=").skip(1)) {
+            let num: String = part
+                .chars()
+                .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-')
+                .collect();
+            if let Ok(t) = num.trim_end_matches('.').parse::<f64>() {
+                // (the first frame is the state at or closest before the
+                // initial time, as OpenSim picks it: one frame of 1/120 s)
+                assert!(
+                    t >= setup.initial_time - 0.0085 && t <= setup.final_time + 1e-6,
+                    "a warning names t = {t}, outside the trial: {w}"
+                );
+            }
+        }
+    }
+}
+
+/// One overground step with a torque-driven model (Schreiber & Moissenet
+/// 2019, 2014001 C4_05: reserves of 100 carry the joints; plates
+/// ground_force_1_/2_ longer than the motion): overground, the bar of the
+/// issue for one-step walking.
+#[test]
+fn one_step_torque_driven_walking() {
+    let Some(d) = shared_models("walk_schreiber2019", "predict_grf one step") else {
+        return;
+    };
+    let s = d.join("2014001");
+    let ik = s.join("ik/C4_05/C4_05_ik.mot");
+    let (t0, t1) = time_range(&ik);
+    let setup = bar_setup(
+        "walk_2014001_c4_05",
+        &s.join("scaling/2014001_scaledModelAdjusted.osim"),
+        &ik,
+        &s.join("dynamic/2014001_C4_05_grf.xml"),
+        (t0 + 0.03, t1 - 0.03),
+        6.0,
+        100.0,
+    );
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_walk_2014001_c4_05")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    println!("floor: {}", p.contacts.decision.reason);
+    assert!(
+        !p.contacts.decision.treadmill,
+        "{}",
+        p.contacts.decision.reason
+    );
+    assert_eq!(p.contacts.belt_velocity.norm(), 0.0);
+    let (rho_v, rmse_v) = mean(&p.metrics, 'y');
+    let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
+    println!("one step 2014001 C4_05: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
+    assert!(p.rejected.is_none(), "{:?}", p.rejected);
+    // The issue's bar (vertical 0.95 / 10 % BW) is NOT met on this trial
+    // (0.912 / 11.8 %: the landing heel loads two frames early; see
+    // docs/grf_prediction.md). Guarded here against getting worse.
+    assert!(rho_v >= 0.90 && rmse_v <= 12.5, "vertical {rho_v} {rmse_v}");
+    // Torque-driven: w0 scaled by the actuators' strength (100 against the
+    // muscles' 200 N m per coordinate): 10 x (1/2)^2.
+    assert!(
+        (p.contact_weight - 2.5).abs() < 1e-9,
+        "w0 {}",
+        p.contact_weight
+    );
+}

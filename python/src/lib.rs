@@ -213,9 +213,154 @@ fn predict_grf<'py>(
         "belt_velocity",
         (p.contacts.belt_velocity.x, p.contacts.belt_velocity.z),
     )?;
+    pred.set_item("treadmill", p.contacts.decision.treadmill)?;
+    pred.set_item("floor_decision", p.contacts.decision.reason.clone())?;
+    pred.set_item("rejected", p.rejected.clone())?;
     pred.set_item("body_weight", p.body_weight)?;
     d.set_item("prediction", pred)?;
     Ok(d)
+}
+
+/// Candidates from Python dicts: `w0`, `expressions` ({force: text}),
+/// `optimal_forces` ({actuator: N}).
+fn candidate_specs(
+    candidates: &[Bound<'_, PyDict>],
+) -> PyResult<Vec<statopt::tools::force_sweep::CandidateSpec>> {
+    use statopt::tools::force_sweep::CandidateSpec;
+    let mut specs = Vec::with_capacity(candidates.len());
+    for c in candidates {
+        let w0: f64 = match c.get_item("w0")? {
+            Some(v) => v.extract()?,
+            None => {
+                return Err(pyo3::exceptions::PyValueError::new_err(
+                    "every candidate needs a w0",
+                ))
+            }
+        };
+        let mut spec = CandidateSpec {
+            w0,
+            ..Default::default()
+        };
+        if let Some(e) = c.get_item("expressions")? {
+            let e = e.downcast_into::<PyDict>()?;
+            for (k, v) in e.iter() {
+                spec.expressions.push((k.extract()?, v.extract()?));
+            }
+        }
+        if let Some(e) = c.get_item("optimal_forces")? {
+            let e = e.downcast_into::<PyDict>()?;
+            for (k, v) in e.iter() {
+                spec.optimal_forces.push((k.extract()?, v.extract()?));
+            }
+        }
+        specs.push(spec);
+    }
+    Ok(specs)
+}
+
+fn outcome_dict<'py>(
+    py: Python<'py>,
+    out: statopt::tools::force_sweep::SweepOutcome,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("metric_names", out.metric_names)?;
+    d.set_item("values", out.values)?;
+    d.set_item("failed", out.failed)?;
+    d.set_item("frames", out.frames)?;
+    d.set_item("loop_seconds", out.loop_seconds)?;
+    d.set_item("warnings", out.warnings)?;
+    d.set_item("iterations", out.iterations)?;
+    Ok(d)
+}
+
+/// A setup compiled and every frame assembled once, kept to solve batch
+/// after batch of candidates (`statopt::tools::force_sweep::Scene`).
+#[pyclass(module = "statopt._native")]
+struct Scene {
+    inner: std::sync::Mutex<statopt::tools::force_sweep::Scene>,
+}
+
+#[pymethods]
+impl Scene {
+    #[new]
+    #[pyo3(signature = (setup, text=None, threads=None))]
+    fn new(py: Python<'_>, setup: PathBuf, text: Option<String>, threads: Option<usize>) -> PyResult<Self> {
+        let scene = py
+            .allow_threads(|| {
+                statopt::tools::force_sweep::Scene::compile(&setup, text.as_deref(), threads)
+            })
+            .map_err(|e| to_py(py, e))?;
+        Ok(Scene {
+            inner: std::sync::Mutex::new(scene),
+        })
+    }
+
+    /// Frames kept.
+    #[getter]
+    fn frames(&self) -> usize {
+        self.inner.lock().map(|s| s.frames()).unwrap_or(0)
+    }
+
+    /// Setup and motion warnings.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.lock().map(|s| s.warnings.clone()).unwrap_or_default()
+    }
+
+    /// Solve `candidates` (as `force_sweep`'s) on the kept frames.
+    #[pyo3(signature = (candidates, warm=true))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        candidates: Vec<Bound<'py, PyDict>>,
+        warm: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let specs = candidate_specs(&candidates)?;
+        let sweep = statopt::tools::force_sweep::SweepOptions { warm };
+        let result = py.allow_threads(|| {
+            let mut scene = self
+                .inner
+                .lock()
+                .map_err(|_| statopt::Error::internal("the scene's lock is poisoned"))?;
+            scene.run(&specs, &sweep)
+        });
+        outcome_dict(py, result.map_err(|e| to_py(py, e))?)
+    }
+}
+
+/// A force sweep (`statopt::tools::force_sweep`): candidates of one
+/// AnalyzeTool setup that differ only in forces, solved on one compiled
+/// scene. `candidates` is a list of dicts with `w0` (a number),
+/// `expressions` ({force name: Lepton text}) and `optimal_forces`
+/// ({actuator name: N}); `text`, when given, is the setup document read as
+/// if it were the file `setup`. Returns {"metric_names", "values" (per
+/// candidate, per metric), "failed", "frames", "loop_seconds", "warnings"}.
+#[pyfunction]
+#[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true))]
+fn force_sweep<'py>(
+    py: Python<'py>,
+    setup: PathBuf,
+    candidates: Vec<Bound<'py, PyDict>>,
+    text: Option<String>,
+    threads: Option<usize>,
+    warm: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    use statopt::tools::force_sweep::{self, SweepOptions};
+    let specs = candidate_specs(&candidates)?;
+    let (hook, pending) = progress_hook(None);
+    let opts = RunOptions {
+        threads,
+        progress: Some(hook),
+        ..Default::default()
+    };
+    let sweep = SweepOptions { warm };
+    let result = py.allow_threads(|| {
+        force_sweep::run_file(&setup, text.as_deref(), &specs, &opts, &sweep)
+    });
+    if let Some(e) = take_pending(&pending) {
+        return Err(e);
+    }
+    outcome_dict(py, result.map_err(|e| to_py(py, e))?)
 }
 
 fn f64_bytes<'py>(py: Python<'py>, v: impl Iterator<Item = f64>) -> Bound<'py, PyBytes> {
@@ -376,6 +521,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_PRECISION", storage::DEFAULT_PRECISION)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(predict_grf, m)?)?;
+    m.add_function(wrap_pyfunction!(force_sweep, m)?)?;
+    m.add_class::<Scene>()?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_function(wrap_pyfunction!(read_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;

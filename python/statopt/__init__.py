@@ -13,13 +13,15 @@ See docs/python.md.
 
 from ._native import InputError, StatoptError, __version__
 from ._run import FramesFailedWarning, Result, check, predict_grf, run
-from ._sweep import summary_metrics, sweep
+from ._sweep import Scene, force_sweep, summary_metrics, sweep
 from ._tables import read_table, write_table
 
 __all__ = [
     "run",
     "predict_grf",
     "sweep",
+    "force_sweep",
+    "Scene",
     "check",
     "read_table",
     "write_table",

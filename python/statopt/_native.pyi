@@ -32,6 +32,19 @@ def predict_grf(
     threads: Optional[int] = None,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Dict[str, Any]: ...
+def force_sweep(
+    setup: str,
+    candidates: List[Dict[str, Any]],
+    text: Optional[str] = None,
+    threads: Optional[int] = None,
+    warm: bool = True,
+) -> Dict[str, Any]: ...
+class Scene:
+    frames: int
+    warnings: List[str]
+    def __init__(self, setup: str, text: Optional[str] = None, threads: Optional[int] = None) -> None: ...
+    def run(self, candidates: List[Dict[str, Any]], warm: bool = True) -> Dict[str, Any]: ...
+
 def read_table(path: str) -> _TableParts: ...
 def read_tables(paths: List[str]) -> List[_TableParts]: ...
 def write_table(

@@ -4,17 +4,21 @@ from __future__ import annotations
 
 import itertools
 import math
+import numbers
 import os
+import shutil
+import tempfile
 import time
 import traceback
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import pandas as pd
 
+from . import _native
 from ._run import Result, _split_key, run
-from ._setup import is_study
+from ._setup import edit_setup, is_study, metric_elements
 
 MetricsSpec = Union[None, Callable[[Result], Mapping[str, Any]], Mapping[str, Callable[[Result], Any]]]
 
@@ -111,6 +115,166 @@ def _points(setup, grid) -> List[tuple]:
     return out
 
 
+# -- force sweeps: points that differ only in forces, batched -------------
+
+#: model_properties a force sweep sets per candidate (the property's last
+#: path element), and the type of their values.
+_BATCHED_PROPERTIES = {"expression": str, "optimal_force": numbers.Real}
+
+
+def _batch_split(ov: Dict[str, Any]):
+    """``(base overrides, candidate)`` when a point's overrides change the
+    setup only in forces one compiled scene can share — one
+    ``contact_weight``, expressions of ExpressionBasedCoordinateForces and
+    actuators' optimal forces set through ``model_properties`` — and
+    ``None`` otherwise."""
+    ov = dict(ov)
+    w0 = ov.pop("contact_weight", None)
+    if isinstance(w0, (list, tuple, np.ndarray)) and len(w0) == 1:
+        w0 = w0[0]
+    if not isinstance(w0, numbers.Real) or isinstance(w0, bool):
+        return None
+    cand: Dict[str, Any] = {"w0": float(w0), "expressions": {}, "optimal_forces": {}}
+    rest = {}
+    for key, value in (ov.pop("model_properties", None) or {}).items():
+        parts = [p for p in str(key).strip("/").split("/") if p]
+        kind = _BATCHED_PROPERTIES.get(parts[-1]) if len(parts) >= 2 else None
+        if kind is not None and isinstance(value, kind) and not isinstance(value, bool):
+            group = "expressions" if parts[-1] == "expression" else "optimal_forces"
+            cand[group][parts[-2]] = value if kind is str else float(value)
+        else:
+            rest[key] = value
+    if rest:
+        ov["model_properties"] = rest
+    return ov, cand
+
+
+def _freeze(v: Any):
+    """A hashable key of an override value (DataFrames by identity)."""
+    if isinstance(v, Mapping):
+        return tuple(sorted((str(k), _freeze(x)) for k, x in v.items()))
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return tuple(_freeze(x) for x in v)
+    if isinstance(v, pd.DataFrame):
+        return ("DataFrame", id(v))
+    if isinstance(v, os.PathLike):
+        return os.fspath(v)
+    return v
+
+
+def force_sweep(setup, candidates: Sequence[Dict[str, Any]], *, threads: Optional[int] = None,
+                warm: bool = True, **overrides: Any) -> List[Dict[str, Any]]:
+    """Candidates of one setup that differ only in forces, on one compiled
+    scene, in this process (the engine's ``tools::force_sweep``): one row
+    per candidate, ``frames``, ``failed`` and the setup's ``<Metric>``
+    values (unrounded). A candidate is ``{"w0": 500, "expressions":
+    {"cam_torque": "-50"}, "optimal_forces": {"reserve_x": 100}}``;
+    ``overrides`` (as :func:`statopt.run`'s, but ``contact_weight``) apply
+    to the setup they share. :func:`sweep` uses it for such points."""
+    inputs = None
+    try:
+        text = None
+        if overrides:
+            inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
+            text = edit_setup(Path(setup), overrides, inputs)
+        out = _native.force_sweep(os.fspath(setup), list(candidates), text=text, threads=threads, warm=warm)
+    finally:
+        if inputs is not None:
+            shutil.rmtree(inputs, ignore_errors=True)
+    return _rows(out)
+
+
+def _rows(out: Dict[str, Any]) -> List[Dict[str, Any]]:
+    rows = []
+    for values, failed in zip(out["values"], out["failed"]):
+        row: Dict[str, Any] = {"frames": out["frames"], "failed": failed}
+        row.update(zip(out["metric_names"], values))
+        rows.append(row)
+    return rows
+
+
+class Scene:
+    """A setup compiled and every frame of its motion assembled once, kept
+    in memory, to solve batch after batch of candidates that differ only in
+    forces (an optimiser's iterates) without compiling or assembling again:
+
+    >>> scene = statopt.Scene("setups/leg_extension_rajagopal_cam2.xml")
+    >>> scene.run([{"w0": 500, "expressions": {"cam_torque": "-50"}}])
+    [{'frames': 101, 'failed': 0, 'quadriceps_work_J': 120.045..., ...}]
+
+    Candidates and rows as :func:`force_sweep`'s; ``overrides`` as
+    :func:`statopt.run`'s (but ``contact_weight``) apply to the scene.
+    Memory grows with the frames (each keeps its assembled program and
+    reaction bases: about 0.3 MB a frame for the Rajagopal leg extension).
+    """
+
+    def __init__(self, setup, *, threads: Optional[int] = None, **overrides: Any):
+        inputs = None
+        try:
+            text = None
+            if overrides:
+                inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
+                text = edit_setup(Path(setup), overrides, inputs)
+            self._scene = _native.Scene(os.fspath(setup), text=text, threads=threads)
+        finally:
+            if inputs is not None:
+                shutil.rmtree(inputs, ignore_errors=True)
+        self.setup = os.fspath(setup)
+
+    @property
+    def frames(self) -> int:
+        return self._scene.frames
+
+    @property
+    def warnings(self) -> List[str]:
+        return self._scene.warnings
+
+    def run(self, candidates: Sequence[Dict[str, Any]], warm: bool = True) -> List[Dict[str, Any]]:
+        """One row per candidate: ``frames``, ``failed`` and the setup's
+        ``<Metric>`` values (unrounded)."""
+        return _rows(self._scene.run(list(candidates), warm=warm))
+
+    def __repr__(self) -> str:
+        return f"<statopt.Scene {os.path.basename(self.setup)}: {self.frames} frames>"
+
+
+def _run_batch(setup: str, base: Dict[str, Any], cands: List[Dict[str, Any]],
+               threads: Optional[int]) -> List[Dict[str, Any]]:
+    """One batch of a sweep (in-process or on a dask worker); raises on
+    failure (the caller then runs its points one by one)."""
+    start = time.perf_counter()
+    rows = force_sweep(setup, cands, threads=threads, **base)
+    seconds = (time.perf_counter() - start) / max(1, len(cands))
+    for r in rows:
+        r["error"] = None
+        r["seconds"] = seconds
+    return rows
+
+
+def _batches(points, metrics, batch) -> Tuple[Dict[Any, List[int]], Dict[int, tuple]]:
+    """The points a force sweep can batch, grouped by what they share:
+    {group key: [point index]}, and each batched point's (setup, base
+    overrides, candidate)."""
+    groups: Dict[Any, List[int]] = {}
+    split: Dict[int, tuple] = {}
+    if batch is False or metrics is not None:
+        return groups, split
+    batchable: Dict[str, bool] = {}
+    for i, (s, ov, _) in enumerate(points):
+        if s not in batchable:
+            batchable[s] = not is_study(Path(s)) and metric_elements(Path(s))
+        if not batchable[s]:
+            continue
+        bs = _batch_split(ov)
+        if bs is None:
+            continue
+        base, cand = bs
+        key = (s, _freeze(base))
+        groups.setdefault(key, []).append(i)
+        split[i] = (s, base, cand)
+    return groups, split
+
+
 def sweep(
     setup: Union[str, "os.PathLike[str]", None],
     grid: Union[Mapping[str, Sequence[Any]], Sequence[Any]],
@@ -119,6 +283,7 @@ def sweep(
     *,
     threads: Optional[int] = None,
     progress: Optional[bool] = None,
+    batch: Optional[bool] = None,
     **fixed: Any,
 ) -> pd.DataFrame:
     """Run many variants of a setup as independent tasks on dask.distributed
@@ -146,16 +311,57 @@ def sweep(
 
     ``progress``: None shows a tqdm bar of the points done once the sweep
     has run a second, True at once, False never.
+
+    **Force sweeps.** Points that differ only in forces — one
+    ``contact_weight`` each, and ``model_properties`` that set an
+    ExpressionBasedCoordinateForce's ``expression`` or an actuator's
+    ``optimal_force`` — with the setup's ``<Metric>``s as metrics are
+    batched (``batch=None``; ``False`` never): every group of points that
+    share everything else runs as one force sweep (:func:`force_sweep`) on
+    one compiled scene, in this process without ``client``, split into one
+    task per worker with one. Their metrics are unrounded (a point run on
+    its own has the 6 decimals of ``<name>_metrics.csv``) and equal those
+    of a run of the point's own setup to 1e-9 relative. A batch that fails
+    runs its points one by one, so errors are reported per point.
     """
     points = _points(setup, grid)
     if not points:
         return pd.DataFrame()
     fixed = dict(fixed)
+    results: Dict[int, Dict[str, Any]] = {}
+    # Points that differ only in forces: one force sweep per group.
+    groups, split = _batches([(s, {**fixed, **ov}, p) for s, ov, p in points], metrics, batch)
+    if groups and client is None:
+        for idx in groups.values():
+            s, base, _ = split[idx[0]]
+            try:
+                rows = _run_batch(s, base, [split[i][2] for i in idx], threads)
+            except Exception:  # noqa: BLE001 - its points run one by one below
+                continue
+            results.update(zip(idx, rows))
+    elif groups:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        tasks = []
+        for idx in groups.values():
+            s, base, _ = split[idx[0]]
+            for chunk in np.array_split(np.arange(len(idx)), min(workers, len(idx))):
+                ids = [idx[j] for j in chunk]
+                tasks.append((ids, client.submit(_run_batch, s, base, [split[i][2] for i in ids],
+                                                 threads, pure=False)))
+        for ids, fut in tasks:
+            try:
+                results.update(zip(ids, fut.result()))
+            except Exception:  # noqa: BLE001 - its points run one by one below
+                continue
+    todo = [i for i in range(len(points)) if i not in results]
+    if not todo:
+        rows = [{**params, **results[i]} for i, (_, _, params) in enumerate(points)]
+        return _frame(rows)
     own = None
     if client is None:
         from dask.distributed import Client, LocalCluster
 
-        n = max(1, min(len(points), os.cpu_count() or 1))
+        n = max(1, min(len(todo), os.cpu_count() or 1))
         own = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                            dashboard_address=None)
         client = Client(own)
@@ -163,8 +369,8 @@ def sweep(
             threads = max(1, (os.cpu_count() or 1) // n)
     try:
         futures = [
-            client.submit(_run_point, s, {**fixed, **ov}, metrics, threads, pure=False)
-            for s, ov, _ in points
+            client.submit(_run_point, points[i][0], {**fixed, **points[i][1]}, metrics, threads, pure=False)
+            for i in todo
         ]
         bar = None
         if progress is not False:
@@ -176,11 +382,10 @@ def sweep(
             except ImportError:
                 if progress:
                     raise
-        results: Dict[int, Dict[str, Any]] = {}
         try:
             from dask.distributed import as_completed
 
-            index = {f.key: i for i, f in enumerate(futures)}
+            index = {f.key: i for i, f in zip(todo, futures)}
             for fut in as_completed(futures):
                 try:
                     r = fut.result()
@@ -197,6 +402,10 @@ def sweep(
         if own is not None:
             client.close()
             own.close()
+    return _frame(rows)
+
+
+def _frame(rows: List[Dict[str, Any]]) -> pd.DataFrame:
     df = pd.DataFrame(rows)
     # parameters, metrics, then error and seconds
     last = [c for c in ("error", "seconds") if c in df.columns]

@@ -267,7 +267,9 @@ def test_sweep_on_local_cluster_reports_failures(repo):
         # the setup's <Metric>s, from single-w0 tables
         single = statopt.run(setup, contact_weight=500, progress=False)
         row = ok[ok.contact_weight == 500].iloc[0]
-        assert row["quadriceps_work_J"] == single.metrics["quadriceps_work_J"]
+        # (points that differ only in w0 run as one force sweep: unrounded
+        # metrics; the run's metrics.csv has 6 decimals)
+        assert row["quadriceps_work_J"] == pytest.approx(single.metrics["quadriceps_work_J"], abs=6e-7, rel=0)
         assert row["failed"] == 0
 
         # setups as points, the summary metrics
@@ -278,6 +280,27 @@ def test_sweep_on_local_cluster_reports_failures(repo):
         assert "no_such.xml" in df2.error.iloc[2]
         assert df2.solved.iloc[0] == 303 and df2.failed.iloc[0] == 0
         assert df2["peak_knee_r_on_tibia_r_in_tibia_r_force_N"].iloc[0] > 500
+
+
+def test_sweep_batches_points_that_differ_only_in_forces(repo):
+    setup = repo / "setups" / "leg_extension_rajagopal_cam2.xml"
+    cam2 = "-50*sqrt(1-0.75*sin(q+0.08726646259971647)^2)"
+    grid = {"contact_weight": [1, 1000],
+            "model_properties": [{"cam_torque/expression": e} for e in ("-50", cam2)]}
+    df = statopt.sweep(setup, grid, time_range=(0.0, 1.0), progress=False)
+    assert len(df) == 4 and df.error.isna().all() and (df.frames == 21).all() and (df.failed == 0).all()
+    # one force sweep: no cluster, one compiled scene, one timing for all
+    assert df.seconds.nunique() == 1
+    for _, row in df.iterrows():
+        own = statopt.run(setup, contact_weight=row.contact_weight, time_range=(0.0, 1.0), progress=False,
+                          tables=False, model_properties=row.model_properties)
+        for k, v in own.metrics.items():
+            assert row[k] == pytest.approx(v, abs=6e-7, rel=0), k
+    # the engine's call, and an input error naming the candidate
+    rows = statopt.force_sweep(setup, [{"w0": 500, "expressions": {"cam_torque": "-50"}}], time_range=(0.0, 1.0))
+    assert rows[0]["frames"] == 21
+    with pytest.raises(statopt.InputError, match="candidate 0: the model has no passive force 'cam'"):
+        statopt.force_sweep(setup, [{"w0": 500, "expressions": {"cam": "-50"}}])
 
 
 # -- studies, Ctrl-C ----------------------------------------------------------

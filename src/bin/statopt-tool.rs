@@ -142,6 +142,36 @@ enum Command {
         /// point's resting height and the floor's tilt from the motion.
         #[arg(long, value_name = "Y", allow_negative_numbers = true)]
         floor_height: Option<f64>,
+        /// The floor is a treadmill belt running backward at SPEED (m/s) along the walking
+        /// direction, or with velocity VX,VY,VZ (m/s, ground): instead of deciding from the motion.
+        #[arg(
+            long,
+            value_name = "SPEED|VX,VY,VZ",
+            allow_hyphen_values = true,
+            conflicts_with = "overground"
+        )]
+        treadmill: Option<String>,
+        /// The floor is the ground (no belt): instead of deciding from the motion.
+        #[arg(long)]
+        overground: bool,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// The setup's static optimization with statopt's knee contact method (docs/knee_contact.md):
+    /// each knee's medial and lateral compartments as unknown contact forces of the optimisation.
+    /// Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
+    /// lateral force) and its figure.
+    #[command(name = "knee-contact")]
+    KneeContact {
+        /// An AnalyzeTool setup with a StaticOptimization analysis.
+        setup: PathBuf,
+        /// Write results here instead of the setup's <results_directory>.
+        #[arg(short = 'o', long = "results-dir", value_name = "DIR")]
+        results_dir: Option<PathBuf>,
+        /// A knee joint to solve so (repeatable; default: every joint whose child is a tibia_* body).
+        #[arg(long = "joint", value_name = "J")]
+        joints: Vec<String>,
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
@@ -424,6 +454,8 @@ fn main() -> ExitCode {
             setup,
             results_dir,
             floor_height,
+            treadmill,
+            overground,
             quiet,
         }) => {
             let opts = RunOptions {
@@ -431,17 +463,26 @@ fn main() -> ExitCode {
                 verbose: !quiet,
                 ..Default::default()
             };
-            let run = match floor_height {
-                None => tools::predict_grf::run_setup(setup, None, &opts),
-                Some(f) => match statopt::parse::setup::Setup::read(setup) {
-                    Ok(statopt::parse::setup::Setup::Analyze(s)) => {
-                        tools::predict_grf::run_with_floor(&s, &opts, Some(*f))
-                    }
-                    Ok(_) => Err(statopt::Error::msg(
-                        "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
-                    )),
-                    Err(e) => Err(e),
+            let motion = match (treadmill, overground) {
+                (Some(t), _) => match tools::predict_grf::parse_treadmill(t) {
+                    Ok(m) => m,
+                    Err(e) => return fail(e),
                 },
+                (None, true) => tools::predict_grf::FloorMotion::Overground,
+                (None, false) => tools::predict_grf::FloorMotion::Auto,
+            };
+            let floor = tools::predict_grf::FloorOptions {
+                height: *floor_height,
+                motion,
+            };
+            let run = match statopt::parse::setup::Setup::read(setup) {
+                Ok(statopt::parse::setup::Setup::Analyze(s)) => {
+                    tools::predict_grf::run_with(&s, &opts, &floor)
+                }
+                Ok(_) => Err(statopt::Error::msg(
+                    "predict-grf needs an AnalyzeTool setup with a StaticOptimization analysis",
+                )),
+                Err(e) => Err(e),
             };
             match run {
                 Ok(p) => {
@@ -455,6 +496,7 @@ fn main() -> ExitCode {
                         {
                             eprintln!("warning: {w}");
                         }
+                        eprintln!("floor: {}", p.contacts.decision.reason);
                         eprintln!(
                             "foot contacts: {} points, floor at y = {:.4} m (points' contact levels {:.4} to {:.4} m), rising {:.2} deg along x and {:.2} deg along z, belt velocity ({:.3}, {:.3}) m/s",
                             p.contacts.points.len(),
@@ -478,11 +520,51 @@ fn main() -> ExitCode {
                                 st.side, st.cop_error_mm, st.heel_strike_error_ms, st.toe_off_error_ms
                             );
                         }
+                        for n in &p.summary.notes {
+                            eprintln!("{n}");
+                        }
                         for line in p.summary.report() {
                             eprintln!("{line}");
                         }
                     }
-                    match p.summary.failure_line() {
+                    let failed = p.summary.failure_line();
+                    if let Some(line) = &failed {
+                        eprintln!("error: {line}");
+                    }
+                    if let Some(line) = &p.rejected {
+                        eprintln!("error: {line}");
+                    }
+                    if failed.is_some() || p.rejected.is_some() {
+                        ExitCode::from(tools::EXIT_FRAMES_FAILED)
+                    } else {
+                        ExitCode::SUCCESS
+                    }
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Some(Command::KneeContact {
+            setup,
+            results_dir,
+            joints,
+            quiet,
+        }) => {
+            let opts = RunOptions {
+                results_dir: results_dir.clone(),
+                verbose: !quiet,
+                ..Default::default()
+            };
+            match tools::knee_contact::run(setup, joints, &opts) {
+                Ok(summary) => {
+                    if !quiet {
+                        for w in &summary.warnings {
+                            eprintln!("warning: {w}");
+                        }
+                        for line in summary.report() {
+                            eprintln!("{line}");
+                        }
+                    }
+                    match summary.failure_line() {
                         Some(line) => {
                             eprintln!("error: {line}");
                             ExitCode::from(tools::EXIT_FRAMES_FAILED)

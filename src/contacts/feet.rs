@@ -13,14 +13,14 @@
 //! on the toes: the hallux (0.25 L from the MTP joint, medially 0.05 L).
 //! Lateral is +z on the right foot and −z on the left, as in these models.
 //!
-//! **Floor.** Unless given, its height is found from the motion: each point's
-//! lowest height over the trial, and the floor at the median of those minima
-//! (a point that sinks at push-off, or one that never lands, does not move
-//! it). The floor is level (normal +y).
+//! **Floor.** Unless given, its height is found from the motion over the
+//! analysed frames: each point's lowest height over the trial, and the floor
+//! at the median of those minima (a point that sinks at push-off, or one
+//! that never lands, does not move it).
 //!
 //! **Moving floor.** On a treadmill the stance foot moves back with the belt.
-//! The belt velocity is the median horizontal velocity of the points while
-//! they are within 1 cm of the floor; above 0.2 m/s it becomes the contacts'
+//! Whether the floor is a belt, and its velocity, is decided by the test of
+//! [`super::floor`] (or given); a belt becomes the contacts'
 //! `plane_velocity`, so stance is static friction, not slip.
 
 use nalgebra::Vector3;
@@ -29,6 +29,8 @@ use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Location, Result};
 use crate::model::Model;
 use crate::motion::states::States;
+
+use super::floor::{self, FloorDecision, FloorMotion, PointTrack};
 
 /// One foot contact point: its name, body and location in the body.
 #[derive(Debug, Clone)]
@@ -92,6 +94,8 @@ pub struct FootContactSet {
     pub warnings: Vec<String>,
     pub floor_height: f64,
     pub belt_velocity: Vector3<f64>,
+    /// Treadmill or ground, and why ([`super::floor`]).
+    pub decision: FloorDecision,
     pub parameters: FootContactParameters,
 }
 
@@ -158,20 +162,48 @@ pub fn foot_points(model: &Model) -> Result<Vec<FootPoint>> {
     Ok(out)
 }
 
-/// Build the contact set over the motion `states`: floor height (unless
-/// `floor` is given) and belt velocity from the points' motion.
+/// Build the contact set over the motion `states`, from its frames within
+/// `range` (the analysed time range, s; the rest, such as the reflected
+/// padding a low-pass filter adds before and after the trial, is no
+/// evidence): floor height (unless `floor` is given) and how the floor
+/// moves (decided from the motion unless `motion` gives it, see
+/// [`super::floor`]).
 pub fn build(
     model: &Model,
     states: &States,
+    range: (f64, f64),
     floor: Option<f64>,
+    motion: FloorMotion,
     parameters: FootContactParameters,
 ) -> Result<FootContactSet> {
     let points = foot_points(model)?;
     let mut data = Data::new(model);
-    let n = states.time.len();
+    // The analysed frames: from the state at or closest before the initial
+    // time (as OpenSim picks the first state) to the final time.
+    let eps = 1e-9;
+    let first = states
+        .time
+        .iter()
+        .rposition(|&t| t <= range.0 + eps)
+        .unwrap_or(0);
+    let frames: Vec<usize> = (first..states.time.len())
+        .filter(|&i| states.time[i] <= range.1 + eps)
+        .collect();
+    if frames.is_empty() {
+        return Err(Error::msg(format!(
+            "predict-grf: the motion has no frame between {} and {} s",
+            range.0, range.1
+        )));
+    }
+    let n = frames.len();
+    let time: Vec<f64> = frames.iter().map(|&i| states.time[i]).collect();
     let mut velocities = vec![Vec::with_capacity(n); points.len()];
     let mut positions = vec![Vec::with_capacity(n); points.len()];
-    for i in 0..n {
+    let root = (0..model.nq())
+        .find(|&c| model.is_root_coordinate(c))
+        .map(|c| model.coordinates[c].body);
+    let (mut pelvis, mut pelvis_x) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for &i in &frames {
         data.q.copy_from_slice(&states.q[i]);
         data.u.copy_from_slice(&states.u[i]);
         data.udot.iter_mut().for_each(|x| *x = 0.0);
@@ -181,6 +213,20 @@ pub fn build(
             let v = data.station_velocity(p.body, &p.local);
             velocities[k].push(v);
             positions[k].push(g);
+        }
+        // The walking direction and progression: the root body (pelvis),
+        // or the calcanei's midpoint for a model without one.
+        match root {
+            Some(b) => {
+                pelvis.push(data.station_position(b, &Vector3::zeros()));
+                pelvis_x.push(data.station_position(b, &Vector3::x()));
+            }
+            None => {
+                let m = 0.5
+                    * (positions[0][positions[0].len() - 1] + positions[6][positions[6].len() - 1]);
+                pelvis.push(m);
+                pelvis_x.push(m + Vector3::x());
+            }
         }
     }
     let floor_height = match floor {
@@ -193,26 +239,19 @@ pub fn build(
             median(&mut lowest)
         }
     };
-    let mut stance_vx = Vec::new();
-    let mut stance_vz = Vec::new();
-    for k in 0..points.len() {
-        for i in 0..n {
-            if positions[k][i].y < floor_height + 0.01 {
-                stance_vx.push(velocities[k][i].x);
-                stance_vz.push(velocities[k][i].z);
-            }
-        }
-    }
-    let belt = if stance_vx.is_empty() {
-        Vector3::zeros()
-    } else {
-        Vector3::new(median(&mut stance_vx), 0.0, median(&mut stance_vz))
-    };
-    let belt_velocity = if belt.norm() > BELT_THRESHOLD {
-        belt
-    } else {
-        Vector3::zeros()
-    };
+    let tracks: Vec<PointTrack> = points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| PointTrack {
+            side: p.side,
+            positions: &positions[k],
+            velocities: &velocities[k],
+        })
+        .collect();
+    let all: Vec<usize> = (0..n).collect();
+    let ev = floor::evidence(&time, &all, &pelvis, &pelvis_x, &tracks);
+    let decision = floor::decide(ev, motion);
+    let belt_velocity = decision.belt_velocity;
     let mut points = points;
     let mut dwell_samples = Vec::with_capacity(points.len());
     for (k, p) in points.iter_mut().enumerate() {
@@ -235,7 +274,46 @@ pub fn build(
         }
         dwell_samples.push(samples);
     }
+    // A point that never dwells (a foot that only lands at the end of a
+    // short trial) rests, when it lands, as its mirror image on the other
+    // foot does (the model's feet are mirror images on one floor): it takes
+    // that point's contact level when that one dwells, else the median
+    // level of the points that dwell, else the common floor.
+    if floor.is_none() {
+        let dwells: Vec<bool> = dwell_samples
+            .iter()
+            .map(|s| s.len() >= DWELL_MIN_FRAMES)
+            .collect();
+        let mut levels: Vec<f64> = points
+            .iter()
+            .zip(&dwells)
+            .filter(|(_, &d)| d)
+            .map(|(p, _)| p.contact_level)
+            .collect();
+        let fallback = if levels.is_empty() {
+            floor_height
+        } else {
+            median(&mut levels)
+        };
+        let names: Vec<String> = points.iter().map(|p| p.name.clone()).collect();
+        for k in 0..points.len() {
+            if dwells[k] {
+                continue;
+            }
+            let other = if points[k].side == 'r' { 'l' } else { 'r' };
+            let stem = &names[k][..names[k].len() - 1];
+            let mirror =
+                (0..points.len()).find(|&j| dwells[j] && names[j] == format!("{stem}{other}"));
+            points[k].contact_level = match mirror {
+                Some(j) => points[j].contact_level,
+                None => fallback,
+            };
+        }
+    }
     let mut warnings = Vec::new();
+    if decision.source == floor::DecisionSource::Fallback {
+        warnings.push(format!("floor: {}", decision.reason));
+    }
     for side in ['r', 'l'] {
         // Deepest sink of each point of this foot below its contact level.
         let sinks: Vec<(usize, f64, usize)> = points
@@ -264,13 +342,13 @@ pub fn build(
                 .expect("not empty");
             warnings.push(format!(
                 "foot {side}: {} of its {} contact points sink more than {:.0} cm below their contact levels (up to {:.1} cm, at t = {:.3} s): the motion's vertical position drifts there, or the floor is not flat; the predicted forces there are uncertain",
-                sunk.len(), sinks.len(), 100.0 * SINK_WARNING, 100.0 * worst.1, states.time[worst.2]
+                sunk.len(), sinks.len(), 100.0 * SINK_WARNING, 100.0 * worst.1, time[worst.2]
             ));
         } else {
             for &&(k, s, i) in &sunk {
                 warnings.push(format!(
                     "foot contact point {} on {} sinks {:.1} cm below its contact level at t = {:.3} s: the foot is rigid there (a toe rolling over) or the markers err; the force there is uncertain",
-                    points[k].name, points[k].body_name, 100.0 * s, states.time[i]
+                    points[k].name, points[k].body_name, 100.0 * s, time[i]
                 ));
             }
         }
@@ -285,6 +363,7 @@ pub fn build(
         floor_slope,
         floor_height,
         belt_velocity,
+        decision,
         parameters,
     })
 }

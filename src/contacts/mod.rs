@@ -15,6 +15,7 @@
 pub mod closure;
 pub mod element;
 pub mod feet;
+pub mod floor;
 pub mod kinematics;
 #[cfg(test)]
 mod tests;

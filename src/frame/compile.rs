@@ -12,7 +12,7 @@ use crate::forces::analysis_model::{
 use crate::forces::external_loads::ExternalLoadsFiles;
 use crate::forces::passive::PassiveForce;
 use crate::frame::problem::{force_file_row, Control, SoProblem};
-use crate::frame::settings::StaticOptimizationSetup;
+use crate::frame::settings::{ConstraintMatrix as ConstraintMatrixKind, StaticOptimizationSetup};
 use crate::muscles::set::MuscleSet;
 use crate::parse::setup::AnalyzeSetup;
 use crate::xml::Element;
@@ -200,6 +200,17 @@ impl SoProblem {
                 force_labels.extend(ef.labels.iter().cloned());
             }
         }
+        let mut knees = crate::frame::knee_contact::select(&model, &so.knee_contact)
+            .map_err(|e| Error::msg(format!("{}: {e}", setup.setup_file.display())))?;
+        for k in knees.iter_mut() {
+            k.frontal = so.knee_contact_frontal;
+        }
+        if !knees.is_empty() && so.constraint_matrix == ConstraintMatrixKind::Perturbation {
+            return Err(Error::msg(format!(
+                "{}: knee_contact needs <constraint_matrix>analytic</constraint_matrix> (its rows are the knee reaction at the target accelerations)",
+                setup.setup_file.display()
+            )));
+        }
         if so.activation_exponent != 2.0 {
             warnings.push(format!(
                 "activation_exponent {} is solved with power cones",
@@ -221,6 +232,7 @@ impl SoProblem {
                 settings: so.clone(),
                 force_labels,
                 contacts,
+                knees,
             },
             warnings,
         ))

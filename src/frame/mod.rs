@@ -6,13 +6,19 @@
 //! - [`problem`]: [`SoProblem`], compiled once per run, and per frame its
 //!   convex program (kinematics → muscle paths and strength → contacts → the
 //!   equations of motion) and outputs ([`FrameResult`]).
+//! - [`knee_contact`]: statopt's knee contact method, the knee's two
+//!   compartments as unknown contact forces of the frame's program.
+//! - [`candidates`]: one assembled frame solved for many candidates that
+//!   differ only in forces (w0, a passive force, an optimal force).
 //! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly.
+pub mod candidates;
 pub mod compile;
 pub mod driver;
 pub mod interrupt;
+pub mod knee_contact;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;

@@ -62,6 +62,10 @@ pub struct SoProblem {
     pub force_labels: Vec<String>,
     /// Point-on-plane contacts; three multipliers each follow the controls.
     pub contacts: Vec<Contact>,
+    /// Knees solved with the knee contact method (`<knee_contact>`, empty
+    /// for plain static optimization): two multipliers each follow the
+    /// contacts', two rows each follow the coordinates' (`frame::knee_contact`).
+    pub knees: Vec<crate::frame::knee_contact::Knee>,
 }
 
 /// The ForceSet part of a force-file row (labels or values): each control's
@@ -177,11 +181,14 @@ pub struct Assembly {
     pub states: Vec<ContactState>,
     /// The external loads' force-table values (`ExternalLoads::apply_recording`).
     pub external: Vec<f64>,
-    couplings: Vec<Vec<(usize, f64)>>,
+    /// Per equation row: the coupling vector C_k (coordinate, coefficient).
+    pub(crate) couplings: Vec<Vec<(usize, f64)>>,
     g: Vec<f64>,
     cols: [Vec<f64>; 3],
     /// The outputs' working buffers ([`SoProblem::frame_result_into`]).
     scratch: ResultScratch,
+    /// The knee rows' buffers (`frame::knee_contact`).
+    knee: crate::frame::knee_contact::KneeScratch,
 }
 
 /// Buffers of a frame's outputs: generalized forces by source, before and
@@ -220,6 +227,7 @@ impl Default for Assembly {
             g: Vec::new(),
             cols: Default::default(),
             scratch: Default::default(),
+            knee: Default::default(),
         }
     }
 }
@@ -317,6 +325,7 @@ impl SoProblem {
             g,
             cols,
             scratch: _,
+            knee,
         } = asm;
         passive_values.clear();
         g.clear();
@@ -332,14 +341,17 @@ impl SoProblem {
         let nr = self.rows.len();
         let nv = self.controls.len();
         let nc = self.contacts.len();
+        // The knee contact method's rows and variables follow (two each per knee).
+        let nk = self.knees.len();
+        let nrt = nr + 2 * nk;
         let a = &mut problem.a;
         // Every column is written below, whole: no need to clear them.
-        if a.shape() != (nr, nv + 3 * nc) {
-            *a = DMatrix::zeros(nr, nv + 3 * nc);
+        if a.shape() != (nrt, nv + 3 * nc + 2 * nk) {
+            *a = DMatrix::zeros(nrt, nv + 3 * nc + 2 * nk);
         }
         let b = &mut problem.b;
-        if b.len() != nr {
-            *b = DVector::zeros(nr);
+        if b.len() != nrt {
+            *b = DVector::zeros(nrt);
         } else {
             b.fill(0.0);
         }
@@ -383,7 +395,7 @@ impl SoProblem {
                 a.set_column(v, &col);
                 continue;
             }
-            let column = &mut a.as_mut_slice()[v * nr..(v + 1) * nr];
+            let column = &mut a.as_mut_slice()[v * nrt..v * nrt + nr];
             for (e, cv) in column.iter_mut().zip(couplings.iter()) {
                 *e = f * cv.iter().map(|(i, c)| c * gen[*i]).sum::<f64>();
             }
@@ -420,7 +432,7 @@ impl SoProblem {
                     a.set_column(v0 + k, &column);
                     continue;
                 }
-                let column = &mut a.as_mut_slice()[(v0 + k) * nr..(v0 + k + 1) * nr];
+                let column = &mut a.as_mut_slice()[(v0 + k) * nrt..(v0 + k) * nrt + nr];
                 for (e, cv) in column.iter_mut().zip(couplings.iter()) {
                     *e = cv.iter().map(|(i, cc)| cc * col[*i]).sum::<f64>();
                 }
@@ -441,6 +453,26 @@ impl SoProblem {
                 });
             }
             states.push(st);
+        }
+        if nk > 0 {
+            problem.lower.extend(std::iter::repeat(0.0).take(2 * nk));
+            problem
+                .upper
+                .extend(std::iter::repeat(f64::INFINITY).take(2 * nk));
+            problem
+                .weights
+                .extend(std::iter::repeat(1.0 / self.w0()).take(2 * nk));
+            self.knee_rows(
+                data,
+                mf,
+                states,
+                scale,
+                &mut problem.a,
+                &mut problem.b,
+                nr,
+                nv + 3 * nc,
+                knee,
+            );
         }
         problem.exponent = self.settings.activation_exponent;
         problem.friction = self.settings.friction;
@@ -776,7 +808,7 @@ impl SoProblem {
 
     /// The outputs of the frame problem in `asm`, solved in
     /// `out.solution`, into `out` (its buffers reused).
-    fn frame_result_into(
+    pub(crate) fn frame_result_into(
         &self,
         t: f64,
         asm: &mut Assembly,
@@ -833,14 +865,16 @@ impl SoProblem {
                 p.fill(0.0);
             }
         }
-        parts[0].copy_from(&problem.b);
+        // (The knee contact method's rows, after the coordinates', are not
+        // generalized forces.)
+        parts[0].copy_from(&problem.b.rows(0, nr));
         for v in 0..problem.a.ncols() {
             let k = match self.controls.get(v) {
                 Some(Control::Muscle(_)) => 1,
                 Some(Control::Actuator(_)) => 2,
                 None => 3,
             };
-            parts[k].axpy(solution.x[v], &problem.a.column(v), 1.0);
+            parts[k].axpy(solution.x[v], &problem.a.column(v).rows(0, nr), 1.0);
         }
         if let Some(m) = m_r {
             let product = &mut scratch.product;

@@ -220,9 +220,10 @@ pub fn time_range_warnings(
 }
 
 /// How far a motion's values for coupler-driven (dependent) coordinates lie
-/// from what their couplers give. OpenSim's assembler solves dependent
-/// coordinates from their couplers whatever the file holds, and so does
-/// statopt; a file that disagrees (e.g. Moco's coordinates.sto, whose
+/// from what their couplers give. statopt sets dependent coordinates and
+/// their speeds from their couplers whatever the file holds; OpenSim's
+/// assembler does so for positions only and keeps the speeds it splined
+/// from the column; a file that disagrees (e.g. Moco's coordinates.sto, whose
 /// `knee_angle_*_beta` columns hold degrees in a radian file) is said, not
 /// refused.
 #[derive(Debug, Clone, Default)]
@@ -282,7 +283,7 @@ impl DependentMismatch {
                     )
                 } else {
                     format!(
-                        "{}: the column of dependent coordinate {} differs from its coupler {} by up to {d:.4} (at t = {}); the coupler's values are used, as OpenSim's assembler does",
+                        "{}: the column of dependent coordinate {} differs from its coupler {} by up to {d:.4} (at t = {}); statopt takes its positions and speeds from the coupler. OpenSim's assembler corrects the positions through the coupler but keeps the speeds splined from this column, so OpenSim's results differ where the joint moves fast; write the column in the coupler's units to compare (docs/knee_contact.md)",
                         file.display(),
                         dependent.name,
                         cp.name,

@@ -38,6 +38,19 @@ pub enum SolverChoice {
     Clarabel,
 }
 
+/// Which knees a StaticOptimization solves with the knee contact method
+/// (`frame::knee_contact`, which re-exports it).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum KneeSelection {
+    /// Plain static optimization (OpenSim's).
+    #[default]
+    Off,
+    /// Every knee of the model (every joint whose child is a `tibia_*` body).
+    All,
+    /// The named joints.
+    Joints(Vec<String>),
+}
+
 /// The StaticOptimization element of an AnalyzeTool setup.
 #[derive(Debug, Clone)]
 pub struct StaticOptimizationSetup {
@@ -73,6 +86,14 @@ pub struct StaticOptimizationSetup {
     /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
     /// on every frame.
     pub solver: SolverChoice,
+    /// statopt `<knee_contact>`: solve the named knees (`all`/`true`: every
+    /// knee of the model) with the knee contact method
+    /// (`frame::knee_contact`, docs/knee_contact.md); off by default.
+    pub knee_contact: KneeSelection,
+    /// false when `<knee_contact>` holds the word `axial`: one axial contact
+    /// per knee instead of two compartments (the ingredient study of
+    /// docs/knee_contact.md).
+    pub knee_contact_frontal: bool,
     /// Whether the element gives `<contact_weight>` (else
     /// [`DEFAULT_CONTACT_WEIGHT`] applies).
     pub contact_weights_given: bool,
@@ -202,6 +223,25 @@ impl StaticOptimizationSetup {
                     other => return Err(f.error(format!("solver must be 'auto' (or 'newton': the dual Newton solver, Clarabel where it does not apply or converge) or 'clarabel', found '{other}'"))),
                 },
                 _ => SolverChoice::Auto,
+            },
+            knee_contact_frontal: !el
+                .child("knee_contact")
+                .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
+            knee_contact: match el.child("knee_contact") {
+                None => KneeSelection::Off,
+                Some(k) => {
+                    let mut words = k.words();
+                    words.retain(|w| !w.eq_ignore_ascii_case("axial"));
+                    if words.is_empty() && !k.words().is_empty() {
+                        words.push("all".into());
+                    }
+                    match words.iter().map(|w| w.to_ascii_lowercase()).collect::<Vec<_>>().as_slice() {
+                        [] => return Err(k.error("knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'")),
+                        [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
+                        [w] if w == "true" || w == "all" => KneeSelection::All,
+                        _ => KneeSelection::Joints(words),
+                    }
+                }
             },
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {

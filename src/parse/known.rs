@@ -45,6 +45,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "constraint_matrix",
             "solver_tolerance",
             "solver",
+            "knee_contact",
         ],
     ),
 ];
@@ -316,7 +317,7 @@ pub const FIGURE_ELEMENTS: &[(&str, &[&str])] = &[
 ];
 
 /// The children of a `<StatoptStudy>`.
-pub const STUDY_CHILDREN: &[&str] = &["setups", "results_directory", "Figure", "Metric"];
+pub const STUDY_CHILDREN: &[&str] = &["setups", "results_directory", "Figure", "Metric", "ForceSweep"];
 
 /// Unknown attributes and children of a `<Figure>` or `<Metric>`, one error
 /// each, with the nearest known name.

@@ -172,7 +172,7 @@ pub fn apply_forces(
 /// [`apply_forces`] when `data`'s positions and velocities and the muscle
 /// paths in `mf` are already those of the state (nothing recomputed).
 #[allow(clippy::too_many_arguments)]
-fn apply_forces_at_state(
+pub(crate) fn apply_forces_at_state(
     data: &mut Data,
     mf: &MuscleFrame,
     controls: &[Control],

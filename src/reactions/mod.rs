@@ -2,11 +2,14 @@
 //!
 //! - [`joint`]: a frame's reactions (Simbody's mobilizer reactions) from
 //!   the forces applied in it, and static optimization's reactions.
+//! - [`linear`]: a frame's reactions as an affine function of its forces,
+//!   for many solutions of one frame (force sweeps).
 //! - [`setup`]: the JointReaction element and the reactions it asks for.
 //! - [`forces_file`]: a JointReaction's forces file, read as frames need it.
 //! - [`problem`]: a JointReaction run compiled once, and one frame of it.
 pub mod forces_file;
 pub mod joint;
+pub mod linear;
 pub mod problem;
 pub mod setup;
 

@@ -51,7 +51,7 @@ pub fn labels(patella: bool) -> Vec<String> {
 /// Header text of the table.
 pub const DESCRIPTION: &str = "Knee loads per side (statopt, docs/leg_extension_results.md): knee_flexion in degrees (flexion positive); tibiofemoral reaction on the tibia in the tibia frame: tf_compression = -Fy (along the tibial long axis, compression positive), tf_shear = +Fx (anterior, perpendicular to the long axis: PCL-type positive, ACL-type negative); pf_compression = magnitude of the patellofemoral reaction on the patella (absent without a patella body). Units N.";
 
-struct Side {
+pub(crate) struct Side {
     femur: usize,
     tibia: usize,
     /// Columns fx, fy of the knee reaction on the tibia in the tibia frame.
@@ -128,6 +128,37 @@ pub fn flexion_degrees(data: &Data, femur: usize, tibia: usize) -> f64 {
     yt.x.atan2(yt.y).to_degrees()
 }
 
+/// Both sides' columns in a reaction table (`table`'s labels; `path` names
+/// it in errors), and whether both have a patella.
+pub(crate) fn sides(
+    model: &Model,
+    table: &storage::Storage,
+    path: &Path,
+) -> Result<([Side; 2], bool)> {
+    let sides = [
+        side_columns(model, table, path, 'r')?,
+        side_columns(model, table, path, 'l')?,
+    ];
+    let patella = sides[0].pf.is_some() && sides[1].pf.is_some();
+    Ok((sides, patella))
+}
+
+/// One row of the table (into `row`, cleared) from a frame's reaction row
+/// `r`, `data` at the frame's positions.
+pub(crate) fn knee_row(data: &Data, sides: &[Side; 2], patella: bool, r: &[f64], row: &mut Vec<f64>) {
+    row.clear();
+    for s in sides {
+        row.push(flexion_degrees(data, s.femur, s.tibia));
+        row.push(-r[s.tf[1]]);
+        row.push(r[s.tf[0]]);
+        if patella {
+            if let Some([x, y, z]) = s.pf {
+                row.push((r[x] * r[x] + r[y] * r[y] + r[z] * r[z]).sqrt());
+            }
+        }
+    }
+}
+
 /// Write the knee loads of the reaction table `reactions` to `out`, knee
 /// angles from `states` at the table's times (each table time must be a
 /// state time).
@@ -140,11 +171,7 @@ pub fn write(
     precision: usize,
 ) -> Result<PathBuf> {
     let table = storage::read(reactions)?;
-    let sides = [
-        side_columns(model, &table, reactions, 'r')?,
-        side_columns(model, &table, reactions, 'l')?,
-    ];
-    let patella = sides[0].pf.is_some() && sides[1].pf.is_some();
+    let (sides, patella) = sides(model, &table, reactions)?;
     let mut w = StoWriter::create_for_setup(
         setup_file,
         out,
@@ -161,18 +188,7 @@ pub fn write(
         data.q.copy_from_slice(&states.q[k]);
         data.u.iter_mut().for_each(|x| *x = 0.0);
         kinematics::full(model, &mut data);
-        row.clear();
-        let r = &table.rows[i];
-        for s in &sides {
-            row.push(flexion_degrees(&data, s.femur, s.tibia));
-            row.push(-r[s.tf[1]]);
-            row.push(r[s.tf[0]]);
-            if patella {
-                if let Some([x, y, z]) = s.pf {
-                    row.push((r[x] * r[x] + r[y] * r[y] + r[z] * r[z]).sqrt());
-                }
-            }
-        }
+        knee_row(&data, &sides, patella, &table.rows[i], &mut row);
         w.write_row(t, &row)?;
     }
     w.finish()?;

@@ -4,9 +4,11 @@ pub mod analyze;
 pub mod bench;
 pub mod bench_grid;
 pub mod check;
+pub mod force_sweep;
 pub use crate::frame::interrupt;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
+pub mod knee_contact;
 pub mod knee_loads;
 pub mod loading;
 pub mod motion_gen;
@@ -155,6 +157,10 @@ pub struct RunSummary {
     /// joint's coordinates: force (N) and moment (N·m), with where.
     pub root_force_peak: Option<(f64, String)>,
     pub root_moment_peak: Option<(f64, String)>,
+    /// Per frame solved: time (s) and the size of the summed force (N) that
+    /// non-muscle actuators (residuals and reserves) apply on the root
+    /// joint's translations.
+    pub root_force_series: Vec<(f64, f64)>,
     /// Weight (N) of what the root joint carries: the body weight residual
     /// forces are compared with.
     pub root_body_weight: Option<f64>,
@@ -206,6 +212,7 @@ impl RunSummary {
         keep_max(&mut self.reserve_peak, other.reserve_peak);
         keep_max(&mut self.root_force_peak, other.root_force_peak);
         keep_max(&mut self.root_moment_peak, other.root_moment_peak);
+        self.root_force_series.extend(other.root_force_series);
         self.root_body_weight = self.root_body_weight.or(other.root_body_weight);
         self.notes.extend(other.notes);
         for d in other.results_dirs {

@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use nalgebra::Vector3;
 
 use crate::contacts::feet::{self, FootContactParameters, FootContactSet};
+pub use crate::contacts::floor::FloorMotion;
 use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Location, Result};
 use crate::forces::external_loads::ExternalLoads;
@@ -58,6 +59,105 @@ pub struct Prediction {
     /// The w0 the prediction ran with ([`DEFAULT_CONTACT_WEIGHT`] unless
     /// the setup gives one).
     pub contact_weight: f64,
+    /// Per frame: time (s) and the root residual, the size of the summed
+    /// force (N) of every actuator on the pelvis translations, residuals
+    /// and reserves included.
+    pub root_residual: Vec<(f64, f64)>,
+    /// Set when the physics rejects the prediction (the root residual above
+    /// [`REJECT_ROOT_RESIDUAL`] of body weight on more than
+    /// [`REJECT_FRAME_SHARE`] of the frames): the line that says so. The
+    /// tool then exits with status 3 ([`crate::tools::EXIT_FRAMES_FAILED`]).
+    pub rejected: Option<String>,
+}
+
+/// A root residual above this share of body weight means the contacts did
+/// not carry the body on that frame (issue 27).
+pub const REJECT_ROOT_RESIDUAL: f64 = 0.25;
+/// More than this share of the frames with such a root residual: the
+/// prediction is not a result (exit status 3).
+pub const REJECT_FRAME_SHARE: f64 = 0.05;
+
+/// The frames whose root residual exceeds [`REJECT_ROOT_RESIDUAL`] of
+/// `body_weight`, among those not in flight, and the line that rejects the
+/// prediction when they are more than [`REJECT_FRAME_SHARE`] of those (None:
+/// accepted). `flight[i]`: no foot point of frame i is within reach of the
+/// floor (every point above its contact band), so no contact could carry
+/// anything there: the body is in free fall, and what the root residual
+/// carries there is asked by the kinematics alone (a low-pass filter smears
+/// the stance's acceleration into the flight), not a failure of the
+/// contacts. Such frames are not judged; a prediction that puts no force
+/// on feet standing on the floor is.
+pub fn judge_root_residual(
+    series: &[(f64, f64)],
+    flight: &[bool],
+    body_weight: f64,
+) -> (Vec<f64>, Option<String>) {
+    let judged: Vec<(f64, f64)> = series
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !flight.get(*i).copied().unwrap_or(false))
+        .map(|(_, x)| *x)
+        .collect();
+    let over: Vec<(f64, f64)> = judged
+        .iter()
+        .copied()
+        .filter(|&(_, f)| !(f <= REJECT_ROOT_RESIDUAL * body_weight))
+        .collect();
+    let times: Vec<f64> = over.iter().map(|x| x.0).collect();
+    if judged.is_empty() || (over.len() as f64) <= REJECT_FRAME_SHARE * judged.len() as f64 {
+        return (times, None);
+    }
+    let worst = over.iter().copied().fold((f64::NAN, 0.0f64), |m, x| {
+        if x.1 > m.1 || m.0.is_nan() {
+            x
+        } else {
+            m
+        }
+    });
+    let skipped = series.len() - judged.len();
+    let line = format!(
+        "the prediction is rejected by the physics: on {} of {} frames with a foot on the floor ({:.0} %, more than {:.0} %) the root residual (every actuator on the pelvis translations) carried more than {:.0} % of body weight, up to {:.0} % at t = {:.3} s (first at t = {:.3} s, last at t = {:.3} s): the foot contacts did not carry the body there{}; the comparison is written, but these forces are not a result; exit status {}",
+        over.len(),
+        judged.len(),
+        100.0 * over.len() as f64 / judged.len() as f64,
+        100.0 * REJECT_FRAME_SHARE,
+        100.0 * REJECT_ROOT_RESIDUAL,
+        100.0 * worst.1 / body_weight,
+        worst.0,
+        times[0],
+        times[times.len() - 1],
+        if skipped > 0 {
+            format!(" ({skipped} frames in flight not judged)")
+        } else {
+            String::new()
+        },
+        crate::tools::EXIT_FRAMES_FAILED
+    );
+    (times, Some(line))
+}
+
+/// Per row of the contacts' table (`..._ContactForces.sto`): whether every
+/// foot point is farther from its floor plane than the contact band
+/// (d_tol + d_trans), where its weight w(d) is nil: nothing can touch.
+fn flight_frames(path: &std::path::Path, set: &FootContactSet) -> Result<Vec<bool>> {
+    let table = storage::read(path)?;
+    let reach = set.parameters.contact_tolerance + set.parameters.transition_zone;
+    let cols: Vec<usize> = set
+        .points
+        .iter()
+        .map(|p| {
+            table
+                .column_index(&format!("{}_distance", p.name))
+                .ok_or_else(|| {
+                    Error::internal(format!("{}: no column {}_distance", path.display(), p.name))
+                })
+        })
+        .collect::<Result<_>>()?;
+    Ok(table
+        .rows
+        .iter()
+        .map(|r| cols.iter().all(|&c| r[c] > reach))
+        .collect())
 }
 
 /// Stance: vertical force above this (N).
@@ -134,10 +234,16 @@ pub fn stance_metrics(side: char, pred: &FootLoads, meas: &FootLoads, s: usize) 
     }
 }
 
-/// Predicted over measured, one panel per axis, both feet.
+/// Predicted over measured, one panel per axis, both feet, and a fourth
+/// panel with the root residual (% body weight) over time, the rejection
+/// threshold and the measured stance windows of each foot (shaded); the
+/// titles say which floor and belt were used.
 fn draw_comparison(
     pred: &FootLoads,
     meas: &FootLoads,
+    root_residual: &[(f64, f64)],
+    body_weight: f64,
+    floor: &str,
     stem: &std::path::Path,
 ) -> Result<Vec<PathBuf>> {
     use crate::plots::{Chart, Layout, Series, Style};
@@ -169,7 +275,54 @@ fn draw_comparison(
         }
         panels.push(chart);
     }
-    crate::plots::write_panels(&panels, stem, Layout::column(3))
+    let mut chart = Chart {
+        title: format!("Root residual; floor: {floor}"),
+        x_label: "time (s)".into(),
+        y_label: "% body weight".into(),
+        ..Chart::default()
+    };
+    let t: Vec<f64> = root_residual.iter().map(|x| x.0).collect();
+    let limit = 100.0 * REJECT_ROOT_RESIDUAL;
+    for (s, side) in ["right", "left"].iter().enumerate() {
+        // Measured stance (vertical force above the stance threshold),
+        // shaded from 0 to the rejection threshold.
+        let on: Vec<bool> = meas.force[s]
+            .iter()
+            .map(|f| f.y > STANCE_THRESHOLD)
+            .collect();
+        let mut band = Series::new(
+            format!("{side} stance, measured"),
+            pred.time.clone(),
+            vec![f64::NAN; pred.time.len()],
+            Style::color(s),
+        );
+        band.band = Some((
+            on.iter().map(|&o| if o { 0.0 } else { f64::NAN }).collect(),
+            on.iter()
+                .map(|&o| if o { limit } else { f64::NAN })
+                .collect(),
+        ));
+        chart.series.push(band);
+    }
+    chart.series.push(Series::new(
+        "root residual",
+        t.clone(),
+        root_residual
+            .iter()
+            .map(|x| 100.0 * x.1 / body_weight)
+            .collect(),
+        Style::color(2),
+    ));
+    if let (Some(&a), Some(&b)) = (t.first(), t.last()) {
+        chart.series.push(Series::new(
+            format!("rejection threshold ({limit:.0} %)"),
+            vec![a, b],
+            vec![limit, limit],
+            Style::dashed(3),
+        ));
+    }
+    panels.push(chart);
+    crate::plots::write_panels(&panels, stem, Layout::column(4))
 }
 
 /// `statopt-tool predict-grf SETUP`: read the setup file (or take it as
@@ -207,6 +360,78 @@ pub fn run_with_floor(
     opts: &RunOptions,
     floor_height: Option<f64>,
 ) -> Result<Prediction> {
+    run_with(
+        setup,
+        opts,
+        &FloorOptions {
+            height: floor_height,
+            motion: FloorMotion::Auto,
+        },
+    )
+}
+
+/// What the user says of the floor: its height (level, at rest) and how it
+/// moves (`--floor-height`, `--overground`, `--treadmill`).
+#[derive(Debug, Clone, Copy)]
+pub struct FloorOptions {
+    pub height: Option<f64>,
+    pub motion: FloorMotion,
+}
+
+impl Default for FloorOptions {
+    fn default() -> Self {
+        FloorOptions {
+            height: None,
+            motion: FloorMotion::Auto,
+        }
+    }
+}
+
+/// `--treadmill SPEED` (m/s backward along the walking direction) or
+/// `--treadmill VX,VY,VZ` (the belt's velocity in ground, m/s; commas or
+/// spaces between).
+pub fn parse_treadmill(text: &str) -> Result<FloorMotion> {
+    let parts: Vec<&str> = text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|p| !p.is_empty())
+        .collect();
+    let nums: std::result::Result<Vec<f64>, _> = parts.iter().map(|p| p.parse::<f64>()).collect();
+    let bad = || {
+        Error::msg(format!(
+            "--treadmill takes a speed (m/s, backward along the walking direction) or a velocity VX,VY,VZ (m/s, ground), found '{text}'"
+        ))
+    };
+    match nums.map_err(|_| bad())?.as_slice() {
+        [v] if v.is_finite() => Ok(FloorMotion::TreadmillSpeed(*v)),
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok(FloorMotion::TreadmillVelocity(Vector3::new(*x, *y, *z)))
+        }
+        _ => Err(bad()),
+    }
+}
+
+/// [`run`] with what the user says of the floor.
+pub fn run_with(
+    setup: &AnalyzeSetup,
+    opts: &RunOptions,
+    floor: &FloorOptions,
+) -> Result<Prediction> {
+    let floor_height = floor.height;
+    if let FloorMotion::TreadmillSpeed(v) = floor.motion {
+        if !v.is_finite() {
+            return Err(Error::msg(format!(
+                "the treadmill speed must be a finite number, found {v}"
+            )));
+        }
+    }
+    if let FloorMotion::TreadmillVelocity(v) = floor.motion {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(Error::msg(format!(
+                "the treadmill belt velocity must be finite, found ({}, {}, {})",
+                v.x, v.y, v.z
+            )));
+        }
+    }
     if let Some(f) = floor_height {
         if !f.is_finite() {
             return Err(Error::msg(format!(
@@ -222,21 +447,29 @@ pub fn run_with_floor(
     }
     let mut setup = setup.clone();
     let measured_file = setup.external_loads_file.take();
-    let contact_weight = use_contact_weight(&mut setup);
+    let reserves = take_reserve_actuators(&mut setup)?;
     let am = loading::load_analysis_model(&setup)?;
+    let strength = torque_driven_strength(&am.forces, &am.model, reserves);
+    let default_weight = match strength {
+        Some(s) => DEFAULT_CONTACT_WEIGHT * (s / MUSCLE_STRENGTH_REFERENCE).powi(2),
+        None => DEFAULT_CONTACT_WEIGHT,
+    };
+    let (contact_weight, given_weight) = use_contact_weight(&mut setup, default_weight);
     let model = am.model;
     let states = analyze::load_states(&setup, &model)?;
     let contacts = feet::build(
         &model,
         &states,
+        (setup.initial_time, setup.final_time),
         floor_height,
+        floor.motion,
         FootContactParameters::default(),
     )?;
     let dir = analyze::results_dir(&setup, opts)?;
     let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
     std::fs::write(&contacts_file, contacts.force_set_xml())
         .map_err(|e| Error::io(&contacts_file, e))?;
-    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir)?;
+    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
     setup.force_set_files = force_sets;
     setup.force_set_files.push(contacts_file.clone());
     let mut summary = analyze::run(&setup, opts)?;
@@ -263,7 +496,67 @@ pub fn run_with_floor(
         stance: Vec::new(),
         body_weight,
         contact_weight,
+        root_residual: Vec::new(),
+        rejected: None,
     };
+    prediction.summary.notes.push(match (given_weight, strength) {
+        (true, _) => format!("contact weight w0 = {contact_weight} (the setup's <contact_weight>)"),
+        (false, None) => format!("contact weight w0 = {contact_weight} (muscle-driven model: the default)"),
+        (false, Some(s)) => format!(
+            "contact weight w0 = {contact_weight:.3} (torque-driven model: its actuators make {s:.0} N m per unit of control per coordinate, against {MUSCLE_STRENGTH_REFERENCE:.0} N m of the muscle-driven models w0 = {DEFAULT_CONTACT_WEIGHT} was chosen on: w0 = {DEFAULT_CONTACT_WEIGHT} x ({s:.0}/{MUSCLE_STRENGTH_REFERENCE:.0})^2)"
+        ),
+    });
+    prediction.root_residual = prediction.summary.root_force_series.clone();
+    let contact_table = dir.join(format!("{}_{}_ContactForces.sto", setup.name, so_name));
+    let flight = flight_frames(&contact_table, &prediction.contacts)?;
+    if flight.len() != prediction.root_residual.len() {
+        return Err(Error::internal(format!(
+            "{}: {} rows, {} frames solved",
+            contact_table.display(),
+            flight.len(),
+            prediction.root_residual.len()
+        )));
+    }
+    let (over, rejected) = judge_root_residual(&prediction.root_residual, &flight, body_weight);
+    prediction.rejected = rejected;
+    let n_flight = flight.iter().filter(|&&f| f).count();
+    let n = prediction.root_residual.len() - n_flight;
+    let peak = |in_flight: bool| {
+        prediction
+            .root_residual
+            .iter()
+            .zip(&flight)
+            .filter(|(_, &f)| f == in_flight)
+            .fold(0.0f64, |m, (x, _)| m.max(x.1))
+    };
+    prediction.summary.notes.push(format!(
+        "root residual (every actuator on the pelvis translations): above {:.0} % of body weight on {} of {} frames with a foot on the floor ({:.1} %), at most {:.1} % of body weight there; {} frames in flight (no foot point within {:.3} m of the floor), where it carried at most {:.1} % (the filtered motion's departure from free fall; not judged)",
+        100.0 * REJECT_ROOT_RESIDUAL,
+        over.len(),
+        n,
+        100.0 * over.len() as f64 / n.max(1) as f64,
+        100.0 * peak(false) / body_weight,
+        n_flight,
+        prediction.contacts.parameters.contact_tolerance + prediction.contacts.parameters.transition_zone,
+        100.0 * peak(true) / body_weight
+    ));
+    let rr = dir.join(format!("{}_root_residual.sto", setup.name));
+    {
+        let mut w = StoWriter::create_for_setup(
+            &setup.setup_file,
+            &rr,
+            "Root residual",
+            "Per frame: the size of the summed force of every actuator on the pelvis translations (N; residuals and reserves included) and as a share of body weight (%).\n",
+            &["root_residual_force".to_string(), "root_residual_percent_bw".to_string()],
+            8,
+            false,
+        )?;
+        for &(t, f) in &prediction.root_residual {
+            w.write_row(t, &[f, 100.0 * f / body_weight])?;
+        }
+        w.finish()?;
+    }
+    prediction.summary.files.push(rr);
     let out = dir.join(format!("{}_predicted_grf.sto", setup.name));
     write_foot_loads(&prediction.predicted, &out, &setup.setup_file)?;
     prediction.summary.files.push(out);
@@ -274,7 +567,13 @@ pub fn run_with_floor(
         Some(mf) => external_forces_of(mf)?,
         None => default_layout(),
     };
-    let (mot, xml) = write_external_loads(&prediction.predicted, &layout, &dir, &setup)?;
+    let (mot, xml) = write_external_loads(
+        &prediction.predicted,
+        &layout,
+        &dir,
+        &setup.name,
+        &setup.setup_file,
+    )?;
     prediction.summary.files.extend([mot, xml]);
     if let Some(mf) = measured_file {
         let setup_dir = setup.dir();
@@ -290,10 +589,14 @@ pub fn run_with_floor(
         write_metrics(&prediction.metrics, &prediction.stance, &csv)?;
         prediction.summary.files.push(csv);
         let stem = dir.join(format!("{}_grf_comparison", setup.name));
-        prediction
-            .summary
-            .files
-            .extend(draw_comparison(&prediction.predicted, &measured, &stem)?);
+        prediction.summary.files.extend(draw_comparison(
+            &prediction.predicted,
+            &measured,
+            &prediction.root_residual,
+            body_weight,
+            &prediction.contacts.decision.label(),
+            &stem,
+        )?);
         prediction.measured = Some(measured);
     }
     Ok(prediction)
@@ -308,21 +611,79 @@ pub fn run_with_floor(
 /// docs/grf_prediction.md).
 pub const DEFAULT_CONTACT_WEIGHT: f64 = 10.0;
 
-/// The setup's own `<contact_weight>` when its StaticOptimization has one;
-/// otherwise [`DEFAULT_CONTACT_WEIGHT`], written into the setup's analysis.
-fn use_contact_weight(setup: &mut AnalyzeSetup) -> f64 {
+/// The strength of the muscles of the models [`DEFAULT_CONTACT_WEIGHT`]
+/// was chosen on, per coordinate (N·m per unit of control): the size of the
+/// generalized forces their muscles make at full activation,
+/// sqrt(Σ (r_i F_max,i)²), over the lower limb's ten coordinates of the
+/// Rajagopal model (moco_walk3d, OpenSim's moment arms over the trial):
+/// 57 (hip rotation) to 354 N·m (ankle), geometric mean 188, rounded to 200.
+pub const MUSCLE_STRENGTH_REFERENCE: f64 = 200.0;
+
+/// A model whose joints are carried by coordinate actuators only (no
+/// muscles: torque-driven, reserves only): the geometric mean over its
+/// unconstrained coordinates but the root's of the actuators' strength
+/// per coordinate, sqrt(Σ F_opt²) (N·m or N per unit of control; the
+/// setup's reserves included). None when the model has muscles, or no such
+/// actuator.
+///
+/// The objective weighs an actuator's generalized force τ as (τ/S)² and a
+/// contact force f as (f/F0)²/w0: to keep the balance between the feet and
+/// the joints that w0 was chosen with on muscle-driven models, a model
+/// whose actuators are k times weaker gets w0/k² (see
+/// docs/grf_prediction.md).
+fn torque_driven_strength(
+    forces: &[crate::xml::Element],
+    model: &crate::model::Model,
+    reserves: Option<f64>,
+) -> Option<f64> {
+    if forces.iter().any(|f| f.name.contains("Muscle")) {
+        return None;
+    }
+    let mut sum2 = vec![0.0; model.nq()];
+    for f in forces.iter().filter(|f| f.name == "CoordinateActuator") {
+        let applies = f
+            .child_text("appliesForce")
+            .map(|t| t.trim() != "false")
+            .unwrap_or(true);
+        let coordinate = f.child_text("coordinate").unwrap_or("").trim();
+        let fo: f64 = f
+            .child_text("optimal_force")
+            .and_then(|t| t.trim().parse().ok())
+            .unwrap_or(1.0);
+        if let (true, Some(c)) = (applies, model.coordinate_index(coordinate)) {
+            sum2[c] += fo * fo;
+        }
+    }
+    let (mut log_sum, mut n) = (0.0, 0usize);
+    for c in 0..model.nq() {
+        if model.coordinates[c].is_constrained() || model.is_root_coordinate(c) {
+            continue;
+        }
+        let s2 = sum2[c] + reserves.map_or(0.0, |r| r * r);
+        if s2 > 0.0 {
+            log_sum += 0.5 * s2.ln();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| (log_sum / n as f64).exp())
+}
+
+/// The setup's own `<contact_weight>` when its StaticOptimization has one
+/// (then `(w0, true)`); otherwise `default`, written into the setup's
+/// analysis (`(default, false)`).
+fn use_contact_weight(setup: &mut AnalyzeSetup, default: f64) -> (f64, bool) {
     for a in setup.analyses.iter_mut() {
         if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
             if so.contact_weights_given {
                 if let Some(first) = so.contact_weights.first() {
-                    return *first;
+                    return (*first, true);
                 }
             }
-            so.contact_weights = vec![DEFAULT_CONTACT_WEIGHT];
-            return DEFAULT_CONTACT_WEIGHT;
+            so.contact_weights = vec![default];
+            return (default, false);
         }
     }
-    DEFAULT_CONTACT_WEIGHT
+    (default, false)
 }
 
 /// Per-foot loads from the contact forces a static-optimization run wrote
@@ -407,15 +768,14 @@ pub fn measured_foot_loads(
         data.q.copy_from_slice(&states.q[i]);
         data.u.copy_from_slice(&states.u[i]);
         kinematics::full(model, &mut data);
-        let mut f = [Vector3::zeros(); 2];
-        let mut cop = [Vector3::repeat(f64::NAN); 2];
+        let mut plates = Vec::with_capacity(loads.forces.len());
         for ef in &loads.forces {
             let name = &model.bodies[ef.applied_to_body].name;
-            let s = if name.ends_with("_l") { 1 } else { 0 };
+            let s = usize::from(name.ends_with("_l"));
             let (fe, pe, _) = ef.evaluate(t, &data)?;
-            f[s] += fe;
-            cop[s] = pe;
+            plates.push((s, fe, pe));
         }
+        let (f, cop) = per_foot(&plates);
         for s in 0..2 {
             out.force[s].push(f[s]);
             out.cop[s].push(cop[s]);
@@ -423,6 +783,32 @@ pub fn measured_foot_loads(
         }
     }
     Ok(out)
+}
+
+/// Plates (foot 0 right / 1 left, force, centre of pressure; ground) summed
+/// per foot: the forces added, the centres of pressure weighted by the
+/// plates' vertical forces (NaN without vertical force).
+fn per_foot(
+    plates: &[(usize, Vector3<f64>, Vector3<f64>)],
+) -> ([Vector3<f64>; 2], [Vector3<f64>; 2]) {
+    let mut f = [Vector3::zeros(); 2];
+    let mut weighted = [Vector3::zeros(); 2];
+    let mut fy = [0.0; 2];
+    for &(s, fe, pe) in plates {
+        f[s] += fe;
+        if pe.iter().all(|x| x.is_finite()) && fe.y.abs() > 1e-9 {
+            weighted[s] += pe * fe.y;
+            fy[s] += fe.y;
+        }
+    }
+    let cop = [0, 1].map(|s| {
+        if fy[s].abs() > 1e-9 {
+            weighted[s] / fy[s]
+        } else {
+            Vector3::repeat(f64::NAN)
+        }
+    });
+    (f, cop)
 }
 
 /// Pearson rho, RMSE (N and % body weight) and peak error per foot and axis.
@@ -593,10 +979,11 @@ fn write_external_loads(
     loads: &FootLoads,
     layout: &[ForceLayout],
     dir: &std::path::Path,
-    setup: &AnalyzeSetup,
+    name: &str,
+    setup_file: &std::path::Path,
 ) -> Result<(PathBuf, PathBuf)> {
-    let mot = dir.join(format!("{}_predicted_grf.mot", setup.name));
-    let xml = dir.join(format!("{}_predicted_grf.xml", setup.name));
+    let mot = dir.join(format!("{name}_predicted_grf.mot"));
+    let xml = dir.join(format!("{name}_predicted_grf.xml"));
     let mut labels = Vec::new();
     for f in layout {
         for id in [
@@ -610,7 +997,7 @@ fn write_external_loads(
         }
     }
     let mut w = StoWriter::create_for_setup(
-        &setup.setup_file,
+        setup_file,
         &mot,
         "predicted_grf",
         "Ground reactions predicted by statopt predict-grf (force N, point m, torque N m; ground frame).\n",
@@ -618,11 +1005,22 @@ fn write_external_loads(
         8,
         false,
     )?;
+    // Several plates under one foot: the first of them carries the foot's
+    // loads, the others nothing (else the foot would be loaded twice).
+    let first_of_foot: Vec<bool> = layout
+        .iter()
+        .enumerate()
+        .map(|(k, f)| {
+            let side = f.body.ends_with("_l");
+            !layout[..k].iter().any(|g| g.body.ends_with("_l") == side)
+        })
+        .collect();
     for i in 0..loads.time.len() {
         let mut row = Vec::with_capacity(labels.len());
-        for f in layout {
+        for (f, &first) in layout.iter().zip(&first_of_foot) {
             let s = usize::from(f.body.ends_with("_l"));
-            let force = loads.force[s][i];
+            let gain = if first { 1.0 } else { 0.0 };
+            let force = loads.force[s][i] * gain;
             let cop = loads.cop[s][i].map(|x| if x.is_finite() { x } else { 0.0 });
             if !f.force_identifier.is_empty() {
                 row.extend(force.iter());
@@ -631,7 +1029,7 @@ fn write_external_loads(
                 row.extend(cop.iter());
             }
             if !f.torque_identifier.is_empty() {
-                row.extend([0.0, loads.free_moment[s][i], 0.0]);
+                row.extend([0.0, gain * loads.free_moment[s][i], 0.0]);
             }
         }
         w.write_row(loads.time[i], &row)?;
@@ -655,6 +1053,21 @@ fn write_external_loads(
     Ok((mot, xml))
 }
 
+/// The StaticOptimization's `<reserve_actuators>` (statopt), taken out of
+/// the setup: predict-grf adds the reserves itself, on every unconstrained
+/// coordinate but the root's, whose actuators follow the one policy of
+/// [`weak_root_residuals`] (a reserve of optimal force 10 or 100 on the
+/// pelvis would carry the body as cheaply as the feet).
+fn take_reserve_actuators(setup: &mut AnalyzeSetup) -> Result<Option<f64>> {
+    for a in setup.analyses.iter_mut() {
+        if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
+            // Checked (positive, finite) when the setup was read.
+            return Ok(so.reserve_actuators.take());
+        }
+    }
+    Ok(None)
+}
+
 /// Optimal force (N or N·m) of the weak root residuals predict-grf uses: 100 N
 /// on the pelvis costs as much as 100 muscles at full activation.
 pub const ROOT_RESIDUAL_OPTIMAL_FORCE: f64 = 1.0;
@@ -671,14 +1084,18 @@ fn weak_root_residuals(
     setup: &AnalyzeSetup,
     model: &crate::model::Model,
     dir: &std::path::Path,
+    reserves: Option<f64>,
 ) -> Result<(Vec<PathBuf>, Vec<PathBuf>)> {
     let roots: Vec<usize> = (0..model.nq())
         .filter(|&c| model.is_root_coordinate(c))
         .collect();
-    if roots.is_empty() {
+    if roots.is_empty() && reserves.is_none() {
         return Ok((setup.force_set_files.clone(), Vec::new()));
     }
-    let root_body = model.bodies[model.coordinates[roots[0]].body].name.clone();
+    let root_body = roots
+        .first()
+        .map(|&c| model.bodies[model.coordinates[c].body].name.clone())
+        .unwrap_or_default();
     let root_names: Vec<&str> = roots
         .iter()
         .map(|&c| model.coordinates[c].name.as_str())
@@ -729,10 +1146,178 @@ fn weak_root_residuals(
             "\t\t\t<CoordinateActuator name=\"{name}_residual\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{ROOT_RESIDUAL_OPTIMAL_FORCE}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
         ));
     }
+    // The setup's <reserve_actuators>, on every unconstrained coordinate
+    // but the root's (those are the weak residuals above).
+    if let Some(f) = reserves {
+        for c in (0..model.nq())
+            .filter(|&c| !model.coordinates[c].is_constrained() && !model.is_root_coordinate(c))
+        {
+            let name = &model.coordinates[c].name;
+            xml.push_str(&format!(
+                "\t\t\t<CoordinateActuator name=\"{name}_reserve\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{f}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
+            ));
+        }
+    }
     xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
     let out = dir.join(format!("{}_root_residuals.xml", setup.name));
     std::fs::write(&out, xml).map_err(|e| Error::io(&out, e))?;
     files.push(out.clone());
     written.push(out);
     Ok((files, written))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The honesty bar: more than 5 % of the frames with a root residual
+    /// above 25 % body weight rejects the prediction and names times of the
+    /// trial; flight frames, where nothing is required, pass; so do a few
+    /// bad frames.
+    #[test]
+    fn root_residual_judgement() {
+        let bw = 700.0;
+        // Running: stance carried by the feet, flight in free fall.
+        let ok: Vec<(f64, f64)> = (0..100)
+            .map(|i| (0.17 + 0.01 * i as f64, if i % 3 == 0 { 0.0 } else { 20.0 }))
+            .collect();
+        let none = vec![false; 100];
+        let (over, rejected) = judge_root_residual(&ok, &none, bw);
+        assert!(over.is_empty() && rejected.is_none());
+        // Five bad frames in 100: accepted, the frames named.
+        let mut few = ok.clone();
+        for f in few.iter_mut().take(5) {
+            f.1 = 300.0;
+        }
+        let (over, rejected) = judge_root_residual(&few, &none, bw);
+        assert_eq!(over.len(), 5);
+        assert!(rejected.is_none());
+        // Six: rejected, and the line names times inside the trial.
+        let mut bad = few.clone();
+        bad[50].1 = 2000.0;
+        let (_, rejected) = judge_root_residual(&bad, &none, bw);
+        let line = rejected.expect("rejected");
+        assert!(line.contains("6 of 100"), "{line}");
+        assert!(line.contains("at t = 0.670 s"), "{line}");
+        assert!(line.contains("first at t = 0.170 s"), "{line}");
+        // A NaN residual counts as over.
+        let mut nan = ok.clone();
+        for f in nan.iter_mut().take(6) {
+            f.1 = f64::NAN;
+        }
+        assert!(judge_root_residual(&nan, &none, bw).1.is_some());
+        // Flight frames (no foot within reach of the floor) are not judged:
+        // the filtered motion asks 40 % there, which no contact could give.
+        let flight: Vec<bool> = (0..100).map(|i| i % 3 == 0).collect();
+        let mut run = ok.clone();
+        for (f, &fl) in run.iter_mut().zip(&flight) {
+            if fl {
+                f.1 = 0.4 * bw;
+            }
+        }
+        assert!(judge_root_residual(&run, &none, bw).1.is_some());
+        assert!(judge_root_residual(&run, &flight, bw).1.is_none());
+        // A prediction with no force on feet that stand on the floor is
+        // judged (those frames are not flight), and rejected.
+        let collapsed: Vec<(f64, f64)> = (0..100).map(|i| (0.01 * i as f64, bw)).collect();
+        let line = judge_root_residual(&collapsed, &none, bw)
+            .1
+            .expect("rejected");
+        assert!(line.contains("100 of 100"), "{line}");
+    }
+
+    /// Two plates under the right foot, one under the left: the foot's
+    /// force is their sum and its centre of pressure the plates' weighted
+    /// by their vertical forces (it was the last plate's).
+    #[test]
+    fn plates_under_one_foot_are_combined() {
+        let plates = [
+            (
+                0,
+                Vector3::new(10.0, 300.0, 0.0),
+                Vector3::new(0.0, 0.0, 0.1),
+            ),
+            (
+                0,
+                Vector3::new(5.0, 100.0, 0.0),
+                Vector3::new(0.4, 0.0, 0.1),
+            ),
+            (1, Vector3::new(0.0, 0.0, 0.0), Vector3::new(9.0, 0.0, 9.0)),
+        ];
+        let (f, cop) = per_foot(&plates);
+        assert_eq!(f[0], Vector3::new(15.0, 400.0, 0.0));
+        assert!(
+            (cop[0] - Vector3::new(0.1, 0.0, 0.1)).norm() < 1e-12,
+            "{cop:?}"
+        );
+        assert!(cop[1].x.is_nan(), "no load: no centre of pressure");
+    }
+
+    /// The predicted loads in a measured layout with three plates under the
+    /// right foot (`ground_force_calcn_r` style names) and one under the
+    /// left: each foot is loaded once (the first of its plates carries it),
+    /// not once per plate.
+    #[test]
+    fn predicted_loads_load_each_foot_once_whatever_its_plates() {
+        let dir = std::env::temp_dir().join(format!("statopt_plates_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plate = |name: &str, body: &str, id: &str| ForceLayout {
+            name: name.into(),
+            body: body.into(),
+            force_identifier: format!("{id}_v"),
+            point_identifier: format!("{id}_p"),
+            torque_identifier: format!("{id}_m"),
+        };
+        let layout = [
+            plate("r1", "calcn_r", "ground_force_calcn_r"),
+            plate("r2", "calcn_r", "1_ground_force"),
+            plate("l1", "calcn_l", "L_ground_force"),
+            plate("r3", "calcn_r", "3_ground_force"),
+        ];
+        let loads = FootLoads {
+            time: vec![0.0, 0.01],
+            force: [
+                vec![Vector3::new(1.0, 700.0, 2.0); 2],
+                vec![Vector3::new(-1.0, 100.0, 0.0); 2],
+            ],
+            cop: [
+                vec![Vector3::new(0.1, 0.0, 0.2); 2],
+                vec![Vector3::zeros(); 2],
+            ],
+            free_moment: [vec![0.5; 2], vec![0.0; 2]],
+        };
+        let (mot, _) =
+            write_external_loads(&loads, &layout, &dir, "t", &dir.join("setup.xml")).unwrap();
+        let t = storage::read(&mot).unwrap();
+        let sum = |ids: &[&str]| -> f64 {
+            ids.iter()
+                .map(|id| t.rows[0][t.column_index(&format!("{id}_vy")).unwrap()])
+                .sum()
+        };
+        assert_eq!(
+            sum(&["ground_force_calcn_r", "1_ground_force", "3_ground_force"]),
+            700.0
+        );
+        assert_eq!(sum(&["L_ground_force"]), 100.0);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn treadmill_option_reads_a_speed_or_a_vector() {
+        assert_eq!(
+            parse_treadmill("3").unwrap(),
+            FloorMotion::TreadmillSpeed(3.0)
+        );
+        assert_eq!(
+            parse_treadmill("-3,0,0.1").unwrap(),
+            FloorMotion::TreadmillVelocity(Vector3::new(-3.0, 0.0, 0.1))
+        );
+        assert_eq!(
+            parse_treadmill("-3 0 0").unwrap(),
+            FloorMotion::TreadmillVelocity(Vector3::new(-3.0, 0.0, 0.0))
+        );
+        for bad in ["", "fast", "1,2", "nan", "1,2,inf"] {
+            assert!(parse_treadmill(bad).is_err(), "{bad}");
+        }
+    }
 }

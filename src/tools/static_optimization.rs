@@ -99,7 +99,7 @@ pub fn run(
         summary.files.push(path);
         warnings.extend(r.summary_lines());
     }
-    let weights: Vec<f64> = if problem.contacts.is_empty() {
+    let weights: Vec<f64> = if problem.contacts.is_empty() && problem.knees.is_empty() {
         vec![so.contact_weights[0]]
     } else {
         so.contact_weights.clone()
@@ -110,6 +110,15 @@ pub fn run(
         let (specs, w) = resolve_reactions(&problem.model, jr)?;
         warnings.extend(w);
         jr_specs.push((jr.common.name.clone(), specs));
+    }
+    // The knee contact method reports each knee's reaction on its tibia
+    // (tibia frame) besides the setup's own reactions; `<name>_KneeContact.sto`
+    // is made from it.
+    if !problem.knees.is_empty() {
+        jr_specs.push((
+            crate::tools::knee_contact::REACTIONS_NAME.to_string(),
+            crate::tools::knee_contact::reaction_specs(&problem.model, &problem.knees),
+        ));
     }
     let mut prefixes = Vec::new();
     let mut knee_states = None;
@@ -169,6 +178,31 @@ pub fn run(
                 }
             }
         }
+        if !stopped && !problem.knees.is_empty() {
+            let states = match &knee_states {
+                Some(s) => s,
+                None => knee_states.insert(crate::tools::analyze::load_states_with(
+                    setup,
+                    &problem.model,
+                    &problem.contacts,
+                )?),
+            };
+            let (p, _) = spec.reactions.last().expect("the knee contact reactions");
+            let out = if sweep {
+                format!("{}_w0_{}_KneeContact.sto", setup.name, w0_tag(spec.w0))
+            } else {
+                format!("{}_KneeContact.sto", setup.name)
+            };
+            knee_files.push(crate::tools::knee_contact::write(
+                &problem.model,
+                &problem.knees,
+                states,
+                &dir.join(format!("{p}ReactionLoads.sto")),
+                &dir.join(out),
+                &setup.setup_file,
+                opts.precision.unwrap_or(setup.output_precision),
+            )?);
+        }
         let label = format!("w0 = {}", spec.w0);
         summary.absorb(s, sweep.then_some(label.as_str()));
         prefixes.push(spec.prefix.clone());
@@ -189,6 +223,10 @@ pub fn run(
             "GeneralizedForcesBySource",
             "MusclePower",
         ] {
+            // A sweep of the knee contact method alone has no contact tables.
+            if problem.contacts.is_empty() && kind.starts_with("Contact") {
+                continue;
+            }
             let files: Vec<std::path::PathBuf> = prefixes
                 .iter()
                 .map(|p| dir.join(format!("{p}{kind}.sto")))
@@ -409,7 +447,7 @@ impl<'a> RunWriters<'a> {
         if let Some(log) = self.log {
             log.finish()?;
         }
-        let stats = self.stats;
+        let mut stats = self.stats;
         // A stopped run counts the frames its tables hold (a resumed run's
         // earlier frames included), not the frames it meant to solve.
         let nframes = if completed { nframes } else { stats.frames };
@@ -447,6 +485,7 @@ impl<'a> RunWriters<'a> {
             root_body_weight,
             root_force_peak: stats.root_peaks[0].clone(),
             root_moment_peak: stats.root_peaks[1].clone(),
+            root_force_series: std::mem::take(&mut stats.root_force_series),
             notes: vec![note],
             results_dirs: Vec::new(),
             unused_properties: Vec::new(),

@@ -19,6 +19,10 @@
 //!   </StatoptStudy>
 //! </OpenSimDocument>
 //! ```
+//! A `<ForceSweep name="..." setup="...">` element runs candidates of one
+//! setup that differ only in forces on one compiled scene and writes their
+//! metrics to `<name>_force_sweep.csv` (`tools::force_sweep`; a study may
+//! hold only sweeps).
 //! File paths are relative to the study file. Metrics (`max`, `min`,
 //! `absmax`, `integral` of the sum of the columns over time, `mean`; and,
 //! with `where="COLUMN"` naming a column of the same file, `argmax`/`argmin`
@@ -205,14 +209,32 @@ fn metric(el: &Element, tables: &Tables) -> Result<(String, f64)> {
         .ok_or_else(|| el.error("missing attribute columns"))?;
     let (t, y) = table_column(el, tables, "file", columns)?;
     // The column that locates a value (`where`): e.g. knee_flexion_r.
-    let located = || -> Result<Vec<f64>> {
-        let w = el
-            .attr("where")
-            .ok_or_else(|| el.error("this op needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"))?;
+    let v = metric_value(el, &t, &y, || {
+        let w = el.attr("where").unwrap_or_default();
         Ok(table_column(el, tables, "file", w)?.1)
+    })?;
+    Ok((name, v))
+}
+
+/// A `<Metric>`'s value (its `op` and `value` attributes) over the series
+/// `y` at times `t`; `where_column` gives its `where` column's values when
+/// the op needs them. (Force sweeps compute their candidates' metrics with
+/// it, from series they never write: `tools::force_sweep`.)
+pub fn metric_value(
+    el: &Element,
+    t: &[f64],
+    y: &[f64],
+    where_column: impl Fn() -> Result<Vec<f64>>,
+) -> Result<f64> {
+    // The column that locates a value (`where`): e.g. knee_flexion_r.
+    let located = || -> Result<Vec<f64>> {
+        if el.attr("where").is_none() {
+            return Err(el.error("this op needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"));
+        }
+        where_column()
     };
     let op = el.attr("op").unwrap_or("max");
-    let v = match op {
+    Ok(match op {
         "max" => y.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         "min" => y.iter().cloned().fold(f64::INFINITY, f64::min),
         "absmax" => y.iter().fold(0.0f64, |m, v| m.max(v.abs())),
@@ -246,8 +268,7 @@ fn metric(el: &Element, tables: &Tables) -> Result<(String, f64)> {
             crossing(&y, &w, |i| y[i]).unwrap_or(f64::NAN)
         }
         other => return Err(el.error(format!("unknown op '{other}' ({})", METRIC_OPS.join(", ")))),
-    };
-    Ok((name, v))
+    })
 }
 
 /// The operations a `<Metric>` knows.
@@ -516,8 +537,12 @@ fn prepare(
         warnings.push(format!("{first} (read on: --allow-unknown)"));
     }
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
-    if setups.is_empty() {
-        return Err(study.error("the study names no <setups>"));
+    let sweeps: Vec<&Element> = study.children.iter().filter(|c| c.name == "ForceSweep").collect();
+    if setups.is_empty() && sweeps.is_empty() {
+        return Err(study.error("the study names no <setups> (and has no <ForceSweep>)"));
+    }
+    for sw in &sweeps {
+        crate::tools::force_sweep::read_element(sw, dir)?;
     }
     let runs: Vec<PlannedRun> = setups
         .iter()
@@ -651,6 +676,13 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
                 ),
             ));
         }
+    }
+    // Force sweeps: candidates of one setup on one compiled scene, their
+    // metrics in <name>_force_sweep.csv (tools::force_sweep).
+    for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {
+        summary
+            .files
+            .push(crate::tools::force_sweep::run_element(sw, &dir, &out, opts)?);
     }
     summary.files.extend(draw(
         &elements,

@@ -27,6 +27,10 @@ pub struct RunStatistics {
     root_rows: Vec<(usize, bool)>,
     root_names: Vec<String>,
     pub root_peaks: [Option<(f64, String)>; 2],
+    /// Per frame: time and the size of the summed force (N) non-muscle
+    /// actuators (residuals, reserves) apply on the root joint's
+    /// translations (empty without a root joint).
+    pub root_force_series: Vec<(f64, f64)>,
     /// Controls at their upper bound: name, frames, first time.
     at_bound: Vec<(String, usize, f64)>,
     /// Time of the last frame observed.
@@ -71,6 +75,7 @@ impl RunStatistics {
             root_rows,
             root_names,
             root_peaks: [None, None],
+            root_force_series: Vec::new(),
             at_bound: Vec::new(),
             last: None,
             frames: 0,
@@ -114,13 +119,20 @@ impl RunStatistics {
         } else {
             self.worst_residual = self.worst_residual.max(eq_residual);
         }
+        let mut root_force2 = 0.0;
         for (k, &(row, translational)) in self.root_rows.iter().enumerate() {
             // by_source holds, per row: required, muscles, actuators, contacts.
             let v = by_source[4 * row + 2].abs();
+            if translational {
+                root_force2 += v * v;
+            }
             let peak = &mut self.root_peaks[usize::from(!translational)];
             if v > peak.as_ref().map_or(0.0, |p| p.0) {
                 *peak = Some((v, format!("{} at t={at}", self.root_names[k])));
             }
+        }
+        if self.root_rows.iter().any(|r| r.1) {
+            self.root_force_series.push((time, root_force2.sqrt()));
         }
         let nv = problem.controls.len();
         for v in 0..nv {

@@ -1,0 +1,1013 @@
+//! A force sweep: many candidates of one AnalyzeTool setup that differ only
+//! in forces — w0, an `ExpressionBasedCoordinateForce`'s expression (a
+//! machine's resistance torque), an actuator's optimal force — share one
+//! compiled scene. The setup is compiled once and the motion (with its
+//! contact closure) streamed once; each frame is assembled once
+//! ([`SoProblem::assemble`]) and solved for every candidate
+//! ([`SoProblem::solve_candidate_into`], `frame::candidates`), each
+//! candidate warm-started from the previous candidate of the same w0 in
+//! the frame (the same answers as a cold start, up to rounding), its joint
+//! reactions from the frame's affine reaction basis
+//! ([`ReactionBasis`]). It writes no tables: each candidate's values of the
+//! setup's `<Metric>` elements are computed from the rows it would have
+//! written (the same `op`s, [`metric_value`]), with the candidate's own w0
+//! whatever w0 tag a metric's file names.
+//!
+//! Candidates' metrics equal those of runs of each candidate's own setup
+//! (tests/force_sweep.rs: 1e-9 relative), as the frames are those runs'
+//! frames: the setup's `<Metric>`s read tables written to
+//! `output_precision` decimals, this sweep the unrounded values.
+
+use std::time::Instant;
+
+use crate::error::{Error, Location, Result};
+use crate::forces::lepton::Expression;
+use crate::forces::passive::PassiveForce;
+use crate::frame::candidates::{CandidateScratch, ForceCandidate};
+use crate::frame::driver::{for_each_frame, Prefetched, PreparingLoads};
+use crate::frame::problem::{status_code, Control, FrameResult, SoProblem};
+use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, CONTACT_WEIGHT_RANGE};
+use crate::frame::workspace::Workspace;
+use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
+use crate::reactions::linear::ReactionBasis;
+use crate::reactions::{column_labels, resolve_reactions, ReactionSpec};
+use crate::tools::analyze::open_state_stream_with;
+use crate::tools::study::metric_value;
+use crate::tools::RunOptions;
+use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
+use crate::xml::Element;
+
+/// One candidate, by name: what it changes in the setup.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CandidateSpec {
+    /// The contact weight w0.
+    pub w0: f64,
+    /// (force name, Lepton expression) of `ExpressionBasedCoordinateForce`s.
+    pub expressions: Vec<(String, String)>,
+    /// (actuator name, optimal force) of actuators other than muscles.
+    pub optimal_forces: Vec<(String, f64)>,
+}
+
+/// What a sweep computed.
+#[derive(Debug, Clone, Default)]
+pub struct SweepOutcome {
+    /// The setup's `<Metric>` names, in its order.
+    pub metric_names: Vec<String>,
+    /// Per candidate: the metrics' values (in `metric_names`' order).
+    pub values: Vec<Vec<f64>>,
+    /// Per candidate: frames the solver could not solve.
+    pub failed: Vec<usize>,
+    /// Frames of the motion.
+    pub frames: usize,
+    /// Seconds spent in the frame loop (every candidate).
+    pub loop_seconds: f64,
+    /// Setup and motion warnings.
+    pub warnings: Vec<String>,
+    /// Solver iterations over every candidate and frame (Newton's linear
+    /// solves, see the diagnostics table's `iterations`).
+    pub iterations: u64,
+}
+
+/// Sweep options.
+#[derive(Debug, Clone)]
+pub struct SweepOptions {
+    /// Warm-start each candidate from the previous one of the same w0 in
+    /// the frame (answers equal cold starts up to rounding).
+    pub warm: bool,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions { warm: true }
+    }
+}
+
+/// The tables a metric may read, by the end of their file names.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    Activation,
+    Force,
+    Diagnostics,
+    ContactForces,
+    ContactBodyForces,
+    BySource,
+    MusclePower,
+    /// A coupled JointReaction's ReactionLoads (index into the sweep's).
+    Reactions(usize),
+    /// Its KneeLoads.
+    Knee(usize),
+}
+
+/// A `<Metric>` compiled against the problem: its columns in the row of
+/// its table.
+struct MetricPlan {
+    el: Element,
+    name: String,
+    source: Source,
+    columns: Vec<usize>,
+    scale: f64,
+    located: Option<usize>,
+}
+
+/// A coupled JointReaction: its name, reactions and, for knee loads, the
+/// sides' columns.
+struct Coupled {
+    name: String,
+    specs: Vec<ReactionSpec>,
+    knee: Option<([crate::tools::knee_loads::Side; 2], bool)>,
+    labels: Vec<String>,
+    /// Whether a metric reads it.
+    used: bool,
+}
+
+const SO_KINDS: [(&str, Source); 7] = [
+    ("GeneralizedForcesBySource", Source::BySource),
+    ("ContactBodyForces", Source::ContactBodyForces),
+    ("ContactForces", Source::ContactForces),
+    ("MusclePower", Source::MusclePower),
+    ("diagnostics", Source::Diagnostics),
+    ("activation", Source::Activation),
+    ("force", Source::Force),
+];
+
+fn table_stem(file: &str) -> &str {
+    let name = file.rsplit(['/', '\\']).next().unwrap_or(file);
+    name.strip_suffix(".sto")
+        .or_else(|| name.strip_suffix(".mot"))
+        .unwrap_or(name)
+}
+
+fn plan_metric(
+    el: &Element,
+    setup: &AnalyzeSetup,
+    so_name: &str,
+    problem: &SoProblem,
+    coupled: &mut [Coupled],
+) -> Result<MetricPlan> {
+    let name = el
+        .attr("name")
+        .ok_or_else(|| el.error("a Metric needs a name attribute"))?
+        .to_string();
+    let file = el
+        .attr("file")
+        .ok_or_else(|| el.error("missing attribute file"))?;
+    let stem = table_stem(file);
+    let so_prefix = format!("{}_{so_name}_", setup.name);
+    let mut source = None;
+    if stem.starts_with(&so_prefix) {
+        source = SO_KINDS
+            .iter()
+            .find(|(k, _)| stem.ends_with(&format!("_{k}")))
+            .map(|(_, s)| *s);
+    }
+    if source.is_none() {
+        for (j, c) in coupled.iter().enumerate() {
+            if stem.starts_with(&format!("{}_{}_", setup.name, c.name)) {
+                if stem.ends_with("_ReactionLoads") {
+                    source = Some(Source::Reactions(j));
+                } else if stem.ends_with("_KneeLoads") && c.knee.is_some() {
+                    source = Some(Source::Knee(j));
+                }
+            }
+        }
+    }
+    let Some(source) = source else {
+        return Err(el.error(format!(
+            "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({so_prefix}..._<{}>.sto) and of its coupled joint reactions (ReactionLoads, KneeLoads)",
+            SO_KINDS.map(|k| k.0).join("|")
+        )));
+    };
+    let labels: Vec<String> = match source {
+        Source::Activation => problem.labels.clone(),
+        Source::Force => problem.force_labels.clone(),
+        Source::Diagnostics => DIAGNOSTICS_COLUMNS.iter().map(|s| s.to_string()).collect(),
+        Source::ContactForces => problem.contact_labels(),
+        Source::ContactBodyForces => problem.contact_body_labels(),
+        Source::BySource => problem.by_source_labels(),
+        Source::MusclePower => problem.muscle_labels(),
+        Source::Reactions(j) => coupled[j].labels.clone(),
+        Source::Knee(j) => {
+            let patella = coupled[j].knee.as_ref().is_some_and(|k| k.1);
+            crate::tools::knee_loads::labels(patella)
+        }
+    };
+    if let Source::Reactions(j) | Source::Knee(j) = source {
+        coupled[j].used = true;
+    }
+    let column = |c: &str| {
+        labels.iter().position(|l| l == c).ok_or_else(|| {
+            el.error(format!("{file} has no column '{c}'"))
+        })
+    };
+    let columns = el
+        .attr("columns")
+        .ok_or_else(|| el.error("missing attribute columns"))?
+        .split_whitespace()
+        .map(&column)
+        .collect::<Result<Vec<_>>>()?;
+    let located = el.attr("where").map(&column).transpose()?;
+    let scale = match el.attr("scale") {
+        Some(s) => s
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| el.error(format!("scale '{s}' is not a finite number")))?,
+        None => 1.0,
+    };
+    Ok(MetricPlan {
+        el: el.clone(),
+        name,
+        source,
+        columns,
+        scale,
+        located,
+    })
+}
+
+/// Resolve the candidates against the problem.
+fn resolve_candidates(
+    setup: &AnalyzeSetup,
+    problem: &SoProblem,
+    specs: &[CandidateSpec],
+) -> Result<Vec<ForceCandidate>> {
+    let err = |k: usize, msg: String| {
+        Error::input(
+            Location::file(&setup.setup_file),
+            format!("force sweep, candidate {k}: {msg}"),
+        )
+    };
+    specs
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            if !(s.w0.is_finite()
+                && (CONTACT_WEIGHT_RANGE.0..=CONTACT_WEIGHT_RANGE.1).contains(&s.w0))
+            {
+                return Err(err(
+                    k,
+                    format!(
+                        "w0 = {} lies outside [{:e}, {:e}]",
+                        s.w0, CONTACT_WEIGHT_RANGE.0, CONTACT_WEIGHT_RANGE.1
+                    ),
+                ));
+            }
+            let mut passive = Vec::new();
+            for (name, text) in &s.expressions {
+                let j = problem
+                    .passive
+                    .iter()
+                    .position(|p| p.name() == name)
+                    .ok_or_else(|| {
+                        err(k, format!("the model has no passive force '{name}' (an ExpressionBasedCoordinateForce whose expression the sweep sets)"))
+                    })?;
+                let PassiveForce::ExpressionBasedCoordinate {
+                    name: n,
+                    coordinate,
+                    ..
+                } = &problem.passive[j]
+                else {
+                    return Err(err(
+                        k,
+                        format!("'{name}' is not an ExpressionBasedCoordinateForce: only their expressions can be swept"),
+                    ));
+                };
+                let expr = Expression::compile(text).map_err(|m| {
+                    err(k, format!("the expression of '{name}' ({text}): {m}"))
+                })?;
+                passive.push((
+                    j,
+                    PassiveForce::ExpressionBasedCoordinate {
+                        name: n.clone(),
+                        coordinate: *coordinate,
+                        expr: Box::new(expr),
+                    },
+                ));
+            }
+            let mut optimal_force = Vec::new();
+            for (name, f) in &s.optimal_forces {
+                let v = problem
+                    .controls
+                    .iter()
+                    .position(|c| matches!(c, Control::Actuator(a) if &a.name == name))
+                    .ok_or_else(|| {
+                        err(k, format!("the model has no actuator '{name}' (optimal forces of actuators other than muscles can be swept)"))
+                    })?;
+                let Control::Actuator(a) = &problem.controls[v] else {
+                    unreachable!("matched an actuator")
+                };
+                if a.optimal_force == 0.0 || !f.is_finite() {
+                    return Err(err(
+                        k,
+                        format!("optimal force {f} of '{name}' (its own is {}): both must be finite and the model's non-zero", a.optimal_force),
+                    ));
+                }
+                optimal_force.push((v, *f));
+            }
+            Ok(ForceCandidate {
+                w0: s.w0,
+                passive,
+                optimal_force,
+            })
+        })
+        .collect()
+}
+
+/// A frame assembled once: its workspace (state, muscle paths, the
+/// program), the candidates' base (b, passive records) and its reaction
+/// bases. Solving candidates leaves it as it is.
+struct PreparedFrame {
+    t: f64,
+    ws: Workspace,
+    scratch: CandidateScratch,
+    bases: Vec<ReactionBasis>,
+}
+
+/// The buffers of one frame's candidates (per thread).
+#[derive(Default)]
+struct CandidateBuffers {
+    result: FrameResult,
+    reaction_rows: Vec<Vec<f64>>,
+    /// Per coupled JointReaction with knee loads: the candidate's row.
+    knee_rows: Vec<Vec<f64>>,
+    /// Per warm-start chain (a w0): the last two candidates' multipliers
+    /// (the last one second), and the start handed to the next.
+    chains: Vec<[Vec<f64>; 2]>,
+    start: Vec<f64>,
+}
+
+/// One frame's values: time, then per candidate and metric (y, where).
+struct FrameValues {
+    time: f64,
+    iterations: u64,
+    values: Vec<f64>,
+    failed: Vec<bool>,
+}
+
+/// What a sweep of a setup shares: the compiled problem, its coupled joint
+/// reactions and the metrics' plans.
+struct Plan {
+    problem: SoProblem,
+    coupled: Vec<Coupled>,
+    metrics: Vec<MetricPlan>,
+    /// Coordinates of the ExpressionBasedCoordinateForces: their
+    /// generalized forces are probed in the reaction bases.
+    probed: Vec<usize>,
+    step_interval: usize,
+    warnings: Vec<String>,
+}
+
+impl Plan {
+    fn compile(setup: &AnalyzeSetup) -> Result<Plan> {
+        let at = || Location::file(&setup.setup_file);
+        let so: StaticOptimizationSetup = setup
+            .analyses
+            .iter()
+            .find_map(|a| match a {
+                Analysis::StaticOptimization(so) if so.common.on => Some((**so).clone()),
+                _ => None,
+            })
+            .ok_or_else(|| {
+                Error::input(
+                    at(),
+                    "a force sweep needs a StaticOptimization analysis that is on",
+                )
+            })?;
+        if setup.reduce_model {
+            return Err(Error::input(
+                at().with_element("<reduce_model>"),
+                "a force sweep runs the full model: turn reduce_model off",
+            ));
+        }
+        if so.constraint_matrix == ConstraintMatrix::Perturbation {
+            return Err(Error::input(
+                at().with_element("<constraint_matrix>"),
+                "a force sweep needs the analytic constraint matrix (perturbation rows are accelerations: a candidate's forces would change every row)",
+            ));
+        }
+        let (problem, mut warnings) = SoProblem::build(setup, &so)?;
+        let mut coupled = Vec::new();
+        for jr in setup.joint_reactions() {
+            {
+                if jr.common.on {
+                    if jr.forces_file.is_some() {
+                        continue;
+                    }
+                    let (specs, w) = resolve_reactions(&problem.model, jr)?;
+                    warnings.extend(w);
+                    let labels = column_labels(&specs);
+                    let knee = if jr.knee_loads {
+                        let table = crate::storage::Storage {
+                            labels: labels.clone(),
+                            ..Default::default()
+                        };
+                        Some(crate::tools::knee_loads::sides(
+                            &problem.model,
+                            &table,
+                            &setup.setup_file,
+                        )?)
+                    } else {
+                        None
+                    };
+                    coupled.push(Coupled {
+                        name: jr.common.name.clone(),
+                        specs,
+                        knee,
+                        labels,
+                        used: false,
+                    });
+                }
+            }
+        }
+        let metrics = setup
+            .figures
+            .iter()
+            .filter(|e| e.name == "Metric")
+            .map(|el| plan_metric(el, setup, &so.common.name, &problem, &mut coupled))
+            .collect::<Result<Vec<_>>>()?;
+        let mut probed: Vec<usize> = Vec::new();
+        for p in &problem.passive {
+            if let PassiveForce::ExpressionBasedCoordinate { coordinate, .. } = p {
+                if !probed.contains(coordinate) {
+                    probed.push(*coordinate);
+                }
+            }
+        }
+        Ok(Plan {
+            problem,
+            coupled,
+            metrics,
+            probed,
+            step_interval: so.common.step_interval,
+            warnings,
+        })
+    }
+
+    /// Assemble the frame at (t, q, u, u̇) into `frame` and build its
+    /// reaction bases.
+    fn prepare(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot: &[f64],
+        frame: &mut PreparedFrame,
+    ) -> Result<()> {
+        let problem = &self.problem;
+        frame.t = t;
+        let ws = &mut frame.ws;
+        let m_r = problem.assemble(t, q, u, udot, &mut ws.data, &mut ws.muscles, &mut ws.assembly);
+        if m_r.is_some() {
+            return Err(Error::internal("force sweep: perturbation rows"));
+        }
+        problem.begin_candidates(ws, &mut frame.scratch);
+        frame
+            .bases
+            .resize_with(self.coupled.len(), Default::default);
+        for (c, basis) in self.coupled.iter().zip(frame.bases.iter_mut()) {
+            if c.used {
+                basis.build(problem, t, ws, &c.specs, &self.probed)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Every candidate of a prepared frame: its metrics' values.
+    fn solve(
+        &self,
+        cands: &[ForceCandidate],
+        chain_of: &[usize],
+        warm: bool,
+        frame: &mut PreparedFrame,
+        buf: &mut CandidateBuffers,
+    ) -> FrameValues {
+        let problem = &self.problem;
+        let (nm, nc) = (self.metrics.len(), cands.len());
+        let nchains = chain_of.iter().max().map_or(0, |m| m + 1);
+        buf.chains.resize_with(nchains, Default::default);
+        buf.chains.iter_mut().flatten().for_each(Vec::clear);
+        buf.reaction_rows.resize_with(self.coupled.len(), Vec::new);
+        buf.knee_rows.resize_with(self.coupled.len(), Vec::new);
+        let t = frame.t;
+        let mut out = FrameValues {
+            time: t,
+            iterations: 0,
+            values: Vec::with_capacity(2 * nm * nc),
+            failed: Vec::with_capacity(nc),
+        };
+        let nv = problem.controls.len();
+        for (k, cand) in cands.iter().enumerate() {
+            let chain = chain_of[k];
+            // Warm start: the previous candidate's multipliers, or their
+            // linear extrapolation from the two before (candidates along a
+            // line of designs move their multipliers along a curve); the
+            // answer is the same either way.
+            let [older, last] = &buf.chains[chain];
+            let y0 = if !warm || last.is_empty() {
+                None
+            } else {
+                buf.start.clear();
+                if older.len() == last.len() {
+                    buf.start
+                        .extend(older.iter().zip(last).map(|(a, b)| b + (b - a)));
+                } else {
+                    buf.start.extend_from_slice(last);
+                }
+                Some(buf.start.as_slice())
+            };
+            problem.solve_candidate_into(
+                t,
+                &mut frame.ws,
+                cand,
+                y0,
+                &mut frame.scratch,
+                &mut buf.result,
+            );
+            let r = &buf.result;
+            let kept = &mut buf.chains[chain];
+            kept.swap(0, 1);
+            kept[1].clear();
+            kept[1].extend_from_slice(&r.solution.y);
+            out.failed.push(status_code(r.solution.status) < 0.0);
+            out.iterations += r.solution.iterations as u64;
+            for (j, c) in self.coupled.iter().enumerate() {
+                if !c.used {
+                    continue;
+                }
+                let row = &mut buf.reaction_rows[j];
+                row.resize(9 * c.specs.len(), 0.0);
+                frame.bases[j].reactions_into(&r.forces, &r.solution.x[nv..], &frame.scratch.dg, row);
+                if let Some((sides, patella)) = &c.knee {
+                    crate::tools::knee_loads::knee_row(
+                        &frame.ws.data,
+                        sides,
+                        *patella,
+                        row,
+                        &mut buf.knee_rows[j],
+                    );
+                }
+            }
+            let mut diag = None;
+            for m in self.metrics.iter() {
+                let row: &[f64] = match m.source {
+                    Source::Activation => &r.solution.x[..nv],
+                    Source::Force => &r.force_row,
+                    Source::Diagnostics => diag.get_or_insert_with(|| diagnostics_row(r)),
+                    Source::ContactForces => &r.contacts.contact,
+                    Source::ContactBodyForces => &r.contacts.bodies,
+                    Source::BySource => &r.by_source,
+                    Source::MusclePower => &r.muscle_power,
+                    Source::Reactions(j) => &buf.reaction_rows[j],
+                    Source::Knee(j) => &buf.knee_rows[j],
+                };
+                // As a study's table column: the columns summed, scaled.
+                let mut y = 0.0;
+                for &c in &m.columns {
+                    y += row[c];
+                }
+                out.values.push(y * m.scale);
+                out.values.push(m.located.map_or(f64::NAN, |c| row[c]));
+            }
+        }
+        out
+    }
+
+    /// The candidates' warm-start chains (one per w0, in the given order).
+    fn chains(cands: &[ForceCandidate]) -> Vec<usize> {
+        let mut chain_w0: Vec<f64> = Vec::new();
+        cands
+            .iter()
+            .map(|c| match chain_w0.iter().position(|w| *w == c.w0) {
+                Some(k) => k,
+                None => {
+                    chain_w0.push(c.w0);
+                    chain_w0.len() - 1
+                }
+            })
+            .collect()
+    }
+
+    fn new_frame(&self) -> PreparedFrame {
+        PreparedFrame {
+            t: 0.0,
+            ws: Workspace::new(&self.problem.model, &self.problem.muscles),
+            scratch: CandidateScratch::default(),
+            bases: Vec::new(),
+        }
+    }
+}
+
+/// The candidates' series (frames in order) → the outcome.
+struct Collected {
+    time: Vec<f64>,
+    series: Vec<Vec<(Vec<f64>, Vec<f64>)>>,
+    failed: Vec<usize>,
+    iterations: u64,
+}
+
+impl Collected {
+    fn new(nc: usize, nm: usize) -> Self {
+        Collected {
+            time: Vec::new(),
+            series: vec![vec![(Vec::new(), Vec::new()); nm]; nc],
+            failed: vec![0; nc],
+            iterations: 0,
+        }
+    }
+
+    fn push(&mut self, fv: &FrameValues) {
+        let nm = self.series.first().map_or(0, Vec::len);
+        self.time.push(fv.time);
+        self.iterations += fv.iterations;
+        for (k, per) in self.series.iter_mut().enumerate() {
+            for (m, s) in per.iter_mut().enumerate() {
+                let at = 2 * (k * nm + m);
+                s.0.push(fv.values[at]);
+                s.1.push(fv.values[at + 1]);
+            }
+            if fv.failed[k] {
+                self.failed[k] += 1;
+            }
+        }
+    }
+
+    fn outcome(self, plan: &Plan, loop_seconds: f64, warnings: Vec<String>) -> Result<SweepOutcome> {
+        let time = &self.time;
+        let values = self
+            .series
+            .iter()
+            .map(|per| {
+                plan.metrics
+                    .iter()
+                    .zip(per)
+                    .map(|(m, (y, w))| metric_value(&m.el, time, y, || Ok(w.clone())))
+                    .collect::<Result<Vec<f64>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(SweepOutcome {
+            metric_names: plan.metrics.iter().map(|m| m.name.clone()).collect(),
+            values,
+            failed: self.failed,
+            frames: time.len(),
+            loop_seconds,
+            warnings,
+            iterations: self.iterations,
+        })
+    }
+}
+
+/// Run a force sweep of the AnalyzeTool setup in `setup_file` (or `text`,
+/// read as if it were that file).
+pub fn run_file(
+    setup_file: &std::path::Path,
+    text: Option<&str>,
+    candidates: &[CandidateSpec],
+    opts: &RunOptions,
+    sweep: &SweepOptions,
+) -> Result<SweepOutcome> {
+    let setup = read_setup(setup_file, text)?;
+    run(&setup, candidates, opts, sweep)
+}
+
+fn read_setup(setup_file: &std::path::Path, text: Option<&str>) -> Result<AnalyzeSetup> {
+    let setup = match text {
+        Some(t) => Setup::parse(t, setup_file)?,
+        None => Setup::read(setup_file)?,
+    };
+    match setup {
+        Setup::Analyze(s) => Ok(s),
+        _ => Err(Error::input(
+            Location::file(setup_file),
+            "a force sweep runs an AnalyzeTool setup with a StaticOptimization",
+        )),
+    }
+}
+
+/// `f` in a pool of `threads` threads (None: rayon's global pool).
+fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+    match threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build()
+            .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?
+            .install(f),
+        None => f(),
+    }
+}
+
+/// Run a force sweep of `setup` (see the module documentation): the
+/// motion streamed once, each frame prepared and solved for every
+/// candidate as it comes (memory does not grow with the motion but for
+/// the metrics' series).
+pub fn run(
+    setup: &AnalyzeSetup,
+    candidates: &[CandidateSpec],
+    opts: &RunOptions,
+    sweep: &SweepOptions,
+) -> Result<SweepOutcome> {
+    in_pool(opts.threads, || run_streamed(setup, candidates, opts, sweep))
+}
+
+fn open_stream<'m>(
+    setup: &AnalyzeSetup,
+    plan: &'m Plan,
+    warnings: &mut Vec<String>,
+) -> Result<crate::motion::stream::StateStream<'m>> {
+    let stream = open_state_stream_with(setup, &plan.problem.model, &plan.problem.contacts)?;
+    warnings.extend(stream.motion_warnings(&[]));
+    if !stream.missing.is_empty() {
+        warnings.push(format!(
+            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
+            stream.missing
+        ));
+    }
+    Ok(stream)
+}
+
+fn run_streamed(
+    setup: &AnalyzeSetup,
+    candidates: &[CandidateSpec],
+    opts: &RunOptions,
+    sweep: &SweepOptions,
+) -> Result<SweepOutcome> {
+    let plan = Plan::compile(setup)?;
+    let cands = resolve_candidates(setup, &plan.problem, candidates)?;
+    let chain_of = Plan::chains(&cands);
+    let mut warnings = plan.warnings.clone();
+    let mut stream = open_stream(setup, &plan, &mut warnings)?;
+    let (i0, i1, step) = (stream.first_row, stream.last_row, plan.step_interval);
+    let nframes = (i0..=i1)
+        .filter(|&i| crate::frame::driver::is_frame(i, i0, i1, step))
+        .count();
+    let mut progress = crate::tools::progress::bar(
+        nframes as u64,
+        opts,
+        &format!("{}_force_sweep", setup.name),
+    );
+    let mut collected = Collected::new(cands.len(), plan.metrics.len());
+    let started = Instant::now();
+    let first = stream.next_block()?;
+    let mut source = PreparingLoads::new(
+        Prefetched::new(first, &mut stream),
+        plan.problem.loads.as_ref(),
+    );
+    let (plan_ref, cands, chain_of) = (&plan, &cands, &chain_of);
+    let completed = for_each_frame(
+        &mut source,
+        i0,
+        i1,
+        step,
+        || (plan_ref.new_frame(), CandidateBuffers::default()),
+        |(frame, buf), block, i| {
+            plan_ref.prepare(block.time[i], &block.q[i], &block.u[i], &block.udot[i], frame)?;
+            Ok(plan_ref.solve(cands, chain_of, sweep.warm, frame, buf))
+        },
+        |fv| {
+            collected.push(&fv);
+            progress.inc(1);
+            Ok(())
+        },
+    )?;
+    let loop_seconds = started.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+    if !completed {
+        return Err(Error::msg("the force sweep was stopped"));
+    }
+    collected.outcome(&plan, loop_seconds, warnings)
+}
+
+/// A setup compiled and every frame of its motion assembled once, kept in
+/// memory, to solve batch after batch of candidates (an optimiser's
+/// iterates): each [`Scene::run`] only solves. Memory grows with the
+/// frames (each keeps its workspace and reaction bases).
+pub struct Scene {
+    plan: Plan,
+    setup: AnalyzeSetup,
+    frames: Vec<PreparedFrame>,
+    threads: Option<usize>,
+    /// Setup and motion warnings.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Compile the setup in `setup_file` (or `text`, read as if it were
+    /// that file) and prepare every frame; `threads` as `RunOptions`'.
+    pub fn compile(
+        setup_file: &std::path::Path,
+        text: Option<&str>,
+        threads: Option<usize>,
+    ) -> Result<Scene> {
+        let setup = read_setup(setup_file, text)?;
+        in_pool(threads, move || {
+            let plan = Plan::compile(&setup)?;
+            let mut warnings = plan.warnings.clone();
+            let mut frames = Vec::new();
+            {
+                let mut stream = open_stream(&setup, &plan, &mut warnings)?;
+                let (i0, i1) = (stream.first_row, stream.last_row);
+                let first = stream.next_block()?;
+                let mut source = PreparingLoads::new(
+                    Prefetched::new(first, &mut stream),
+                    plan.problem.loads.as_ref(),
+                );
+                let plan_ref = &plan;
+                let completed = for_each_frame(
+                    &mut source,
+                    i0,
+                    i1,
+                    plan.step_interval,
+                    || (),
+                    |_, block, i| {
+                        let mut frame = plan_ref.new_frame();
+                        plan_ref.prepare(
+                            block.time[i],
+                            &block.q[i],
+                            &block.u[i],
+                            &block.udot[i],
+                            &mut frame,
+                        )?;
+                        Ok(frame)
+                    },
+                    |f| {
+                        frames.push(f);
+                        Ok(())
+                    },
+                )?;
+                if !completed {
+                    return Err(Error::msg("compiling the scene was stopped"));
+                }
+            }
+            Ok(Scene {
+                plan,
+                setup,
+                frames,
+                threads,
+                warnings,
+            })
+        })
+    }
+
+    /// The frames kept.
+    pub fn frames(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Solve every frame for `candidates` (frames in parallel).
+    pub fn run(&mut self, candidates: &[CandidateSpec], sweep: &SweepOptions) -> Result<SweepOutcome> {
+        let Scene {
+            plan,
+            setup,
+            frames,
+            threads,
+            warnings,
+        } = self;
+        let (plan, setup, warnings) = (&*plan, &*setup, &*warnings);
+        in_pool(*threads, move || {
+            use rayon::prelude::*;
+            let cands = resolve_candidates(setup, &plan.problem, candidates)?;
+            let chain_of = Plan::chains(&cands);
+            let started = Instant::now();
+            let values: Vec<FrameValues> = frames
+                .par_iter_mut()
+                .map_init(CandidateBuffers::default, |buf, frame| {
+                    plan.solve(&cands, &chain_of, sweep.warm, frame, buf)
+                })
+                .collect();
+            let mut collected = Collected::new(cands.len(), plan.metrics.len());
+            for fv in &values {
+                collected.push(fv);
+            }
+            collected.outcome(plan, started.elapsed().as_secs_f64(), warnings.clone())
+        })
+    }
+}
+
+/// A study's `<ForceSweep>` element (see `tools::study`):
+///
+/// ```xml
+/// <ForceSweep name="cam_shapes" setup="leg_extension_rajagopal_cam2.xml">
+///   <contact_weight>1 500 1000</contact_weight>   (default: the setup's)
+///   <Candidate name="circular">
+///     <expression force="cam_torque">-50</expression>
+///     <optimal_force actuator="knee_angle_r_reserve">50</optimal_force>
+///   </Candidate>
+///   ...
+/// </ForceSweep>
+/// ```
+///
+/// Every candidate runs at every w0; the metrics (the setup's `<Metric>`s)
+/// go to `<out>/<name>_force_sweep.csv`, one row per (candidate, w0):
+/// `candidate`, `w0`, `frames`, `failed`, then the metrics (unrounded).
+/// `dir` is the study's folder (the setup's path is relative to it).
+pub fn run_element(
+    el: &Element,
+    dir: &std::path::Path,
+    out: &std::path::Path,
+    opts: &RunOptions,
+) -> Result<std::path::PathBuf> {
+    let (setup, specs, names) = read_element(el, dir)?;
+    let outcome = run(&setup, &specs, opts, &SweepOptions::default())?;
+    let name = el.attr("name").unwrap_or("force_sweep");
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let path = out.join(format!("{name}_force_sweep.csv"));
+    let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
+    let mut w = csv::Writer::from_path(&path).map_err(csv_err)?;
+    let mut header = vec!["candidate".to_string(), "w0".into(), "frames".into(), "failed".into()];
+    header.extend(outcome.metric_names.iter().cloned());
+    w.write_record(&header).map_err(csv_err)?;
+    for (((n, spec), values), failed) in names
+        .iter()
+        .zip(&specs)
+        .zip(&outcome.values)
+        .zip(&outcome.failed)
+    {
+        let mut rec = vec![
+            n.clone(),
+            format!("{}", spec.w0),
+            outcome.frames.to_string(),
+            failed.to_string(),
+        ];
+        rec.extend(values.iter().map(|v| format!("{v:e}")));
+        w.write_record(&rec).map_err(csv_err)?;
+    }
+    w.flush().map_err(|e| Error::io(&path, e))?;
+    Ok(path)
+}
+
+/// The setup, the candidates (each at every w0) and their names of a
+/// `<ForceSweep>` element; checks it without running.
+pub fn read_element(
+    el: &Element,
+    dir: &std::path::Path,
+) -> Result<(AnalyzeSetup, Vec<CandidateSpec>, Vec<String>)> {
+    let file = el
+        .attr("setup")
+        .ok_or_else(|| el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)"))?;
+    let path = crate::parse::setup::resolve(dir, file);
+    let Setup::Analyze(setup) = Setup::read(&path)? else {
+        return Err(el.error(format!("setup=\"{file}\" is not an AnalyzeTool setup")));
+    };
+    let w0s: Vec<f64> = match el.child("contact_weight") {
+        Some(c) => c.numbers()?,
+        None => {
+            setup
+                .static_optimization()
+                .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
+                .contact_weights
+                .clone()
+        }
+    };
+    if w0s.is_empty() {
+        return Err(el.error("contact_weight: give one or more w0"));
+    }
+    let mut specs = Vec::new();
+    let mut names = Vec::new();
+    for (k, c) in el.children.iter().enumerate() {
+        match c.name.as_str() {
+            "contact_weight" => continue,
+            "Candidate" => {}
+            other => {
+                return Err(c.error(format!(
+                    "unknown element <{other}> in a ForceSweep (contact_weight, Candidate)"
+                )))
+            }
+        }
+        let mut spec = CandidateSpec::default();
+        for p in &c.children {
+            match p.name.as_str() {
+                "expression" => spec.expressions.push((
+                    p.attr("force")
+                        .ok_or_else(|| p.error("an expression needs a force attribute"))?
+                        .to_string(),
+                    p.text.trim().to_string(),
+                )),
+                "optimal_force" => spec.optimal_forces.push((
+                    p.attr("actuator")
+                        .ok_or_else(|| p.error("an optimal_force needs an actuator attribute"))?
+                        .to_string(),
+                    p.numbers_n(1)?[0],
+                )),
+                other => {
+                    return Err(p.error(format!(
+                        "unknown element <{other}> in a Candidate (expression, optimal_force)"
+                    )))
+                }
+            }
+        }
+        let name = c
+            .attr("name")
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("candidate_{k}"));
+        for &w0 in &w0s {
+            specs.push(CandidateSpec {
+                w0,
+                ..spec.clone()
+            });
+            names.push(name.clone());
+        }
+    }
+    if specs.is_empty() {
+        return Err(el.error("a ForceSweep needs at least one <Candidate>"));
+    }
+    Ok((setup, specs, names))
+}
