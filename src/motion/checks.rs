@@ -276,7 +276,7 @@ impl DependentMismatch {
                 let dependent = &model.coordinates[cp.dependent];
                 if *dd <= DEPENDENT_TOLERANCE.to_degrees() {
                     format!(
-                        "{}: the column of dependent coordinate {} holds its coupler {}'s values in degrees; OpenSim reads it as radians (its motion type is not rotational): the positions are fixed by the coupler, but the speeds OpenSim splines from the column are 57.3× too large; statopt uses the coupler's values for both",
+                        "{}: the column of dependent coordinate {} holds its coupler {}'s values in degrees, where OpenSim reads radians (its motion type is not rotational): OpenSim's assembler corrects the positions through the coupler but keeps the speeds splined from this column, 57.3× too large; statopt takes its positions and speeds from the coupler",
                         file.display(),
                         dependent.name,
                         cp.name

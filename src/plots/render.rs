@@ -370,7 +370,34 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
             .unwrap_or(0);
         (text_w + LEGEND_ICON + 3 * pad + m.margin).min(w * 9 / 20)
     };
-    let (plot_area, legend_area) = area.split_horizontally(w - legend_w);
+    // The title spans the whole figure (the legend column included),
+    // shrunk to fit its width.
+    let body = if c.title.is_empty() {
+        area.clone()
+    } else {
+        let mut size = m.title;
+        let fits = |size: f64| {
+            let font = TextStyle::from((FONT, size).into_font());
+            area.estimate_text_size(&c.title, &font)
+                .map_or(true, |(tw, _)| tw + 2 * m.margin <= w)
+        };
+        while size > 10.0 && !fits(size) {
+            size *= 0.9;
+        }
+        let title_h = (1.6 * size) as u32 + m.margin / 2;
+        let (title_area, rest) = area.split_vertically(title_h);
+        let font = TextStyle::from((FONT, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+        let (tw, th) = title_area.dim_in_pixel();
+        title_area
+            .draw(&Text::new(
+                c.title.clone(),
+                ((tw / 2) as i32, (th as i32 + m.margin as i32 / 2) / 2),
+                font,
+            ))
+            .map_err(plot_err)?;
+        rest
+    };
+    let (plot_area, legend_area) = body.split_horizontally(w - legend_w);
 
     let mut xs = Vec::new();
     let mut ys = Vec::new();
@@ -395,9 +422,6 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
         .margin(m.margin)
         .x_label_area_size(m.x_area)
         .y_label_area_size(m.y_area);
-    if !c.title.is_empty() {
-        builder.caption(&c.title, (FONT, m.title));
-    }
     let mut ch = builder
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(plot_err)?;

@@ -577,3 +577,27 @@ fn an_axis_crossing_zero_labels_its_negative_side() {
     assert!(svg.has_text("-100"), "{:?}", svg.texts());
     assert!(!svg.texts().iter().any(|t| t.ends_with(".0")), "{:?}", svg.texts());
 }
+
+/// A title wider than the plot (the legend takes a column) is drawn over
+/// the whole figure and shrunk to fit: never clipped at the figure's edge
+/// (Figure 9's title lost its first letters).
+#[test]
+fn a_long_title_is_not_clipped() {
+    let d = out_dir("long_title");
+    let mut c = knee_chart();
+    c.size = (1000, 650);
+    c.title = "Hip flexion moment, right: muscles vs contacts (Figure 9, Rajagopal, cam 1), long".into();
+    let paths = write(&c, &d.join("t")).unwrap();
+    let (w, _, px) = read_png(&paths[0]);
+    // No dark title pixel touches the left or right edge columns.
+    let edge_dark = px
+        .iter()
+        .enumerate()
+        .filter(|(i, p)| {
+            let x = *i as u32 % w;
+            (x < 3 || x >= w - 3) && p.iter().all(|&c| c < 100)
+        })
+        .count();
+    assert_eq!(edge_dark, 0, "text reaches the figure's edge");
+    assert!(Svg::read(&paths[1]).has_text(&c.title));
+}

@@ -1259,8 +1259,8 @@ mod tests {
     /// not once per plate.
     #[test]
     fn predicted_loads_load_each_foot_once_whatever_its_plates() {
-        let dir = std::env::temp_dir().join(format!("statopt_plates_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = crate::test_dir::TempDir::new("plates");
+        let dir = tmp.path().to_path_buf();
         let plate = |name: &str, body: &str, id: &str| ForceLayout {
             name: name.into(),
             body: body.into(),
