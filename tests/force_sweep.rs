@@ -32,12 +32,17 @@ const CAM2: &str = "-50*sqrt(1-0.75*sin(q+0.08726646259971647)^2)";
 fn setup_text(w0: Option<f64>, reserve: f64, machine: Option<&Path>) -> String {
     let mut text = std::fs::read_to_string(root().join(SETUP)).unwrap();
     // No figures (they name the tables of every w0); the metrics stay.
-    let (a, b) = (text.find("<Figure").unwrap(), text.rfind("</Figure>").unwrap());
+    let (a, b) = (
+        text.find("<Figure").unwrap(),
+        text.rfind("</Figure>").unwrap(),
+    );
     text.replace_range(a..b + "</Figure>".len(), "");
     text = text.replace("<final_time>5</final_time>", "<final_time>1</final_time>");
     text = text.replace(
         "<friction_cone>cone</friction_cone>",
-        &format!("<friction_cone>cone</friction_cone><reserve_actuators>{reserve}</reserve_actuators>"),
+        &format!(
+            "<friction_cone>cone</friction_cone><reserve_actuators>{reserve}</reserve_actuators>"
+        ),
     );
     if let Some(w) = w0 {
         text = text.replace(
@@ -146,10 +151,22 @@ fn candidates_equal_their_own_runs() {
         threads: Some(2),
         ..Default::default()
     };
-    let warm = force_sweep::run_file(&root().join(SETUP), Some(&base), &specs, &opts, &SweepOptions { warm: true })
-        .unwrap();
-    let cold = force_sweep::run_file(&root().join(SETUP), Some(&base), &specs, &opts, &SweepOptions { warm: false })
-        .unwrap();
+    let warm = force_sweep::run_file(
+        &root().join(SETUP),
+        Some(&base),
+        &specs,
+        &opts,
+        &SweepOptions { warm: true },
+    )
+    .unwrap();
+    let cold = force_sweep::run_file(
+        &root().join(SETUP),
+        Some(&base),
+        &specs,
+        &opts,
+        &SweepOptions { warm: false },
+    )
+    .unwrap();
     assert_eq!(warm.frames, 21);
     assert_eq!(warm.metric_names.len(), 6);
     for (k, &(expr, w0, reserve)) in cases.iter().enumerate() {
@@ -174,15 +191,25 @@ fn candidates_equal_their_own_runs() {
         for (m, (name, v)) in own.iter().enumerate() {
             assert_eq!(&warm.metric_names[m], name);
             let (w, c) = (warm.values[k][m], cold.values[k][m]);
-            assert!(close(w, *v, 1e-9), "case {k} {name}: sweep {w} vs own run {v}");
-            assert!(close(c, *v, 1e-9), "case {k} {name}: cold sweep {c} vs own run {v}");
+            assert!(
+                close(w, *v, 1e-9),
+                "case {k} {name}: sweep {w} vs own run {v}"
+            );
+            assert!(
+                close(c, *v, 1e-9),
+                "case {k} {name}: cold sweep {c} vs own run {v}"
+            );
             assert!(close(w, c, 1e-11), "case {k} {name}: warm {w} vs cold {c}");
         }
     }
     // The candidates differ: at w0 = 500 a rounder cam (b/a = 0.7) demands
     // more quadriceps work than cam 2 (b/a = 0.5).
     assert_eq!(warm.metric_names[0], "quadriceps_work_J");
-    assert!(warm.values[3][0] > warm.values[0][0] + 1.0, "{:?}", warm.values);
+    assert!(
+        warm.values[3][0] > warm.values[0][0] + 1.0,
+        "{:?}",
+        warm.values
+    );
 }
 
 #[test]
@@ -204,7 +231,10 @@ fn bad_candidates_are_input_errors() {
         expressions: vec![("no_such_force".into(), "-50".into())],
         ..Default::default()
     });
-    assert!(e.contains("candidate 0") && e.contains("no passive force 'no_such_force'"), "{e}");
+    assert!(
+        e.contains("candidate 0") && e.contains("no passive force 'no_such_force'"),
+        "{e}"
+    );
     let e = run(CandidateSpec {
         w0: 500.0,
         expressions: vec![("cam_torque".into(), "-50*(".into())],
@@ -268,9 +298,14 @@ fn a_study_force_sweep_element_writes_its_metrics() {
     let bad = std::fs::read_to_string(&study_file)
         .unwrap()
         .replace("<Candidate name=\"cam2\">", "<Candidat name=\"cam2\">")
-        .replace("</expression></Candidate>\n\t\t</ForceSweep>", "</expression></Candidat>\n\t\t</ForceSweep>");
+        .replace(
+            "</expression></Candidate>\n\t\t</ForceSweep>",
+            "</expression></Candidat>\n\t\t</ForceSweep>",
+        );
     std::fs::write(&study_file, bad).unwrap();
-    let e = tools::run_setup(&study_file, &RunOptions::default()).unwrap_err().to_string();
+    let e = tools::run_setup(&study_file, &RunOptions::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("unknown element <Candidat>"), "{e}");
 }
 

@@ -284,7 +284,12 @@ struct Scene {
 impl Scene {
     #[new]
     #[pyo3(signature = (setup, text=None, threads=None))]
-    fn new(py: Python<'_>, setup: PathBuf, text: Option<String>, threads: Option<usize>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        setup: PathBuf,
+        text: Option<String>,
+        threads: Option<usize>,
+    ) -> PyResult<Self> {
         let scene = py
             .allow_threads(|| {
                 statopt::tools::force_sweep::Scene::compile(&setup, text.as_deref(), threads)
@@ -304,7 +309,10 @@ impl Scene {
     /// Setup and motion warnings.
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.inner.lock().map(|s| s.warnings.clone()).unwrap_or_default()
+        self.inner
+            .lock()
+            .map(|s| s.warnings.clone())
+            .unwrap_or_default()
     }
 
     /// Solve `candidates` (as `force_sweep`'s) on the kept frames.
@@ -354,9 +362,8 @@ fn force_sweep<'py>(
         ..Default::default()
     };
     let sweep = SweepOptions { warm };
-    let result = py.allow_threads(|| {
-        force_sweep::run_file(&setup, text.as_deref(), &specs, &opts, &sweep)
-    });
+    let result =
+        py.allow_threads(|| force_sweep::run_file(&setup, text.as_deref(), &specs, &opts, &sweep));
     if let Some(e) = take_pending(&pending) {
         return Err(e);
     }

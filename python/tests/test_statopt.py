@@ -311,7 +311,7 @@ def test_study_and_ctrl_c(repo, tmp_path):
 
     study = repo / "setups" / "leg_extension_study.xml"
     res = statopt.run(study, progress=False)
-    assert res.summary["solves"] == 1212 and res.failed == 0  # 4 setups x 3 w0 x 101 frames
+    assert res.summary["solves"] == 2121 and res.failed == 0  # 7 setups x 3 w0 x 101 frames
     # metrics of each setup and of the study, named after their files
     assert res.metrics["leg_extension.gait2392_cam1_quadriceps_work_J"] == res.metrics["leg_extension_cam1.quadriceps_work_J"]
     assert res.activations.index.names == ["table", "time"]

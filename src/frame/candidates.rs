@@ -115,7 +115,10 @@ impl SoProblem {
             scratch.record.clear();
             pf.record_values_into(data, t, &mut scratch.record);
             let k = scratch.record_start[*j];
-            let n = scratch.record.len().min(asm.passive.len().saturating_sub(k));
+            let n = scratch
+                .record
+                .len()
+                .min(asm.passive.len().saturating_sub(k));
             asm.passive[k..k + n].copy_from_slice(&scratch.record[..n]);
         }
         asm.problem.b.copy_from(&scratch.b0);

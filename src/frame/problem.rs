@@ -455,13 +455,13 @@ impl SoProblem {
             states.push(st);
         }
         if nk > 0 {
-            problem.lower.extend(std::iter::repeat(0.0).take(2 * nk));
+            problem.lower.extend(std::iter::repeat_n(0.0, 2 * nk));
             problem
                 .upper
-                .extend(std::iter::repeat(f64::INFINITY).take(2 * nk));
+                .extend(std::iter::repeat_n(f64::INFINITY, 2 * nk));
             problem
                 .weights
-                .extend(std::iter::repeat(1.0 / self.w0()).take(2 * nk));
+                .extend(std::iter::repeat_n(1.0 / self.w0(), 2 * nk));
             self.knee_rows(
                 data,
                 mf,

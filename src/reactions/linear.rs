@@ -240,7 +240,17 @@ impl ReactionBasis {
                 self.columns = DMatrix::zeros(n, nv + 3 * nc);
             }
             let mut r0 = std::mem::take(&mut self.r0);
-            evaluate(problem, t, ws, &states, specs, &self.forces, None, None, &mut r0)?;
+            evaluate(
+                problem,
+                t,
+                ws,
+                &states,
+                specs,
+                &self.forces,
+                None,
+                None,
+                &mut r0,
+            )?;
             self.r0 = r0;
             // The forward dynamics of r₀ left M_r and C in data.forward.
             let c = ws.data.forward.coupling.clone();
@@ -265,7 +275,17 @@ impl ReactionBasis {
                 }
             }
             for (col, probe) in probes {
-                linear_response(problem, ws, &states, specs, &factor, &c, probe, &mut y, &mut self.row);
+                linear_response(
+                    problem,
+                    ws,
+                    &states,
+                    specs,
+                    &factor,
+                    &c,
+                    probe,
+                    &mut y,
+                    &mut self.row,
+                );
                 let size = match probe {
                     Probe::Control(_, p) => p,
                     _ => 1.0,
@@ -274,7 +294,8 @@ impl ReactionBasis {
                     self.columns[(i, col)] = r / size;
                 }
             }
-            self.mobility.resize_with(coordinates.len(), Default::default);
+            self.mobility
+                .resize_with(coordinates.len(), Default::default);
             for (m, &k) in self.mobility.iter_mut().zip(coordinates) {
                 linear_response(
                     problem,
@@ -305,15 +326,19 @@ impl ReactionBasis {
     /// the probed coordinates count) into `out`.
     pub fn reactions_into(&self, forces: &[f64], lambda: &[f64], dg: &[f64], out: &mut [f64]) {
         out.copy_from_slice(&self.r0);
-        let nv = forces.len();
-        for (j, x) in forces.iter().chain(lambda).enumerate() {
+        let n = out.len();
+        if n == 0 {
+            return;
+        }
+        // Column by column over the matrix's storage (column-major).
+        let columns = self.columns.as_slice().chunks_exact(n);
+        for (x, col) in forces.iter().chain(lambda).zip(columns) {
             if *x != 0.0 {
-                for (o, c) in out.iter_mut().zip(self.columns.column(j).iter()) {
+                for (o, c) in out.iter_mut().zip(col) {
                     *o += c * x;
                 }
             }
         }
-        debug_assert_eq!(self.columns.ncols(), nv + lambda.len());
         for (k, col) in &self.mobility {
             let d = dg.get(*k).copied().unwrap_or(0.0);
             if d != 0.0 {

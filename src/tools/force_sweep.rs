@@ -90,7 +90,7 @@ enum Source {
     Diagnostics,
     ContactForces,
     ContactBodyForces,
-    BySource,
+    GeneralizedForces,
     MusclePower,
     /// A coupled JointReaction's ReactionLoads (index into the sweep's).
     Reactions(usize),
@@ -121,7 +121,7 @@ struct Coupled {
 }
 
 const SO_KINDS: [(&str, Source); 7] = [
-    ("GeneralizedForcesBySource", Source::BySource),
+    ("GeneralizedForcesBySource", Source::GeneralizedForces),
     ("ContactBodyForces", Source::ContactBodyForces),
     ("ContactForces", Source::ContactForces),
     ("MusclePower", Source::MusclePower),
@@ -183,7 +183,7 @@ fn plan_metric(
         Source::Diagnostics => DIAGNOSTICS_COLUMNS.iter().map(|s| s.to_string()).collect(),
         Source::ContactForces => problem.contact_labels(),
         Source::ContactBodyForces => problem.contact_body_labels(),
-        Source::BySource => problem.by_source_labels(),
+        Source::GeneralizedForces => problem.by_source_labels(),
         Source::MusclePower => problem.muscle_labels(),
         Source::Reactions(j) => coupled[j].labels.clone(),
         Source::Knee(j) => {
@@ -195,9 +195,10 @@ fn plan_metric(
         coupled[j].used = true;
     }
     let column = |c: &str| {
-        labels.iter().position(|l| l == c).ok_or_else(|| {
-            el.error(format!("{file} has no column '{c}'"))
-        })
+        labels
+            .iter()
+            .position(|l| l == c)
+            .ok_or_else(|| el.error(format!("{file} has no column '{c}'")))
     };
     let columns = el
         .attr("columns")
@@ -330,9 +331,9 @@ struct CandidateBuffers {
     reaction_rows: Vec<Vec<f64>>,
     /// Per coupled JointReaction with knee loads: the candidate's row.
     knee_rows: Vec<Vec<f64>>,
-    /// Per warm-start chain (a w0): the last two candidates' multipliers
-    /// (the last one second), and the start handed to the next.
-    chains: Vec<[Vec<f64>; 2]>,
+    /// Per warm-start chain (a w0): the last three candidates' multipliers
+    /// (the last one last), and the start handed to the next.
+    chains: Vec<[Vec<f64>; 3]>,
     start: Vec<f64>,
 }
 
@@ -386,6 +387,14 @@ impl Plan {
             ));
         }
         let (problem, mut warnings) = SoProblem::build(setup, &so)?;
+        if !problem.knees.is_empty() {
+            // Its rows' right-hand side holds forces of the frame a
+            // candidate would change; not handled yet.
+            return Err(Error::input(
+                at().with_element("<knee_contact>"),
+                "a force sweep does not handle the knee contact method yet: sweep the setup without <knee_contact>",
+            ));
+        }
         let mut coupled = Vec::new();
         for jr in setup.joint_reactions() {
             {
@@ -456,7 +465,15 @@ impl Plan {
         let problem = &self.problem;
         frame.t = t;
         let ws = &mut frame.ws;
-        let m_r = problem.assemble(t, q, u, udot, &mut ws.data, &mut ws.muscles, &mut ws.assembly);
+        let m_r = problem.assemble(
+            t,
+            q,
+            u,
+            udot,
+            &mut ws.data,
+            &mut ws.muscles,
+            &mut ws.assembly,
+        );
         if m_r.is_some() {
             return Err(Error::internal("force sweep: perturbation rows"));
         }
@@ -499,15 +516,25 @@ impl Plan {
         for (k, cand) in cands.iter().enumerate() {
             let chain = chain_of[k];
             // Warm start: the previous candidate's multipliers, or their
-            // linear extrapolation from the two before (candidates along a
-            // line of designs move their multipliers along a curve); the
-            // answer is the same either way.
-            let [older, last] = &buf.chains[chain];
+            // extrapolation from the two or three before (candidates along a
+            // line of designs move their multipliers along a smooth curve,
+            // and where it is smooth enough Newton has nothing left to do);
+            // the answer is the same either way.
+            let [oldest, older, last] = &buf.chains[chain];
             let y0 = if !warm || last.is_empty() {
                 None
             } else {
                 buf.start.clear();
-                if older.len() == last.len() {
+                if oldest.len() == last.len() && older.len() == last.len() {
+                    // Quadratic through the last three.
+                    buf.start.extend(
+                        oldest
+                            .iter()
+                            .zip(older)
+                            .zip(last)
+                            .map(|((a, b), c)| 3.0 * (c - b) + a),
+                    );
+                } else if older.len() == last.len() {
                     buf.start
                         .extend(older.iter().zip(last).map(|(a, b)| b + (b - a)));
                 } else {
@@ -525,9 +552,9 @@ impl Plan {
             );
             let r = &buf.result;
             let kept = &mut buf.chains[chain];
-            kept.swap(0, 1);
-            kept[1].clear();
-            kept[1].extend_from_slice(&r.solution.y);
+            kept.rotate_left(1);
+            kept[2].clear();
+            kept[2].extend_from_slice(&r.solution.y);
             out.failed.push(status_code(r.solution.status) < 0.0);
             out.iterations += r.solution.iterations as u64;
             for (j, c) in self.coupled.iter().enumerate() {
@@ -536,7 +563,12 @@ impl Plan {
                 }
                 let row = &mut buf.reaction_rows[j];
                 row.resize(9 * c.specs.len(), 0.0);
-                frame.bases[j].reactions_into(&r.forces, &r.solution.x[nv..], &frame.scratch.dg, row);
+                frame.bases[j].reactions_into(
+                    &r.forces,
+                    &r.solution.x[nv..],
+                    &frame.scratch.dg,
+                    row,
+                );
                 if let Some((sides, patella)) = &c.knee {
                     crate::tools::knee_loads::knee_row(
                         &frame.ws.data,
@@ -555,7 +587,7 @@ impl Plan {
                     Source::Diagnostics => diag.get_or_insert_with(|| diagnostics_row(r)),
                     Source::ContactForces => &r.contacts.contact,
                     Source::ContactBodyForces => &r.contacts.bodies,
-                    Source::BySource => &r.by_source,
+                    Source::GeneralizedForces => &r.by_source,
                     Source::MusclePower => &r.muscle_power,
                     Source::Reactions(j) => &buf.reaction_rows[j],
                     Source::Knee(j) => &buf.knee_rows[j],
@@ -631,7 +663,12 @@ impl Collected {
         }
     }
 
-    fn outcome(self, plan: &Plan, loop_seconds: f64, warnings: Vec<String>) -> Result<SweepOutcome> {
+    fn outcome(
+        self,
+        plan: &Plan,
+        loop_seconds: f64,
+        warnings: Vec<String>,
+    ) -> Result<SweepOutcome> {
         let time = &self.time;
         let values = self
             .series
@@ -705,7 +742,9 @@ pub fn run(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    in_pool(opts.threads, || run_streamed(setup, candidates, opts, sweep))
+    in_pool(opts.threads, || {
+        run_streamed(setup, candidates, opts, sweep)
+    })
 }
 
 fn open_stream<'m>(
@@ -739,11 +778,8 @@ fn run_streamed(
     let nframes = (i0..=i1)
         .filter(|&i| crate::frame::driver::is_frame(i, i0, i1, step))
         .count();
-    let mut progress = crate::tools::progress::bar(
-        nframes as u64,
-        opts,
-        &format!("{}_force_sweep", setup.name),
-    );
+    let mut progress =
+        crate::tools::progress::bar(nframes as u64, opts, &format!("{}_force_sweep", setup.name));
     let mut collected = Collected::new(cands.len(), plan.metrics.len());
     let started = Instant::now();
     let first = stream.next_block()?;
@@ -759,7 +795,13 @@ fn run_streamed(
         step,
         || (plan_ref.new_frame(), CandidateBuffers::default()),
         |(frame, buf), block, i| {
-            plan_ref.prepare(block.time[i], &block.q[i], &block.u[i], &block.udot[i], frame)?;
+            plan_ref.prepare(
+                block.time[i],
+                &block.q[i],
+                &block.u[i],
+                &block.udot[i],
+                frame,
+            )?;
             Ok(plan_ref.solve(cands, chain_of, sweep.warm, frame, buf))
         },
         |fv| {
@@ -853,7 +895,11 @@ impl Scene {
     }
 
     /// Solve every frame for `candidates` (frames in parallel).
-    pub fn run(&mut self, candidates: &[CandidateSpec], sweep: &SweepOptions) -> Result<SweepOutcome> {
+    pub fn run(
+        &mut self,
+        candidates: &[CandidateSpec],
+        sweep: &SweepOptions,
+    ) -> Result<SweepOutcome> {
         let Scene {
             plan,
             setup,
@@ -912,7 +958,12 @@ pub fn run_element(
     let path = out.join(format!("{name}_force_sweep.csv"));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
     let mut w = csv::Writer::from_path(&path).map_err(csv_err)?;
-    let mut header = vec!["candidate".to_string(), "w0".into(), "frames".into(), "failed".into()];
+    let mut header = vec![
+        "candidate".to_string(),
+        "w0".into(),
+        "frames".into(),
+        "failed".into(),
+    ];
     header.extend(outcome.metric_names.iter().cloned());
     w.write_record(&header).map_err(csv_err)?;
     for (((n, spec), values), failed) in names
@@ -940,9 +991,9 @@ pub fn read_element(
     el: &Element,
     dir: &std::path::Path,
 ) -> Result<(AnalyzeSetup, Vec<CandidateSpec>, Vec<String>)> {
-    let file = el
-        .attr("setup")
-        .ok_or_else(|| el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)"))?;
+    let file = el.attr("setup").ok_or_else(|| {
+        el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)")
+    })?;
     let path = crate::parse::setup::resolve(dir, file);
     let Setup::Analyze(setup) = Setup::read(&path)? else {
         return Err(el.error(format!("setup=\"{file}\" is not an AnalyzeTool setup")));
@@ -999,10 +1050,7 @@ pub fn read_element(
             .map(str::to_string)
             .unwrap_or_else(|| format!("candidate_{k}"));
         for &w0 in &w0s {
-            specs.push(CandidateSpec {
-                w0,
-                ..spec.clone()
-            });
+            specs.push(CandidateSpec { w0, ..spec.clone() });
             names.push(name.clone());
         }
     }

@@ -145,7 +145,13 @@ pub(crate) fn sides(
 
 /// One row of the table (into `row`, cleared) from a frame's reaction row
 /// `r`, `data` at the frame's positions.
-pub(crate) fn knee_row(data: &Data, sides: &[Side; 2], patella: bool, r: &[f64], row: &mut Vec<f64>) {
+pub(crate) fn knee_row(
+    data: &Data,
+    sides: &[Side; 2],
+    patella: bool,
+    r: &[f64],
+    row: &mut Vec<f64>,
+) {
     row.clear();
     for s in sides {
         row.push(flexion_degrees(data, s.femur, s.tibia));

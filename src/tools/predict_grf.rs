@@ -136,6 +136,39 @@ pub fn judge_root_residual(
     (times, Some(line))
 }
 
+fn n_flight_of(flight: &[bool]) -> usize {
+    flight.iter().filter(|&&f| f).count()
+}
+
+/// The feet must carry the body over the trial: the mean over its frames of
+/// the predicted vertical force of both feet is body weight (over a gait
+/// cycle the body's mean vertical acceleration is nil; over one step within
+/// a few %). Below (1 − [`REJECT_ROOT_RESIDUAL`]) of it the contacts did not
+/// carry the body, whatever the frames judged one by one say (a floor put
+/// too low makes every frame look like flight): the line that rejects the
+/// prediction, else None.
+pub fn judge_support(pred: &FootLoads, body_weight: f64, flight_frames: usize) -> Option<String> {
+    let n = pred.time.len();
+    if n == 0 || body_weight <= 0.0 {
+        return None;
+    }
+    let mean = (0..n)
+        .map(|i| pred.force[0][i].y + pred.force[1][i].y)
+        .sum::<f64>()
+        / n as f64;
+    let share = mean / body_weight;
+    (!(share >= 1.0 - REJECT_ROOT_RESIDUAL)).then(|| {
+        format!(
+            "the prediction is rejected by the physics: over the trial the feet carried {:.0} % of body weight on average (less than {:.0} %; {} of {} frames had no foot within reach of the floor): the foot contacts did not carry the body, the pelvis did; the comparison is written, but these forces are not a result; exit status {}",
+            100.0 * share,
+            100.0 * (1.0 - REJECT_ROOT_RESIDUAL),
+            flight_frames,
+            n,
+            crate::tools::EXIT_FRAMES_FAILED
+        )
+    })
+}
+
 /// Per row of the contacts' table (`..._ContactForces.sto`): whether every
 /// foot point is farther from its floor plane than the contact band
 /// (d_tol + d_trans), where its weight w(d) is nil: nothing can touch.
@@ -518,7 +551,8 @@ pub fn run_with(
         )));
     }
     let (over, rejected) = judge_root_residual(&prediction.root_residual, &flight, body_weight);
-    prediction.rejected = rejected;
+    prediction.rejected = rejected
+        .or_else(|| judge_support(&prediction.predicted, body_weight, n_flight_of(&flight)));
     let n_flight = flight.iter().filter(|&&f| f).count();
     let n = prediction.root_residual.len() - n_flight;
     let peak = |in_flight: bool| {
@@ -530,7 +564,7 @@ pub fn run_with(
             .fold(0.0f64, |m, (x, _)| m.max(x.1))
     };
     prediction.summary.notes.push(format!(
-        "root residual (every actuator on the pelvis translations): above {:.0} % of body weight on {} of {} frames with a foot on the floor ({:.1} %), at most {:.1} % of body weight there; {} frames in flight (no foot point within {:.3} m of the floor), where it carried at most {:.1} % (the filtered motion's departure from free fall; not judged)",
+        "root residual (every actuator on the pelvis translations): above {:.0} % of body weight on {} of {} frames with a foot on the floor ({:.1} %), at most {:.1} % of body weight there; {} frames in flight (no foot point within {:.3} m of the floor), where it carried at most {:.1} % (no contact can act there; not judged frame by frame: in free fall nothing is required, and what filtered motion asks there is not the contacts' doing)",
         100.0 * REJECT_ROOT_RESIDUAL,
         over.len(),
         n,
@@ -1300,6 +1334,44 @@ mod tests {
         );
         assert_eq!(sum(&["L_ground_force"]), 100.0);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Feet that carry the body on average pass; a prediction whose every
+    /// frame looks like flight (a floor put too low: no contact reaches it)
+    /// is rejected by the mean support.
+    #[test]
+    fn the_feet_must_carry_the_body_on_average() {
+        let bw = 700.0;
+        let loads = |fy: f64| FootLoads {
+            time: vec![0.0, 0.01, 0.02, 0.03],
+            force: [
+                vec![
+                    Vector3::new(0.0, fy, 0.0),
+                    Vector3::zeros(),
+                    Vector3::new(0.0, 2.0 * fy, 0.0),
+                    Vector3::zeros(),
+                ],
+                vec![
+                    Vector3::new(0.0, fy, 0.0),
+                    Vector3::new(0.0, fy, 0.0),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                ],
+            ],
+            ..Default::default()
+        };
+        // Mean (2 + 1 + 2 + 0) fy / 4 = 1.25 fy.
+        assert!(judge_support(&loads(bw / 1.25), bw, 1).is_none());
+        assert!(judge_support(&loads(0.8 * bw / 1.25), bw, 1).is_none());
+        let line = judge_support(&loads(0.0), bw, 4).expect("rejected");
+        assert!(
+            line.contains("carried 0 %") && line.contains("4 of 4 frames"),
+            "{line}"
+        );
+        // Everything in flight, nothing judged frame by frame: the support
+        // still rejects it.
+        let series: Vec<(f64, f64)> = (0..4).map(|i| (0.01 * i as f64, bw)).collect();
+        assert!(judge_root_residual(&series, &[true; 4], bw).1.is_none());
     }
 
     #[test]

@@ -261,11 +261,11 @@ pub fn metric_value(
                 .attr("value")
                 .and_then(|s| s.trim().parse().ok())
                 .ok_or_else(|| el.error("op at needs a numeric value attribute (the where column's value to read at)"))?;
-            crossing(&w, &y, |i| w[i] - x).unwrap_or(f64::NAN)
+            crossing(&w, y, |i| w[i] - x).unwrap_or(f64::NAN)
         }
         "crossing" => {
             let w = located()?;
-            crossing(&y, &w, |i| y[i]).unwrap_or(f64::NAN)
+            crossing(y, &w, |i| y[i]).unwrap_or(f64::NAN)
         }
         other => return Err(el.error(format!("unknown op '{other}' ({})", METRIC_OPS.join(", ")))),
     })
@@ -537,7 +537,11 @@ fn prepare(
         warnings.push(format!("{first} (read on: --allow-unknown)"));
     }
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
-    let sweeps: Vec<&Element> = study.children.iter().filter(|c| c.name == "ForceSweep").collect();
+    let sweeps: Vec<&Element> = study
+        .children
+        .iter()
+        .filter(|c| c.name == "ForceSweep")
+        .collect();
     if setups.is_empty() && sweeps.is_empty() {
         return Err(study.error("the study names no <setups> (and has no <ForceSweep>)"));
     }
@@ -680,9 +684,9 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     // Force sweeps: candidates of one setup on one compiled scene, their
     // metrics in <name>_force_sweep.csv (tools::force_sweep).
     for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {
-        summary
-            .files
-            .push(crate::tools::force_sweep::run_element(sw, &dir, &out, opts)?);
+        summary.files.push(crate::tools::force_sweep::run_element(
+            sw, &dir, &out, opts,
+        )?);
     }
     summary.files.extend(draw(
         &elements,
