@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use statopt::frame::Workspace;
-use statopt::parse::setup::{Analysis, Setup};
+use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::joint_reaction::{JointReactionProblem, JointReactionSetup};
 
@@ -23,17 +23,7 @@ fn bench(c: &mut Criterion) {
             Setup::Analyze(s) => s,
             _ => unreachable!(),
         };
-        let (el, common) = setup
-            .analyses
-            .iter()
-            .find_map(|a| match a {
-                Analysis::Other { element, common } if element.name == "JointReaction" => {
-                    Some((element.clone(), common.clone()))
-                }
-                _ => None,
-            })
-            .unwrap();
-        let jr = JointReactionSetup::from_xml(&el, common, path.parent().unwrap()).unwrap();
+        let jr: JointReactionSetup = setup.joint_reactions().next().unwrap().clone();
         let (problem, _) = JointReactionProblem::build(&setup, &jr).unwrap();
         let states = load_states(&setup, &problem.model).unwrap();
         let rows = frame_rows(&states.time, setup.initial_time, setup.final_time, 1);

@@ -40,6 +40,8 @@ pub mod paths;
 pub mod plots;
 pub mod reactions;
 pub mod storage;
+#[cfg(test)]
+pub(crate) mod test_dir;
 pub mod tools;
 pub mod wrapping;
 pub mod writers;

@@ -17,9 +17,9 @@ use std::path::{Path, PathBuf};
 use statopt::frame::Workspace;
 use statopt::motion::stream::{FrameSource, StateBlock};
 use statopt::optimize::SolverKind;
-use statopt::parse::setup::Analysis;
+
 use statopt::tools::analyze;
-use statopt::tools::joint_reaction::{resolve_reactions, JointReactionSetup};
+use statopt::tools::joint_reaction::resolve_reactions;
 use statopt::tools::static_optimization::{frame_outputs, FrameOutput};
 
 struct Counting;
@@ -63,15 +63,9 @@ static GLOBAL: Counting = Counting;
 /// Returns the frames checked.
 fn check_setup(setup_file: &Path) -> usize {
     let (setup, so, problem) = common::so_case(setup_file, None);
-    let dir = setup_file.parent().unwrap();
     let mut reactions = Vec::new();
-    for a in &setup.analyses {
-        if let Analysis::Other { element, common } = a {
-            if element.name == "JointReaction" {
-                let jr = JointReactionSetup::from_xml(element, common.clone(), dir).unwrap();
-                reactions.push(resolve_reactions(&problem.model, &jr).unwrap().0);
-            }
-        }
+    for jr in setup.joint_reactions() {
+        reactions.push(resolve_reactions(&problem.model, jr).unwrap().0);
     }
     let reactions: Vec<&[_]> = reactions.iter().map(|r| r.as_slice()).collect();
     let weights = if problem.contacts.is_empty() {

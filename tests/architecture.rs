@@ -26,8 +26,9 @@ const PIPELINE: [&str; 15] = [
     "writers",
     "tools",
 ];
-/// Modules any stage may use; they import only each other.
-const BASE: [&str; 5] = ["error", "xml", "storage", "output", "plots"];
+/// Modules any stage may use; they import only each other (`test_dir`:
+/// unit tests' scratch folders).
+const BASE: [&str; 6] = ["error", "xml", "storage", "output", "plots", "test_dir"];
 /// Items the crate root re-exports from `error`.
 const ROOT_ITEMS: [(&str, &str); 3] = [
     ("Error", "error"),
@@ -180,4 +181,45 @@ fn every_stage_imports_only_from_the_stages_before_it() {
         "imports against the pipeline's order:\n{}",
         violations.join("\n")
     );
+}
+
+/// Tests leave nothing in the system's temporary directory: unit tests
+/// take their scratch folders from `test_dir` (removed when dropped),
+/// integration tests write under `CARGO_TARGET_TMPDIR`. (Eleven unit tests
+/// left `statopt-*` folders behind.) The bench's own folder is removed by
+/// the bench.
+#[test]
+fn tests_take_scratch_folders_that_clean_up() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    rust_files(&root.join("tests"), &mut files);
+    let allowed = ["src/test_dir.rs", "src/tools/bench.rs"];
+    let offenders: Vec<String> = files
+        .iter()
+        .filter(|f| !allowed.iter().any(|a| f.ends_with(a)))
+        .filter(|f| {
+            std::fs::read_to_string(f)
+                .unwrap()
+                .contains(&["std::env::", "temp_dir()"].concat())
+        })
+        .map(|f| f.display().to_string())
+        .collect();
+    assert!(offenders.is_empty(), "{offenders:?}");
+}
+
+/// The README says what the tool does now; its history lives in git and
+/// docs/performance_history.md (it read as a diary: "seventh session",
+/// "before issue 16's work").
+#[test]
+fn the_readme_is_no_diary() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let lower = text.to_lowercase();
+    for word in ["session", "'s work", "today", "this week"] {
+        assert!(
+            !lower.contains(word),
+            "README.md says '{word}': history belongs in docs/performance_history.md"
+        );
+    }
 }

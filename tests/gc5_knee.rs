@@ -264,7 +264,6 @@ fn knee_contact_on_ss1_against_the_etibia() {
 fn knee_rows_are_the_joint_reaction_at_the_solution() {
     use statopt::frame::knee_contact::UNIT_FORCE;
     use statopt::frame::Workspace;
-    use statopt::parse::setup::Analysis;
     use statopt::tools::analyze::load_states;
     use statopt::tools::joint_reaction::static_optimization_reactions;
     use statopt::tools::static_optimization::{SoProblem, StaticOptimizationSetup};
@@ -275,16 +274,11 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };
-    let (mut el, common_) = match &setup.analyses[0] {
-        Analysis::Other { element, common } => (element.clone(), common.clone()),
-        _ => unreachable!(),
-    };
-    let mut k = el.children[0].clone();
-    k.name = "knee_contact".into();
-    k.children.clear();
-    k.text = "all".into();
-    el.children.push(k);
-    let so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    let so: StaticOptimizationSetup = setup
+        .static_optimization()
+        .unwrap()
+        .with_option("knee_contact", "all")
+        .unwrap();
     let (problem, _) = SoProblem::build(&setup, &so).unwrap();
     assert_eq!(problem.knees.len(), 2);
     let states = load_states(&setup, &problem.model).unwrap();
@@ -340,18 +334,12 @@ fn knee_contact_sweeps_w0_without_machine_contacts() {
         _ => unreachable!(),
     };
     for a in setup.analyses.iter_mut() {
-        if let Analysis::Other { element, .. } = a {
-            if element.name == "StaticOptimization" {
-                for (name, text) in [
-                    ("knee_contact", "walker_knee_l"),
-                    ("contact_weight", "100 1000"),
-                ] {
-                    let mut e = element.children[0].clone();
-                    e.name = name.into();
-                    e.children.clear();
-                    e.text = text.into();
-                    element.children.push(e);
-                }
+        if let Analysis::StaticOptimization(so) = a {
+            for (name, text) in [
+                ("knee_contact", "walker_knee_l"),
+                ("contact_weight", "100 1000"),
+            ] {
+                **so = so.with_option(name, text).unwrap();
             }
         }
     }

@@ -495,10 +495,12 @@ fn inverse_dynamics_matches_opensim() {
         forces_to_exclude: vec!["Muscles".into()],
         external_loads_file: None,
         results_directory: out.clone(),
+        results_directory_loc: Default::default(),
         output_gen_force_file: "id.sto".into(),
         joints_to_report_body_forces: vec![],
         output_body_forces_file: None,
         warnings: Vec::new(),
+        unused_properties: Vec::new(),
         artifact_files: vec![],
     };
     let opts = RunOptions {

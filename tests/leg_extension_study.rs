@@ -126,6 +126,18 @@ fn study_document_draws_figures_and_metrics() {
         },
     )
     .unwrap();
+    // The README says how many files the study writes.
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let said = readme
+        .split(" files in all")
+        .next()
+        .and_then(|h| h.rsplit(' ').next())
+        .and_then(|n| n.parse::<usize>().ok());
+    assert_eq!(
+        said,
+        Some(s.files.len()),
+        "README's 'N files in all' of the study"
+    );
     for f in [
         "fig08_resistance_torque",
         "fig09_hip_flexion_share",
@@ -308,4 +320,104 @@ fn study_honours_the_thread_bound() {
         }
     }
     assert!(loops >= 4, "one frame loop per setup, found {loops}");
+}
+
+/// The shipped motions raise no dependent-coordinate warning: their
+/// `knee_angle_*_beta` columns hold the couplers' values as OpenSim reads
+/// them (radians; they held degrees, and every study run warned that they
+/// "differ from the coupler by up to 93.34"). A column that holds the
+/// coupler's value in degrees is named as such, with what OpenSim does.
+#[test]
+fn dependent_columns_in_degrees_are_named_and_shipped_motions_are_clean() {
+    let file = root().join("setups/leg_extension_rajagopal_cam1.xml");
+    let Setup::Analyze(mut s) = Setup::read(&file).unwrap() else {
+        unreachable!()
+    };
+    let am = statopt::tools::loading::load_analysis_model(&s).unwrap();
+    let warnings = analyze::open_state_stream(&s, &am.model)
+        .unwrap()
+        .motion_warnings(&[]);
+    assert!(
+        !warnings.iter().any(|w| w.contains("_beta")),
+        "{warnings:?}"
+    );
+    // The beta columns in degrees, as the generator wrote them before.
+    let mut t = storage::read(s.coordinates_file.as_ref().unwrap()).unwrap();
+    for side in ["r", "l"] {
+        let knee = t.column(t.column_index(&format!("knee_angle_{side}")).unwrap());
+        let j = t.column_index(&format!("knee_angle_{side}_beta")).unwrap();
+        t.set_column(j, &knee);
+    }
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("beta_in_degrees");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let mot = out.join("beta_in_degrees.mot");
+    storage::write(&mot, &t, 12).unwrap();
+    s.coordinates_file = Some(mot);
+    let warnings = analyze::open_state_stream(&s, &am.model)
+        .unwrap()
+        .motion_warnings(&[]);
+    for side in ["r", "l"] {
+        let w = warnings
+            .iter()
+            .find(|w| w.contains(&format!("knee_angle_{side}_beta")))
+            .unwrap_or_else(|| panic!("no warning for knee_angle_{side}_beta: {warnings:?}"));
+        assert!(
+            w.contains("holds its coupler")
+                && w.contains("in degrees")
+                && w.contains("57.3")
+                && !w.contains("differs from"),
+            "{w}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A misspelled property of the leg extension setup is refused before
+/// anything runs (it used to pass silently: w0 fell back to 1000 and the
+/// run failed later about a `<Band>` table, leaving 12 tables behind).
+#[test]
+fn a_misspelled_property_of_the_study_setup_is_refused() {
+    let file = root().join("setups/leg_extension_rajagopal_cam1.xml");
+    let text = std::fs::read_to_string(&file)
+        .unwrap()
+        .replace("contact_weight>", "contact_wieght>");
+    let e = Setup::parse(&text, &file).unwrap_err().to_string();
+    assert!(
+        e.contains("leg_extension_rajagopal_cam1.xml")
+            && e.contains("<contact_wieght>")
+            && e.contains("did you mean contact_weight")
+            && e.contains("line 26"),
+        "{e}"
+    );
+}
+
+/// docs/python.md's example result says what the cam 1 setup writes: its
+/// table count and its quadriceps work metric (they had drifted: "48
+/// tables" and 113.234417 J).
+#[test]
+fn python_docs_numbers_match_the_cam1_run() {
+    let (out, _) = run_into("cam1", "python_docs");
+    let mut tables = 0;
+    for e in std::fs::read_dir(&out).unwrap() {
+        let p = e.unwrap().path();
+        if matches!(p.extension().and_then(|x| x.to_str()), Some("sto" | "mot")) {
+            tables += 1;
+        }
+    }
+    let metrics = std::fs::read_to_string(out.join("leg_extension_cam1_metrics.csv")).unwrap();
+    let work = metrics
+        .lines()
+        .find_map(|l| l.strip_prefix("quadriceps_work_J,"))
+        .unwrap()
+        .to_string();
+    let doc = std::fs::read_to_string(root().join("docs/python.md")).unwrap();
+    assert!(
+        doc.contains(&format!("frame problems solved, {tables} tables>")),
+        "docs/python.md should say {tables} tables"
+    );
+    assert!(
+        doc.contains(&format!("'quadriceps_work_J': {work}")),
+        "docs/python.md should say quadriceps_work_J {work}"
+    );
 }

@@ -531,7 +531,8 @@ fn unknown_properties_warn_with_location() {
         "<activation_exponent>2</activation_exponent>",
         "<activation_exponant>2</activation_exponant>",
     );
-    let (code, err) = run("unknown_property", &f, "setup.xml");
+    // The setup's misspelling is refused unless the user reads on past it.
+    let (code, err) = run_with("unknown_property", &f, "setup.xml", &["--allow-unknown"]);
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("model.osim")
@@ -542,8 +543,9 @@ fn unknown_properties_warn_with_location() {
     );
     assert!(
         err.contains("setup.xml")
-            && err.contains("unknown property <activation_exponant>")
-            && err.contains(&format!("(line {sline})")),
+            && err.contains("unknown element <activation_exponant>")
+            && err.contains("did you mean activation_exponent")
+            && err.contains(&format!("line {sline}")),
         "{err}"
     );
 }
@@ -1141,4 +1143,170 @@ fn close_contacts_errors_carry_a_line() {
             ],
         );
     }
+}
+
+/// Run the tool on `entry` with extra arguments; (exit status, stderr).
+fn run_with(test: &str, files: &Files, entry: &str, args: &[&str]) -> (i32, String) {
+    let dir = common::out_dir(&format!("malformed_{test}"));
+    files.write(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join(entry))
+        .args(args)
+        .arg("--threads")
+        .arg("1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        !err.contains("panicked"),
+        "{test}: the tool panicked:\n{err}"
+    );
+    (out.status.code().unwrap_or(-1), err)
+}
+
+/// A misspelled property of a setup document is refused (exit 2), not
+/// ignored: `<contact_wieght>` used to leave w0 at its default 1000 where
+/// the user meant 1, with a warning and exit 0. The message names the file,
+/// the line, the element and the nearest known name; `--check` says the
+/// same and exits 2; `--allow-unknown` reads on with a warning.
+#[test]
+fn unknown_setup_element_is_refused_with_the_nearest_name() {
+    let mut f = Files::analyze();
+    let line = f.replace(
+        "setup.xml",
+        "<contact_weight>1</contact_weight>",
+        "<contact_wieght>1</contact_wieght>",
+    );
+    let needles = [
+        "setup.xml".to_string(),
+        format!("line {line}"),
+        "<contact_wieght>".to_string(),
+        "<StaticOptimization name=\"SO\">".to_string(),
+        "did you mean contact_weight".to_string(),
+    ];
+    let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+    let r = run("unknown_element", &f, "setup.xml");
+    expect_input_error("unknown_element", r, &needles);
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("malformed_unknown_element");
+    assert!(
+        !dir.join("out").exists(),
+        "a refused setup must write nothing"
+    );
+    let r = run_with("unknown_element_check", &f, "setup.xml", &["--check"]);
+    expect_input_error("unknown_element_check", r, &needles);
+    let (code, err) = run_with("unknown_element_allowed", &f, "setup.xml", &["--allow-unknown"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning:") && err.contains("did you mean contact_weight"),
+        "{err}"
+    );
+    // An unknown element of a setup's figure, and of a study document.
+    let mut f = Files::inverse_dynamics();
+    let line = f.replace("study.xml", "<Figure name=\"f\"", "<Figuer name=\"f\"");
+    f.replace("study.xml", "</Figure>", "</Figuer>");
+    let r = run("unknown_study_element", &f, "study.xml");
+    expect_input_error(
+        "unknown_study_element",
+        r,
+        &["study.xml", &format!("line {line}"), "<Figuer>", "did you mean Figure"],
+    );
+    let mut f = Files::inverse_dynamics();
+    f.replace("study.xml", "scale=\"1\"", "scael=\"1\"");
+    let r = run("unknown_study_attribute", &f, "study.xml");
+    expect_input_error("unknown_study_attribute", r, &["scael", "did you mean scale"]);
+}
+
+/// Properties OpenSim defines that statopt does not use are accepted and
+/// listed once in the summary.
+#[test]
+fn unused_opensim_properties_are_listed_once() {
+    let mut f = Files::analyze();
+    f.replace(
+        "setup.xml",
+        "<initial_time>0</initial_time>",
+        "<initial_time>0</initial_time><maximum_integrator_step_size>1</maximum_integrator_step_size>",
+    );
+    f.replace(
+        "setup.xml",
+        "<activation_exponent>2</activation_exponent>",
+        "<activation_exponent>2</activation_exponent><start_time>0</start_time>",
+    );
+    let (code, err) = run("unused_properties", &f, "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    let line = "accepted but not used by statopt (OpenSim 4.6 properties): AnalyzeTool <maximum_integrator_step_size>, StaticOptimization <start_time>";
+    assert_eq!(err.matches(line).count(), 1, "{err}");
+}
+
+/// A results_directory that names a file is an error naming the setup, the
+/// element and its line (it used to say only "./afile: cannot read or
+/// write file: File exists"), found by `--check` too (which passed it).
+#[test]
+fn results_directory_that_is_a_file_is_named() {
+    let mut f = Files::analyze();
+    let line = f.replace(
+        "setup.xml",
+        "<results_directory>out</results_directory>",
+        "<results_directory>afile</results_directory>",
+    );
+    f.0.push(("afile", "not a folder".to_string()));
+    let needles = [
+        "setup.xml".to_string(),
+        format!("line {line}"),
+        "<results_directory>".to_string(),
+        "afile".to_string(),
+        "is a file, not a folder".to_string(),
+    ];
+    let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+    let r = run("results_dir_file", &f, "setup.xml");
+    expect_input_error("results_dir_file", r, &needles);
+    let r = run_with("results_dir_file_check", &f, "setup.xml", &["--check"]);
+    expect_input_error("results_dir_file_check", r, &needles);
+    // A folder below a file cannot be created either.
+    let mut f = f.clone();
+    f.replace(
+        "setup.xml",
+        "<results_directory>afile</results_directory>",
+        "<results_directory>afile/out</results_directory>",
+    );
+    let r = run_with("results_dir_below_file_check", &f, "setup.xml", &["--check"]);
+    expect_input_error(
+        "results_dir_below_file_check",
+        r,
+        &["<results_directory>", "cannot be created"],
+    );
+}
+
+/// A coordinates file without a column for one of the model's coordinates:
+/// the warning names the file and the coordinate in words (it printed a
+/// Rust debug list, `["q2"]`, and no file).
+#[test]
+fn a_missing_column_is_named_with_its_file() {
+    let mut f = Files::analyze();
+    f.replace("motion.mot", "time\tq1\tq2", "time\tq1\tq2_renamed");
+    let (code, err) = run("missing_column", &f, "setup.xml");
+    assert_eq!(code, 0, "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("no column for the coordinate q2"))
+        .unwrap_or_else(|| panic!("{err}"));
+    assert!(line.contains("motion.mot") && !line.contains("[\""), "{line}");
+}
+
+/// `--check` checks a setup's own figure references before anything runs:
+/// a table of a w0 the setup does not run, or a file that is neither the
+/// setup's nor there, is a problem naming the element and its line.
+#[test]
+fn check_finds_a_setups_bad_figure_reference() {
+    let mut f = Files::analyze();
+    let line = f.replace(
+        "setup.xml",
+        "<coordinates_file>motion.mot</coordinates_file>",
+        "<Figure name=\"fig\"><Series file=\"run_SO_w0_500_force.sto\" column=\"r1\"/></Figure>\n<coordinates_file>motion.mot</coordinates_file>",
+    );
+    let r = run_with("figure_ref_check", &f, "setup.xml", &["--check"]);
+    expect_input_error(
+        "figure_ref_check",
+        r,
+        &["setup.xml", &format!("line {line}"), "<Series>", "names w0 = 500", "a single w0"],
+    );
 }

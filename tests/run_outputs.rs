@@ -238,9 +238,20 @@ fn spawn_until(
     rows: usize,
     more: impl Fn() -> bool,
 ) -> std::process::Child {
+    spawn_with(setup, act_path, rows, more, &["--quiet"])
+}
+
+/// [`spawn_until`] with `args` instead of `--quiet`.
+fn spawn_with(
+    setup: &Path,
+    act_path: &Path,
+    rows: usize,
+    more: impl Fn() -> bool,
+    args: &[&str],
+) -> std::process::Child {
     let mut child = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
         .arg(setup)
-        .arg("--quiet")
+        .args(args)
         .arg("--threads")
         .arg("1")
         .stderr(std::process::Stdio::piped())
@@ -359,7 +370,8 @@ fn a_signal_stops_the_run_cleanly() {
         let (setup, out) = write_case(&format!("outputs_signal_{signal}"), 400_000, so);
         let act_path = out.join("block_SO_activation.sto");
         let log_path = out.join("block_SO_log.mcap");
-        let child = spawn_until(&setup, &act_path, 2000, || true);
+        // Not quiet: the summary is printed too.
+        let child = spawn_with(&setup, &act_path, 2000, || true, &[]);
         let sent = Instant::now();
         let ok = Command::new("kill")
             .arg(format!("-{signal}"))
@@ -386,8 +398,23 @@ fn a_signal_stops_the_run_cleanly() {
         let last = *act.time.last().unwrap();
         assert!(
             err.contains(&format!(
-                "stopped by a signal after the frame at t = {last}"
+                "stopped by a signal after the frame at t = {}",
+                statopt::storage::fmt_time(last)
             )),
+            "SIG{signal}: {err}"
+        );
+        // The summary counts the frames written (it used to say every frame
+        // of the motion was solved) and says how to go on.
+        let n = act.time.len();
+        assert!(
+            err.contains(&format!(
+                "{n} frames; static optimization: {n} of {n} frame problems solved"
+            )),
+            "SIG{signal}: {err}"
+        );
+        assert!(
+            err.contains(&format!("hold the {n} frames solved so far"))
+                && err.contains("--resume"),
             "SIG{signal}: {err}"
         );
         // MCAP: closed properly, read by the standard reader, one activation
@@ -488,10 +515,15 @@ fn root_residuals_are_reported_against_body_weight() {
 /// uninterrupted runs' logs already differ in their bytes.)
 #[test]
 fn resume_after_a_kill_equals_an_uninterrupted_run() {
-    let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization><JointReaction name=\"JR\"><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>";
+    // Reserves: the summary's reserve and root residual peaks are checked.
+    let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight><reserve_actuators>1</reserve_actuators></StaticOptimization><JointReaction name=\"JR\"><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>";
     let rows = 60_000;
     let (full_setup, full_out) = write_case("outputs_resume_full", rows, so);
-    run(&full_setup, RunOptions::default());
+    let full = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(&full_setup)
+        .output()
+        .unwrap();
+    assert!(full.status.success());
     let (setup, out) = write_case("outputs_resume_killed", rows, so);
     let act_path = out.join("block_SO_activation.sto");
     let mut child = spawn_until(&setup, &act_path, 3000, || true);
@@ -502,7 +534,6 @@ fn resume_after_a_kill_equals_an_uninterrupted_run() {
     let resumed = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
         .arg(&setup)
         .arg("--resume")
-        .arg("--quiet")
         .output()
         .unwrap();
     assert!(
@@ -510,6 +541,25 @@ fn resume_after_a_kill_equals_an_uninterrupted_run() {
         "{}",
         String::from_utf8_lossy(&resumed.stderr)
     );
+    // The resumed run's summary covers the whole run, the frames the
+    // killed run wrote included: frames, problems, and the reserve and
+    // residual peaks with where they were (they used to describe only the
+    // frames computed again). The worst equation residual is left out: read
+    // back from the tables it is rounded to their precision.
+    let summary = |out: &std::process::Output| -> Vec<String> {
+        String::from_utf8_lossy(&out.stderr)
+            .lines()
+            .filter(|l| {
+                l.starts_with("reserve actuators carried")
+                    || l.starts_with("residual actuators on the root")
+                    || l.contains(" frames; static optimization: ")
+            })
+            .map(|l| l.split("; worst equation residual").next().unwrap().to_string())
+            .collect()
+    };
+    let (a, b) = (summary(&full), summary(&resumed));
+    assert!(a.len() >= 3, "{a:?}");
+    assert_eq!(a, b, "the resumed run's summary differs from the uninterrupted one's");
     for name in [
         "block_SO_activation.sto",
         "block_SO_force.sto",

@@ -131,7 +131,6 @@ fn missing_actuator_forces_are_reported() {
 #[test]
 fn static_optimization_frames_give_the_reactions_of_their_force_file() {
     use statopt::frame::Workspace;
-    use statopt::parse::setup::Analysis;
     use statopt::tools::analyze::{frame_rows, load_states};
     use statopt::tools::joint_reaction::{
         resolve_reactions, static_optimization_reactions, JointReactionSetup,
@@ -149,13 +148,8 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
             Setup::Analyze(s) => s,
             _ => unreachable!(),
         };
-        let other = |s: &statopt::parse::setup::AnalyzeSetup| match &s.analyses[0] {
-            Analysis::Other { element, common } => (element.clone(), common.clone()),
-            _ => unreachable!(),
-        };
         let so_setup = analyze_setup("setup_SO.xml");
-        let (so_el, so_common) = other(&so_setup);
-        let so = StaticOptimizationSetup::from_xml(&so_el, so_common).unwrap();
+        let so: StaticOptimizationSetup = so_setup.static_optimization().unwrap().clone();
         let (problem, _) = SoProblem::build(&so_setup, &so).unwrap();
         let states = load_states(&so_setup, &problem.model).unwrap();
         let udot = states
@@ -167,8 +161,7 @@ fn static_optimization_frames_give_the_reactions_of_their_force_file() {
                 .step_by(7)
                 .collect();
         let jr_setup = analyze_setup("setup_JR_child.xml");
-        let (jr_el, jr_common) = other(&jr_setup);
-        let jr = JointReactionSetup::from_xml(&jr_el, jr_common, &dir).unwrap();
+        let jr: JointReactionSetup = jr_setup.joint_reactions().next().unwrap().clone();
         let (specs, _) = resolve_reactions(&problem.model, &jr).unwrap();
         let mut ws = Workspace::new(&problem.model, &problem.muscles);
         let mut forces = storage::Storage {

@@ -134,6 +134,8 @@ fn run<'py>(
         reduce,
         sync,
         progress: Some(hook),
+        // Python callers get the CLI's rule: an unknown element is an error.
+        allow_unknown: false,
     };
     let result = py.allow_threads(|| match &text {
         Some(t) => tools::run_setup_text(&setup, t, &opts),
@@ -495,12 +497,26 @@ fn write_table(
 /// without running; returns (errors, warnings, files checked).
 #[pyfunction]
 fn check(py: Python<'_>, setup: PathBuf) -> (Vec<String>, Vec<String>, Vec<String>) {
-    let r = py.allow_threads(|| tools::check::run(&setup));
+    let r = py.allow_threads(|| tools::check::run(&setup, false));
     (
         r.errors.iter().map(|e| e.to_string()).collect(),
         r.warnings,
         r.checked,
     )
+}
+
+/// A table's file stem ending in `_<kind>` split into its run's name and
+/// its w0 tag (`writers::names::split_table_stem`; None: not of `kind`).
+#[pyfunction]
+fn split_table_stem(stem: &str, kind: &str) -> Option<(String, Option<String>)> {
+    statopt::writers::names::split_table_stem(stem, kind)
+}
+
+/// A file name with its `w0_<tag>_` part taken out
+/// (`writers::names::without_w0`).
+#[pyfunction]
+fn without_w0(file: &str) -> String {
+    statopt::writers::names::without_w0(file)
 }
 
 #[pymodule]
@@ -518,5 +534,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(split_table_stem, m)?)?;
+    m.add_function(wrap_pyfunction!(without_w0, m)?)?;
     Ok(())
 }

@@ -5,7 +5,6 @@ from __future__ import annotations
 import csv
 import logging
 import os
-import re
 import shutil
 import tempfile
 import threading
@@ -22,7 +21,6 @@ from ._tables import read_tables
 
 log = logging.getLogger("statopt")
 
-_W0_PREFIX = re.compile(r"^(?P<prefix>.*)_w0_(?P<tag>[^_]+)$")
 _STATS = ("mean", "min", "max")
 
 
@@ -33,17 +31,12 @@ class FramesFailedWarning(RuntimeWarning):
 
 def _split_key(key: str, kind: str):
     """(prefix, w0 tag or None) when the table ``key`` is of ``kind`` (its
-    file name ends in ``_<kind>``), else None."""
+    file name ends in ``_<kind>``), else None; the names are the engine's
+    (``statopt::writers::names``, through the binding)."""
     for suffix in (".sto", ".mot"):
         if key.endswith(suffix):
             key = key[: -len(suffix)]
-    if not key.endswith("_" + kind):
-        return None
-    prefix = key[: -len(kind) - 1]
-    m = _W0_PREFIX.match(prefix)
-    if m:
-        return m["prefix"], m["tag"]
-    return prefix, None
+    return _native.split_table_stem(key, kind)
 
 
 def _w0_value(tag: str) -> Optional[float]:

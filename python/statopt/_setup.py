@@ -144,15 +144,15 @@ class SetupDocument:
 
 
 def _w0_untag(doc: SetupDocument) -> None:
-    """With one w0 the tables carry no ``_w0_<tag>_`` in their names: point
-    the setup's figures and metrics at those."""
-    pat = re.compile(r"_w0_[^_/\\]+_")
+    """With one w0 the tables carry no w0 part in their names: point the
+    setup's figures and metrics at those (names made by the engine,
+    ``statopt::writers::names``, through the binding)."""
     for el in doc.tool.iter():
         if el.tag in ("Figure", "Metric", "Series", "Band"):
             for a in ("file", "mean", "min", "max"):
                 v = el.get(a)
                 if v is not None:
-                    el.set(a, pat.sub("_", v))
+                    el.set(a, _native.without_w0(v))
 
 
 def _model_files(doc: SetupDocument) -> List[Tuple[str, ET.Element]]:

@@ -387,3 +387,21 @@ def test_sweep_own_local_cluster_of_processes(repo):
     assert df.error.isna().all(), df.error.tolist()
     assert df.contact_weight.tolist() == [1, 500] and (df.failed == 0).all()
     assert df.quadriceps_work_J.iloc[0] != df.quadriceps_work_J.iloc[1]
+
+
+def test_table_names_come_from_the_engine():
+    """The package names tables through the binding (the engine's
+    writers::names), not with regexes of its own."""
+    from statopt import _native
+    from statopt._run import _split_key
+
+    assert _native.split_table_stem("cam1_SO_w0_500_force", "force") == ("cam1_SO", "500")
+    assert _native.split_table_stem("cam1_SO_force", "force") == ("cam1_SO", None)
+    assert _native.split_table_stem("cam1_SO_force", "activation") is None
+    assert _split_key("cam1_JR_w0_mean_KneeLoads.sto", "KneeLoads") == ("cam1_JR", "mean")
+    assert _native.without_w0("../o/x_SO_w0_1_force.sto") == "../o/x_SO_force.sto"
+    import statopt._run as run_module
+    import statopt._setup as setup_module
+    for m in (run_module, setup_module):
+        src = open(m.__file__).read()
+        assert "_W0_PREFIX" not in src and 're.compile(r"_w0_' not in src, m.__file__

@@ -74,6 +74,11 @@ struct RunArgs {
     /// power cut; without it files are closed as OpenSim closes them.
     #[arg(long)]
     sync: bool,
+    /// Read on past elements of a setup or study document that neither OpenSim 4.6 nor statopt
+    /// knows, with a warning (without it they are errors: a misspelled property would silently
+    /// take its default).
+    #[arg(long)]
+    allow_unknown: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -341,6 +346,7 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         reduce: a.reduce,
         sync: a.sync,
         progress: None,
+        allow_unknown: a.allow_unknown,
     };
     let setup = a
         .setup
@@ -581,7 +587,7 @@ fn main() -> ExitCode {
             let Some(setup) = cli.run.setup.as_ref() else {
                 return fail(statopt::Error::msg("no setup file given"));
             };
-            let report = tools::check::run(setup);
+            let report = tools::check::run(setup, cli.run.allow_unknown);
             let mut said = std::collections::HashSet::new();
             for w in report.warnings.iter().filter(|w| said.insert(w.as_str())) {
                 eprintln!("warning: {w}");

@@ -683,8 +683,8 @@ fn disabled_and_foreign_passive_forces() {
 
 #[test]
 fn force_set_file_layouts() {
-    let dir = std::env::temp_dir().join(format!("statopt_forces_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_forces");
+    let dir = tmp.path().to_path_buf();
     let doc = dir.join("doc.xml");
     std::fs::write(&doc, "<OpenSimDocument Version=\"40000\"><ForceSet name=\"r\"><objects><CoordinateActuator name=\"a\"/><PointActuator name=\"b\"/></objects></ForceSet></OpenSimDocument>").unwrap();
     let names: Vec<String> = read_force_set_file(&doc)
@@ -971,8 +971,8 @@ fn validation_actuators_match_opensim() {
 fn external_loads_apply_recording_matches_apply_and_record() {
     use crate::forces::external_loads::ExternalLoads;
     let model = test_model();
-    let dir = std::env::temp_dir().join(format!("statopt_extload_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_extload");
+    let dir = tmp.path().to_path_buf();
     for rows in [7usize, 3] {
         let mut mot = format!(
             "grf.mot\nversion=1\nnRows={rows}\nnColumns=10\ninDegrees=no\nendheader\n\
@@ -1022,8 +1022,8 @@ fn external_loads_apply_recording_matches_apply_and_record() {
 fn external_loads_report_the_first_error_in_reading_order() {
     use crate::forces::external_loads::ExternalLoads;
     let model = test_model();
-    let dir = std::env::temp_dir().join(format!("statopt_extload_err_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_extload_err");
+    let dir = tmp.path().to_path_buf();
     let mut mot = "grf.mot\nversion=1\nnRows=5\nnColumns=4\ninDegrees=no\nendheader\ntime\tf_vx\tf_vy\tf_vz\n".to_string();
     for i in 0..5 {
         mot.push_str(&format!("{}\t1\t2\t3\n", 0.01 * i as f64));
@@ -1118,8 +1118,8 @@ fn two_forces_xml(dir: &std::path::Path) -> std::path::PathBuf {
 fn external_loads_windowed_equal_the_whole_file() {
     use crate::forces::external_loads::{ExternalLoads, ExternalLoadsFiles};
     let model = test_model();
-    let dir = std::env::temp_dir().join(format!("statopt_extload_win_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_extload_win");
+    let dir = tmp.path().to_path_buf();
     let xpath = long_grf(&dir, 1000, None);
     let whole = ExternalLoads::load(&xpath, &dir, &model).unwrap();
     assert!(!whole.windowed());
@@ -1203,8 +1203,8 @@ fn external_loads_windowed_equal_the_whole_file() {
 fn external_loads_windowed_report_bad_data_as_the_whole_file() {
     use crate::forces::external_loads::ExternalLoadsFiles;
     let model = test_model();
-    let dir = std::env::temp_dir().join(format!("statopt_extload_nan_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_extload_nan");
+    let dir = tmp.path().to_path_buf();
     for nan in [(700, 1), (5, 4), (999, 8)] {
         let xpath = long_grf(&dir, 1000, Some(nan));
         let err = |window: usize| {

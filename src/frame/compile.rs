@@ -232,7 +232,6 @@ impl SoProblem {
                 settings: so.clone(),
                 force_labels,
                 contacts,
-                w0: so.contact_weights[0],
                 knees,
             },
             warnings,

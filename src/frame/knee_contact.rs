@@ -47,17 +47,9 @@ pub const CONDYLE_SPACING: f64 = 0.040;
 /// weighted as any other contact of the run, `(l / (F0 √w0))²`.
 pub const UNIT_FORCE: f64 = 100.0;
 
-/// Which knees a StaticOptimization solves with the knee contact method.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub enum KneeSelection {
-    /// Plain static optimization (OpenSim's).
-    #[default]
-    Off,
-    /// Every knee of the model (every joint whose child is a `tibia_*` body).
-    All,
-    /// The named joints.
-    Joints(Vec<String>),
-}
+/// Which knees a StaticOptimization solves with the knee contact method
+/// (read with the setup, `parse::analyses`).
+pub use crate::parse::analyses::KneeSelection;
 
 /// One knee of the method.
 #[derive(Debug, Clone)]

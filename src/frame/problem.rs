@@ -62,8 +62,6 @@ pub struct SoProblem {
     pub force_labels: Vec<String>,
     /// Point-on-plane contacts; three multipliers each follow the controls.
     pub contacts: Vec<Contact>,
-    /// The contact weight w0 of the current run.
-    pub w0: f64,
     /// Knees solved with the knee contact method (`<knee_contact>`, empty
     /// for plain static optimization): two multipliers each follow the
     /// contacts', two rows each follow the coordinates' (`frame::knee_contact`).
@@ -446,7 +444,7 @@ impl SoProblem {
             };
             problem.lower.extend([0.0, shear.0, shear.0]);
             problem.upper.extend([f64::INFINITY, shear.1, shear.1]);
-            problem.weights.extend([1.0 / self.w0; 3]);
+            problem.weights.extend([1.0 / self.w0(); 3]);
             if !kinetic {
                 problem.static_contacts.push(StaticContact {
                     normal: v0,
@@ -463,7 +461,7 @@ impl SoProblem {
                 .extend(std::iter::repeat_n(f64::INFINITY, 2 * nk));
             problem
                 .weights
-                .extend(std::iter::repeat_n(1.0 / self.w0, 2 * nk));
+                .extend(std::iter::repeat_n(1.0 / self.w0(), 2 * nk));
             self.knee_rows(
                 data,
                 mf,
@@ -654,6 +652,14 @@ impl SoProblem {
         }
     }
 
+    /// The contact weight a single frame problem is assembled with: the
+    /// plan's first (`settings.contact_weights`; a sweep solves each of its
+    /// weights from that one assembly, `solve_frame_weights`). The plan
+    /// carries the weights; the compiled problem keeps no copy of its own.
+    pub fn w0(&self) -> f64 {
+        self.settings.contact_weights[0]
+    }
+
     /// Solve one frame. `data` and `mf` are per-thread workspaces.
     pub fn solve_frame(
         &self,
@@ -664,7 +670,7 @@ impl SoProblem {
         data: &mut Data,
         mf: &mut MuscleFrame,
     ) -> FrameResult {
-        self.solve_frame_weights(t, q, u, udot_target, data, mf, &[self.w0])
+        self.solve_frame_weights(t, q, u, udot_target, data, mf, &[self.w0()])
             .pop()
             .expect("one result per weight")
     }

@@ -230,6 +230,10 @@ pub fn time_range_warnings(
 pub struct DependentMismatch {
     /// Per coupler of the model: largest |file − coupler value| and its time.
     worst: Vec<(f64, f64)>,
+    /// Per coupler: largest |file − coupler value in degrees| (the column
+    /// holding the coupler's value converted to degrees, as generators that
+    /// treat every angle-like column as rotational write it).
+    worst_degrees: Vec<f64>,
 }
 
 /// A difference below this (rad or m) is rounding in the file.
@@ -239,6 +243,7 @@ impl DependentMismatch {
     pub fn new(model: &Model) -> Self {
         DependentMismatch {
             worst: vec![(0.0, f64::NAN); model.couplers.len()],
+            worst_degrees: vec![0.0; model.couplers.len()],
         }
     }
 
@@ -249,9 +254,14 @@ impl DependentMismatch {
             let (Some(dep), Some(ind)) = (value(cp.dependent), value(cp.independent[0])) else {
                 continue;
             };
-            let d = (dep - cp.scale * cp.function.value(ind)).abs();
+            let given = cp.scale * cp.function.value(ind);
+            let d = (dep - given).abs();
             if d > self.worst[k].0 {
                 self.worst[k] = (d, t);
+            }
+            let dd = (dep - given.to_degrees()).abs();
+            if dd > self.worst_degrees[k] {
+                self.worst_degrees[k] = dd;
             }
         }
     }
@@ -260,15 +270,26 @@ impl DependentMismatch {
         model
             .couplers
             .iter()
-            .zip(&self.worst)
-            .filter(|(_, (d, _))| *d > DEPENDENT_TOLERANCE)
-            .map(|(cp, (d, t))| {
-                format!(
-                    "{}: the column of dependent coordinate {} differs from its coupler {} by up to {d:.4} (at t = {t}); statopt takes its positions and speeds from the coupler. OpenSim's assembler corrects the positions through the coupler but keeps the speeds splined from this column (a column in degrees: 57.3 times too large), so OpenSim's results differ where the joint moves fast; write the column in the coupler's units to compare (docs/knee_contact.md)",
-                    file.display(),
-                    model.coordinates[cp.dependent].name,
-                    cp.name
-                )
+            .zip(self.worst.iter().zip(&self.worst_degrees))
+            .filter(|(_, ((d, _), _))| *d > DEPENDENT_TOLERANCE)
+            .map(|(cp, ((d, t), dd))| {
+                let dependent = &model.coordinates[cp.dependent];
+                if *dd <= DEPENDENT_TOLERANCE.to_degrees() {
+                    format!(
+                        "{}: the column of dependent coordinate {} holds its coupler {}'s values in degrees, where OpenSim reads radians (its motion type is not rotational): OpenSim's assembler corrects the positions through the coupler but keeps the speeds splined from this column, 57.3× too large; statopt takes its positions and speeds from the coupler",
+                        file.display(),
+                        dependent.name,
+                        cp.name
+                    )
+                } else {
+                    format!(
+                        "{}: the column of dependent coordinate {} differs from its coupler {} by up to {d:.4} (at t = {}); statopt takes its positions and speeds from the coupler. OpenSim's assembler corrects the positions through the coupler but keeps the speeds splined from this column, so OpenSim's results differ where the joint moves fast; write the column in the coupler's units to compare (docs/knee_contact.md)",
+                        file.display(),
+                        dependent.name,
+                        cp.name,
+                        crate::storage::fmt_time(*t)
+                    )
+                }
             })
             .collect()
     }

@@ -1282,8 +1282,8 @@ mod tests {
         }
         let (_, model) =
             crate::tools::loading::load_model(&root.join("arm26/inputs/arm26.osim")).unwrap();
-        let dir = std::env::temp_dir().join(format!("statopt-stream-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = crate::test_dir::TempDir::new("statopt-stream");
+        let dir = tmp.path().to_path_buf();
         let n = 12_000;
         let mut table = Storage {
             name: "synthetic".into(),
@@ -1350,8 +1350,8 @@ mod tests {
         }
         let (_, model) =
             crate::tools::loading::load_model(&root.join("arm26/inputs/arm26.osim")).unwrap();
-        let dir = std::env::temp_dir().join(format!("statopt-stream-v3-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = crate::test_dir::TempDir::new("statopt-stream-v3");
+        let dir = tmp.path().to_path_buf();
         let mut text = String::from("version=3\nOpenSimVersion=4.6\ninDegrees=yes\nDataType=double\nendheader\ntime\tr_shoulder_elev\tr_elbow_flex\n");
         for i in 0..700 {
             let t = 0.01 * i as f64 + if i % 3 == 0 { 0.002 } else { 0.0 };

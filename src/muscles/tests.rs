@@ -417,8 +417,8 @@ fn xml_spellings_defaults_and_errors() {
 
 #[test]
 fn document_version_is_read_from_file_head() {
-    let dir = std::env::temp_dir().join(format!("statopt_muscles_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt_muscles");
+    let dir = tmp.path().to_path_buf();
     let f = dir.join("v.osim");
     std::fs::write(
         &f,

@@ -42,18 +42,7 @@ pub struct StaticContact {
     pub mu: f64,
 }
 
-/// Representation of the static friction cone. The default is the exact
-/// cone, as a StaticOptimization without `<friction_cone>` uses (README).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FrictionModel {
-    /// Four-sided circumscribed pyramid, eq. 16 of the paper.
-    Pyramid4,
-    /// Eight-sided circumscribed pyramid (faces tangent to the cone every 45°).
-    Pyramid8,
-    /// Exact second-order cone ‖(λs1, λs2)‖ ≤ μ_s λn (eq. 2).
-    #[default]
-    Cone,
-}
+pub use crate::parse::analyses::FrictionModel;
 
 const PYRAMID4: [(f64, f64); 4] = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)];
 const PYRAMID8: [(f64, f64); 8] = [

@@ -23,19 +23,7 @@ pub struct SolveSettings {
     pub solver: SolverChoice,
 }
 
-/// Solver selection of [`SolveSettings`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SolverChoice {
-    /// The dual semismooth Newton method ([`super::dual`]) where it applies
-    /// and converges (to ‖A x − b‖∞ ≤ 1e-12·max(1, ‖b‖∞), accepting 1e-10,
-    /// whatever `tolerance` says), Clarabel otherwise (other exponents,
-    /// free variables of weight 0, contacts with bounds beyond λn ≥ 0 or
-    /// unequal weights, possibly infeasible frames).
-    #[default]
-    Auto,
-    /// Clarabel on every frame.
-    Clarabel,
-}
+pub use crate::parse::analyses::SolverChoice;
 
 /// The solver that produced a [`FrameSolution`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

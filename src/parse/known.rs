@@ -85,6 +85,9 @@ const ANY_ELEMENT: &[&str] = &["defaults"];
 /// Properties of older documents that OpenSim still reads and converts.
 pub const LEGACY_PROPERTIES: &[(&str, &[&str])] = &[
     ("Coordinate", &["motion_type"]),
+    // OpenSim 3.x setups (e.g. the arm26 example's): 4.x reads the units
+    // from the coordinates file's header instead.
+    ("InverseDynamicsTool", &["coordinates_in_degrees"]),
     ("CoordinateCouplerConstraint", &["isDisabled"]),
     (
         "Thelen2003Muscle",
@@ -152,5 +155,276 @@ fn walk(el: &Element, check_opensim: bool, out: &mut Vec<String>) {
     }
     for c in &el.children {
         walk(c, check_opensim, out);
+    }
+}
+
+/// Element types of setup documents. An unknown child of one is refused
+/// (statopt is stricter than OpenSim here: a misspelled
+/// `<contact_wieght>` would otherwise leave w0 at its default, a factor
+/// of 1000 in the contact/muscle split), unless the user asks to read on
+/// (`--allow-unknown`). Models and force sets keep the warning above.
+pub const SETUP_ELEMENT_TYPES: &[&str] = &[
+    "AnalyzeTool",
+    "InverseDynamicsTool",
+    "StaticOptimization",
+    "MuscleAnalysis",
+    "JointReaction",
+];
+
+/// Properties OpenSim 4.6 defines for setup elements that statopt accepts
+/// but does not use (the integrator's settings: statopt integrates nothing;
+/// an analysis's own time window and units: statopt analyses the tool's
+/// time range and writes its tables in the units it documents). A run
+/// lists the ones a setup holds once, in its summary.
+pub const UNUSED_SETUP_PROPERTIES: &[(&str, &[&str])] = &[
+    (
+        "AnalyzeTool",
+        &[
+            "solve_for_equilibrium_for_auxiliary_states",
+            "maximum_number_of_integrator_steps",
+            "maximum_integrator_step_size",
+            "minimum_integrator_step_size",
+            "integrator_error_tolerance",
+            "ControllerSet",
+        ],
+    ),
+    ("InverseDynamicsTool", &["coordinates_in_degrees"]),
+    ("StaticOptimization", &["start_time", "end_time", "in_degrees"]),
+    ("MuscleAnalysis", &["start_time", "end_time", "in_degrees"]),
+    ("JointReaction", &["start_time", "end_time", "in_degrees"]),
+];
+
+/// What checking a setup document's elements found.
+#[derive(Debug, Default)]
+pub struct SetupElements {
+    /// Children neither OpenSim 4.6 nor statopt knows, one error each
+    /// (file, line, element and the nearest known name).
+    pub unknown: Vec<crate::error::Error>,
+    /// OpenSim properties the document holds that statopt does not use,
+    /// e.g. `AnalyzeTool <maximum_integrator_step_size>`.
+    pub unused: Vec<String>,
+}
+
+/// Every name a child of an element of type `ty` may carry.
+fn known_names(ty: &str) -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = ANY_ELEMENT.to_vec();
+    for table in [
+        OPENSIM_PROPERTIES,
+        STATOPT_PROPERTIES,
+        LEGACY_PROPERTIES,
+        STATOPT_ELEMENTS,
+    ] {
+        for (t, props) in table {
+            if *t == ty {
+                out.extend_from_slice(props);
+            }
+        }
+    }
+    out
+}
+
+/// The known name nearest to `name` (edit distance, case ignored), if one
+/// is near enough to be a misspelling of it.
+pub fn nearest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
+    let lower = name.to_ascii_lowercase();
+    candidates
+        .iter()
+        .map(|c| (strsim::damerau_levenshtein(&lower, &c.to_ascii_lowercase()), *c))
+        .filter(|(d, c)| *d <= (c.len().max(name.len()) / 3).max(2))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
+/// The "did you mean" part of a message about an unknown `name` among
+/// `candidates`, with the names known there when none is near.
+pub fn suggestion(name: &str, candidates: &[&str]) -> String {
+    match nearest(name, candidates) {
+        Some(n) => format!("did you mean {n}?"),
+        None => {
+            let mut all: Vec<&str> = candidates.to_vec();
+            all.sort_unstable();
+            all.dedup();
+            format!("known here: {}", all.join(", "))
+        }
+    }
+}
+
+/// Check every element of a setup document's tool element (see
+/// [`SETUP_ELEMENT_TYPES`]).
+pub fn setup_elements(tool: &Element) -> SetupElements {
+    let mut out = SetupElements::default();
+    setup_walk(tool, &mut out);
+    out
+}
+
+fn setup_walk(el: &Element, out: &mut SetupElements) {
+    let ty = el.name.as_str();
+    if SETUP_ELEMENT_TYPES.contains(&ty) {
+        let names = known_names(ty);
+        let unused = UNUSED_SETUP_PROPERTIES
+            .iter()
+            .find(|(t, _)| *t == ty)
+            .map_or(&[][..], |(_, p)| *p);
+        for c in &el.children {
+            let key = c
+                .attr("name")
+                .filter(|n| names.contains(n))
+                .unwrap_or(c.name.as_str());
+            if names.contains(&c.name.as_str()) || names.contains(&key) {
+                if matches!(c.name.as_str(), "Figure" | "Metric") {
+                    out.unknown.extend(figure_elements(c));
+                }
+                if unused.contains(&key) {
+                    out.unused.push(format!("{ty} <{key}>"));
+                }
+                continue;
+            }
+            out.unknown.push(c.error(format!(
+                "unknown element <{}> in {}: {} (statopt refuses elements it does not know in setup documents, as a misspelled property would silently take its default; --allow-unknown reads on with a warning)",
+                c.name,
+                el.describe(),
+                suggestion(&c.name, &names)
+            )));
+        }
+        for c in &el.children {
+            setup_walk(c, out);
+        }
+    } else {
+        // Sets inside a setup (AnalysisSet, objects): their children are
+        // checked by type.
+        for c in &el.children {
+            setup_walk(c, out);
+        }
+    }
+}
+
+/// statopt's figure and metric elements (in a study or an AnalyzeTool
+/// setup) and the attributes each reads; a `<Figure>` holds the others
+/// but `<Metric>`.
+pub const FIGURE_ELEMENTS: &[(&str, &[&str])] = &[
+    ("Figure", &["name", "title", "x_label", "y_label", "fill_label"]),
+    ("Series", &["file", "column", "label", "color", "dashed", "scale"]),
+    (
+        "Band",
+        &["mean", "min", "max", "column", "label", "color", "dashed", "scale"],
+    ),
+    ("panel", &["title", "x_label", "y_label", "fill_label"]),
+    ("fill_between", &["label"]),
+    (
+        "Metric",
+        &["name", "file", "columns", "op", "where", "value", "scale"],
+    ),
+];
+
+/// The children of a `<StatoptStudy>`.
+pub const STUDY_CHILDREN: &[&str] = &["setups", "results_directory", "Figure", "Metric", "ForceSweep"];
+
+/// Unknown attributes and children of a `<Figure>` or `<Metric>`, one error
+/// each, with the nearest known name.
+pub fn figure_elements(el: &Element) -> Vec<crate::error::Error> {
+    let mut out = Vec::new();
+    let Some((_, attrs)) = FIGURE_ELEMENTS.iter().find(|(t, _)| *t == el.name) else {
+        return out;
+    };
+    for (a, _) in &el.attrs {
+        if !attrs.contains(&a.as_str()) {
+            out.push(el.error(format!(
+                "unknown attribute {a}=\"...\" of {}: {}",
+                el.describe(),
+                suggestion(a, attrs)
+            )));
+        }
+    }
+    if el.name == "Figure" {
+        let inner: Vec<&str> = FIGURE_ELEMENTS
+            .iter()
+            .map(|(t, _)| *t)
+            .filter(|t| !matches!(*t, "Figure" | "Metric"))
+            .collect();
+        for c in &el.children {
+            if inner.contains(&c.name.as_str()) {
+                out.extend(figure_elements(c));
+            } else {
+                out.push(c.error(format!(
+                    "unknown element <{}> in {}: {}",
+                    c.name,
+                    el.describe(),
+                    suggestion(&c.name, &inner)
+                )));
+            }
+        }
+    } else {
+        for c in &el.children {
+            out.push(c.error(format!(
+                "unknown element <{}> in {}: it holds no elements",
+                c.name,
+                el.describe()
+            )));
+        }
+    }
+    out
+}
+
+/// Unknown children of a `<StatoptStudy>` (and of its figures and metrics).
+pub fn study_elements(study: &Element) -> Vec<crate::error::Error> {
+    let mut out = Vec::new();
+    for c in &study.children {
+        if !STUDY_CHILDREN.contains(&c.name.as_str()) {
+            out.push(c.error(format!(
+                "unknown element <{}> in {}: {} (statopt refuses elements it does not know in setup documents; --allow-unknown reads on with a warning)",
+                c.name,
+                study.describe(),
+                suggestion(&c.name, STUDY_CHILDREN)
+            )));
+        } else {
+            out.extend(figure_elements(c));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_names_a_misspelling_and_nothing_far() {
+        let so = known_names("StaticOptimization");
+        assert_eq!(nearest("contact_wieght", &so), Some("contact_weight"));
+        assert_eq!(nearest("activation_exponant", &so), Some("activation_exponent"));
+        assert_eq!(nearest("Contact_Weight", &so), Some("contact_weight"));
+        assert_eq!(nearest("frobnicate", &so), None);
+        assert!(suggestion("frobnicate", &["b", "a"]).contains("known here: a, b"));
+    }
+
+    #[test]
+    fn setup_elements_refuse_unknown_and_list_unused() {
+        let text = r#"<AnalyzeTool name="t"><model_file>m.osim</model_file>
+<maximum_integrator_step_size>1</maximum_integrator_step_size>
+<AnalysisSet name="Analyses"><objects><StaticOptimization name="so">
+<contact_wieght>1</contact_wieght><start_time>0</start_time></StaticOptimization>
+</objects><groups/></AnalysisSet>
+<Figure name="f" titel="x"><Series file="a.sto" column="c"/></Figure>
+<ControllerSet name="Controllers"><objects/></ControllerSet>
+<defaults/></AnalyzeTool>"#;
+        let root = crate::xml::parse_str(text, std::path::Path::new("s.xml")).unwrap();
+        let found = setup_elements(&root);
+        let msgs: Vec<String> = found.unknown.iter().map(|e| e.to_string()).collect();
+        assert_eq!(msgs.len(), 2, "{msgs:?}");
+        let so = msgs.iter().find(|m| m.contains("<contact_wieght>")).unwrap();
+        assert!(
+            so.contains("s.xml, line 4") && so.contains("did you mean contact_weight"),
+            "{so}"
+        );
+        let fig = msgs.iter().find(|m| m.contains("titel")).unwrap();
+        assert!(fig.contains("did you mean title"), "{fig}");
+        assert_eq!(
+            found.unused,
+            vec![
+                "AnalyzeTool <maximum_integrator_step_size>",
+                "AnalyzeTool <ControllerSet>",
+                "StaticOptimization <start_time>"
+            ]
+        );
     }
 }

@@ -1,4 +1,5 @@
 //! Reading user files: model documents and tool setups.
+pub mod analyses;
 pub mod compose;
 pub mod known;
 mod known_properties;

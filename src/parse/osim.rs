@@ -259,10 +259,21 @@ fn read_40(spec: &mut ModelSpec, model: &Element) -> Result<()> {
                 }
             }
             name if IGNORED.contains(&name) => {}
+            _ if is_empty_set(child) => {}
             _ => unsupported(spec, child, "model element"),
         }
     }
     Ok(())
+}
+
+/// A set with no members (`<XSet><objects/><groups/></XSet>`): there is
+/// nothing in it to ignore, so nothing is said.
+fn is_empty_set(el: &Element) -> bool {
+    el.name.ends_with("Set")
+        && el.children.iter().all(|c| match c.name.as_str() {
+            "objects" | "groups" => c.children.is_empty(),
+            _ => false,
+        })
 }
 
 fn components(el: &Element) -> impl Iterator<Item = &Element> {
@@ -604,7 +615,13 @@ fn read_3x(spec: &mut ModelSpec, model: &Element) -> Result<()> {
                 }
             }
             "BodySet" | "gravity" => {}
+            "components" | "ComponentSet" => {
+                for c in components(child) {
+                    unsupported(spec, c, "component");
+                }
+            }
             name if IGNORED.contains(&name) => {}
+            _ if is_empty_set(child) => {}
             _ => unsupported(spec, child, "model element"),
         }
     }
@@ -687,4 +704,39 @@ fn read_joint_3x(spec: &mut ModelSpec, j: &Element, child_body: &str) -> Result<
 #[allow(dead_code)]
 fn located(loc: &Location, msg: impl Into<String>) -> Error {
     Error::input(loc.clone(), msg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An empty set (Rajagopal2015's `<ComponentSet name="MiscComponents">`
+    /// in a 3.x document) holds nothing to ignore and is not reported; a
+    /// set with members still is.
+    #[test]
+    fn empty_sets_are_not_reported() {
+        let doc = |extra: &str| {
+            format!(
+                r#"<OpenSimDocument Version="30000"><Model name="m3"><BodySet><objects>
+<Body name="ground"><mass>0</mass></Body>
+<Body name="upper"><mass>2.3</mass><mass_center>0 -0.4 0</mass_center><inertia_xx>0.11</inertia_xx><inertia_yy>0.02</inertia_yy><inertia_zz>0.11</inertia_zz>
+<Joint><PinJoint name="shoulder"><parent_body>ground</parent_body><location_in_parent>0 1.5 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent><location>0 0 0</location><orientation>0 0 0</orientation>
+<CoordinateSet><objects><Coordinate name="q1"><range>-3 3</range></Coordinate></objects></CoordinateSet></PinJoint></Joint></Body>
+</objects></BodySet>{extra}</Model></OpenSimDocument>"#
+            )
+        };
+        let read = |text: &str| {
+            let root = xml::parse_str(text, Path::new("m3.osim")).unwrap();
+            ModelSpec::from_document(&root, Path::new("m3.osim")).unwrap()
+        };
+        let spec = read(&doc(
+            r#"<ComponentSet name="MiscComponents"><objects /><groups /></ComponentSet><WidgetSet name="w"><objects/></WidgetSet>"#,
+        ));
+        assert!(spec.unsupported.is_empty(), "{:?}", spec.unsupported);
+        let spec = read(&doc(
+            r#"<ComponentSet name="MiscComponents"><objects><Widget name="w"/></objects></ComponentSet>"#,
+        ));
+        assert_eq!(spec.unsupported.len(), 1, "{:?}", spec.unsupported);
+        assert!(spec.unsupported[0].0.contains("<Widget name=\"w\">"));
+    }
 }

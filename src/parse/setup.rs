@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
+use crate::parse::analyses::{JointReactionSetup, StaticOptimizationSetup};
 use crate::xml::{self, Element};
 
 /// A parsed setup file.
@@ -27,6 +28,8 @@ pub struct AnalyzeSetup {
     pub replace_force_set: bool,
     pub force_set_files: Vec<PathBuf>,
     pub results_directory: PathBuf,
+    /// Where `<results_directory>` stands (the tool element when absent).
+    pub results_directory_loc: crate::error::Location,
     pub output_precision: usize,
     pub initial_time: f64,
     pub final_time: f64,
@@ -52,8 +55,13 @@ pub struct AnalyzeSetup {
     /// drawn from the run's tables after the analyses.
     pub figures: Vec<Element>,
     pub analyses: Vec<Analysis>,
-    /// Non-fatal remarks (unknown properties, see `parse::known`).
+    /// Non-fatal remarks (unknown elements read on with `--allow-unknown`,
+    /// see `parse::known`).
     pub warnings: Vec<String>,
+    /// OpenSim properties the setup holds that statopt accepts but does not
+    /// use (`parse::known::UNUSED_SETUP_PROPERTIES`), e.g.
+    /// `AnalyzeTool <maximum_integrator_step_size>`: listed in the summary.
+    pub unused_properties: Vec<String>,
 }
 
 /// Properties every OpenSim analysis has.
@@ -65,14 +73,31 @@ pub struct AnalysisCommon {
     pub in_degrees: bool,
 }
 
+/// An analysis of the setup's AnalysisSet, read once into its typed
+/// settings (`parse::analyses`); tools never read its XML again.
 #[derive(Debug, Clone)]
 pub enum Analysis {
     MuscleAnalysis(MuscleAnalysisSetup),
-    /// Other analyses are read by the modules that run them; kept as XML.
-    Other {
+    StaticOptimization(Box<StaticOptimizationSetup>),
+    JointReaction(Box<JointReactionSetup>),
+    /// An analysis OpenSim knows that statopt does not run (refused when
+    /// it is on).
+    Unsupported {
         common: AnalysisCommon,
         element: Element,
     },
+}
+
+impl Analysis {
+    /// The properties every analysis has.
+    pub fn common(&self) -> &AnalysisCommon {
+        match self {
+            Analysis::MuscleAnalysis(m) => &m.common,
+            Analysis::StaticOptimization(s) => &s.common,
+            Analysis::JointReaction(j) => &j.common,
+            Analysis::Unsupported { common, .. } => common,
+        }
+    }
 }
 
 impl AnalyzeSetup {
@@ -81,13 +106,37 @@ impl AnalyzeSetup {
         self.setup_file.parent().unwrap_or(Path::new("."))
     }
 
-    /// The first analysis kept as XML whose element is `type_name` (e.g.
-    /// `StaticOptimization`), on or off: its element and common settings.
+    /// The element and common settings of the first analysis of type
+    /// `type_name` (e.g. `StaticOptimization`), on or off (for located
+    /// messages; the settings are [`AnalyzeSetup::static_optimization`] and
+    /// [`AnalyzeSetup::joint_reactions`]).
     pub fn analysis_element(&self, type_name: &str) -> Option<(&Element, &AnalysisCommon)> {
         self.analyses.iter().find_map(|a| match a {
-            Analysis::Other { element, common } if element.name == type_name => {
+            Analysis::StaticOptimization(s) if type_name == "StaticOptimization" => {
+                Some((&s.element, &s.common))
+            }
+            Analysis::JointReaction(j) if type_name == "JointReaction" => {
+                Some((&j.element, &j.common))
+            }
+            Analysis::Unsupported { element, common } if element.name == type_name => {
                 Some((element, common))
             }
+            _ => None,
+        })
+    }
+
+    /// The first StaticOptimization analysis, on or off.
+    pub fn static_optimization(&self) -> Option<&StaticOptimizationSetup> {
+        self.analyses.iter().find_map(|a| match a {
+            Analysis::StaticOptimization(s) => Some(&**s),
+            _ => None,
+        })
+    }
+
+    /// The JointReaction analyses, on or off.
+    pub fn joint_reactions(&self) -> impl Iterator<Item = &JointReactionSetup> {
+        self.analyses.iter().filter_map(|a| match a {
+            Analysis::JointReaction(j) => Some(&**j),
             _ => None,
         })
     }
@@ -118,11 +167,16 @@ pub struct InverseDynamicsSetup {
     pub forces_to_exclude: Vec<String>,
     pub external_loads_file: Option<PathBuf>,
     pub results_directory: PathBuf,
+    /// Where `<results_directory>` stands (the tool element when absent).
+    pub results_directory_loc: crate::error::Location,
     pub output_gen_force_file: String,
     pub joints_to_report_body_forces: Vec<String>,
     pub output_body_forces_file: Option<String>,
-    /// Non-fatal remarks (unknown properties, see `parse::known`).
+    /// Non-fatal remarks (unknown elements read on with `--allow-unknown`).
     pub warnings: Vec<String>,
+    /// OpenSim properties statopt accepts but does not use (see
+    /// [`AnalyzeSetup::unused_properties`]).
+    pub unused_properties: Vec<String>,
 }
 
 impl InverseDynamicsSetup {
@@ -130,6 +184,53 @@ impl InverseDynamicsSetup {
     pub fn dir(&self) -> &Path {
         self.setup_file.parent().unwrap_or(Path::new("."))
     }
+}
+
+/// What stops `dir` from being a results folder (it or a folder above it
+/// is a file, or the nearest existing folder above it is read-only), said
+/// as the end of a sentence naming `dir`; None when a run can write there.
+/// Nothing is created (for `--check`).
+pub fn results_dir_problem(dir: &Path) -> Option<String> {
+    if dir.exists() {
+        return (!dir.is_dir()).then(|| "is a file, not a folder".to_string());
+    }
+    let mut up = dir.parent();
+    while let Some(p) = up {
+        let p = if p.as_os_str().is_empty() { Path::new(".") } else { p };
+        if p.exists() {
+            if !p.is_dir() {
+                return Some(format!(
+                    "cannot be created: {} is a file, not a folder",
+                    p.display()
+                ));
+            }
+            if std::fs::metadata(p).is_ok_and(|m| m.permissions().readonly()) {
+                return Some(format!("cannot be created: {} is read-only", p.display()));
+            }
+            return None;
+        }
+        up = p.parent();
+    }
+    None
+}
+
+/// Create the results folder `dir` (the error names the setup's
+/// `<results_directory>`, at `loc`, or the command line's `-o`).
+pub fn create_results_dir(dir: &Path, loc: &crate::error::Location, from_cli: bool) -> Result<()> {
+    let say = |what: String| {
+        if from_cli {
+            Error::msg(format!("-o {}: the results folder {what}", dir.display()))
+        } else {
+            Error::input(
+                loc.clone(),
+                format!("<results_directory> names {}, which {what}", dir.display()),
+            )
+        }
+    };
+    if let Some(p) = results_dir_problem(dir) {
+        return Err(say(p));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| say(format!("cannot be created: {e}")))
 }
 
 /// Resolve a path from a setup relative to the setup's folder.
@@ -235,27 +336,85 @@ fn opt_text(el: &Element, name: &str) -> Option<String> {
         .map(str::to_string)
 }
 
+/// Every element of a setup document neither OpenSim 4.6 nor statopt
+/// knows, one error each (for `--check`, which reports all problems at
+/// once; see `parse::known::setup_elements`).
+pub fn unknown_elements(setup: &Path) -> Result<Vec<Error>> {
+    let root = xml::parse_file(setup)?;
+    Ok(super::known::setup_elements(tool_element(&root)?).unknown)
+}
+
 impl Setup {
+    /// Read a setup file. An element neither OpenSim 4.6 nor statopt knows
+    /// is an error (see [`Setup::read_with`]).
     pub fn read(path: &Path) -> Result<Setup> {
-        Self::from_document(&xml::parse_file(path)?, path)
+        Self::read_with(path, false)
+    }
+
+    /// Read a setup file; with `allow_unknown` (`--allow-unknown`) an
+    /// unknown element is a warning instead of an error.
+    pub fn read_with(path: &Path, allow_unknown: bool) -> Result<Setup> {
+        Self::from_document(&xml::parse_file(path)?, path, allow_unknown)
     }
 
     /// A setup document given as text, read as if it were the file `path`:
     /// relative paths resolve against `path`'s folder and messages name
     /// `path` (callers that edit a setup in memory, e.g. the Python package).
     pub fn parse(text: &str, path: &Path) -> Result<Setup> {
-        Self::from_document(&xml::parse_str(text, path)?, path)
+        Self::parse_with(text, path, false)
     }
 
-    fn from_document(root: &Element, path: &Path) -> Result<Setup> {
+    /// [`Setup::parse`], unknown elements allowed or not (see [`Setup::read_with`]).
+    pub fn parse_with(text: &str, path: &Path, allow_unknown: bool) -> Result<Setup> {
+        Self::from_document(&xml::parse_str(text, path)?, path, allow_unknown)
+    }
+
+    fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
         let tool = tool_element(root)?;
         let dir = setup_dir(path);
+        let found = super::known::setup_elements(tool);
+        if !allow_unknown {
+            if let Some(first) = found.unknown.first() {
+                let more = found.unknown.len() - 1;
+                let e = Error::input(
+                    match first {
+                        Error::Input { loc, .. } => (**loc).clone(),
+                        Error::Internal(_) => crate::error::Location::file(path),
+                    },
+                    match first {
+                        Error::Input { msg, .. } if more > 0 => format!(
+                            "{msg}; {more} more unknown element(s) follow (statopt-tool --check lists them all)"
+                        ),
+                        Error::Input { msg, .. } => msg.clone(),
+                        Error::Internal(m) => m.clone(),
+                    },
+                );
+                return Err(e);
+            }
+        }
+        let warnings: Vec<String> = found
+            .unknown
+            .iter()
+            .map(|e| format!("{e} (read on: --allow-unknown)"))
+            .collect();
+        let mut unused = found.unused;
+        unused.dedup();
         if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {
             check_inputs_exist(tool, &dir)?;
         }
         match tool.name.as_str() {
-            "InverseDynamicsTool" => Ok(Setup::InverseDynamics(read_id(tool, path, &dir)?)),
-            "AnalyzeTool" => Ok(Setup::Analyze(read_analyze(tool, path, &dir)?)),
+            "InverseDynamicsTool" => {
+                let mut s = read_id(tool, path, &dir)?;
+                s.warnings = warnings;
+                s.unused_properties = unused;
+                Ok(Setup::InverseDynamics(s))
+            }
+            "AnalyzeTool" => {
+                let mut s = read_analyze(tool, path, &dir)?;
+                s.warnings = warnings;
+                s.unused_properties = unused;
+                Ok(Setup::Analyze(s))
+            }
             other => Err(tool.error(format!(
                 "'{other}' setups are not supported; supported: InverseDynamicsTool, AnalyzeTool"
             ))),
@@ -305,11 +464,13 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
             dir,
             &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
         ),
+        results_directory_loc: tool.child("results_directory").unwrap_or(tool).loc(),
         output_gen_force_file: opt_text(tool, "output_gen_force_file")
             .unwrap_or_else(|| "inverse_dynamics.sto".into()),
         joints_to_report_body_forces: joints,
         output_body_forces_file: opt_text(tool, "output_body_forces_file"),
-        warnings: super::known::unknown_properties(tool),
+        warnings: Vec::new(),
+        unused_properties: Vec::new(),
     })
 }
 
@@ -367,7 +528,13 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
                     compute_moments: a.child_bool_or("compute_moments", true)?,
                     common,
                 }),
-                _ => Analysis::Other {
+                "StaticOptimization" => Analysis::StaticOptimization(Box::new(
+                    StaticOptimizationSetup::from_xml(a, common)?,
+                )),
+                "JointReaction" => Analysis::JointReaction(Box::new(
+                    JointReactionSetup::from_xml(a, common, dir)?,
+                )),
+                _ => Analysis::Unsupported {
                     common,
                     element: a.clone(),
                 },
@@ -403,6 +570,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             dir,
             &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
         ),
+        results_directory_loc: tool.child("results_directory").unwrap_or(tool).loc(),
         output_precision: precision,
         initial_time,
         final_time,
@@ -447,6 +615,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             .cloned()
             .collect(),
         analyses,
-        warnings: super::known::unknown_properties(tool),
+        warnings: Vec::new(),
+        unused_properties: Vec::new(),
     })
 }

@@ -141,6 +141,16 @@ pub struct Layout {
 }
 
 impl Layout {
+    /// `rows` panels stacked, each 1600×800: at a page's or a screen's
+    /// width the text reads at its normal size.
+    pub fn column(rows: usize) -> Self {
+        Layout {
+            rows,
+            cols: 1,
+            size: (1600, 800 * rows.max(1) as u32),
+        }
+    }
+
     /// One row of `cols` panels, each 1000×650.
     pub fn row(cols: usize) -> Self {
         Layout {

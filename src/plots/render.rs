@@ -142,6 +142,55 @@ fn axis_range(v: &[f64], log: bool, pad: f64) -> (f64, f64) {
     }
 }
 
+/// Tick labels for linear axes: the value with at most six decimals and
+/// no trailing zeros (`200`, not `200.0`; `0.25`), negative values with
+/// their sign, never `-0`.
+pub(super) fn linear_tick(v: &f64) -> String {
+    let v = *v;
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
+/// How many tick labels to ask plotters for on a linear axis over
+/// `lo..hi`: about eight, and more where the axis crosses zero with a
+/// tenth or more of its span on the short side, so that side gets a
+/// labelled tick too (a shear axis from -130 to 1100 N labelled 0, 200,
+/// ... left its negative values unlabelled).
+pub(super) fn label_count(lo: f64, hi: f64) -> usize {
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0) {
+        return 8;
+    }
+    let short = if lo < 0.0 && hi > 0.0 {
+        (-lo).min(hi)
+    } else {
+        span
+    };
+    // The 1-2-5 step plotters would take for 8 labels, made no larger than
+    // the short side when that side is a tenth of the span or more.
+    let nice = |x: f64| {
+        let p = 10f64.powf(x.log10().floor());
+        [5.0, 2.0, 1.0]
+            .into_iter()
+            .map(|m| m * p)
+            .find(|s| *s <= x)
+            .unwrap_or(p)
+    };
+    let mut step = nice(span / 7.0);
+    if short < step && short >= 0.1 * span {
+        step = nice(short);
+    }
+    ((span / step).floor() as usize + 1).clamp(2, 16)
+}
+
 /// Tick labels for logarithmic axes: at most 4 significant digits,
 /// scientific notation outside 1e-3..1e5.
 pub(super) fn log_tick(v: &f64) -> String {
@@ -277,10 +326,78 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .map_err(plot_err)
 }
 
-/// Draw one line chart filling `area`.
+/// A legend entry of a line chart: its label and how its icon is drawn.
+enum Entry<'a> {
+    /// The shaded area between two series.
+    Fill(&'a str),
+    /// A series: its style and whether it has a band.
+    Line(&'a str, Style, bool),
+}
+
+impl Entry<'_> {
+    fn label(&self) -> &str {
+        match self {
+            Entry::Fill(l) | Entry::Line(l, _, _) => l,
+        }
+    }
+}
+
+/// Draw one line chart filling `area`: the plot, and its legend in a column
+/// right of it, outside the data.
 pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart) -> Result<()> {
     area.fill(&WHITE).map_err(plot_err)?;
     let m = metrics(area);
+
+    let mut entries: Vec<Entry> = Vec::new();
+    if c.fill_between.is_some() && !c.fill_label.is_empty() {
+        entries.push(Entry::Fill(&c.fill_label));
+    }
+    for s in &c.series {
+        if !s.label.is_empty() {
+            entries.push(Entry::Line(&s.label, s.style, s.band.is_some()));
+        }
+    }
+    let font = TextStyle::from((FONT, m.legend).into_font());
+    let pad = legend_pad(&m);
+    let (w, _) = area.dim_in_pixel();
+    let legend_w = if entries.is_empty() {
+        0
+    } else {
+        let text_w = entries
+            .iter()
+            .map(|e| area.estimate_text_size(e.label(), &font).map_or(0, |s| s.0))
+            .max()
+            .unwrap_or(0);
+        (text_w + LEGEND_ICON + 3 * pad + m.margin).min(w * 9 / 20)
+    };
+    // The title spans the whole figure (the legend column included),
+    // shrunk to fit its width.
+    let body = if c.title.is_empty() {
+        area.clone()
+    } else {
+        let mut size = m.title;
+        let fits = |size: f64| {
+            let font = TextStyle::from((FONT, size).into_font());
+            area.estimate_text_size(&c.title, &font)
+                .map_or(true, |(tw, _)| tw + 2 * m.margin <= w)
+        };
+        while size > 10.0 && !fits(size) {
+            size *= 0.9;
+        }
+        let title_h = (1.6 * size) as u32 + m.margin / 2;
+        let (title_area, rest) = area.split_vertically(title_h);
+        let font = TextStyle::from((FONT, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+        let (tw, th) = title_area.dim_in_pixel();
+        title_area
+            .draw(&Text::new(
+                c.title.clone(),
+                ((tw / 2) as i32, (th as i32 + m.margin as i32 / 2) / 2),
+                font,
+            ))
+            .map_err(plot_err)?;
+        rest
+    };
+    let (plot_area, legend_area) = body.split_horizontally(w - legend_w);
 
     let mut xs = Vec::new();
     let mut ys = Vec::new();
@@ -300,20 +417,20 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
     let (x0, x1) = axis_range(&xs, false, 0.0);
     let (y0, y1) = axis_range(&ys, false, 0.05);
 
-    let mut builder = ChartBuilder::on(area);
+    let mut builder = ChartBuilder::on(&plot_area);
     builder
         .margin(m.margin)
         .x_label_area_size(m.x_area)
         .y_label_area_size(m.y_area);
-    if !c.title.is_empty() {
-        builder.caption(&c.title, (FONT, m.title));
-    }
     let mut ch = builder
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(plot_err)?;
     ch.configure_mesh()
         .x_desc(&c.x_label)
         .y_desc(&c.y_label)
+        .x_label_formatter(&linear_tick)
+        .y_label_formatter(&linear_tick)
+        .y_labels(label_count(y0, y1))
         .label_style((FONT, m.tick))
         .axis_desc_style((FONT, m.desc))
         .bold_line_style(BLACK.mix(0.12))
@@ -321,7 +438,6 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
         .draw()
         .map_err(plot_err)?;
 
-    let mut labels: Vec<&str> = Vec::new();
     let mut occ = Occupancy::default();
 
     // Shaded area between two series: forward along one, back along the other.
@@ -338,15 +454,8 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
                 .rev();
         let poly: Vec<(f64, f64)> = fwd.chain(back).map(|(x, y)| (*x, *y)).collect();
         let fill = BLACK.mix(0.16).filled();
-        let anno = ch
-            .draw_series(std::iter::once(Polygon::new(poly, fill)))
+        ch.draw_series(std::iter::once(Polygon::new(poly, fill)))
             .map_err(plot_err)?;
-        if !c.fill_label.is_empty() {
-            labels.push(&c.fill_label);
-            anno.label(&c.fill_label).legend(move |(x, y)| {
-                Rectangle::new([(x, y - 7), (x + 26, y + 7)], BLACK.mix(0.16).filled())
-            });
-        }
     }
 
     // Bands behind all lines.
@@ -359,11 +468,6 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
                     .map(|&i| (s.x[i], lo[i]))
                     .chain(run.iter().rev().map(|&i| (s.x[i], hi[i])))
                     .collect();
-                let px: Vec<(i32, i32)> = poly.iter().map(|p| ch.backend_coord(p)).collect();
-                occ.polyline(&px);
-                for (k, &i) in run.iter().enumerate() {
-                    occ.polyline(&[px[k], ch.backend_coord(&(s.x[i], hi[i]))]);
-                }
                 ch.draw_series(std::iter::once(Polygon::new(poly, fill)))
                     .map_err(plot_err)?;
             }
@@ -372,32 +476,66 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
 
     for s in &c.series {
         draw_line(&mut ch, s, &mut occ)?;
-        if !s.label.is_empty() {
-            labels.push(&s.label);
-            let (style, band) = (s.style, s.band.is_some());
-            ch.draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
-                .map_err(plot_err)?
-                .label(&s.label)
-                .legend(move |(x, y)| {
-                    // Line icon over a band swatch if the series has a band;
-                    // a dashed line is drawn as two dashes.
-                    let swatch = if band {
-                        color(style.color).mix(0.22).filled()
-                    } else {
-                        TRANSPARENT.filled()
-                    };
-                    let (a, b) = if style.dashed { (9, 16) } else { (13, 13) };
-                    EmptyElement::at((x, y))
-                        + Rectangle::new([(0, -7), (26, 7)], swatch)
-                        + PathElement::new(vec![(0, 0), (a, 0)], line_style(style))
-                        + PathElement::new(vec![(b, 0), (26, 0)], line_style(style))
-                });
-        }
     }
 
-    if !labels.is_empty() {
-        let pos = legend_position(ch.plotting_area(), &occ, &labels, &m);
-        draw_legend(&mut ch, pos, &m)?;
+    if !entries.is_empty() {
+        // The legend's rows start level with the plot's top edge.
+        let top = ch.plotting_area().get_pixel_range().1.start - legend_area.get_base_pixel().1;
+        draw_side_legend(&legend_area, &entries, top, &m)?;
+    }
+    Ok(())
+}
+
+/// The legend of a line chart in its own column: one row per entry, an
+/// icon (line, dashes, band swatch or shaded box) and the label.
+fn draw_side_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    top: i32,
+    m: &Metrics,
+) -> Result<()> {
+    let font = TextStyle::from((FONT, m.legend).into_font())
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let pad = legend_pad(m) as i32;
+    let row_h = (1.5 * m.legend) as i32;
+    let icon = LEGEND_ICON as i32;
+    let half = (0.35 * m.legend) as i32;
+    for (k, e) in entries.iter().enumerate() {
+        let y = top + pad + row_h / 2 + k as i32 * row_h;
+        let x = pad;
+        match e {
+            Entry::Fill(_) => {
+                area.draw(&Rectangle::new(
+                    [(x, y - half), (x + icon - pad, y + half)],
+                    BLACK.mix(0.16).filled(),
+                ))
+                .map_err(plot_err)?;
+            }
+            Entry::Line(_, style, band) => {
+                let w = icon - pad;
+                if *band {
+                    area.draw(&Rectangle::new(
+                        [(x, y - half), (x + w, y + half)],
+                        color(style.color).mix(0.22).filled(),
+                    ))
+                    .map_err(plot_err)?;
+                }
+                let (a, b) = if style.dashed {
+                    (w * 9 / 26, w * 16 / 26)
+                } else {
+                    (w / 2, w / 2)
+                };
+                area.draw(&PathElement::new(vec![(x, y), (x + a, y)], line_style(*style)))
+                    .map_err(plot_err)?;
+                area.draw(&PathElement::new(
+                    vec![(x + b, y), (x + w, y)],
+                    line_style(*style),
+                ))
+                .map_err(plot_err)?;
+            }
+        }
+        area.draw(&Text::new(e.label().to_string(), (x + icon + pad, y), font.clone()))
+            .map_err(plot_err)?;
     }
     Ok(())
 }
@@ -554,7 +692,7 @@ impl Ranged for Axis {
 impl ValueFormatter<f64> for Axis {
     fn format_ext(&self, value: &f64) -> String {
         match self.log_ticks {
-            None => RangedCoordf64::format(value),
+            None => linear_tick(value),
             Some(_) => log_tick(&10f64.powf(*value)),
         }
     }

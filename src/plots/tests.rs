@@ -503,3 +503,101 @@ fn log_axis_ticks_and_labels() {
     assert_eq!(log_tick(&2.5e5), "2.5e5");
     assert_eq!(log_tick(&300.0), "300");
 }
+
+/// Linear tick labels: no trailing ".0", negative values signed.
+#[test]
+fn linear_tick_labels_are_plain_and_signed() {
+    use super::render::linear_tick;
+    assert_eq!(linear_tick(&200.0), "200");
+    assert_eq!(linear_tick(&-120.0), "-120");
+    assert_eq!(linear_tick(&0.25), "0.25");
+    assert_eq!(linear_tick(&(0.1 + 0.2)), "0.3");
+    assert_eq!(linear_tick(&-0.0), "0");
+}
+
+/// A chart's legend stands right of the plotted data, never over it: no
+/// series colour right of the legend column's left edge but in the icons,
+/// and the curves' pixels keep clear of the legend text.
+#[test]
+fn legend_stands_outside_the_data() {
+    let d = out_dir("legend_outside");
+    let mut c = knee_chart();
+    c.size = (1600, 900);
+    let paths = write(&c, &d.join("knee")).unwrap();
+    let (w, _, px) = read_png(&paths[0]);
+    // Blue pixels: the line (left) and its legend icon (right column).
+    let cols: Vec<u32> = px
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| **p == BLUE)
+        .map(|(i, _)| i as u32 % w)
+        .collect();
+    let mut xs = cols;
+    xs.sort_unstable();
+    xs.dedup();
+    // A gap between the plot's right edge and the legend's icons.
+    assert!(
+        xs.windows(2).any(|p| p[0] > w / 2 && p[1] > p[0] + 20),
+        "no legend icon apart from the data: {xs:?}"
+    );
+    let svg = Svg::read(&paths[1]);
+    assert!(svg.has_text("inverse dynamics"));
+}
+
+/// Stacked panels are 1600 px wide, one above the other.
+#[test]
+fn column_layout_stacks_panels() {
+    let d = out_dir("column");
+    let paths = write_panels(&[knee_chart(), knee_chart(), knee_chart()], &d.join("f"), Layout::column(3)).unwrap();
+    let (w, h, _) = read_png(&paths[0]);
+    assert_eq!((w, h), (1600, 2400));
+}
+
+/// An axis that crosses zero with a tenth or more of its span below it
+/// gets a labelled negative tick (the shear panel reached -120 N and its
+/// lowest label was 0).
+#[test]
+fn an_axis_crossing_zero_labels_its_negative_side() {
+    use super::render::label_count;
+    // -135..1125: plotters' 8 labels step by 200; asked for 13, by 100.
+    assert!(label_count(-135.0, 1125.0) >= 13);
+    // Barely below zero: the usual count.
+    assert_eq!(label_count(-5.0, 1000.0), label_count(0.0, 1000.0));
+    let d = out_dir("negative_ticks");
+    let t: Vec<f64> = (0..=100).map(|i| i as f64 * 0.05).collect();
+    let y: Vec<f64> = t.iter().map(|t| 1000.0 - 225.0 * t).collect();
+    let c = Chart {
+        title: "shear".into(),
+        series: vec![Series::new("shear", t, y, Style::color(0))],
+        size: (1600, 900),
+        ..Default::default()
+    };
+    let paths = write(&c, &d.join("shear")).unwrap();
+    let svg = Svg::read(&paths[1]);
+    assert!(svg.has_text("-100"), "{:?}", svg.texts());
+    assert!(!svg.texts().iter().any(|t| t.ends_with(".0")), "{:?}", svg.texts());
+}
+
+/// A title wider than the plot (the legend takes a column) is drawn over
+/// the whole figure and shrunk to fit: never clipped at the figure's edge
+/// (Figure 9's title lost its first letters).
+#[test]
+fn a_long_title_is_not_clipped() {
+    let d = out_dir("long_title");
+    let mut c = knee_chart();
+    c.size = (1000, 650);
+    c.title = "Hip flexion moment, right: muscles vs contacts (Figure 9, Rajagopal, cam 1), long".into();
+    let paths = write(&c, &d.join("t")).unwrap();
+    let (w, _, px) = read_png(&paths[0]);
+    // No dark title pixel touches the left or right edge columns.
+    let edge_dark = px
+        .iter()
+        .enumerate()
+        .filter(|(i, p)| {
+            let x = *i as u32 % w;
+            (x < 3 || x >= w - 3) && p.iter().all(|&c| c < 100)
+        })
+        .count();
+    assert_eq!(edge_dark, 0, "text reaches the figure's edge");
+    assert!(Svg::read(&paths[1]).has_text(&c.title));
+}

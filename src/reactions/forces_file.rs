@@ -174,8 +174,8 @@ mod tests {
     /// past the last and back to the start (the file is read again).
     #[test]
     fn forces_file_window_equals_the_whole_table() {
-        let dir = std::env::temp_dir().join(format!("statopt_jr_window_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = crate::test_dir::TempDir::new("statopt_jr_window");
+        let dir = tmp.path().to_path_buf();
         let path = dir.join("forces.sto");
         let mut st = Storage {
             name: "forces".into(),

@@ -2,59 +2,11 @@
 //! §7.1), and the reactions it asks for resolved against the model as
 //! OpenSim's `JointReaction::setupReactionList` does.
 
-use std::path::PathBuf;
-
 use crate::error::Result;
 use crate::model::{Model, Transform};
-use crate::parse::setup::{resolve, AnalysisCommon};
 use crate::reactions::joint::ReactionSpec;
-use crate::xml::Element;
 
-/// The JointReaction element of an AnalyzeTool setup (§7.1).
-#[derive(Debug, Clone)]
-pub struct JointReactionSetup {
-    pub common: AnalysisCommon,
-    /// Resolved against the setup's folder; None when empty.
-    pub forces_file: Option<PathBuf>,
-    pub joint_names: Vec<String>,
-    pub apply_on_bodies: Vec<String>,
-    pub express_in_frame: Vec<String>,
-    /// statopt `<knee_loads>`: also write `<prefix>KneeLoads.sto`
-    /// (`tools::knee_loads`) with each ReactionLoads table of a static
-    /// optimization run.
-    pub knee_loads: bool,
-    /// The element, for located errors.
-    pub element: Element,
-}
-
-impl JointReactionSetup {
-    pub fn from_xml(
-        el: &Element,
-        common: AnalysisCommon,
-        setup_dir: &std::path::Path,
-    ) -> Result<Self> {
-        let list = |name: &str, default: &str| -> Vec<String> {
-            match el.child(name).map(|c| c.words()) {
-                Some(w) if !w.is_empty() => w,
-                _ => vec![default.to_string()],
-            }
-        };
-        let forces_file = el
-            .child_text("forces_file")
-            .map(str::trim)
-            .filter(|s| !s.is_empty() && *s != "Unassigned")
-            .map(|s| resolve(setup_dir, s));
-        Ok(JointReactionSetup {
-            common,
-            forces_file,
-            joint_names: list("joint_names", "ALL"),
-            apply_on_bodies: list("apply_on_bodies", "child"),
-            express_in_frame: list("express_in_frame", "ground"),
-            knee_loads: el.child_bool_or("knee_loads", false)?,
-            element: el.clone(),
-        })
-    }
-}
+pub use crate::parse::analyses::JointReactionSetup;
 
 /// Resolve joint_names / apply_on_bodies / express_in_frame as
 /// `JointReaction::setupReactionList` does (§7.1). Unknown joints are

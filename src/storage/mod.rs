@@ -9,6 +9,23 @@ mod read;
 mod write;
 
 pub use read::{open_rows, read, RowMark, RowReader};
+/// A frame time as a message says it: rounded to the nanosecond with
+/// trailing zeros dropped, so that a time computed on the motion's grid
+/// (`0.5833328799999886`) reads as the motion's own row time
+/// (`0.58333288`); never more decimals than that.
+pub fn fmt_time(t: f64) -> String {
+    if !t.is_finite() {
+        return format!("{t}");
+    }
+    let s = format!("{:.9}", t);
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
 pub use write::{complete_rows, format_c_fixed, write, StoWriter, DEFAULT_PRECISION};
 
 /// A table of samples over time, as OpenSim's `Storage`.

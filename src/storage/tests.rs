@@ -11,14 +11,12 @@ fn validation_dir() -> Option<PathBuf> {
     }
 }
 
-/// A fresh temporary file path (no tempfile crate: pid + test name).
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("statopt-storage-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+/// A fresh temporary file, removed (with its folder) when dropped.
+fn tmp(name: &str) -> crate::test_dir::TempFile {
+    crate::test_dir::TempFile::new("storage", name)
 }
 
-fn write_text(name: &str, text: &str) -> PathBuf {
+fn write_text(name: &str, text: &str) -> crate::test_dir::TempFile {
     let p = tmp(name);
     std::fs::write(&p, text).unwrap();
     p
@@ -407,8 +405,8 @@ fn row_reader_equals_read() {
 /// first empty line), and a mark taken mid-file returns to the same row.
 #[test]
 fn row_reader_streams_time_series_tables() {
-    let dir = std::env::temp_dir().join(format!("statopt-rowreader-v3-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt-rowreader-v3");
+    let dir = tmp.path().to_path_buf();
     let mut cases = Vec::new();
     for (name, data_type, cell) in [
         ("double.sto", "double", "{a}"),
@@ -462,8 +460,8 @@ fn row_reader_streams_time_series_tables() {
 
 #[test]
 fn row_reader_errors_like_read() {
-    let dir = std::env::temp_dir().join(format!("statopt-rowreader-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::test_dir::TempDir::new("statopt-rowreader");
+    let dir = tmp.path().to_path_buf();
     for (name, text) in [
         (
             "short.sto",
@@ -514,4 +512,17 @@ fn row_reader_errors_like_read() {
         assert_eq!(got, want, "{name}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Frame times in messages read as the motion's row times, not as the
+/// float noise of a time computed on its grid.
+#[test]
+fn frame_times_print_without_float_noise() {
+    use super::fmt_time;
+    assert_eq!(fmt_time(0.5833328799999886), "0.58333288");
+    assert_eq!(fmt_time(2.4999984999999625), "2.4999985");
+    assert_eq!(fmt_time(1.31), "1.31");
+    assert_eq!(fmt_time(2.0), "2");
+    assert_eq!(fmt_time(-0.0000000001), "0");
+    assert_eq!(fmt_time(-0.25), "-0.25");
 }

@@ -200,15 +200,13 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
 fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     let mut summary = RunSummary {
         warnings: setup.warnings.clone(),
+        unused_properties: setup.unused_properties.clone(),
         ..Default::default()
     };
     let active: Vec<&Analysis> = setup
         .analyses
         .iter()
-        .filter(|a| match a {
-            Analysis::MuscleAnalysis(m) => m.common.on,
-            Analysis::Other { common, .. } => common.on,
-        })
+        .filter(|a| a.common().on)
         .collect();
     if active.is_empty() {
         return Err(Error::input(
@@ -218,25 +216,18 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     }
     // A JointReaction without a forces_file in a setup that also runs
     // StaticOptimization takes each frame's solution directly.
-    let setup_dir = setup.dir();
-    let has_so = active.iter().any(
-        |a| matches!(a, Analysis::Other { element, .. } if element.name == "StaticOptimization"),
-    );
-    let mut coupled = Vec::new();
-    for a in &active {
-        if let Analysis::Other { element, common } = a {
-            if element.name == "JointReaction" && has_so {
-                let jr = joint_reaction::JointReactionSetup::from_xml(
-                    element,
-                    common.clone(),
-                    setup_dir,
-                )?;
-                if jr.forces_file.is_none() {
-                    coupled.push(jr);
-                }
+    let has_so = active
+        .iter()
+        .any(|a| matches!(a, Analysis::StaticOptimization(_)));
+    let coupled: Vec<joint_reaction::JointReactionSetup> = active
+        .iter()
+        .filter_map(|a| match a {
+            Analysis::JointReaction(jr) if has_so && jr.forces_file.is_none() => {
+                Some((**jr).clone())
             }
-        }
-    }
+            _ => None,
+        })
+        .collect();
     for a in active {
         match a {
             Analysis::MuscleAnalysis(m) => {
@@ -246,24 +237,24 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                     return Ok(summary);
                 }
             }
-            Analysis::Other { element, common } if element.name == "StaticOptimization" => {
-                let s = static_optimization::run(setup, element, common, &coupled, opts)?;
+            Analysis::StaticOptimization(so) => {
+                let s = static_optimization::run(setup, so, &coupled, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
                 }
             }
-            Analysis::Other { element, common } if element.name == "JointReaction" => {
-                if coupled.iter().any(|jr| jr.common.name == common.name) {
+            Analysis::JointReaction(jr) => {
+                if coupled.iter().any(|c| c.common.name == jr.common.name) {
                     continue; // computed inside static optimization
                 }
-                let s = joint_reaction::run(setup, element, common, opts)?;
+                let s = joint_reaction::run(setup, jr, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
                 }
             }
-            Analysis::Other { element, .. } => {
+            Analysis::Unsupported { element, .. } => {
                 return Err(element.error(format!(
                     "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction",
                     element.name
@@ -274,13 +265,37 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     Ok(summary)
 }
 
+/// The warning for the model's coordinates the motion file has no column
+/// for (None: it has them all), naming the file.
+pub fn missing_columns_warning(setup: &AnalyzeSetup, missing: &[String]) -> Option<String> {
+    if missing.is_empty() {
+        return None;
+    }
+    let file = setup
+        .coordinates_file
+        .as_ref()
+        .or(setup.states_file.as_ref())
+        .map(|f| f.display().to_string())
+        .unwrap_or_default();
+    Some(format!(
+        "{file}: no column for the coordinate{} {}; {} set to 0 on every row, as OpenSim's AnalyzeTool does",
+        if missing.len() == 1 { "" } else { "s" },
+        missing.join(", "),
+        if missing.len() == 1 { "it is" } else { "they are" }
+    ))
+}
+
 /// The results directory: the command-line override or the setup's.
 pub fn results_dir(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<std::path::PathBuf> {
     let dir = opts
         .results_dir
         .clone()
         .unwrap_or_else(|| setup.results_directory.clone());
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    crate::parse::setup::create_results_dir(
+        &dir,
+        &setup.results_directory_loc,
+        opts.results_dir.is_some(),
+    )?;
     Ok(dir)
 }
 

@@ -24,7 +24,7 @@ use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plots::{self, RefLine, Scatter, ScatterPoint};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, RunOptions};
-use crate::xml::Element;
+use crate::parse::analyses::StaticOptimizationSetup;
 
 /// An edit of a setup that makes one method choice.
 pub type Edit = Arc<dyn Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync>;
@@ -121,18 +121,14 @@ pub const CSV_COLUMNS: [&str; 11] = [
     "pareto",
 ];
 
-/// The active StaticOptimization element of the setup.
-fn so_element(setup: &mut AnalyzeSetup) -> Result<&mut Element> {
+/// The active StaticOptimization analysis of the setup.
+fn so_analysis(setup: &mut AnalyzeSetup) -> Result<&mut StaticOptimizationSetup> {
     let file = setup.setup_file.clone();
     setup
         .analyses
         .iter_mut()
         .find_map(|a| match a {
-            Analysis::Other { element, common }
-                if element.name == "StaticOptimization" && common.on =>
-            {
-                Some(element)
-            }
+            Analysis::StaticOptimization(so) if so.common.on => Some(&mut **so),
             _ => None,
         })
         .ok_or_else(|| {
@@ -143,27 +139,11 @@ fn so_element(setup: &mut AnalyzeSetup) -> Result<&mut Element> {
         })
 }
 
-/// Set the text of `<name>` in the setup's StaticOptimization element
-/// (added when absent).
+/// Set property `name` of the setup's StaticOptimization to `text` (as if
+/// its element said `<name>text</name>`).
 pub fn set_so_option(setup: &mut AnalyzeSetup, name: &str, text: &str) -> Result<()> {
-    let el = so_element(setup)?;
-    match el.children.iter_mut().find(|c| c.name == name) {
-        Some(c) => {
-            c.text = text.to_string();
-            c.children.clear();
-        }
-        None => {
-            let child = Element {
-                name: name.to_string(),
-                attrs: Vec::new(),
-                children: Vec::new(),
-                text: text.to_string(),
-                line: el.line,
-                file: el.file.clone(),
-            };
-            el.children.push(child);
-        }
-    }
+    let so = so_analysis(setup)?;
+    *so = so.with_option(name, text)?;
     Ok(())
 }
 
@@ -281,30 +261,21 @@ fn bench_setup(setup: &AnalyzeSetup, w0: Option<f64>) -> Result<AnalyzeSetup> {
     for a in s.analyses.iter_mut() {
         match a {
             Analysis::MuscleAnalysis(m) => m.common.on = false,
-            Analysis::Other { element, common } => {
-                let standalone_jr = element.name == "JointReaction"
-                    && element
-                        .child_text("forces_file")
-                        .is_some_and(|t| !t.is_empty() && t != "Unassigned");
-                if (element.name != "StaticOptimization" && element.name != "JointReaction")
-                    || standalone_jr
-                {
-                    common.on = false;
+            Analysis::StaticOptimization(_) => {}
+            // Joint reactions from a forces file run on their own.
+            Analysis::JointReaction(jr) => {
+                if jr.forces_file.is_some() {
+                    jr.common.on = false;
                 }
             }
+            Analysis::Unsupported { common, .. } => common.on = false,
         }
     }
-    let el = so_element(&mut s)?;
-    let first_w0 = match el.child("contact_weight") {
-        Some(w) if !w.text().is_empty() => w.words().first().cloned(),
-        _ => None,
-    };
-    let first_w0 = match w0 {
-        Some(w) => Some(format!("{w}")),
-        None => first_w0,
-    };
-    if let Some(w) = first_w0 {
-        set_so_option(&mut s, "contact_weight", &w)?;
+    let so = so_analysis(&mut s)?;
+    if let Some(w) = w0 {
+        so.contact_weights = vec![w];
+    } else {
+        so.contact_weights.truncate(1);
     }
     Ok(s)
 }
@@ -314,11 +285,7 @@ fn so_name(setup: &AnalyzeSetup) -> String {
         .analyses
         .iter()
         .find_map(|a| match a {
-            Analysis::Other { element, common }
-                if element.name == "StaticOptimization" && common.on =>
-            {
-                Some(common.name.clone())
-            }
+            Analysis::StaticOptimization(so) if so.common.on => Some(so.common.name.clone()),
             _ => None,
         })
         .unwrap_or_default()
@@ -327,14 +294,9 @@ fn so_name(setup: &AnalyzeSetup) -> String {
 /// The JointReaction analyses computed inside static optimization.
 fn coupled_reactions(setup: &AnalyzeSetup) -> Vec<String> {
     setup
-        .analyses
-        .iter()
-        .filter_map(|a| match a {
-            Analysis::Other { element, common } if element.name == "JointReaction" && common.on => {
-                Some(common.name.clone())
-            }
-            _ => None,
-        })
+        .joint_reactions()
+        .filter(|jr| jr.common.on)
+        .map(|jr| jr.common.name.clone())
         .collect()
 }
 
@@ -695,19 +657,7 @@ pub fn write_chart(
 /// Whether the setup's model has contacts (the friction choices apply).
 fn has_contacts(setup: &AnalyzeSetup) -> Result<bool> {
     let mut s = setup.clone();
-    let el = so_element(&mut s)?.clone();
-    let common = match s.analyses.iter().find_map(|a| match a {
-        Analysis::Other { element, common }
-            if element.name == "StaticOptimization" && common.on =>
-        {
-            Some(common.clone())
-        }
-        _ => None,
-    }) {
-        Some(c) => c,
-        None => return Ok(false),
-    };
-    let so = crate::tools::static_optimization::StaticOptimizationSetup::from_xml(&el, common)?;
+    let so = so_analysis(&mut s)?.clone();
     let (p, _) = crate::tools::static_optimization::SoProblem::build(&s, &so)?;
     Ok(!p.contacts.is_empty())
 }

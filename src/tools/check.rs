@@ -10,7 +10,8 @@ use std::path::Path;
 
 use crate::error::Error;
 use crate::parse::setup::{
-    missing_input_files, Analysis, AnalyzeSetup, InverseDynamicsSetup, Setup,
+    missing_input_files, results_dir_problem, unknown_elements, Analysis, AnalyzeSetup,
+    InverseDynamicsSetup, Setup,
 };
 use crate::tools::{analyze, joint_reaction, loading, static_optimization, study};
 
@@ -23,33 +24,71 @@ pub struct CheckReport {
     pub checked: Vec<String>,
 }
 
-/// Check a setup or a study document.
-pub fn run(path: &Path) -> CheckReport {
+/// Check a setup or a study document; with `allow_unknown`
+/// (`--allow-unknown`) elements neither OpenSim nor statopt knows are
+/// warnings, as a run would read on past them.
+pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
     let mut report = CheckReport::default();
     if study::is_study(path) {
-        match study::check(path) {
+        match study::unknown_elements(path) {
+            Ok(unknown) => report.unknown(unknown, allow_unknown),
+            Err(e) => report.errors.push(e),
+        }
+        if let Err(e) = study::check_results_directory(path) {
+            report.errors.push(e);
+        }
+        // Unknown elements are reported above and per setup below.
+        match study::check(path, true) {
             Ok(setups) => {
                 for s in setups {
-                    check_setup(&s, &mut report);
+                    check_setup(&s, allow_unknown, &mut report);
                 }
             }
             Err(e) => {
                 report.errors.push(e);
                 // The study's setups are still checked one by one.
                 for s in study::setup_files(path).unwrap_or_default() {
-                    check_setup(&s, &mut report);
+                    check_setup(&s, allow_unknown, &mut report);
                 }
             }
         }
         report.checked.push(path.display().to_string());
     } else {
-        check_setup(path, &mut report);
+        check_setup(path, allow_unknown, &mut report);
     }
     report
 }
 
-fn check_setup(path: &Path, report: &mut CheckReport) {
+impl CheckReport {
+    fn unknown(&mut self, unknown: Vec<Error>, allow_unknown: bool) {
+        if allow_unknown {
+            self.warnings
+                .extend(unknown.iter().map(|e| format!("{e} (read on: --allow-unknown)")));
+        } else {
+            self.errors.extend(unknown);
+        }
+    }
+}
+
+/// A results folder a run could not write to, named with its element.
+fn check_results_dir(dir: &Path, loc: &crate::error::Location, report: &mut CheckReport) {
+    if let Some(p) = results_dir_problem(dir) {
+        report.errors.push(Error::input(
+            loc.clone(),
+            format!("<results_directory> names {}, which {p}", dir.display()),
+        ));
+    }
+}
+
+fn check_setup(path: &Path, allow_unknown: bool, report: &mut CheckReport) {
     report.checked.push(path.display().to_string());
+    match unknown_elements(path) {
+        Ok(unknown) => report.unknown(unknown, allow_unknown),
+        Err(e) => {
+            report.errors.push(e);
+            return;
+        }
+    }
     // Every missing file at once (reading the setup stops at the first).
     match missing_input_files(path) {
         Ok(missing) if !missing.is_empty() => {
@@ -62,13 +101,14 @@ fn check_setup(path: &Path, report: &mut CheckReport) {
             return;
         }
     }
-    match Setup::read(path) {
+    // Unknown elements were reported above: read on past them here.
+    match Setup::read_with(path, true) {
         Ok(Setup::Analyze(a)) => {
-            report.warnings.extend(a.warnings.iter().cloned());
+            check_results_dir(&a.results_directory, &a.results_directory_loc, report);
             check_analyze(&a, report);
         }
         Ok(Setup::InverseDynamics(i)) => {
-            report.warnings.extend(i.warnings.iter().cloned());
+            check_results_dir(&i.results_directory, &i.results_directory_loc, report);
             check_inverse_dynamics(&i, report);
         }
         Err(e) => report.errors.push(e),
@@ -85,44 +125,42 @@ fn check_analyze(setup: &AnalyzeSetup, report: &mut CheckReport) {
     };
     report.warnings.extend(am.warnings.iter().cloned());
     match analyze::open_state_stream(setup, &am.model) {
-        Ok(stream) => report.warnings.extend(stream.motion_warnings(&[])),
+        Ok(stream) => {
+            report.warnings.extend(stream.motion_warnings(&[]));
+            report
+                .warnings
+                .extend(analyze::missing_columns_warning(setup, &stream.missing));
+        }
         Err(e) => report.errors.push(e),
     }
+    check_figure_references(setup, report);
+    if !setup.analyses.iter().any(|a| a.common().on) {
+        report.errors.push(Error::input(
+            crate::error::Location::file(&setup.setup_file).with_element("<AnalysisSet>"),
+            "the setup has no analysis that is on",
+        ));
+    }
     for a in &setup.analyses {
-        let Analysis::Other { element, common } = a else {
-            continue;
-        };
-        match element.name.as_str() {
-            "StaticOptimization" => {
-                let so = match static_optimization::StaticOptimizationSetup::from_xml(
-                    element,
-                    common.clone(),
-                ) {
-                    Ok(so) => so,
-                    Err(e) => {
-                        report.errors.push(e);
-                        continue;
-                    }
-                };
-                match static_optimization::SoProblem::build_from(setup, &so, am.clone()) {
+        match a {
+            Analysis::StaticOptimization(so) => {
+                match static_optimization::SoProblem::build_from(setup, so, am.clone()) {
                     Ok((_, w)) => report.warnings.extend(w),
                     Err(e) => report.errors.push(e),
                 }
             }
-            "JointReaction" => {
-                let dir = setup.dir();
-                match joint_reaction::JointReactionSetup::from_xml(element, common.clone(), dir) {
-                    // Without a forces file the reactions come from the
-                    // setup's own static optimization (checked above); a
-                    // forces file from an earlier run need not exist yet.
-                    Ok(jr) if jr.forces_file.as_ref().is_none_or(|f| !f.exists()) => {}
-                    Ok(jr) => {
-                        if let Err(e) = joint_reaction::JointReactionProblem::build(setup, &jr) {
-                            report.errors.push(e);
-                        }
-                    }
-                    Err(e) => report.errors.push(e),
+            // Without a forces file the reactions come from the setup's own
+            // static optimization (checked above); a forces file from an
+            // earlier run need not exist yet.
+            Analysis::JointReaction(jr) if jr.forces_file.as_ref().is_some_and(|f| f.exists()) => {
+                if let Err(e) = joint_reaction::JointReactionProblem::build(setup, jr) {
+                    report.errors.push(e);
                 }
+            }
+            Analysis::Unsupported { element, common } if common.on => {
+                report.errors.push(element.error(format!(
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction",
+                    element.name
+                )));
             }
             _ => {}
         }
@@ -163,5 +201,59 @@ fn check_inverse_dynamics(setup: &InverseDynamicsSetup, report: &mut CheckReport
             Err(e) => report.errors.push(e),
         },
         Err(e) => report.errors.push(e),
+    }
+}
+
+/// The tables a setup's `<Figure>`s and `<Metric>`s name (relative to its
+/// results directory, drawn after the run): each must be one this setup
+/// writes (named after it; a w0 its static optimization runs) or exist
+/// already.
+fn check_figure_references(setup: &AnalyzeSetup, report: &mut CheckReport) {
+    use crate::writers::names;
+    let tags: Vec<String> = match setup.static_optimization() {
+        Some(so) if so.contact_weights.len() > 1 => so
+            .contact_weights
+            .iter()
+            .map(|w| names::w0_tag(*w))
+            .chain(names::SWEEP_STATS.map(String::from))
+            .collect(),
+        _ => Vec::new(),
+    };
+    let mut visit = |el: &crate::xml::Element| {
+        for attr in ["file", "mean", "min", "max"] {
+            let Some(value) = el.attr(attr) else { continue };
+            let path = crate::parse::setup::resolve(&setup.results_directory, value);
+            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+            let ours = file.starts_with(&format!("{}_", setup.name))
+                && path.parent() == Some(setup.results_directory.as_path());
+            if !ours {
+                if !path.is_file() {
+                    report.errors.push(el.error(format!(
+                        "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results directory)",
+                        path.display(),
+                        setup.name
+                    )));
+                }
+                continue;
+            }
+            if let Some(tag) = names::w0_tag_in(file) {
+                if !tags.iter().any(|t| t == tag) {
+                    report.errors.push(el.error(format!(
+                        "{attr}=\"{value}\": names w0 = {tag}, but the setup runs {}",
+                        if tags.is_empty() {
+                            "a single w0 (its tables carry no w0 in their names)".to_string()
+                        } else {
+                            format!("w0 = {}", tags[..tags.len() - 3].join(", "))
+                        }
+                    )));
+                }
+            }
+        }
+    };
+    for f in &setup.figures {
+        visit(f);
+        for c in &f.children {
+            visit(c);
+        }
     }
 }

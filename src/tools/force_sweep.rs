@@ -30,7 +30,7 @@ use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, CONTACT_
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::reactions::linear::ReactionBasis;
-use crate::reactions::{column_labels, resolve_reactions, JointReactionSetup, ReactionSpec};
+use crate::reactions::{column_labels, resolve_reactions, ReactionSpec};
 use crate::tools::analyze::open_state_stream_with;
 use crate::tools::study::metric_value;
 use crate::tools::RunOptions;
@@ -361,15 +361,11 @@ struct Plan {
 impl Plan {
     fn compile(setup: &AnalyzeSetup) -> Result<Plan> {
         let at = || Location::file(&setup.setup_file);
-        let (so_el, so_common) = setup
+        let so: StaticOptimizationSetup = setup
             .analyses
             .iter()
             .find_map(|a| match a {
-                Analysis::Other { element, common }
-                    if element.name == "StaticOptimization" && common.on =>
-                {
-                    Some((element, common))
-                }
+                Analysis::StaticOptimization(so) if so.common.on => Some((**so).clone()),
                 _ => None,
             })
             .ok_or_else(|| {
@@ -384,14 +380,13 @@ impl Plan {
                 "a force sweep runs the full model: turn reduce_model off",
             ));
         }
-        let so = StaticOptimizationSetup::from_xml(so_el, so_common.clone())?;
         if so.constraint_matrix == ConstraintMatrix::Perturbation {
             return Err(Error::input(
                 at().with_element("<constraint_matrix>"),
                 "a force sweep needs the analytic constraint matrix (perturbation rows are accelerations: a candidate's forces would change every row)",
             ));
         }
-        let (mut problem, mut warnings) = SoProblem::build(setup, &so)?;
+        let (problem, mut warnings) = SoProblem::build(setup, &so)?;
         if !problem.knees.is_empty() {
             // Its rows' right-hand side holds forces of the frame a
             // candidate would change; not handled yet.
@@ -400,16 +395,14 @@ impl Plan {
                 "a force sweep does not handle the knee contact method yet: sweep the setup without <knee_contact>",
             ));
         }
-        problem.w0 = so.contact_weights[0];
         let mut coupled = Vec::new();
-        for a in &setup.analyses {
-            if let Analysis::Other { element, common } = a {
-                if element.name == "JointReaction" && common.on {
-                    let jr = JointReactionSetup::from_xml(element, common.clone(), setup.dir())?;
+        for jr in setup.joint_reactions() {
+            {
+                if jr.common.on {
                     if jr.forces_file.is_some() {
                         continue;
                     }
-                    let (specs, w) = resolve_reactions(&problem.model, &jr)?;
+                    let (specs, w) = resolve_reactions(&problem.model, jr)?;
                     warnings.extend(w);
                     let labels = column_labels(&specs);
                     let knee = if jr.knee_loads {
@@ -1008,10 +1001,11 @@ pub fn read_element(
     let w0s: Vec<f64> = match el.child("contact_weight") {
         Some(c) => c.numbers()?,
         None => {
-            let (so_el, common) = setup
-                .analysis_element("StaticOptimization")
-                .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?;
-            StaticOptimizationSetup::from_xml(so_el, common.clone())?.contact_weights
+            setup
+                .static_optimization()
+                .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
+                .contact_weights
+                .clone()
         }
     };
     if w0s.is_empty() {

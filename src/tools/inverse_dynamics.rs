@@ -154,7 +154,11 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         .results_dir
         .clone()
         .unwrap_or_else(|| setup.results_directory.clone());
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    crate::parse::setup::create_results_dir(
+        &dir,
+        &setup.results_directory_loc,
+        opts.results_dir.is_some(),
+    )?;
     let out = dir.join(&setup.output_gen_force_file);
     let mut writer = StoWriter::create_for_setup(
         &setup.setup_file,
@@ -171,6 +175,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     // The frame driver every analysis uses: frames in parallel chunks,
     // written in order; a stop request ends the run after a whole chunk.
     let mut last_t = None;
+    let mut written = 0usize;
     let completed = crate::frame::driver::for_each_frame(
         &mut frames,
         i0,
@@ -187,6 +192,7 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         },
         |(t, tau)| {
             last_t = Some(t);
+            written += 1;
             writer.write_row(t, &tau)
         },
     )?;
@@ -194,11 +200,13 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     let stopped =
         (!completed).then(|| (crate::frame::interrupt::requested().unwrap_or(130), last_t));
     Ok(RunSummary {
-        frames: i1 + 1 - i0,
+        // After a stop, the frames written (the table holds them).
+        frames: if completed { i1 + 1 - i0 } else { written },
         stopped,
         results_dirs: vec![dir.clone()],
         files: vec![out],
         warnings,
+        unused_properties: setup.unused_properties.clone(),
         ..Default::default()
     })
 }

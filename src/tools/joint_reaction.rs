@@ -42,11 +42,10 @@
 
 use crate::error::Result;
 use crate::frame::workspace::Workspace;
-use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
+use crate::parse::setup::AnalyzeSetup;
 use crate::storage::StoWriter;
 use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
-use crate::xml::Element;
 
 // The JointReaction analysis's parts are the `reactions` stage (the table's
 // description, `writers::tables`); these paths stay for users.
@@ -59,24 +58,15 @@ pub use crate::reactions::problem::{JointReactionProblem, WithForces};
 pub use crate::reactions::setup::{resolve_reactions, JointReactionSetup};
 pub use crate::writers::tables::JOINT_REACTION_DESCRIPTION as DESCRIPTION;
 
-pub fn run(
-    setup: &AnalyzeSetup,
-    el: &Element,
-    common: &AnalysisCommon,
-    opts: &RunOptions,
-) -> Result<RunSummary> {
-    let setup_dir = setup.dir();
-    let jr = JointReactionSetup::from_xml(el, common.clone(), setup_dir)?;
-    let (problem, mut warnings) = JointReactionProblem::build(setup, &jr)?;
+pub fn run(setup: &AnalyzeSetup, jr: &JointReactionSetup, opts: &RunOptions) -> Result<RunSummary> {
+    let (problem, mut warnings) = JointReactionProblem::build(setup, jr)?;
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_state_stream(setup, &problem.model)?;
     warnings.extend(stream.motion_warnings(&[]));
-    if !stream.missing.is_empty() {
-        warnings.push(format!(
-            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            stream.missing
-        ));
-    }
+    warnings.extend(crate::tools::analyze::missing_columns_warning(
+        setup,
+        &stream.missing,
+    ));
     let (i0, i1, step) = (stream.first_row, stream.last_row, jr.common.step_interval);
     let nframes = if i1 < i0 {
         0
@@ -147,6 +137,7 @@ pub fn run(
 mod tests {
     use super::*;
     use crate::dynamics::{kinematics, rnea, BodyForce, Data};
+    use crate::parse::setup::AnalysisCommon;
     use crate::forces::actuators::{Actuator, ActuatorKind};
     use crate::model::{compile, Model};
     use crate::parse::osim::ModelSpec;

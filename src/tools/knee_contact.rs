@@ -23,7 +23,6 @@ use crate::reactions::ReactionSpec;
 use crate::storage::{self, StoWriter};
 use crate::tools::knee_loads::flexion_degrees;
 use crate::tools::{RunOptions, RunSummary};
-use crate::xml::Element;
 
 /// The name of the reactions the method reports (`<name>_KneeContact_ReactionLoads.sto`).
 pub const REACTIONS_NAME: &str = "KneeContact";
@@ -141,23 +140,14 @@ pub fn run(setup_file: &Path, joints: &[String], opts: &RunOptions) -> Result<Ru
     };
     let mut found = false;
     for a in setup.analyses.iter_mut() {
-        if let Analysis::Other { element, .. } = a {
-            if element.name == "StaticOptimization" {
-                element.children.retain(|c| c.name != "knee_contact");
-                element.children.push(Element {
-                    name: "knee_contact".into(),
-                    attrs: Vec::new(),
-                    children: Vec::new(),
-                    text: if joints.is_empty() {
-                        "all".into()
-                    } else {
-                        joints.join(" ")
-                    },
-                    line: element.line,
-                    file: element.file.clone(),
-                });
-                found = true;
-            }
+        if let Analysis::StaticOptimization(so) = a {
+            let words = if joints.is_empty() {
+                "all".to_string()
+            } else {
+                joints.join(" ")
+            };
+            **so = so.with_option("knee_contact", &words)?;
+            found = true;
         }
     }
     if !found {

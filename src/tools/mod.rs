@@ -48,6 +48,10 @@ pub struct RunOptions {
     pub sync: bool,
     /// Told how frame loops advance (embedding callers; see [`progress`]).
     pub progress: Option<progress::ProgressHook>,
+    /// Read on past elements of a setup document neither OpenSim nor
+    /// statopt knows, with a warning (`--allow-unknown`); without it they
+    /// are errors (see `parse::known::setup_elements`).
+    pub allow_unknown: bool,
 }
 
 /// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
@@ -56,7 +60,10 @@ pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<Ru
     let summary = if study::is_study(setup) {
         study::run(setup, opts)?
     } else {
-        run_parsed(crate::parse::setup::Setup::read(setup)?, opts)?
+        run_parsed(
+            crate::parse::setup::Setup::read_with(setup, opts.allow_unknown)?,
+            opts,
+        )?
     };
     synced(summary, opts)
 }
@@ -108,7 +115,10 @@ pub fn run_setup_text(
     opts: &RunOptions,
 ) -> crate::Result<RunSummary> {
     synced(
-        run_parsed(crate::parse::setup::Setup::parse(text, setup)?, opts)?,
+        run_parsed(
+            crate::parse::setup::Setup::parse_with(text, setup, opts.allow_unknown)?,
+            opts,
+        )?,
         opts,
     )
 }
@@ -161,6 +171,9 @@ pub struct RunSummary {
     /// Set when a signal stopped the run: the exit status it asks for and
     /// the time of the last frame written (None: none was).
     pub stopped: Option<(u8, Option<f64>)>,
+    /// OpenSim properties the setups hold that statopt accepts but does not
+    /// use (listed once in the report).
+    pub unused_properties: Vec<String>,
 }
 
 /// Exit status of a run in which some frames could not be solved (the
@@ -210,17 +223,23 @@ impl RunSummary {
         if self.stopped.is_none() {
             self.stopped = other.stopped;
         }
+        for p in other.unused_properties {
+            if !self.unused_properties.contains(&p) {
+                self.unused_properties.push(p);
+            }
+        }
     }
 
     /// The line that says where a stopped run stopped, if it was stopped.
     pub fn stopped_line(&self) -> Option<String> {
         self.stopped.map(|(_, t)| {
             format!(
-                "stopped by a signal {}; every table and the MCAP log hold the frames solved so far and are closed; run again to compute the rest",
+                "stopped by a signal {}; every table and the MCAP log hold the {} frames solved so far and are closed; run the same command again with --resume to compute the rest (the tables then equal an uninterrupted run's)",
                 match t {
-                    Some(t) => format!("after the frame at t = {t}"),
+                    Some(t) => format!("after the frame at t = {}", crate::storage::fmt_time(t)),
                     None => "before the first frame".to_string(),
-                }
+                },
+                self.frames
             )
         })
     }
@@ -258,6 +277,12 @@ impl RunSummary {
         if let Some((v, at)) = &self.root_moment_peak {
             out.push(format!(
                 "residual actuators on the root joint carried at most {v:.3} N m, {at}"
+            ));
+        }
+        if !self.unused_properties.is_empty() {
+            out.push(format!(
+                "accepted but not used by statopt (OpenSim 4.6 properties): {}",
+                self.unused_properties.join(", ")
             ));
         }
         let dirs: Vec<String> = self

@@ -39,12 +39,10 @@ pub fn run(
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_state_stream(setup, &model)?;
     warnings.extend(stream.motion_warnings(&[]));
-    if !stream.missing.is_empty() {
-        warnings.push(format!(
-            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            stream.missing
-        ));
-    }
+    warnings.extend(crate::tools::analyze::missing_columns_warning(
+        setup,
+        &stream.missing,
+    ));
     // Muscles and coordinates to report.
     let names = select(
         &ma.muscle_list,

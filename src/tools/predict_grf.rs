@@ -358,7 +358,7 @@ fn draw_comparison(
         ));
     }
     panels.push(chart);
-    crate::plots::write_panels(&panels, stem, Layout::row(4))
+    crate::plots::write_panels(&panels, stem, Layout::column(4))
 }
 
 /// `statopt-tool predict-grf SETUP`: read the setup file (or take it as
@@ -711,27 +711,13 @@ fn torque_driven_strength(
 /// analysis (`(default, false)`).
 fn use_contact_weight(setup: &mut AnalyzeSetup, default: f64) -> (f64, bool) {
     for a in setup.analyses.iter_mut() {
-        if let crate::parse::setup::Analysis::Other { element, .. } = a {
-            if element.name != "StaticOptimization" {
-                continue;
-            }
-            if let Some(w) = element
-                .child("contact_weight")
-                .and_then(|w| w.numbers().ok())
-            {
-                if let Some(first) = w.first() {
+        if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
+            if so.contact_weights_given {
+                if let Some(first) = so.contact_weights.first() {
                     return (*first, true);
                 }
             }
-            let w = crate::xml::Element {
-                name: "contact_weight".to_string(),
-                attrs: Vec::new(),
-                children: Vec::new(),
-                text: format!("{default}"),
-                line: element.line,
-                file: element.file.clone(),
-            };
-            element.children.push(w);
+            so.contact_weights = vec![default];
             return (default, false);
         }
     }
@@ -1112,29 +1098,9 @@ fn write_external_loads(
 /// pelvis would carry the body as cheaply as the feet).
 fn take_reserve_actuators(setup: &mut AnalyzeSetup) -> Result<Option<f64>> {
     for a in setup.analyses.iter_mut() {
-        if let crate::parse::setup::Analysis::Other { element, .. } = a {
-            if element.name != "StaticOptimization" {
-                continue;
-            }
-            let Some(k) = element
-                .children
-                .iter()
-                .position(|c| c.name == "reserve_actuators")
-            else {
-                return Ok(None);
-            };
-            let r = &element.children[k];
-            if r.text().trim().is_empty() {
-                return Ok(None);
-            }
-            let v = r.f64()?;
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(r.error(format!(
-                    "reserve_actuators is the reserves' optimal force and must be positive, found {v}"
-                )));
-            }
-            element.children.remove(k);
-            return Ok(Some(v));
+        if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
+            // Checked (positive, finite) when the setup was read.
+            return Ok(so.reserve_actuators.take());
         }
     }
     Ok(None)
@@ -1335,8 +1301,8 @@ mod tests {
     /// not once per plate.
     #[test]
     fn predicted_loads_load_each_foot_once_whatever_its_plates() {
-        let dir = std::env::temp_dir().join(format!("statopt_plates_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = crate::test_dir::TempDir::new("plates");
+        let dir = tmp.path().to_path_buf();
         let plate = |name: &str, body: &str, id: &str| ForceLayout {
             name: name.into(),
             body: body.into(),

@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::forces::analysis_model::load_analysis_model;
 use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
-use crate::parse::setup::{AnalysisCommon, AnalyzeSetup};
+use crate::parse::setup::AnalyzeSetup;
 use crate::reactions::{
     resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
@@ -30,7 +30,6 @@ use crate::writers::resume::resume_point;
 use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
 use crate::writers::sweep_statistics::write_sweep_statistics;
-use crate::xml::Element;
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
 pub use crate::frame::problem::{
@@ -43,25 +42,16 @@ pub use crate::frame::settings::{
 
 pub use crate::writers::run_statistics::ROOT_RESIDUAL_WARNING;
 
-/// Format a contact weight for file names: `500`, `0.001`, `1e+06`.
-pub fn w0_tag(w0: f64) -> String {
-    let t = format!("{w0}");
-    if t.len() <= 8 {
-        t
-    } else {
-        format!("{w0:e}")
-    }
-}
+pub use crate::writers::names::w0_tag;
+use crate::writers::names::{self, Sweep};
 
 pub fn run(
     setup: &AnalyzeSetup,
-    el: &Element,
-    common: &AnalysisCommon,
+    so: &StaticOptimizationSetup,
     reactions: &[JointReactionSetup],
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    let so = StaticOptimizationSetup::from_xml(el, common.clone())?;
-    let (mut problem, mut warnings, reduction) = if setup.reduce_model {
+    let (problem, mut warnings, reduction) = if setup.reduce_model {
         let am = load_analysis_model(setup)?;
         let (am, r) = crate::tools::reduce::reduce(
             setup,
@@ -70,10 +60,10 @@ pub fn run(
             so.passive_fiber_forces,
             reactions,
         )?;
-        let (p, w) = SoProblem::build_from(setup, &so, am)?;
+        let (p, w) = SoProblem::build_from(setup, so, am)?;
         (p, w, Some(r))
     } else {
-        let (p, w) = SoProblem::build(setup, &so)?;
+        let (p, w) = SoProblem::build(setup, so)?;
         (p, w, None)
     };
     // The states are streamed block by block (motion::stream): memory stays
@@ -86,23 +76,25 @@ pub fn run(
         .map(|r| r.coordinates_dropped.clone())
         .unwrap_or_default();
     warnings.extend(stream.motion_warnings(&dropped));
-    if !stream.missing.is_empty() {
-        warnings.push(format!(
-            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            stream.missing
-        ));
-    }
+    warnings.extend(crate::tools::analyze::missing_columns_warning(
+        setup,
+        &stream.missing,
+    ));
     let step_interval = so.common.step_interval;
-    let frames = frame_count(stream.first_row, stream.last_row, step_interval);
     let dir = results_dir(setup, opts)?;
-    let base = format!("{}_{}_", setup.name, so.common.name);
+    let so_name = so.common.name.as_str();
+    // Frames come from the runs' summaries: after a stop, those written.
     let mut summary = RunSummary {
-        frames,
         warnings: Vec::new(),
         ..Default::default()
     };
     if let Some(r) = &reduction {
-        let path = dir.join(format!("{base}reduction.txt"));
+        let path = dir.join(names::file_name(
+            &setup.name,
+            so_name,
+            Sweep::Single,
+            "reduction.txt",
+        ));
         r.write(&path)?;
         summary.files.push(path);
         warnings.extend(r.summary_lines());
@@ -134,18 +126,13 @@ pub fn run(
     let specs: Vec<RunSpec> = weights
         .iter()
         .map(|&w0| {
-            let prefix = if sweep {
-                format!("{base}w0_{}_", w0_tag(w0))
+            let run = if sweep {
+                Sweep::Weight(w0)
             } else {
-                base.clone()
+                Sweep::Single
             };
-            let jr_prefix = |name: &str| {
-                if sweep {
-                    format!("{}_{name}_w0_{}_", setup.name, w0_tag(w0))
-                } else {
-                    format!("{}_{name}_", setup.name)
-                }
-            };
+            let prefix = names::prefix(&setup.name, so_name, run);
+            let jr_prefix = |name: &str| names::prefix(&setup.name, name, run);
             RunSpec {
                 w0,
                 prefix,
@@ -156,7 +143,6 @@ pub fn run(
             }
         })
         .collect();
-    problem.w0 = weights[0];
     let summaries = run_sweep(
         &problem,
         stream,
@@ -165,7 +151,7 @@ pub fn run(
         &dir,
         &specs,
         opts,
-        base.trim_end_matches('_'),
+        &format!("{}_{so_name}", setup.name),
     )?;
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
@@ -245,11 +231,18 @@ pub fn run(
                 .iter()
                 .map(|p| dir.join(format!("{p}{kind}.sto")))
                 .collect();
+            let stat_path = |stat: &str| {
+                dir.join(names::file_name(
+                    &setup.name,
+                    so_name,
+                    Sweep::Stat(stat),
+                    &format!("{kind}.sto"),
+                ))
+            };
             summary.files.extend(write_sweep_statistics(
                 &setup.setup_file,
                 &files,
-                &dir,
-                &format!("{base}w0_"),
+                &stat_path,
                 kind,
                 &weights,
                 precision,
@@ -265,18 +258,26 @@ pub fn run(
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
                     .map(|w0| {
-                        dir.join(format!(
-                            "{}_{name}_w0_{}_{kind}.sto",
-                            setup.name,
-                            w0_tag(*w0)
+                        dir.join(names::file_name(
+                            &setup.name,
+                            name,
+                            Sweep::Weight(*w0),
+                            &format!("{kind}.sto"),
                         ))
                     })
                     .collect();
+                let stat_path = |stat: &str| {
+                    dir.join(names::file_name(
+                        &setup.name,
+                        name,
+                        Sweep::Stat(stat),
+                        &format!("{kind}.sto"),
+                    ))
+                };
                 summary.files.extend(write_sweep_statistics(
                     &setup.setup_file,
                     &files,
-                    &dir,
-                    &format!("{}_{name}_w0_", setup.name),
+                    &stat_path,
                     kind,
                     &weights,
                     precision,
@@ -386,6 +387,12 @@ impl<'a> RunWriters<'a> {
         } else {
             None
         };
+        let mut stats = RunStatistics::new(problem);
+        if let Some(r) = &resume {
+            // The frames an earlier run wrote count in this run's summary:
+            // read back before the tables are reopened.
+            stats.observe_tables(problem, dir, prefix, r.keep)?;
+        }
         let tables = SoTables::open(
             problem,
             &TablesSpec {
@@ -411,7 +418,7 @@ impl<'a> RunWriters<'a> {
             log_path,
             log: Some(log),
             skip_until,
-            stats: RunStatistics::new(problem),
+            stats,
         })
     }
 
@@ -441,6 +448,9 @@ impl<'a> RunWriters<'a> {
             log.finish()?;
         }
         let mut stats = self.stats;
+        // A stopped run counts the frames its tables hold (a resumed run's
+        // earlier frames included), not the frames it meant to solve.
+        let nframes = if completed { nframes } else { stats.frames };
         let warnings = stats.warnings(problem, nframes, &diag_path);
         let root_body_weight = stats.root_body_weight(problem);
         let note = if shared > 1 {
@@ -478,6 +488,7 @@ impl<'a> RunWriters<'a> {
             root_force_series: std::mem::take(&mut stats.root_force_series),
             notes: vec![note],
             results_dirs: Vec::new(),
+            unused_properties: Vec::new(),
             stopped: (!completed).then(|| {
                 (
                     crate::tools::interrupt::requested().unwrap_or(130),

@@ -188,10 +188,14 @@ fn figure(el: &Element, tables: &Tables, out: &Path) -> Result<Vec<PathBuf>> {
     panels.push(chart);
     let stem = out.join(name);
     if panels.len() == 1 {
+        // 1600 px wide: read at a page's or screen's width, the text has
+        // its normal size.
+        panels[0].size = (1600, 900);
         plots::write(&panels[0], &stem)
     } else {
+        // Panels stacked, each as wide as a single chart.
         let n = panels.len();
-        plots::write_panels(&panels, &stem, Layout::row(n))
+        plots::write_panels(&panels, &stem, Layout::column(n))
     }
 }
 
@@ -306,24 +310,20 @@ struct PlannedRun {
     only_file: Option<String>,
 }
 
-fn plan(p: PathBuf, moved_to: Option<&Path>) -> Result<PlannedRun> {
-    let setup = Setup::read(&p)?;
+fn plan(p: PathBuf, moved_to: Option<&Path>, allow_unknown: bool) -> Result<PlannedRun> {
+    let setup = Setup::read_with(&p, allow_unknown)?;
     let mut only_file = None;
     let (own_dir, name, w0_tags) = match &setup {
         Setup::Analyze(a) => {
             let mut tags = Vec::new();
-            if let Some((el, common)) = a.analysis_element("StaticOptimization") {
-                let so = crate::tools::static_optimization::StaticOptimizationSetup::from_xml(
-                    el,
-                    common.clone(),
-                )?;
+            if let Some(so) = a.static_optimization() {
                 if so.contact_weights.len() > 1 {
                     tags.extend(
                         so.contact_weights
                             .iter()
-                            .map(|w| crate::tools::static_optimization::w0_tag(*w)),
+                            .map(|w| crate::writers::names::w0_tag(*w)),
                     );
-                    tags.extend(["mean", "min", "max"].map(String::from));
+                    tags.extend(crate::writers::names::SWEEP_STATS.map(String::from));
                 }
             }
             (a.results_directory.clone(), a.name.clone(), tags)
@@ -413,8 +413,7 @@ fn check_and_move_references(
                     run.name
                 )));
             }
-            if let Some(k) = file.find("_w0_") {
-                let tag = file[k + 4..].split('_').next().unwrap_or("");
+            if let Some(tag) = crate::writers::names::w0_tag_in(file) {
                 if !run.w0_tags.iter().any(|t| t == tag) {
                     return Err(el.error(format!(
                         "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
@@ -483,21 +482,60 @@ pub fn setup_files(path: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// Everything [`run`] checks before its first run; returns the setup files.
-pub fn check(path: &Path) -> Result<Vec<PathBuf>> {
+pub fn check(path: &Path, allow_unknown: bool) -> Result<Vec<PathBuf>> {
     let root = xml::parse_file(path)?;
     let study = study_element(&root)?;
     let dir = study_dir(path);
-    let (runs, _, _) = prepare(study, &dir, None)?;
+    let (runs, _, _, _) = prepare(study, &dir, None, allow_unknown)?;
     Ok(runs.into_iter().map(|r| r.file).collect())
+}
+
+/// The study's own `<results_directory>` (its figures and metrics), if a
+/// run could not write there.
+pub fn check_results_directory(path: &Path) -> Result<()> {
+    let root = xml::parse_file(path)?;
+    let study = study_element(&root)?;
+    let dir = study_dir(path);
+    let out = resolve(&dir, study.child_text("results_directory").unwrap_or("."));
+    match crate::parse::setup::results_dir_problem(&out) {
+        Some(p) => Err(study
+            .child("results_directory")
+            .unwrap_or(study)
+            .error(format!("<results_directory> names {}, which {p}", out.display()))),
+        None => Ok(()),
+    }
+}
+
+/// The elements of a study document neither statopt nor OpenSim knows
+/// (see `parse::known::study_elements`), one error each.
+pub fn unknown_elements(path: &Path) -> Result<Vec<Error>> {
+    let root = xml::parse_file(path)?;
+    Ok(crate::parse::known::study_elements(study_element(&root)?))
 }
 
 /// Plan the runs, check every reference and metric, and point figure
 /// references at where the runs will write.
+/// Also returns warnings: unknown elements read on (`allow_unknown`).
+#[allow(clippy::type_complexity)]
 fn prepare(
     study: &Element,
     dir: &Path,
     moved_to: Option<&Path>,
-) -> Result<(Vec<PlannedRun>, Vec<Element>, Vec<(PathBuf, Location)>)> {
+    allow_unknown: bool,
+) -> Result<(
+    Vec<PlannedRun>,
+    Vec<Element>,
+    Vec<(PathBuf, Location)>,
+    Vec<String>,
+)> {
+    let unknown = crate::parse::known::study_elements(study);
+    let mut warnings = Vec::new();
+    if let Some(first) = unknown.into_iter().next() {
+        if !allow_unknown {
+            return Err(first);
+        }
+        warnings.push(format!("{first} (read on: --allow-unknown)"));
+    }
     let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
     let sweeps: Vec<&Element> = study
         .children
@@ -512,7 +550,7 @@ fn prepare(
     }
     let runs: Vec<PlannedRun> = setups
         .iter()
-        .map(|s| plan(resolve(dir, s), moved_to))
+        .map(|s| plan(resolve(dir, s), moved_to, allow_unknown))
         .collect::<Result<_>>()?;
     let mut elements: Vec<Element> = study
         .children
@@ -539,7 +577,7 @@ fn prepare(
             return Err(m.error("op 'at' needs a numeric value attribute"));
         }
     }
-    Ok((runs, elements, expected))
+    Ok((runs, elements, expected, warnings))
 }
 
 /// Run a study document. Everything it names is checked before the first
@@ -571,7 +609,34 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let root = xml::parse_file(path)?;
     let study = study_element(&root)?;
     let dir = study_dir(path);
-    let (runs, elements, expected) = prepare(study, &dir, opts.results_dir.as_deref())?;
+    let (runs, elements, expected, warnings) = prepare(
+        study,
+        &dir,
+        opts.results_dir.as_deref(),
+        opts.allow_unknown,
+    )?;
+    let out = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
+    crate::parse::setup::create_results_dir(
+        &out,
+        &study.child("results_directory").unwrap_or(study).loc(),
+        opts.results_dir.is_some(),
+    )?;
+    // Every setup's results folder before the first run writes anything.
+    for r in &runs {
+        if let Some(p) = crate::parse::setup::results_dir_problem(&r.out_dir) {
+            let loc = match &r.setup {
+                Setup::Analyze(a) => a.results_directory_loc.clone(),
+                Setup::InverseDynamics(i) => i.results_directory_loc.clone(),
+            };
+            return Err(Error::input(
+                loc,
+                format!("<results_directory> names {}, which {p}", r.out_dir.display()),
+            ));
+        }
+    }
     // The setups are independent: they run side by side (each one's frames in
     // parallel too), so that one setup's serial parts (loading, closing the
     // contacts, sweep statistics) overlap another's frames. Summaries are
@@ -591,7 +656,10 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             }
         })
         .collect();
-    let mut summary = RunSummary::default();
+    let mut summary = RunSummary {
+        warnings,
+        ..Default::default()
+    };
     for (r, done) in runs.iter().zip(done) {
         let s = r.file.display().to_string();
         summary.absorb(done?, Some(s.as_str()));
@@ -613,10 +681,6 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             ));
         }
     }
-    let out = opts
-        .results_dir
-        .clone()
-        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
     // Force sweeps: candidates of one setup on one compiled scene, their
     // metrics in <name>_force_sweep.csv (tools::force_sweep).
     for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {

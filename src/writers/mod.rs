@@ -16,6 +16,7 @@
 //!   frames, worst residual, bounds reached, reserve and root residual
 //!   peaks) and the warnings made from it.
 pub mod frame_log;
+pub mod names;
 pub mod resume;
 pub mod run_statistics;
 pub mod so_tables;

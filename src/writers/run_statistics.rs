@@ -35,6 +35,8 @@ pub struct RunStatistics {
     at_bound: Vec<(String, usize, f64)>,
     /// Time of the last frame observed.
     pub last: Option<f64>,
+    /// Frames observed (a resumed run's kept frames included).
+    pub frames: usize,
 }
 
 impl RunStatistics {
@@ -76,57 +78,137 @@ impl RunStatistics {
             root_force_series: Vec::new(),
             at_bound: Vec::new(),
             last: None,
+            frames: 0,
         }
     }
 
     /// Take in one frame's result (frames in order).
     pub fn observe(&mut self, problem: &SoProblem, r: &FrameResult) {
-        if !r.solution.status.is_ok() {
+        let failed = (!r.solution.status.is_ok()).then(|| format!("{:?}", r.solution.status));
+        self.observe_values(
+            problem,
+            r.time,
+            failed,
+            r.solution.eq_residual,
+            &r.solution.x,
+            |v| r.forces[v],
+            &r.by_source,
+        );
+    }
+
+    /// Take in one frame: its time, why it failed (None: solved), its
+    /// equation residual, controls `x`, each control's force and the
+    /// generalized forces by source (4 per row of the problem).
+    #[allow(clippy::too_many_arguments)]
+    fn observe_values(
+        &mut self,
+        problem: &SoProblem,
+        time: f64,
+        failed: Option<String>,
+        eq_residual: f64,
+        x: &[f64],
+        force: impl Fn(usize) -> f64,
+        by_source: &[f64],
+    ) {
+        let at = crate::storage::fmt_time(time);
+        self.frames += 1;
+        if let Some(status) = failed {
             self.failures.push(format!(
-                "t={}: {:?}, equation residual {:.3e}",
-                r.time, r.solution.status, r.solution.eq_residual
+                "t={at}: {status}, equation residual {eq_residual:.3e}"
             ));
         } else {
-            self.worst_residual = self.worst_residual.max(r.solution.eq_residual);
+            self.worst_residual = self.worst_residual.max(eq_residual);
         }
         let mut root_force2 = 0.0;
         for (k, &(row, translational)) in self.root_rows.iter().enumerate() {
             // by_source holds, per row: required, muscles, actuators, contacts.
-            let v = r.by_source[4 * row + 2].abs();
+            let v = by_source[4 * row + 2].abs();
             if translational {
                 root_force2 += v * v;
             }
             let peak = &mut self.root_peaks[usize::from(!translational)];
             if v > peak.as_ref().map_or(0.0, |p| p.0) {
-                *peak = Some((v, format!("{} at t={}", self.root_names[k], r.time)));
+                *peak = Some((v, format!("{} at t={at}", self.root_names[k])));
             }
         }
         if self.root_rows.iter().any(|r| r.1) {
-            self.root_force_series.push((r.time, root_force2.sqrt()));
+            self.root_force_series.push((time, root_force2.sqrt()));
         }
         let nv = problem.controls.len();
         for v in 0..nv {
             let up = problem.upper[v];
-            if up.is_finite() && r.solution.x[v] >= up - 1e-6 {
+            if up.is_finite() && x[v] >= up - 1e-6 {
                 match self
                     .at_bound
                     .iter_mut()
                     .find(|(n, _, _)| *n == problem.labels[v])
                 {
                     Some(e) => e.1 += 1,
-                    None => self.at_bound.push((problem.labels[v].clone(), 1, r.time)),
+                    None => self.at_bound.push((problem.labels[v].clone(), 1, time)),
                 }
             }
         }
         for &v in &self.reserve_vars {
-            if r.forces[v].abs() > self.reserve_peak.0 {
-                self.reserve_peak = (
-                    r.forces[v].abs(),
-                    format!("{} at t={}", problem.labels[v], r.time),
-                );
+            let f = force(v).abs();
+            if f > self.reserve_peak.0 {
+                self.reserve_peak = (f, format!("{} at t={at}", problem.labels[v]));
             }
         }
-        self.last = Some(r.time);
+        self.last = Some(time);
+    }
+
+    /// Take in the first `keep` frames of a run's tables (`dir`, file names
+    /// starting `prefix`) as written: a resumed run's summary then covers
+    /// the whole run, the frames an earlier run wrote included (values as
+    /// the tables hold them, rounded to their precision).
+    pub fn observe_tables(
+        &mut self,
+        problem: &SoProblem,
+        dir: &std::path::Path,
+        prefix: &str,
+        keep: usize,
+    ) -> crate::error::Result<()> {
+        use crate::error::{Error, Location};
+        let read = |kind: &str| crate::storage::read(&dir.join(format!("{prefix}{kind}.sto")));
+        let act = read("activation")?;
+        let force = read("force")?;
+        let diag = read("diagnostics")?;
+        let src = read("GeneralizedForcesBySource")?;
+        let column = |t: &crate::storage::Storage, label: &str, kind: &str| {
+            t.column_index(label).ok_or_else(|| {
+                Error::input(
+                    Location::file(dir.join(format!("{prefix}{kind}.sto"))),
+                    format!("the table to resume lacks its column '{label}'"),
+                )
+            })
+        };
+        let status = column(&diag, "status", "diagnostics")?;
+        let residual = column(&diag, "equation_residual", "diagnostics")?;
+        let force_cols: Vec<Option<usize>> = problem
+            .labels
+            .iter()
+            .map(|l| force.column_index(l))
+            .collect();
+        let rows = keep
+            .min(act.rows.len())
+            .min(force.rows.len())
+            .min(diag.rows.len())
+            .min(src.rows.len());
+        for i in 0..rows {
+            let d = &diag.rows[i];
+            let failed = (d[status] < 0.0).then(|| "failed (status -1)".to_string());
+            let f = &force.rows[i];
+            self.observe_values(
+                problem,
+                diag.time[i],
+                failed,
+                d[residual],
+                &act.rows[i],
+                |v| force_cols[v].map_or(0.0, |j| f[j]),
+                &src.rows[i],
+            );
+        }
+        Ok(())
     }
 
     /// What reserve actuators carried at most, and where (None: the run
@@ -167,7 +249,12 @@ impl RunStatistics {
             let list: Vec<String> = self
                 .at_bound
                 .iter()
-                .map(|(n, k, t)| format!("{n} ({k} frames, first at t={t})"))
+                .map(|(n, k, t)| {
+                    format!(
+                        "{n} ({k} frames, first at t={})",
+                        crate::storage::fmt_time(*t)
+                    )
+                })
                 .collect();
             warnings.push(format!(
                 "activations at their upper bound: {}",

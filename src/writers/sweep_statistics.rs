@@ -8,11 +8,12 @@ use crate::storage::StoWriter;
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
 /// (the paper's uncertainty band, section 3.2). The runs' tables are read
 /// row by row in step, so memory does not grow with the trial's length.
+/// `stat_path` names the table of each statistic (`mean`, `min`, `max`;
+/// `writers::names`).
 pub fn write_sweep_statistics(
     setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
-    dir: &std::path::Path,
-    prefix: &str,
+    stat_path: &dyn Fn(&str) -> std::path::PathBuf,
     kind: &str,
     weights: &[f64],
     precision: usize,
@@ -31,11 +32,11 @@ pub fn write_sweep_statistics(
             )));
         }
     }
-    let stats = ["mean", "min", "max"];
+    let stats = crate::writers::names::SWEEP_STATS;
     let mut out = Vec::new();
     let mut writers = Vec::new();
     for stat in stats {
-        let path = dir.join(format!("{prefix}{stat}_{kind}.sto"));
+        let path = stat_path(stat);
         let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
         writers.push(StoWriter::create_for_setup(
             setup_file,

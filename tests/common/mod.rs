@@ -143,3 +143,28 @@ pub fn so_case(
     let (problem, _) = SoProblem::build(&setup, &so).unwrap();
     (setup, so, problem)
 }
+
+/// The cell of the README's table row starting `| {row} |` in the column
+/// headed `column` (the validation table's cases), or None.
+pub fn readme_cell(row: &str, column: &str) -> Option<String> {
+    let text = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .ok()?;
+    let lines: Vec<&str> = text.lines().collect();
+    let cells = |l: &str| -> Vec<String> {
+        l.trim()
+            .trim_matches('|')
+            .split(" | ")
+            .map(|c| c.trim().to_string())
+            .collect()
+    };
+    let r = lines
+        .iter()
+        .position(|l| l.starts_with(&format!("| {row} |")))?;
+    // The header: the first table line above the row.
+    let mut h = r;
+    while h > 0 && lines[h - 1].starts_with('|') {
+        h -= 1;
+    }
+    let j = cells(lines[h]).iter().position(|c| c == column)?;
+    cells(lines[r]).get(j).cloned()
+}

@@ -6,12 +6,10 @@ use super::*;
 use mcap::read::Options as ReadOptions;
 use std::collections::HashMap;
 
-/// A scratch directory shared by these tests; the files are kept so that
-/// `scripts/check_mcap.py` can be run on them afterwards.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join("statopt-mcaplog");
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir.join(name)
+/// A scratch file, removed when dropped (`STATOPT_KEEP_TEST_FILES=1`
+/// keeps it, to run `scripts/check_mcap.py` on it afterwards).
+fn scratch(name: &str) -> crate::test_dir::TempFile {
+    crate::test_dir::TempFile::new("mcaplog", name)
 }
 
 fn arm_like() -> StatoptChannels {

@@ -1,0 +1,312 @@
+//! The analyses of an AnalyzeTool setup as typed values: the
+//! StaticOptimization element (OpenSim's properties and statopt's
+//! additions, among them the contact weights w0) and the JointReaction
+//! element, each read once, with the element kept for located messages.
+//! Later stages re-export them where they are used
+//! (`frame::settings`, `reactions::setup`, `optimize`).
+
+use std::path::PathBuf;
+
+use crate::error::Result;
+use crate::parse::setup::{resolve, AnalysisCommon};
+use crate::xml::Element;
+
+/// Representation of the static friction cone. The default is the exact
+/// cone, as a StaticOptimization without `<friction_cone>` uses (README).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FrictionModel {
+    /// Four-sided circumscribed pyramid, eq. 16 of the paper.
+    Pyramid4,
+    /// Eight-sided circumscribed pyramid (faces tangent to the cone every 45°).
+    Pyramid8,
+    /// Exact second-order cone ‖(λs1, λs2)‖ ≤ μ_s λn (eq. 2).
+    #[default]
+    Cone,
+}
+
+/// Solver selection of the frame solve (`optimize::SolveSettings`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolverChoice {
+    /// The dual semismooth Newton method (`optimize::dual`) where it applies
+    /// and converges (to ‖A x − b‖∞ ≤ 1e-12·max(1, ‖b‖∞), accepting 1e-10,
+    /// whatever `tolerance` says), Clarabel otherwise (other exponents,
+    /// free variables of weight 0, contacts with bounds beyond λn ≥ 0 or
+    /// unequal weights, possibly infeasible frames).
+    #[default]
+    Auto,
+    /// Clarabel on every frame.
+    Clarabel,
+}
+
+/// Which knees a StaticOptimization solves with the knee contact method
+/// (`frame::knee_contact`, which re-exports it).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum KneeSelection {
+    /// Plain static optimization (OpenSim's).
+    #[default]
+    Off,
+    /// Every knee of the model (every joint whose child is a `tibia_*` body).
+    All,
+    /// The named joints.
+    Joints(Vec<String>),
+}
+
+/// The StaticOptimization element of an AnalyzeTool setup.
+#[derive(Debug, Clone)]
+pub struct StaticOptimizationSetup {
+    pub common: AnalysisCommon,
+    pub use_model_force_set: bool,
+    pub activation_exponent: f64,
+    pub use_muscle_physiology: bool,
+    /// OpenSim's IPOPT tolerance; statopt passes it to Clarabel only if it is
+    /// tighter than [`DEFAULT_TOLERANCE`].
+    pub convergence_criterion: f64,
+    pub max_iterations: u32,
+    /// statopt: add passive fiber force to each muscle (off by default, as
+    /// OpenSim ignores it).
+    pub passive_fiber_forces: bool,
+    /// statopt: add a CoordinateActuator `<coordinate>_reserve` with this
+    /// optimal force to every unconstrained coordinate, so that every frame
+    /// can be solved; the run reports how much they carried.
+    pub reserve_actuators: Option<f64>,
+    /// statopt (Krüger & Wartzack eq. 6): the global contact weight w0; the
+    /// objective is a'a + (1/w0) l'l. Several values run a sweep.
+    pub contact_weights: Vec<f64>,
+    /// Static-regime friction constraint: the paper's four-sided pyramid
+    /// (eq. 16), an eight-sided one, or the exact cone (eq. 2; default).
+    pub friction: FrictionModel,
+    /// statopt: how the equations of motion become the constraint matrix
+    /// (`<constraint_matrix>analytic|perturbation</constraint_matrix>`).
+    pub constraint_matrix: ConstraintMatrix,
+    /// statopt: Clarabel's tolerance exactly (`<solver_tolerance>`), looser or
+    /// tighter than [`DEFAULT_TOLERANCE`]; unset: the convergence-criterion rule.
+    /// (The dual Newton solver always solves to 1e-10 relative.)
+    pub solver_tolerance: Option<f64>,
+    /// statopt: `<solver>auto|newton|clarabel</solver>`: the dual Newton
+    /// solver with Clarabel as fallback (auto, newton; default), or Clarabel
+    /// on every frame.
+    pub solver: SolverChoice,
+    /// statopt `<knee_contact>`: solve the named knees (`all`/`true`: every
+    /// knee of the model) with the knee contact method
+    /// (`frame::knee_contact`, docs/knee_contact.md); off by default.
+    pub knee_contact: KneeSelection,
+    /// false when `<knee_contact>` holds the word `axial`: one axial contact
+    /// per knee instead of two compartments (the ingredient study of
+    /// docs/knee_contact.md).
+    pub knee_contact_frontal: bool,
+    /// Whether the element gives `<contact_weight>` (else
+    /// [`DEFAULT_CONTACT_WEIGHT`] applies).
+    pub contact_weights_given: bool,
+    /// The element, for located messages.
+    pub element: Element,
+}
+
+/// How a frame's equality constraints are built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ConstraintMatrix {
+    /// Force space: inverse dynamics once for the required generalized
+    /// forces, each variable's unit generalized force projected on the
+    /// coupling vectors (rows = C_kᵀ M u̇).
+    #[default]
+    Analytic,
+    /// Acceleration space by unit perturbation (Krüger & Wartzack eq. 14,
+    /// OpenSim's StaticOptimizationTarget): one forward-dynamics solve per
+    /// variable, column i = u̇_i − u̇_0, b = u̇_target − u̇_0
+    /// (see `tools::perturbation`).
+    Perturbation,
+}
+
+/// Clarabel's feasibility/gap tolerance unless the setup asks for tighter.
+pub const DEFAULT_TOLERANCE: f64 = 1e-8;
+
+impl StaticOptimizationSetup {
+    /// The same settings with property `name` set to `text` (as if the
+    /// element said `<name>text</name>`), checked as when read: e.g.
+    /// `("friction_cone", "pyramid4")` (`statopt-tool bench --grid`).
+    pub fn with_option(&self, name: &str, text: &str) -> Result<Self> {
+        let mut el = self.element.clone();
+        match el.children.iter_mut().find(|c| c.name == name) {
+            Some(c) => {
+                c.text = text.to_string();
+                c.children.clear();
+            }
+            None => {
+                let child = Element {
+                    name: name.to_string(),
+                    attrs: Vec::new(),
+                    children: Vec::new(),
+                    text: text.to_string(),
+                    line: el.line,
+                    file: el.file.clone(),
+                };
+                el.children.push(child);
+            }
+        }
+        Self::from_xml(&el, self.common.clone())
+    }
+}
+
+impl StaticOptimizationSetup {
+    pub fn from_xml(el: &Element, common: AnalysisCommon) -> Result<Self> {
+        let p = el.child_f64_or("activation_exponent", 2.0)?;
+        if !(p >= 1.0 && p.is_finite()) {
+            return Err(el.req("activation_exponent")?.error(format!("activation_exponent must be a finite number >= 1 (the problem is convex only then), found {p}")));
+        }
+        let max_iter = el.child_f64_or("optimizer_max_iterations", 100.0)?;
+        if !(max_iter >= 1.0) {
+            return Err(el
+                .req("optimizer_max_iterations")?
+                .error("optimizer_max_iterations must be positive"));
+        }
+        Ok(StaticOptimizationSetup {
+            common,
+            contact_weights_given: el.child("contact_weight").is_some(),
+            element: el.clone(),
+            use_model_force_set: el.child_bool_or("use_model_force_set", true)?,
+            activation_exponent: p,
+            use_muscle_physiology: el.child_bool_or("use_muscle_physiology", true)?,
+            convergence_criterion: el.child_f64_or("optimizer_convergence_criterion", 1e-4)?,
+            max_iterations: max_iter as u32,
+            passive_fiber_forces: el.child_bool_or("passive_fiber_forces", false)?,
+            contact_weights: match el.child("contact_weight") {
+                Some(w) if w.text().trim().is_empty() => {
+                    return Err(w.error(format!(
+                        "contact_weight is empty: give w0 (one or more positive numbers), or leave the element out for the default {DEFAULT_CONTACT_WEIGHT}"
+                    )))
+                }
+                Some(w) => {
+                    let v = w.numbers()?;
+                    if v.is_empty() || v.iter().any(|x| !(*x > 0.0 && x.is_finite())) {
+                        return Err(w.error(format!("contact_weight must be one or more positive numbers, found '{}'", w.text())));
+                    }
+                    if let Some(x) = v.iter().find(|x| !(CONTACT_WEIGHT_RANGE.0..=CONTACT_WEIGHT_RANGE.1).contains(*x)) {
+                        return Err(w.error(format!(
+                            "contact_weight {x:e} lies outside [{:e}, {:e}]: the objective weighs contacts by 1/w0, and past these bounds one term no longer counts in double precision (the answer saturates long before: beyond w0 = 1e4 contacts carry more than 99.99 %, below 1e-4 muscles do)",
+                            CONTACT_WEIGHT_RANGE.0, CONTACT_WEIGHT_RANGE.1
+                        )));
+                    }
+                    v
+                }
+                None => vec![DEFAULT_CONTACT_WEIGHT],
+            },
+            friction: match el.child("friction_cone") {
+                Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
+                    "cone" => FrictionModel::Cone,
+                    "pyramid" | "pyramid4" => FrictionModel::Pyramid4,
+                    "pyramid8" => FrictionModel::Pyramid8,
+                    other => return Err(f.error(format!("friction_cone must be 'cone', 'pyramid' (four-sided, the paper's eq. 16) or 'pyramid8', found '{other}'"))),
+                },
+                _ => FrictionModel::default(),
+            },
+            constraint_matrix: match el.child("constraint_matrix") {
+                Some(f) if !f.text().is_empty() => match f.text().to_ascii_lowercase().as_str() {
+                    "analytic" => ConstraintMatrix::Analytic,
+                    "perturbation" => ConstraintMatrix::Perturbation,
+                    other => return Err(f.error(format!("constraint_matrix must be 'analytic' or 'perturbation', found '{other}'"))),
+                },
+                _ => ConstraintMatrix::Analytic,
+            },
+            solver_tolerance: match el.child("solver_tolerance") {
+                Some(r) if !r.text().is_empty() => {
+                    let v = r.f64()?;
+                    if !(v > 0.0 && v < 1.0) {
+                        return Err(r.error(format!("solver_tolerance must lie in (0, 1), found {v}")));
+                    }
+                    Some(v)
+                }
+                _ => None,
+            },
+            solver: match el.child("solver") {
+                Some(f) if !f.text().trim().is_empty() => match f.text().trim().to_ascii_lowercase().as_str() {
+                    "auto" | "newton" => SolverChoice::Auto,
+                    "clarabel" => SolverChoice::Clarabel,
+                    other => return Err(f.error(format!("solver must be 'auto' (or 'newton': the dual Newton solver, Clarabel where it does not apply or converge) or 'clarabel', found '{other}'"))),
+                },
+                _ => SolverChoice::Auto,
+            },
+            knee_contact_frontal: !el
+                .child("knee_contact")
+                .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
+            knee_contact: match el.child("knee_contact") {
+                None => KneeSelection::Off,
+                Some(k) => {
+                    let mut words = k.words();
+                    words.retain(|w| !w.eq_ignore_ascii_case("axial"));
+                    if words.is_empty() && !k.words().is_empty() {
+                        words.push("all".into());
+                    }
+                    match words.iter().map(|w| w.to_ascii_lowercase()).collect::<Vec<_>>().as_slice() {
+                        [] => return Err(k.error("knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'")),
+                        [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
+                        [w] if w == "true" || w == "all" => KneeSelection::All,
+                        _ => KneeSelection::Joints(words),
+                    }
+                }
+            },
+            reserve_actuators: match el.child("reserve_actuators") {
+                Some(r) if !r.text().is_empty() => {
+                    let v = r.f64()?;
+                    if !(v > 0.0 && v.is_finite()) {
+                        return Err(r.error(format!("reserve_actuators is the reserves' optimal force and must be positive, found {v}")));
+                    }
+                    Some(v)
+                }
+                _ => None,
+            },
+        })
+    }
+}
+
+/// w0 when a StaticOptimization has no `<contact_weight>`.
+pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;
+
+/// The w0 statopt accepts: 1/w0 and w0 times a unit multiplier stay within
+/// ten decades of the activations' scale either way.
+pub const CONTACT_WEIGHT_RANGE: (f64, f64) = (1e-12, 1e12);
+
+/// The JointReaction element of an AnalyzeTool setup (§7.1).
+#[derive(Debug, Clone)]
+pub struct JointReactionSetup {
+    pub common: AnalysisCommon,
+    /// Resolved against the setup's folder; None when empty.
+    pub forces_file: Option<PathBuf>,
+    pub joint_names: Vec<String>,
+    pub apply_on_bodies: Vec<String>,
+    pub express_in_frame: Vec<String>,
+    /// statopt `<knee_loads>`: also write `<prefix>KneeLoads.sto`
+    /// (`tools::knee_loads`) with each ReactionLoads table of a static
+    /// optimization run.
+    pub knee_loads: bool,
+    /// The element, for located errors.
+    pub element: Element,
+}
+
+impl JointReactionSetup {
+    pub fn from_xml(
+        el: &Element,
+        common: AnalysisCommon,
+        setup_dir: &std::path::Path,
+    ) -> Result<Self> {
+        let list = |name: &str, default: &str| -> Vec<String> {
+            match el.child(name).map(|c| c.words()) {
+                Some(w) if !w.is_empty() => w,
+                _ => vec![default.to_string()],
+            }
+        };
+        let forces_file = el
+            .child_text("forces_file")
+            .map(str::trim)
+            .filter(|s| !s.is_empty() && *s != "Unassigned")
+            .map(|s| resolve(setup_dir, s));
+        Ok(JointReactionSetup {
+            common,
+            forces_file,
+            joint_names: list("joint_names", "ALL"),
+            apply_on_bodies: list("apply_on_bodies", "child"),
+            express_in_frame: list("express_in_frame", "ground"),
+            knee_loads: el.child_bool_or("knee_loads", false)?,
+            element: el.clone(),
+        })
+    }
+}
+
