@@ -212,6 +212,23 @@ pub(crate) fn apply_forces_at_state(
 /// was solved in (`SoProblem::solve_frame*` leaves them there, and so does
 /// this function, for the next weight of a sweep): they are recomputed only
 /// when `ws` holds another state than `result`'s.
+/// Every muscle's passive fiber force along its path, added to the forces
+/// applied in `data` (static optimization's `passive_fiber_forces`).
+pub(crate) fn add_passive_fiber_forces(problem: &SoProblem, mf: &MuscleFrame, data: &mut Data) {
+    let mut applied = std::mem::take(&mut data.applied);
+    let mut gen = std::mem::take(&mut data.applied_gen);
+    for m in 0..problem.muscles.len() {
+        geometry::add_tension_forces(
+            mf.path_state(m),
+            mf.passive_force[m],
+            &mut applied,
+            &mut gen,
+        );
+    }
+    data.applied = applied;
+    data.applied_gen = gen;
+}
+
 pub fn static_optimization_reactions(
     problem: &SoProblem,
     t: f64,
@@ -258,18 +275,7 @@ pub fn static_optimization_reactions(
         }
     }
     if problem.settings.passive_fiber_forces {
-        let mut applied = std::mem::take(&mut data.applied);
-        let mut gen = std::mem::take(&mut data.applied_gen);
-        for m in 0..problem.muscles.len() {
-            geometry::add_tension_forces(
-                mf.path_state(m),
-                mf.passive_force[m],
-                &mut applied,
-                &mut gen,
-            );
-        }
-        data.applied = applied;
-        data.applied_gen = gen;
+        add_passive_fiber_forces(problem, mf, data);
     }
     reactions(model, data, t, specs, out)
 }

@@ -32,7 +32,9 @@ use crate::error::Result;
 use crate::frame::problem::{Control, SoProblem};
 use crate::frame::workspace::Workspace;
 use crate::paths::geometry;
-use crate::reactions::joint::{apply_forces_at_state, reactions, ReactionSpec};
+use crate::reactions::joint::{
+    add_passive_fiber_forces, apply_forces_at_state, reactions, ReactionSpec,
+};
 
 /// One frame's reactions as r₀ + columns · (forces, multipliers) + mobility
 /// responses (see the module documentation).
@@ -87,18 +89,7 @@ fn evaluate(
         }
     }
     if problem.settings.passive_fiber_forces {
-        let mut applied = std::mem::take(&mut data.applied);
-        let mut gen = std::mem::take(&mut data.applied_gen);
-        for m in 0..problem.muscles.len() {
-            geometry::add_tension_forces(
-                mf.path_state(m),
-                mf.passive_force[m],
-                &mut applied,
-                &mut gen,
-            );
-        }
-        data.applied = applied;
-        data.applied_gen = gen;
+        add_passive_fiber_forces(problem, mf, data);
     }
     if let Some((k, value)) = mobility {
         data.applied_gen[k] += value;

@@ -158,14 +158,7 @@ pub fn run(
         if !stopped {
             for (jr_setup, (p, _)) in reactions.iter().zip(&spec.reactions) {
                 if jr_setup.knee_loads {
-                    let states = match &knee_states {
-                        Some(s) => s,
-                        None => knee_states.insert(crate::tools::analyze::load_states_with(
-                            setup,
-                            &problem.model,
-                            &problem.contacts,
-                        )?),
-                    };
+                    let states = knee_states_of(&mut knee_states, setup, &problem)?;
                     let table = dir.join(format!("{p}ReactionLoads.sto"));
                     knee_files.push(crate::tools::knee_loads::write(
                         &problem.model,
@@ -179,20 +172,17 @@ pub fn run(
             }
         }
         if !stopped && !problem.knees.is_empty() {
-            let states = match &knee_states {
-                Some(s) => s,
-                None => knee_states.insert(crate::tools::analyze::load_states_with(
-                    setup,
-                    &problem.model,
-                    &problem.contacts,
-                )?),
-            };
+            let states = knee_states_of(&mut knee_states, setup, &problem)?;
             let (p, _) = spec.reactions.last().expect("the knee contact reactions");
-            let out = if sweep {
-                format!("{}_w0_{}_KneeContact.sto", setup.name, w0_tag(spec.w0))
-            } else {
-                format!("{}_KneeContact.sto", setup.name)
-            };
+            let out = names::setup_file_name(
+                &setup.name,
+                if sweep {
+                    Sweep::Weight(spec.w0)
+                } else {
+                    Sweep::Single
+                },
+                "KneeContact.sto",
+            );
             knee_files.push(crate::tools::knee_contact::write(
                 &problem.model,
                 &problem.knees,
@@ -292,6 +282,23 @@ pub fn run(
 }
 
 /// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
+/// The run's states for the knee loads and the knee contact table, read
+/// once, on the first call.
+fn knee_states_of<'a>(
+    cache: &'a mut Option<crate::motion::states::States>,
+    setup: &AnalyzeSetup,
+    problem: &crate::frame::problem::SoProblem,
+) -> Result<&'a crate::motion::states::States> {
+    if cache.is_none() {
+        *cache = Some(crate::tools::analyze::load_states_with(
+            setup,
+            &problem.model,
+            &problem.contacts,
+        )?);
+    }
+    Ok(cache.as_ref().expect("just read"))
+}
+
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     if i1 < i0 {
         return 0;

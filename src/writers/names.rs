@@ -46,6 +46,17 @@ pub fn file_name(setup: &str, analysis: &str, sweep: Sweep, kind: &str) -> Strin
     format!("{}{kind}", prefix(setup, analysis, sweep))
 }
 
+/// The file name of table `kind` that belongs to a setup rather than to
+/// one of its analyses: `<setup>_[w0_<tag>_]<kind>` (the knee contact
+/// method's `<setup>_KneeContact.sto`, `<setup>_w0_500_KneeContact.sto`).
+pub fn setup_file_name(setup: &str, sweep: Sweep, kind: &str) -> String {
+    match sweep {
+        Sweep::Single => format!("{setup}_{kind}"),
+        Sweep::Weight(w0) => format!("{setup}_w0_{}_{kind}", w0_tag(w0)),
+        Sweep::Stat(t) => format!("{setup}_w0_{t}_{kind}"),
+    }
+}
+
 /// A table's file stem (no extension) ending in `_<kind>` split into the
 /// run's name without the w0 part and the w0 tag, if any:
 /// `a_SO_w0_500_force` with kind `force` → (`a_SO`, Some(`500`)),
@@ -89,7 +100,10 @@ mod tests {
             file_name("cam1", "SO", Sweep::Weight(500.0), "force.sto"),
             "cam1_SO_w0_500_force.sto"
         );
-        assert_eq!(file_name("cam1", "SO", Sweep::Single, "log.mcap"), "cam1_SO_log.mcap");
+        assert_eq!(
+            file_name("cam1", "SO", Sweep::Single, "log.mcap"),
+            "cam1_SO_log.mcap"
+        );
         assert_eq!(
             file_name("cam1", "JR", Sweep::Stat("mean"), "KneeLoads.sto"),
             "cam1_JR_w0_mean_KneeLoads.sto"
@@ -107,8 +121,14 @@ mod tests {
             assert_eq!(w0_tag_in(&name), tag);
         }
         assert_eq!(split_table_stem("a_SO_force", "activation"), None);
-        assert_eq!(without_w0("../o/x_SO_w0_1_force.sto"), "../o/x_SO_force.sto");
-        assert_eq!(without_w0("x_JR_w0_mean_KneeLoads.sto"), "x_JR_KneeLoads.sto");
+        assert_eq!(
+            without_w0("../o/x_SO_w0_1_force.sto"),
+            "../o/x_SO_force.sto"
+        );
+        assert_eq!(
+            without_w0("x_JR_w0_mean_KneeLoads.sto"),
+            "x_JR_KneeLoads.sto"
+        );
         assert_eq!(without_w0("x_SO_force.sto"), "x_SO_force.sto");
     }
 }
