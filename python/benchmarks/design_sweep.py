@@ -18,8 +18,10 @@ wall times (CPU times far less).
 """
 
 import argparse
+import atexit
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -60,6 +62,7 @@ def main():
     print(f"load average before: {os.getloadavg()}; {os.cpu_count()} cores")
     ratios = [f"{r:.6f}" for r in np.linspace(0.3, 1.0, a.ratios)]
     out = Path(tempfile.mkdtemp(prefix="statopt-bench-"))
+    atexit.register(shutil.rmtree, out, True)
 
     def example(*args):
         subprocess.run([sys.executable, str(EXAMPLES / args[0]), "--out", str(out), *args[1:]],
