@@ -265,7 +265,10 @@ fn bad_candidates_are_input_errors() {
     )
     .unwrap_err()
     .to_string();
-    assert!(e.contains("<knee_contact>") && e.contains("knee contact method"), "{e}");
+    assert!(
+        e.contains("<knee_contact>") && e.contains("knee contact method"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -1194,7 +1194,12 @@ fn unknown_setup_element_is_refused_with_the_nearest_name() {
     );
     let r = run_with("unknown_element_check", &f, "setup.xml", &["--check"]);
     expect_input_error("unknown_element_check", r, &needles);
-    let (code, err) = run_with("unknown_element_allowed", &f, "setup.xml", &["--allow-unknown"]);
+    let (code, err) = run_with(
+        "unknown_element_allowed",
+        &f,
+        "setup.xml",
+        &["--allow-unknown"],
+    );
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("warning:") && err.contains("did you mean contact_weight"),
@@ -1208,12 +1213,21 @@ fn unknown_setup_element_is_refused_with_the_nearest_name() {
     expect_input_error(
         "unknown_study_element",
         r,
-        &["study.xml", &format!("line {line}"), "<Figuer>", "did you mean Figure"],
+        &[
+            "study.xml",
+            &format!("line {line}"),
+            "<Figuer>",
+            "did you mean Figure",
+        ],
     );
     let mut f = Files::inverse_dynamics();
     f.replace("study.xml", "scale=\"1\"", "scael=\"1\"");
     let r = run("unknown_study_attribute", &f, "study.xml");
-    expect_input_error("unknown_study_attribute", r, &["scael", "did you mean scale"]);
+    expect_input_error(
+        "unknown_study_attribute",
+        r,
+        &["scael", "did you mean scale"],
+    );
 }
 
 /// Properties OpenSim defines that statopt does not use are accepted and
@@ -1268,7 +1282,12 @@ fn results_directory_that_is_a_file_is_named() {
         "<results_directory>afile</results_directory>",
         "<results_directory>afile/out</results_directory>",
     );
-    let r = run_with("results_dir_below_file_check", &f, "setup.xml", &["--check"]);
+    let r = run_with(
+        "results_dir_below_file_check",
+        &f,
+        "setup.xml",
+        &["--check"],
+    );
     expect_input_error(
         "results_dir_below_file_check",
         r,
@@ -1289,7 +1308,10 @@ fn a_missing_column_is_named_with_its_file() {
         .lines()
         .find(|l| l.contains("no column for the coordinate q2"))
         .unwrap_or_else(|| panic!("{err}"));
-    assert!(line.contains("motion.mot") && !line.contains("[\""), "{line}");
+    assert!(
+        line.contains("motion.mot") && !line.contains("[\""),
+        "{line}"
+    );
 }
 
 /// `--check` checks a setup's own figure references before anything runs:
@@ -1307,6 +1329,12 @@ fn check_finds_a_setups_bad_figure_reference() {
     expect_input_error(
         "figure_ref_check",
         r,
-        &["setup.xml", &format!("line {line}"), "<Series>", "names w0 = 500", "a single w0"],
+        &[
+            "setup.xml",
+            &format!("line {line}"),
+            "<Series>",
+            "names w0 = 500",
+            "a single w0",
+        ],
     );
 }

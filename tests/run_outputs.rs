@@ -413,8 +413,7 @@ fn a_signal_stops_the_run_cleanly() {
             "SIG{signal}: {err}"
         );
         assert!(
-            err.contains(&format!("hold the {n} frames solved so far"))
-                && err.contains("--resume"),
+            err.contains(&format!("hold the {n} frames solved so far")) && err.contains("--resume"),
             "SIG{signal}: {err}"
         );
         // MCAP: closed properly, read by the standard reader, one activation
@@ -554,12 +553,20 @@ fn resume_after_a_kill_equals_an_uninterrupted_run() {
                     || l.starts_with("residual actuators on the root")
                     || l.contains(" frames; static optimization: ")
             })
-            .map(|l| l.split("; worst equation residual").next().unwrap().to_string())
+            .map(|l| {
+                l.split("; worst equation residual")
+                    .next()
+                    .unwrap()
+                    .to_string()
+            })
             .collect()
     };
     let (a, b) = (summary(&full), summary(&resumed));
     assert!(a.len() >= 3, "{a:?}");
-    assert_eq!(a, b, "the resumed run's summary differs from the uninterrupted one's");
+    assert_eq!(
+        a, b,
+        "the resumed run's summary differs from the uninterrupted one's"
+    );
     for name in [
         "block_SO_activation.sto",
         "block_SO_force.sto",

@@ -189,7 +189,10 @@ pub const UNUSED_SETUP_PROPERTIES: &[(&str, &[&str])] = &[
         ],
     ),
     ("InverseDynamicsTool", &["coordinates_in_degrees"]),
-    ("StaticOptimization", &["start_time", "end_time", "in_degrees"]),
+    (
+        "StaticOptimization",
+        &["start_time", "end_time", "in_degrees"],
+    ),
     ("MuscleAnalysis", &["start_time", "end_time", "in_degrees"]),
     ("JointReaction", &["start_time", "end_time", "in_degrees"]),
 ];
@@ -229,7 +232,12 @@ pub fn nearest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
     let lower = name.to_ascii_lowercase();
     candidates
         .iter()
-        .map(|c| (strsim::damerau_levenshtein(&lower, &c.to_ascii_lowercase()), *c))
+        .map(|c| {
+            (
+                strsim::damerau_levenshtein(&lower, &c.to_ascii_lowercase()),
+                *c,
+            )
+        })
         .filter(|(d, c)| *d <= (c.len().max(name.len()) / 3).max(2))
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
@@ -302,11 +310,19 @@ fn setup_walk(el: &Element, out: &mut SetupElements) {
 /// setup) and the attributes each reads; a `<Figure>` holds the others
 /// but `<Metric>`.
 pub const FIGURE_ELEMENTS: &[(&str, &[&str])] = &[
-    ("Figure", &["name", "title", "x_label", "y_label", "fill_label"]),
-    ("Series", &["file", "column", "label", "color", "dashed", "scale"]),
+    (
+        "Figure",
+        &["name", "title", "x_label", "y_label", "fill_label"],
+    ),
+    (
+        "Series",
+        &["file", "column", "label", "color", "dashed", "scale"],
+    ),
     (
         "Band",
-        &["mean", "min", "max", "column", "label", "color", "dashed", "scale"],
+        &[
+            "mean", "min", "max", "column", "label", "color", "dashed", "scale",
+        ],
     ),
     ("panel", &["title", "x_label", "y_label", "fill_label"]),
     ("fill_between", &["label"]),
@@ -317,7 +333,13 @@ pub const FIGURE_ELEMENTS: &[(&str, &[&str])] = &[
 ];
 
 /// The children of a `<StatoptStudy>`.
-pub const STUDY_CHILDREN: &[&str] = &["setups", "results_directory", "Figure", "Metric", "ForceSweep"];
+pub const STUDY_CHILDREN: &[&str] = &[
+    "setups",
+    "results_directory",
+    "Figure",
+    "Metric",
+    "ForceSweep",
+];
 
 /// Unknown attributes and children of a `<Figure>` or `<Metric>`, one error
 /// each, with the nearest known name.
@@ -391,7 +413,10 @@ mod tests {
     fn nearest_names_a_misspelling_and_nothing_far() {
         let so = known_names("StaticOptimization");
         assert_eq!(nearest("contact_wieght", &so), Some("contact_weight"));
-        assert_eq!(nearest("activation_exponant", &so), Some("activation_exponent"));
+        assert_eq!(
+            nearest("activation_exponant", &so),
+            Some("activation_exponent")
+        );
         assert_eq!(nearest("Contact_Weight", &so), Some("contact_weight"));
         assert_eq!(nearest("frobnicate", &so), None);
         assert!(suggestion("frobnicate", &["b", "a"]).contains("known here: a, b"));
@@ -411,7 +436,10 @@ mod tests {
         let found = setup_elements(&root);
         let msgs: Vec<String> = found.unknown.iter().map(|e| e.to_string()).collect();
         assert_eq!(msgs.len(), 2, "{msgs:?}");
-        let so = msgs.iter().find(|m| m.contains("<contact_wieght>")).unwrap();
+        let so = msgs
+            .iter()
+            .find(|m| m.contains("<contact_wieght>"))
+            .unwrap();
         assert!(
             so.contains("s.xml, line 4") && so.contains("did you mean contact_weight"),
             "{so}"

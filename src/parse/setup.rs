@@ -196,7 +196,11 @@ pub fn results_dir_problem(dir: &Path) -> Option<String> {
     }
     let mut up = dir.parent();
     while let Some(p) = up {
-        let p = if p.as_os_str().is_empty() { Path::new(".") } else { p };
+        let p = if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        };
         if p.exists() {
             if !p.is_dir() {
                 return Some(format!(
@@ -531,9 +535,9 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
                 "StaticOptimization" => Analysis::StaticOptimization(Box::new(
                     StaticOptimizationSetup::from_xml(a, common)?,
                 )),
-                "JointReaction" => Analysis::JointReaction(Box::new(
-                    JointReactionSetup::from_xml(a, common, dir)?,
-                )),
+                "JointReaction" => {
+                    Analysis::JointReaction(Box::new(JointReactionSetup::from_xml(a, common, dir)?))
+                }
                 _ => Analysis::Unsupported {
                     common,
                     element: a.clone(),

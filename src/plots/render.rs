@@ -386,7 +386,8 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
         }
         let title_h = (1.6 * size) as u32 + m.margin / 2;
         let (title_area, rest) = area.split_vertically(title_h);
-        let font = TextStyle::from((FONT, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+        let font =
+            TextStyle::from((FONT, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
         let (tw, th) = title_area.dim_in_pixel();
         title_area
             .draw(&Text::new(
@@ -494,8 +495,8 @@ fn draw_side_legend<DB: DrawingBackend>(
     top: i32,
     m: &Metrics,
 ) -> Result<()> {
-    let font = TextStyle::from((FONT, m.legend).into_font())
-        .pos(Pos::new(HPos::Left, VPos::Center));
+    let font =
+        TextStyle::from((FONT, m.legend).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
     let pad = legend_pad(m) as i32;
     let row_h = (1.5 * m.legend) as i32;
     let icon = LEGEND_ICON as i32;
@@ -525,8 +526,11 @@ fn draw_side_legend<DB: DrawingBackend>(
                 } else {
                     (w / 2, w / 2)
                 };
-                area.draw(&PathElement::new(vec![(x, y), (x + a, y)], line_style(*style)))
-                    .map_err(plot_err)?;
+                area.draw(&PathElement::new(
+                    vec![(x, y), (x + a, y)],
+                    line_style(*style),
+                ))
+                .map_err(plot_err)?;
                 area.draw(&PathElement::new(
                     vec![(x + b, y), (x + w, y)],
                     line_style(*style),
@@ -534,8 +538,12 @@ fn draw_side_legend<DB: DrawingBackend>(
                 .map_err(plot_err)?;
             }
         }
-        area.draw(&Text::new(e.label().to_string(), (x + icon + pad, y), font.clone()))
-            .map_err(plot_err)?;
+        area.draw(&Text::new(
+            e.label().to_string(),
+            (x + icon + pad, y),
+            font.clone(),
+        ))
+        .map_err(plot_err)?;
     }
     Ok(())
 }

@@ -548,7 +548,12 @@ fn legend_stands_outside_the_data() {
 #[test]
 fn column_layout_stacks_panels() {
     let d = out_dir("column");
-    let paths = write_panels(&[knee_chart(), knee_chart(), knee_chart()], &d.join("f"), Layout::column(3)).unwrap();
+    let paths = write_panels(
+        &[knee_chart(), knee_chart(), knee_chart()],
+        &d.join("f"),
+        Layout::column(3),
+    )
+    .unwrap();
     let (w, h, _) = read_png(&paths[0]);
     assert_eq!((w, h), (1600, 2400));
 }
@@ -575,7 +580,11 @@ fn an_axis_crossing_zero_labels_its_negative_side() {
     let paths = write(&c, &d.join("shear")).unwrap();
     let svg = Svg::read(&paths[1]);
     assert!(svg.has_text("-100"), "{:?}", svg.texts());
-    assert!(!svg.texts().iter().any(|t| t.ends_with(".0")), "{:?}", svg.texts());
+    assert!(
+        !svg.texts().iter().any(|t| t.ends_with(".0")),
+        "{:?}",
+        svg.texts()
+    );
 }
 
 /// A title wider than the plot (the legend takes a column) is drawn over
@@ -586,7 +595,8 @@ fn a_long_title_is_not_clipped() {
     let d = out_dir("long_title");
     let mut c = knee_chart();
     c.size = (1000, 650);
-    c.title = "Hip flexion moment, right: muscles vs contacts (Figure 9, Rajagopal, cam 1), long".into();
+    c.title =
+        "Hip flexion moment, right: muscles vs contacts (Figure 9, Rajagopal, cam 1), long".into();
     let paths = write(&c, &d.join("t")).unwrap();
     let (w, _, px) = read_png(&paths[0]);
     // No dark title pixel touches the left or right edge columns.

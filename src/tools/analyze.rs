@@ -203,11 +203,7 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
         unused_properties: setup.unused_properties.clone(),
         ..Default::default()
     };
-    let active: Vec<&Analysis> = setup
-        .analyses
-        .iter()
-        .filter(|a| a.common().on)
-        .collect();
+    let active: Vec<&Analysis> = setup.analyses.iter().filter(|a| a.common().on).collect();
     if active.is_empty() {
         return Err(Error::input(
             Location::file(&setup.setup_file).with_element("<AnalysisSet>"),

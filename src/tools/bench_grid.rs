@@ -20,11 +20,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{Error, Location, Result};
+use crate::parse::analyses::StaticOptimizationSetup;
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plots::{self, RefLine, Scatter, ScatterPoint};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, RunOptions};
-use crate::parse::analyses::StaticOptimizationSetup;
 
 /// An edit of a setup that makes one method choice.
 pub type Edit = Arc<dyn Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync>;

@@ -62,8 +62,11 @@ pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
 impl CheckReport {
     fn unknown(&mut self, unknown: Vec<Error>, allow_unknown: bool) {
         if allow_unknown {
-            self.warnings
-                .extend(unknown.iter().map(|e| format!("{e} (read on: --allow-unknown)")));
+            self.warnings.extend(
+                unknown
+                    .iter()
+                    .map(|e| format!("{e} (read on: --allow-unknown)")),
+            );
         } else {
             self.errors.extend(unknown);
         }

@@ -1000,13 +1000,11 @@ pub fn read_element(
     };
     let w0s: Vec<f64> = match el.child("contact_weight") {
         Some(c) => c.numbers()?,
-        None => {
-            setup
-                .static_optimization()
-                .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
-                .contact_weights
-                .clone()
-        }
+        None => setup
+            .static_optimization()
+            .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
+            .contact_weights
+            .clone(),
     };
     if w0s.is_empty() {
         return Err(el.error("contact_weight: give one or more w0"));

@@ -137,10 +137,10 @@ pub fn run(setup: &AnalyzeSetup, jr: &JointReactionSetup, opts: &RunOptions) -> 
 mod tests {
     use super::*;
     use crate::dynamics::{kinematics, rnea, BodyForce, Data};
-    use crate::parse::setup::AnalysisCommon;
     use crate::forces::actuators::{Actuator, ActuatorKind};
     use crate::model::{compile, Model};
     use crate::parse::osim::ModelSpec;
+    use crate::parse::setup::AnalysisCommon;
     use crate::paths::coupling;
     use nalgebra::Vector3;
     use std::path::Path;

@@ -501,7 +501,10 @@ pub fn check_results_directory(path: &Path) -> Result<()> {
         Some(p) => Err(study
             .child("results_directory")
             .unwrap_or(study)
-            .error(format!("<results_directory> names {}, which {p}", out.display()))),
+            .error(format!(
+                "<results_directory> names {}, which {p}",
+                out.display()
+            ))),
         None => Ok(()),
     }
 }
@@ -609,12 +612,8 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let root = xml::parse_file(path)?;
     let study = study_element(&root)?;
     let dir = study_dir(path);
-    let (runs, elements, expected, warnings) = prepare(
-        study,
-        &dir,
-        opts.results_dir.as_deref(),
-        opts.allow_unknown,
-    )?;
+    let (runs, elements, expected, warnings) =
+        prepare(study, &dir, opts.results_dir.as_deref(), opts.allow_unknown)?;
     let out = opts
         .results_dir
         .clone()
@@ -633,7 +632,10 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
             };
             return Err(Error::input(
                 loc,
-                format!("<results_directory> names {}, which {p}", r.out_dir.display()),
+                format!(
+                    "<results_directory> names {}, which {p}",
+                    r.out_dir.display()
+                ),
             ));
         }
     }
