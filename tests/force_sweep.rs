@@ -77,7 +77,12 @@ fn machine_with(expr: &str, dir: &Path) -> PathBuf {
 /// The setup's <Metric>s computed from the tables of a single-w0 run in
 /// `out` (their names carry no w0 tag), unrounded.
 fn metrics_of_run(setup_text: &str, out: &Path) -> Vec<(String, f64)> {
-    let Setup::Analyze(s) = Setup::parse(setup_text, &root().join(SETUP)).unwrap() else {
+    metrics_of_run_at(&root().join(SETUP), setup_text, out)
+}
+
+/// [`metrics_of_run`] of the setup text read as if it were `setup`.
+fn metrics_of_run_at(setup: &Path, setup_text: &str, out: &Path) -> Vec<(String, f64)> {
+    let Setup::Analyze(s) = Setup::parse(setup_text, setup).unwrap() else {
         unreachable!()
     };
     s.figures
@@ -144,6 +149,7 @@ fn candidates_equal_their_own_runs() {
             } else {
                 reserves.iter().map(|n| (n.clone(), r)).collect()
             },
+            ..Default::default()
         })
         .collect();
     let base = setup_text(None, 100.0, None);
@@ -252,23 +258,273 @@ fn bad_candidates_are_input_errors() {
         ..Default::default()
     });
     assert!(e.contains("no actuator 'vasint_r'"), "{e}");
-    // The knee contact method's rows are not swept yet: said, not ignored.
-    let e = force_sweep::run_file(
-        &root().join("setups/leg_extension_rajagopal_cam1_kc.xml"),
-        None,
-        &[CandidateSpec {
-            w0: 500.0,
+    // External load scales: the setup has no external loads.
+    let e = run(CandidateSpec {
+        w0: 1.0,
+        external_scales: vec![("*".into(), 2.0)],
+        ..Default::default()
+    });
+    assert!(e.contains("the setup has no external loads"), "{e}");
+}
+
+/// The cam 1 setup with the knee contact method (setups/
+/// leg_extension_rajagopal_cam1_kc.xml) over its first second, one w0
+/// (its tables then carry no w0 tag), the machine `machine` and a metric
+/// of the method's KneeContact table.
+fn kc_setup_text(w0: f64, machine: &Path) -> String {
+    let mut text =
+        std::fs::read_to_string(root().join("setups/leg_extension_rajagopal_cam1_kc.xml")).unwrap();
+    let (a, b) = (
+        text.find("<Figure").unwrap(),
+        text.rfind("</Figure>").unwrap(),
+    );
+    text.replace_range(a..b + "</Figure>".len(), "");
+    text = text.replace("<final_time>5</final_time>", "<final_time>1</final_time>");
+    text = text.replace(
+        "<contact_weight>1 500 1000</contact_weight>",
+        &format!("<contact_weight>{w0}</contact_weight>"),
+    );
+    text = text.replace("_w0_mean_", "_");
+    text = text.replace(
+        "../models/leg_extension/machine_cam1_rajagopal.osim",
+        &machine.display().to_string(),
+    );
+    text.replace(
+        "<external_loads_file",
+        "<Metric name=\"peak_tf_total_N\" file=\"leg_extension_rajagopal_cam1_kc_KneeContact.sto\" columns=\"walker_knee_r_total_N\" op=\"max\"/>\n\t\t<Metric name=\"mean_medial_N\" file=\"leg_extension_rajagopal_cam1_kc_KneeContact.sto\" columns=\"walker_knee_r_medial_N\" op=\"mean\"/>\n\t\t<external_loads_file",
+    )
+}
+
+/// With the knee contact method (its rows' right-hand side holds loads of
+/// the frame): the cam torque's candidates equal their own runs on every
+/// metric, the KneeContact table's included.
+#[test]
+fn knee_contact_candidates_equal_their_own_runs() {
+    let dir = tmp("knee_contact");
+    let cases: [(&str, f64); 2] = [(CAM2, 500.0), ("-50", 1.0)];
+    let base = kc_setup_text(500.0, &root().join(MACHINE));
+    let specs: Vec<CandidateSpec> = cases
+        .iter()
+        .map(|&(e, w0)| CandidateSpec {
+            w0,
+            expressions: vec![("cam_torque".into(), e.into())],
             ..Default::default()
-        }],
-        &RunOptions::default(),
+        })
+        .collect();
+    let setup = root().join("setups/leg_extension_rajagopal_cam1_kc.xml");
+    let sweep = force_sweep::run_file(
+        &setup,
+        Some(&base),
+        &specs,
+        &RunOptions {
+            threads: Some(2),
+            ..Default::default()
+        },
         &SweepOptions::default(),
     )
-    .unwrap_err()
-    .to_string();
+    .unwrap();
+    assert_eq!(sweep.frames, 21);
+    assert!(sweep.metric_names.iter().any(|n| n == "peak_tf_total_N"));
+    for (k, &(expr, w0)) in cases.iter().enumerate() {
+        let d = dir.join(format!("case{k}"));
+        std::fs::create_dir_all(&d).unwrap();
+        let text = kc_setup_text(w0, &machine_with(expr, &d));
+        let out = d.join("out");
+        let summary = tools::run_setup_text(
+            &setup,
+            &text,
+            &RunOptions {
+                results_dir: Some(out.clone()),
+                precision: Some(20),
+                threads: Some(2),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(summary.failed, sweep.failed[k], "case {k}");
+        for (m, (name, v)) in metrics_of_run_at(&setup, &text, &out).iter().enumerate() {
+            assert_eq!(&sweep.metric_names[m], name);
+            let w = sweep.values[k][m];
+            assert!(
+                close(w, *v, 1e-9),
+                "case {k} {name}: sweep {w} vs own run {v}"
+            );
+        }
+    }
+    // The cams differ in the knee's total force.
     assert!(
-        e.contains("<knee_contact>") && e.contains("knee contact method"),
-        "{e}"
+        (sweep.values[0][0] - sweep.values[1][0]).abs() > 1.0,
+        "{:?}",
+        sweep.values
     );
+}
+
+/// The GC5 walking trial (../shared/models/knee_gc5; SKIP when absent)
+/// over its first frames: candidates scaling its external loads (one
+/// plate, or all) equal runs whose data file's forces and torques are
+/// scaled, with and without the knee contact method, on metrics of the
+/// force table (the loads' own columns), the joint reactions and the
+/// method's KneeContact table.
+#[test]
+fn external_load_scales_equal_runs_of_scaled_data() {
+    let gc5 = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/knee_gc5");
+    if !gc5.join("setup_ss1.xml").is_file() {
+        eprintln!("SKIP external_load_scales_equal_runs_of_scaled_data: ../shared/models/knee_gc5 is absent");
+        return;
+    }
+    let dir = tmp("external");
+    let setup = gc5.join("setup_ss1.xml");
+    let setup_text = |loads: &Path, knee_contact: bool| -> String {
+        let mut t = std::fs::read_to_string(&setup).unwrap();
+        t = t.replace("1.09166667", "0.05");
+        let kc = if knee_contact {
+            "<knee_contact>walker_knee_l</knee_contact>"
+        } else {
+            ""
+        };
+        t = t.replace(
+            "<use_muscle_physiology>true</use_muscle_physiology>",
+            &format!("<use_muscle_physiology>true</use_muscle_physiology><contact_weight>1000</contact_weight>{kc}"),
+        );
+        let mut metrics = String::from(
+            "<Metric name=\"peak_plate1_fy\" file=\"GC5_ss1_SO_force.sto\" columns=\"calcn_l_plate1_left_Fy\" op=\"max\"/>\n\
+             <Metric name=\"peak_knee_fy\" file=\"GC5_ss1_JR_ReactionLoads.sto\" columns=\"walker_knee_l_on_tibia_l_in_tibia_l_fy\" op=\"min\"/>\n\
+             <Metric name=\"mean_vasint\" file=\"GC5_ss1_SO_force.sto\" columns=\"vasint_l\" op=\"mean\"/>\n",
+        );
+        if knee_contact {
+            metrics.push_str("<Metric name=\"peak_total\" file=\"GC5_ss1_KneeContact.sto\" columns=\"walker_knee_l_total_N\" op=\"max\"/>\n<Metric name=\"mean_lateral\" file=\"GC5_ss1_KneeContact.sto\" columns=\"walker_knee_l_lateral_N\" op=\"mean\"/>\n");
+        }
+        t.replace(
+            "<external_loads_file>GC5_ss1_loads.xml</external_loads_file>",
+            &format!(
+                "{metrics}<external_loads_file>{}</external_loads_file>",
+                loads.display()
+            ),
+        )
+    };
+    // The loads file with its data file's forces and torques of the named
+    // plates (all: None) scaled by s.
+    let scaled_loads = |d: &Path, plates: Option<&[&str]>, s: f64| -> PathBuf {
+        let data = std::fs::read_to_string(gc5.join("GC5_ss1_kinetics.mot")).unwrap();
+        let prefixes: Vec<String> = match plates {
+            None => vec!["1_".into(), "2_".into(), "3_".into()],
+            Some(p) => p.iter().map(|x| x[..2].to_string()).collect(),
+        };
+        let mut out = String::new();
+        let mut cols: Vec<bool> = Vec::new();
+        let mut body = false;
+        for line in data.lines() {
+            if body {
+                let v: Vec<String> = line
+                    .split_whitespace()
+                    .zip(&cols)
+                    .map(|(x, &c)| {
+                        if c {
+                            format!("{}", x.parse::<f64>().unwrap() * s)
+                        } else {
+                            x.to_string()
+                        }
+                    })
+                    .collect();
+                out.push_str(&v.join("\t"));
+            } else {
+                if line.starts_with("time") {
+                    cols = line
+                        .split_whitespace()
+                        .map(|l| {
+                            prefixes.iter().any(|p| l.starts_with(p.as_str()))
+                                && (l.contains("_force_v") || l.contains("_torque_"))
+                        })
+                        .collect();
+                    body = true;
+                }
+                out.push_str(line);
+            }
+            out.push('\n');
+        }
+        let data_path = d.join("kinetics.mot");
+        std::fs::write(&data_path, out).unwrap();
+        let xml = std::fs::read_to_string(gc5.join("GC5_ss1_loads.xml"))
+            .unwrap()
+            .replace(
+                "<datafile>GC5_ss1_kinetics.mot</datafile>",
+                &format!("<datafile>{}</datafile>", data_path.display()),
+            );
+        let p = d.join("loads.xml");
+        std::fs::write(&p, xml).unwrap();
+        p
+    };
+    let cases: [(Option<&[&str]>, f64); 2] = [(Some(&["1_plate1_left"]), 0.8), (None, 1.1)];
+    for knee_contact in [false, true] {
+        let base = setup_text(&gc5.join("GC5_ss1_loads.xml"), knee_contact);
+        let specs: Vec<CandidateSpec> = cases
+            .iter()
+            .map(|&(p, s)| CandidateSpec {
+                w0: 1000.0,
+                external_scales: vec![(
+                    p.map_or("*".to_string(), |_| "plate1_left".to_string()),
+                    s,
+                )],
+                ..Default::default()
+            })
+            .collect();
+        let sweep = force_sweep::run_file(
+            &setup,
+            Some(&base),
+            &specs,
+            &RunOptions {
+                threads: Some(2),
+                ..Default::default()
+            },
+            &SweepOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(sweep.frames, 7);
+        for (k, &(plates, s)) in cases.iter().enumerate() {
+            let d = dir.join(format!("kc{knee_contact}_case{k}"));
+            std::fs::create_dir_all(&d).unwrap();
+            let text = setup_text(&scaled_loads(&d, plates, s), knee_contact);
+            let out = d.join("out");
+            let summary = tools::run_setup_text(
+                &setup,
+                &text,
+                &RunOptions {
+                    results_dir: Some(out.clone()),
+                    precision: Some(20),
+                    threads: Some(2),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(summary.failed, sweep.failed[k], "case {k}");
+            let own = metrics_of_run_at(&setup, &text, &out);
+            assert_eq!(own.len(), if knee_contact { 5 } else { 3 });
+            for (m, (name, v)) in own.iter().enumerate() {
+                assert_eq!(&sweep.metric_names[m], name);
+                let w = sweep.values[k][m];
+                assert!(
+                    close(w, *v, 1e-9),
+                    "knee contact {knee_contact}, case {k} {name}: sweep {w} vs own run {v}"
+                );
+            }
+            // The scale reached the force table: the plate's own column.
+            if k == 0 {
+                let unscaled = force_sweep::run_file(
+                    &setup,
+                    Some(&base),
+                    &[CandidateSpec {
+                        w0: 1000.0,
+                        ..Default::default()
+                    }],
+                    &RunOptions::default(),
+                    &SweepOptions::default(),
+                )
+                .unwrap();
+                let (a, b) = (sweep.values[0][0], unscaled.values[0][0]);
+                assert!(close(a, 0.8 * b, 1e-12), "{a} vs 0.8 × {b}");
+            }
+        }
+    }
 }
 
 #[test]
@@ -324,6 +580,20 @@ fn a_study_force_sweep_element_writes_its_metrics() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("unknown element <Candidat>"), "{e}");
+    // An external load scale is read (and checked against the setup's loads).
+    let scaled = std::fs::read_to_string(&study_file)
+        .unwrap()
+        .replace("<Candidat ", "<Candidate ")
+        .replace("</Candidat>", "</Candidate>")
+        .replace(
+            "<expression force=\"cam_torque\">-50</expression>",
+            "<expression force=\"cam_torque\">-50</expression><external_scale>2</external_scale>",
+        );
+    std::fs::write(&study_file, scaled).unwrap();
+    let e = tools::run_setup(&study_file, &RunOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("the setup has no external loads"), "{e}");
 }
 
 /// The design sweep compares its circular cam with the cam 1 setup's run,

@@ -222,7 +222,8 @@ fn predict_grf<'py>(
 }
 
 /// Candidates from Python dicts: `w0`, `expressions` ({force: text}),
-/// `optimal_forces` ({actuator: N}).
+/// `optimal_forces` ({actuator: N}), `external_scales` ({ExternalForce
+/// name or "*": factor}).
 fn candidate_specs(
     candidates: &[Bound<'_, PyDict>],
 ) -> PyResult<Vec<statopt::tools::force_sweep::CandidateSpec>> {
@@ -251,6 +252,12 @@ fn candidate_specs(
             let e = e.downcast_into::<PyDict>()?;
             for (k, v) in e.iter() {
                 spec.optimal_forces.push((k.extract()?, v.extract()?));
+            }
+        }
+        if let Some(e) = c.get_item("external_scales")? {
+            let e = e.downcast_into::<PyDict>()?;
+            for (k, v) in e.iter() {
+                spec.external_scales.push((k.extract()?, v.extract()?));
             }
         }
         specs.push(spec);

@@ -726,6 +726,43 @@ impl ExternalForce {
         }
     }
 
+    /// How many values [`record`](Self::record) appends.
+    pub fn record_size(&self) -> usize {
+        3 * (self.force.is_some() as usize
+            + self.point.is_some() as usize
+            + self.torque.is_some() as usize)
+    }
+
+    /// Scale the force and torque of this load's [`record`](Self::record)
+    /// values (`record`, of [`record_size`](Self::record_size)) by `s`: the
+    /// record of the load with its force and torque data scaled by `s` (the
+    /// point stays).
+    pub fn scale_record(&self, record: &mut [f64], s: f64) {
+        let mut k = 0;
+        for (present, scaled) in [
+            (self.force.is_some(), true),
+            (self.point.is_some(), false),
+            (self.torque.is_some(), true),
+        ] {
+            if present {
+                if scaled {
+                    record[k..k + 3].iter_mut().for_each(|x| *x *= s);
+                }
+                k += 3;
+            }
+        }
+    }
+
+    /// The load at time `t` as the spatial force (about the ground origin,
+    /// ground frame) [`ExternalLoads::apply`] adds to its body
+    /// ([`Self::applied_to_body`]).
+    pub fn body_force(&self, t: f64, data: &Data) -> Result<BodyForce> {
+        let (f_g, p_g, t_g) = self.evaluate(t, data)?;
+        let mut bf = BodyForce::torque(t_g);
+        bf.add(&BodyForce::at_point(f_g, p_g));
+        Ok(bf)
+    }
+
     /// Force, point of application and torque in ground at time `t`.
     /// Fails only as [`ExternalLoads::apply`] does.
     pub fn evaluate(

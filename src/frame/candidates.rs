@@ -11,7 +11,14 @@
 //!   b = Cᵀ(τ_ID − g_applied), so b_c = b − Cᵀ Δg; its record values
 //!   change the force table's row;
 //! - **an actuator's optimal force** (not a muscle's): the scale f_i of its
-//!   column of A and of its force x_i f_i.
+//!   column of A and of its force x_i f_i;
+//! - **an external load's scale** s (an `ExternalForce` of the setup's
+//!   ExternalLoads, its force and torque data times s): its generalized
+//!   force g_e = Jᵀ F_e enters b as a passive force's does, b_c = b −
+//!   Cᵀ (s − 1) g_e, and the knee contact method's rows (affine in the loads
+//!   on the bodies distal to the knee, `frame::knee_contact`) by the same
+//!   (s − 1) times that load's share, precomputed once per frame; its
+//!   force-table values (force and torque) scale by s.
 //!
 //! Everything else (the motion and its contact closure, kinematics, muscle
 //! geometry and strength, moment arms, contact states, A) is the frame's,
@@ -38,6 +45,9 @@ pub struct ForceCandidate {
     /// Actuators' optimal forces: (control index, optimal force); muscles
     /// are not allowed.
     pub optimal_force: Vec<(usize, f64)>,
+    /// Per ExternalForce of the problem's loads (in their order): the
+    /// factor its force and torque data are scaled by; empty: all 1.
+    pub external: Vec<f64>,
 }
 
 /// A frame's shared part and per-candidate buffers (per thread).
@@ -54,15 +64,34 @@ pub struct CandidateScratch {
     record: Vec<f64>,
     /// Columns of A saved while an optimal force is changed.
     saved: Vec<(usize, Vec<f64>, f64)>,
+    /// The external loads' force-table values as assembled, and where each
+    /// load's start.
+    external0: Vec<f64>,
+    external_start: Vec<usize>,
+    /// Per external load: its generalized force Jᵀ F_e at the frame (nq).
+    external_gen: Vec<Vec<f64>>,
+    /// Per knee of the knee contact method and external load (knee-major):
+    /// the load's part of the knee rows' right-hand sides (axial, frontal).
+    knee_external: Vec<[f64; 2]>,
+    /// Per external load: its spatial force and body at the frame (for the
+    /// reaction bases).
+    pub external_forces: Vec<(usize, crate::dynamics::BodyForce)>,
 }
 
 impl SoProblem {
-    /// Keep the frame just assembled in `ws` (by [`SoProblem::assemble`])
-    /// as the base every candidate of the frame starts from.
-    pub fn begin_candidates(&self, ws: &Workspace, scratch: &mut CandidateScratch) {
+    /// Keep the frame at time `t` just assembled in `ws` (by
+    /// [`SoProblem::assemble`]) as the base every candidate of the frame
+    /// starts from. Fails only as the external loads' evaluation does.
+    pub fn begin_candidates(
+        &self,
+        t: f64,
+        ws: &Workspace,
+        scratch: &mut CandidateScratch,
+    ) -> crate::error::Result<()> {
         let asm = &ws.assembly;
         scratch.b0.clone_from(&asm.problem.b);
         scratch.passive0.clone_from(&asm.passive);
+        scratch.external0.clone_from(&asm.external);
         scratch.record_start.clear();
         let mut k = 0;
         for p in &self.passive {
@@ -72,6 +101,52 @@ impl SoProblem {
         let nq = self.model.nq();
         scratch.dg.resize(nq, 0.0);
         scratch.g.resize(nq, 0.0);
+        scratch.external_start.clear();
+        scratch.external_forces.clear();
+        scratch.knee_external.clear();
+        let Some(loads) = &self.loads else {
+            scratch.external_gen.clear();
+            return Ok(());
+        };
+        let data = &ws.data;
+        let ne = loads.forces.len();
+        scratch.external_gen.resize_with(ne, Vec::new);
+        let mut k = 0;
+        for (ef, gen) in loads.forces.iter().zip(scratch.external_gen.iter_mut()) {
+            scratch.external_start.push(k);
+            k += ef.record_size();
+            let bf = ef.body_force(t, data)?;
+            let b = ef.applied_to_body;
+            gen.clear();
+            gen.resize(nq, 0.0);
+            // Jᵀ of the spatial force: its force at the ground origin, fixed
+            // on the body, and its moment about the ground origin.
+            let origin = nalgebra::Vector3::zeros();
+            crate::dynamics::jacobian::add_point_force(
+                &self.model,
+                data,
+                b,
+                &origin,
+                &bf.force,
+                gen,
+            );
+            crate::dynamics::jacobian::add_body_torque(&self.model, data, b, &bf.moment, gen);
+            scratch.external_forces.push((b, bf));
+        }
+        for knee in &self.knees {
+            for (b, bf) in &scratch.external_forces {
+                // The knee's reaction r₀ holds −(the loads on its distal
+                // bodies): b_axial = −F0_y, b_frontal = M0_x.
+                let share = if knee.distal[*b] {
+                    let (f, m) = crate::frame::knee_contact::in_tibia(data, knee.tibia, bf);
+                    [f.y, if knee.frontal { -m.x } else { 0.0 }]
+                } else {
+                    [0.0, 0.0]
+                };
+                scratch.knee_external.push(share);
+            }
+        }
+        Ok(())
     }
 
     /// Solve the frame kept by [`begin_candidates`](Self::begin_candidates)
@@ -121,11 +196,45 @@ impl SoProblem {
                 .min(asm.passive.len().saturating_sub(k));
             asm.passive[k..k + n].copy_from_slice(&scratch.record[..n]);
         }
+        // External loads scaled: their generalized forces (with the
+        // passive forces' in Δg for the rows, apart for the reactions) and
+        // their force-table values.
+        let scaled = cand.external.iter().any(|&s| s != 1.0);
+        let g = &mut scratch.g;
+        g.iter_mut().for_each(|x| *x = 0.0);
+        asm.external.clone_from(&scratch.external0);
+        if scaled {
+            let forces = self.loads.as_ref().map_or(&[][..], |l| &l.forces[..]);
+            for (e, &s) in cand.external.iter().enumerate() {
+                if s == 1.0 {
+                    continue;
+                }
+                for (x, ge) in g.iter_mut().zip(&scratch.external_gen[e]) {
+                    *x += (s - 1.0) * ge;
+                }
+                let k = scratch.external_start[e];
+                let ef = &forces[e];
+                ef.scale_record(&mut asm.external[k..k + ef.record_size()], s);
+            }
+        }
         asm.problem.b.copy_from(&scratch.b0);
-        if !cand.passive.is_empty() {
+        if !cand.passive.is_empty() || scaled {
             for (r, cv) in asm.couplings.iter().enumerate() {
-                let d: f64 = cv.iter().map(|(i, c)| c * scratch.dg[*i]).sum();
+                let d: f64 = cv
+                    .iter()
+                    .map(|(i, c)| c * (scratch.dg[*i] + scratch.g[*i]))
+                    .sum();
                 asm.problem.b[r] -= d;
+            }
+        }
+        if scaled && !self.knees.is_empty() {
+            let (nr, ne) = (self.rows.len(), cand.external.len());
+            for ki in 0..self.knees.len() {
+                for (e, &s) in cand.external.iter().enumerate() {
+                    let [fa, fm] = scratch.knee_external[ki * ne + e];
+                    asm.problem.b[nr + 2 * ki] += (s - 1.0) * fa;
+                    asm.problem.b[nr + 2 * ki + 1] += (s - 1.0) * fm;
+                }
             }
         }
         // Weights: every variable after the controls is a contact multiplier.
@@ -153,6 +262,7 @@ impl SoProblem {
             asm.scale[v] = f0;
         }
         asm.passive.clone_from(&scratch.passive0);
+        asm.external.clone_from(&scratch.external0);
         asm.problem.b.copy_from(&scratch.b0);
     }
 }

@@ -159,7 +159,7 @@ fn distal_sum(knee: &Knee, applied: &[BodyForce]) -> BodyForce {
 
 /// The reaction on the tibia at the joint centre M_o, in the tibia frame:
 /// (force, moment about M_o).
-fn in_tibia(data: &Data, tibia: usize, f: &BodyForce) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn in_tibia(data: &Data, tibia: usize, f: &BodyForce) -> (Vector3<f64>, Vector3<f64>) {
     let r: Matrix3<f64> = data.rotation[tibia].transpose();
     let p = data.p_gm[tibia];
     (r * f.force, r * (f.moment - p.cross(&f.force)))

@@ -10,13 +10,14 @@
 //! gravity and velocities only),
 //!
 //! ```text
-//! r = r₀ + Σ_i R_i F_i + Σ_j L_j λ_j + Σ_k M_k Δg_k
+//! r = r₀ + Σ_i R_i F_i + Σ_j L_j λ_j + Σ_k M_k Δg_k + Σ_e E_e (s_e − 1)
 //! ```
 //!
 //! F_i the actuator forces (x_i f_i), λ_j the contact multipliers (each
-//! contact's force is linear in its three, at its state) and Δg_k a change
+//! contact's force is linear in its three, at its state), Δg_k a change
 //! of the generalized force on coordinate k (a passive force of a
-//! candidate). Each column is one evaluation of
+//! candidate) and s_e the factor an external load's force and torque are
+//! scaled by (E_e: the response to that load as the frame applies it). Each column is one evaluation of
 //! [`static_optimization_reactions`](super::static_optimization_reactions)'s
 //! forces with one force probed, less r₀: 1 + n_controls + 3 n_contacts
 //! (+ the coordinates probed) forward-dynamics evaluations per frame,
@@ -47,6 +48,9 @@ pub struct ReactionBasis {
     pub columns: DMatrix<f64>,
     /// Per probed coordinate: the change per unit generalized force on it.
     pub mobility: Vec<(usize, Vec<f64>)>,
+    /// Per external load given to [`build`](Self::build): the change its
+    /// spatial force makes.
+    pub external: Vec<Vec<f64>>,
     forces: Vec<f64>,
     row: Vec<f64>,
 }
@@ -105,6 +109,8 @@ enum Probe {
     Control(usize, f64),
     Multiplier(usize, usize),
     Mobility(usize),
+    /// A spatial force (about the ground origin) on a body.
+    Body(usize, BodyForce),
 }
 
 /// The linear part of the reactions for the forces of `probe` alone, at
@@ -151,6 +157,7 @@ fn linear_response(
             }
         }
         Probe::Mobility(k) => gen[k] += 1.0,
+        Probe::Body(b, f) => applied[b].add(&f),
     }
     data.applied = applied;
     data.applied_gen = gen;
@@ -203,7 +210,8 @@ fn linear_response(
 impl ReactionBasis {
     /// The basis of the frame whose state, muscle paths and contact states
     /// `ws` holds (as [`SoProblem::assemble`] leaves them), probing the
-    /// generalized forces of `coordinates` too: r₀ by one full evaluation,
+    /// generalized forces of `coordinates` and the spatial forces
+    /// `external` (body, force) too: r₀ by one full evaluation,
     /// each column by [`linear_response`] with M_r factored once. `ws`'s
     /// kinematics and `data.udot` are restored.
     pub fn build(
@@ -213,6 +221,7 @@ impl ReactionBasis {
         ws: &mut Workspace,
         specs: &[ReactionSpec],
         coordinates: &[usize],
+        external: &[(usize, BodyForce)],
     ) -> Result<()> {
         let n = 9 * specs.len();
         let nv = problem.controls.len();
@@ -302,6 +311,21 @@ impl ReactionBasis {
                 m.0 = k;
                 m.1.clone_from(&self.row);
             }
+            self.external.resize_with(external.len(), Default::default);
+            for (e, &(b, f)) in self.external.iter_mut().zip(external) {
+                linear_response(
+                    problem,
+                    ws,
+                    &states,
+                    specs,
+                    &factor,
+                    &c,
+                    Probe::Body(b, f),
+                    &mut y,
+                    &mut self.row,
+                );
+                e.clone_from(&self.row);
+            }
             Ok(())
         })();
         ws.assembly.states = states;
@@ -313,9 +337,17 @@ impl ReactionBasis {
     }
 
     /// The reactions of a solution: actuator forces `forces`, contact
-    /// multipliers `lambda` and generalized-force changes `dg` (nq; only
-    /// the probed coordinates count) into `out`.
-    pub fn reactions_into(&self, forces: &[f64], lambda: &[f64], dg: &[f64], out: &mut [f64]) {
+    /// multipliers `lambda`, generalized-force changes `dg` (nq; only
+    /// the probed coordinates count) and the external loads' factors
+    /// `external` (empty: all 1) into `out`.
+    pub fn reactions_into(
+        &self,
+        forces: &[f64],
+        lambda: &[f64],
+        dg: &[f64],
+        external: &[f64],
+        out: &mut [f64],
+    ) {
         out.copy_from_slice(&self.r0);
         let n = out.len();
         if n == 0 {
@@ -332,6 +364,14 @@ impl ReactionBasis {
         }
         for (k, col) in &self.mobility {
             let d = dg.get(*k).copied().unwrap_or(0.0);
+            if d != 0.0 {
+                for (o, c) in out.iter_mut().zip(col) {
+                    *o += c * d;
+                }
+            }
+        }
+        for (s, col) in external.iter().zip(&self.external) {
+            let d = s - 1.0;
             if d != 0.0 {
                 for (o, c) in out.iter_mut().zip(col) {
                     *o += c * d;

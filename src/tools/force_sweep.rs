@@ -1,7 +1,10 @@
 //! A force sweep: many candidates of one AnalyzeTool setup that differ only
 //! in forces — w0, an `ExpressionBasedCoordinateForce`'s expression (a
-//! machine's resistance torque), an actuator's optimal force — share one
-//! compiled scene. The setup is compiled once and the motion (with its
+//! machine's resistance torque), an actuator's optimal force, an external
+//! load's scale — share one compiled scene, with or without the knee
+//! contact method (`<knee_contact>`: its rows are affine in those forces,
+//! `frame::candidates`; its `<setup>_KneeContact.sto` columns can be
+//! metrics). The setup is compiled once and the motion (with its
 //! contact closure) streamed once; each frame is assembled once
 //! ([`SoProblem::assemble`]) and solved for every candidate
 //! ([`SoProblem::solve_candidate_into`], `frame::candidates`), each
@@ -46,6 +49,10 @@ pub struct CandidateSpec {
     pub expressions: Vec<(String, String)>,
     /// (actuator name, optimal force) of actuators other than muscles.
     pub optimal_forces: Vec<(String, f64)>,
+    /// (ExternalForce name, or `*` for every external load, factor): the
+    /// load's force and torque data scaled by the factor (factors of one
+    /// load multiply).
+    pub external_scales: Vec<(String, f64)>,
 }
 
 /// What a sweep computed.
@@ -96,6 +103,9 @@ enum Source {
     Reactions(usize),
     /// Its KneeLoads.
     Knee(usize),
+    /// The knee contact method's `<setup>_KneeContact.sto` (the coupled
+    /// reactions of the method's knees).
+    KneeContact(usize),
 }
 
 /// A `<Metric>` compiled against the problem: its columns in the row of
@@ -118,6 +128,9 @@ struct Coupled {
     labels: Vec<String>,
     /// Whether a metric reads it.
     used: bool,
+    /// The knee contact method's reactions (one spec per knee of
+    /// `SoProblem::knees`, `tools::knee_contact::reaction_specs`).
+    knee_contact: bool,
 }
 
 const SO_KINDS: [(&str, Source); 7] = [
@@ -160,6 +173,16 @@ fn plan_metric(
             .find(|(k, _)| stem.ends_with(&format!("_{k}")))
             .map(|(_, s)| *s);
     }
+    let kc_stem = format!("{}_KneeContact", setup.name);
+    let kc_tagged = format!("{}_w0_", setup.name);
+    if source.is_none()
+        && (stem == kc_stem || (stem.starts_with(&kc_tagged) && stem.ends_with("_KneeContact")))
+    {
+        source = coupled
+            .iter()
+            .position(|c| c.knee_contact)
+            .map(Source::KneeContact);
+    }
     if source.is_none() {
         for (j, c) in coupled.iter().enumerate() {
             if stem.starts_with(&format!("{}_{}_", setup.name, c.name)) {
@@ -173,7 +196,7 @@ fn plan_metric(
     }
     let Some(source) = source else {
         return Err(el.error(format!(
-            "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({so_prefix}..._<{}>.sto) and of its coupled joint reactions (ReactionLoads, KneeLoads)",
+            "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({so_prefix}..._<{}>.sto), of its coupled joint reactions (ReactionLoads, KneeLoads) and of the knee contact method ({kc_stem}.sto)",
             SO_KINDS.map(|k| k.0).join("|")
         )));
     };
@@ -190,8 +213,9 @@ fn plan_metric(
             let patella = coupled[j].knee.as_ref().is_some_and(|k| k.1);
             crate::tools::knee_loads::labels(patella)
         }
+        Source::KneeContact(_) => crate::tools::knee_contact::labels(&problem.knees),
     };
-    if let Source::Reactions(j) | Source::Knee(j) = source {
+    if let Source::Reactions(j) | Source::Knee(j) | Source::KneeContact(j) = source {
         coupled[j].used = true;
     }
     let column = |c: &str| {
@@ -305,10 +329,30 @@ fn resolve_candidates(
                 }
                 optimal_force.push((v, *f));
             }
+            let mut external = Vec::new();
+            for (name, f) in &s.external_scales {
+                let Some(loads) = &problem.loads else {
+                    return Err(err(k, format!("external load scale of '{name}': the setup has no external loads")));
+                };
+                if !f.is_finite() {
+                    return Err(err(k, format!("external load scale {f} of '{name}' is not a finite number")));
+                }
+                external.resize(loads.forces.len(), 1.0);
+                if name == "*" {
+                    external.iter_mut().for_each(|x| *x *= f);
+                    continue;
+                }
+                let e = loads.forces.iter().position(|ef| &ef.name == name).ok_or_else(|| {
+                    err(k, format!("the external loads have no ExternalForce '{name}' (names: {}; '*' scales them all)",
+                        loads.forces.iter().map(|ef| ef.name.as_str()).collect::<Vec<_>>().join(", ")))
+                })?;
+                external[e] *= f;
+            }
             Ok(ForceCandidate {
                 w0: s.w0,
                 passive,
                 optimal_force,
+                external,
             })
         })
         .collect()
@@ -387,15 +431,21 @@ impl Plan {
             ));
         }
         let (problem, mut warnings) = SoProblem::build(setup, &so)?;
-        if !problem.knees.is_empty() {
-            // Its rows' right-hand side holds forces of the frame a
-            // candidate would change; not handled yet.
-            return Err(Error::input(
-                at().with_element("<knee_contact>"),
-                "a force sweep does not handle the knee contact method yet: sweep the setup without <knee_contact>",
-            ));
-        }
         let mut coupled = Vec::new();
+        if !problem.knees.is_empty() {
+            // The knee contact method's rows are affine in the candidates'
+            // forces (frame::candidates); its table's reactions as a coupled
+            // joint reaction's.
+            let specs = crate::tools::knee_contact::reaction_specs(&problem.model, &problem.knees);
+            coupled.push(Coupled {
+                name: crate::tools::knee_contact::REACTIONS_NAME.to_string(),
+                labels: column_labels(&specs),
+                specs,
+                knee: None,
+                used: false,
+                knee_contact: true,
+            });
+        }
         for jr in setup.joint_reactions() {
             {
                 if jr.common.on {
@@ -424,6 +474,7 @@ impl Plan {
                         knee,
                         labels,
                         used: false,
+                        knee_contact: false,
                     });
                 }
             }
@@ -477,13 +528,20 @@ impl Plan {
         if m_r.is_some() {
             return Err(Error::internal("force sweep: perturbation rows"));
         }
-        problem.begin_candidates(ws, &mut frame.scratch);
+        problem.begin_candidates(t, ws, &mut frame.scratch)?;
         frame
             .bases
             .resize_with(self.coupled.len(), Default::default);
         for (c, basis) in self.coupled.iter().zip(frame.bases.iter_mut()) {
             if c.used {
-                basis.build(problem, t, ws, &c.specs, &self.probed)?;
+                basis.build(
+                    problem,
+                    t,
+                    ws,
+                    &c.specs,
+                    &self.probed,
+                    &frame.scratch.external_forces,
+                )?;
             }
         }
         Ok(())
@@ -567,8 +625,25 @@ impl Plan {
                     &r.forces,
                     &r.solution.x[nv..],
                     &frame.scratch.dg,
+                    &cand.external,
                     row,
                 );
+                if c.knee_contact {
+                    let kr = &mut buf.knee_rows[j];
+                    kr.clear();
+                    for (ki, knee) in problem.knees.iter().enumerate() {
+                        let r = &row[9 * ki..9 * ki + 9];
+                        let (med, lat) = crate::frame::knee_contact::compartments(knee, r[1], r[3]);
+                        kr.push(crate::tools::knee_loads::flexion_degrees(
+                            &frame.ws.data,
+                            knee.femur,
+                            knee.tibia,
+                        ));
+                        kr.push((r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt());
+                        kr.push(med);
+                        kr.push(lat);
+                    }
+                }
                 if let Some((sides, patella)) = &c.knee {
                     crate::tools::knee_loads::knee_row(
                         &frame.ws.data,
@@ -590,7 +665,7 @@ impl Plan {
                     Source::GeneralizedForces => &r.by_source,
                     Source::MusclePower => &r.muscle_power,
                     Source::Reactions(j) => &buf.reaction_rows[j],
-                    Source::Knee(j) => &buf.knee_rows[j],
+                    Source::Knee(j) | Source::KneeContact(j) => &buf.knee_rows[j],
                 };
                 // As a study's table column: the columns summed, scaled.
                 let mut y = 0.0;
@@ -936,6 +1011,7 @@ impl Scene {
 ///   <Candidate name="circular">
 ///     <expression force="cam_torque">-50</expression>
 ///     <optimal_force actuator="knee_angle_r_reserve">50</optimal_force>
+///     <external_scale force="plate1_left">1.2</external_scale>  (no force: all)
 ///   </Candidate>
 ///   ...
 /// </ForceSweep>
@@ -1036,9 +1112,13 @@ pub fn read_element(
                         .to_string(),
                     p.numbers_n(1)?[0],
                 )),
+                "external_scale" => spec.external_scales.push((
+                    p.attr("force").unwrap_or("*").to_string(),
+                    p.numbers_n(1)?[0],
+                )),
                 other => {
                     return Err(p.error(format!(
-                        "unknown element <{other}> in a Candidate (expression, optimal_force)"
+                        "unknown element <{other}> in a Candidate (expression, optimal_force, external_scale)"
                     )))
                 }
             }
