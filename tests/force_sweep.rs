@@ -162,7 +162,10 @@ fn candidates_equal_their_own_runs() {
         Some(&base),
         &specs,
         &opts,
-        &SweepOptions { warm: true },
+        &SweepOptions {
+            warm: true,
+            ..Default::default()
+        },
     )
     .unwrap();
     let cold = force_sweep::run_file(
@@ -170,7 +173,10 @@ fn candidates_equal_their_own_runs() {
         Some(&base),
         &specs,
         &opts,
-        &SweepOptions { warm: false },
+        &SweepOptions {
+            warm: false,
+            ..Default::default()
+        },
     )
     .unwrap();
     assert_eq!(warm.frames, 21);
@@ -295,9 +301,55 @@ fn kc_setup_text(w0: f64, machine: &Path) -> String {
     )
 }
 
+/// Every table a candidate's sweep wrote in `tables` equals the table of
+/// the same name its own run wrote in `own` (1e-9 of each column's peak;
+/// of the diagnostics only status and objective: the solver's counters and
+/// residuals depend on its start). Returns how many tables were compared.
+fn tables_equal(tables: &Path, own: &Path) -> usize {
+    let mut n = 0;
+    for entry in std::fs::read_dir(tables).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let other = own.join(&name);
+        assert!(other.is_file(), "{name}: the own run wrote no such table");
+        if name.ends_with(".xml") {
+            assert_eq!(
+                std::fs::read_to_string(&path).unwrap(),
+                std::fs::read_to_string(&other).unwrap(),
+                "{name}"
+            );
+            n += 1;
+            continue;
+        }
+        let (a, b) = (
+            storage::read(&path).unwrap(),
+            storage::read(&other).unwrap(),
+        );
+        assert_eq!(a.labels, b.labels, "{name}");
+        assert_eq!(a.time, b.time, "{name}");
+        for (j, label) in a.labels.iter().enumerate() {
+            if name.ends_with("diagnostics.sto") && label != "status" && label != "objective" {
+                continue;
+            }
+            let peak = b.rows.iter().map(|r| r[j].abs()).fold(1.0, f64::max);
+            for (ra, rb) in a.rows.iter().zip(&b.rows) {
+                assert!(
+                    (ra[j] - rb[j]).abs() <= 1e-9 * peak,
+                    "{name} {label}: sweep {} vs own run {}",
+                    ra[j],
+                    rb[j]
+                );
+            }
+        }
+        n += 1;
+    }
+    n
+}
+
 /// With the knee contact method (its rows' right-hand side holds loads of
 /// the frame): the cam torque's candidates equal their own runs on every
-/// metric, the KneeContact table's included.
+/// metric, the KneeContact table's included, and the tables the sweep
+/// writes on request equal the runs' tables.
 #[test]
 fn knee_contact_candidates_equal_their_own_runs() {
     let dir = tmp("knee_contact");
@@ -318,13 +370,26 @@ fn knee_contact_candidates_equal_their_own_runs() {
         &specs,
         &RunOptions {
             threads: Some(2),
+            precision: Some(20),
             ..Default::default()
         },
-        &SweepOptions::default(),
+        &SweepOptions {
+            tables: (0..cases.len())
+                .map(|k| force_sweep::CandidateTables {
+                    dir: dir.join(format!("tables{k}")),
+                    w0_tag: false,
+                })
+                .collect(),
+            ..Default::default()
+        },
     )
     .unwrap();
     assert_eq!(sweep.frames, 21);
     assert!(sweep.metric_names.iter().any(|n| n == "peak_tf_total_N"));
+    assert!(sweep
+        .files
+        .iter()
+        .any(|f| f.ends_with("tables1/leg_extension_rajagopal_cam1_kc_KneeContact.sto")));
     for (k, &(expr, w0)) in cases.iter().enumerate() {
         let d = dir.join(format!("case{k}"));
         std::fs::create_dir_all(&d).unwrap();
@@ -342,6 +407,9 @@ fn knee_contact_candidates_equal_their_own_runs() {
         )
         .unwrap();
         assert_eq!(summary.failed, sweep.failed[k], "case {k}");
+        // SO (7 with contacts, the contact loads' .mot and .xml), JR and
+        // KneeContact reactions, KneeLoads, KneeContact.
+        assert_eq!(tables_equal(&dir.join(format!("tables{k}")), &out), 13);
         for (m, (name, v)) in metrics_of_run_at(&setup, &text, &out).iter().enumerate() {
             assert_eq!(&sweep.metric_names[m], name);
             let w = sweep.values[k][m];
@@ -549,6 +617,7 @@ fn a_study_force_sweep_element_writes_its_metrics() {
 		<results_directory>out</results_directory>
 		<ForceSweep name="shapes" setup="setup.xml">
 			<contact_weight>1 500</contact_weight>
+			<write_tables>true</write_tables>
 			<Candidate name="circular"><expression force="cam_torque">-50</expression></Candidate>
 			<Candidate name="cam2"><expression force="cam_torque">{CAM2}</expression></Candidate>
 		</ForceSweep>
@@ -567,6 +636,15 @@ fn a_study_force_sweep_element_writes_its_metrics() {
     assert!(lines[0].starts_with("candidate,w0,frames,failed,quadriceps_work_J,"));
     assert!(lines[1].starts_with("circular,1,21,0,"));
     assert!(lines[4].starts_with("cam2,500,21,0,"));
+    // The tables, on request: per candidate, named as a run of its setup
+    // with both w0 names them.
+    for (c, w0) in [("circular", 1), ("cam2", 500)] {
+        let f = dir.join(format!(
+            "out/shapes_force_sweep/{c}/leg_extension_rajagopal_cam2_JR_w0_{w0}_KneeLoads.sto"
+        ));
+        assert!(summary.files.contains(&f), "{}", f.display());
+        assert_eq!(storage::read(&f).unwrap().time.len(), 21);
+    }
     // A candidate element it does not know is an error naming it.
     let bad = std::fs::read_to_string(&study_file)
         .unwrap()

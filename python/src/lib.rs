@@ -277,6 +277,13 @@ fn outcome_dict<'py>(
     d.set_item("loop_seconds", out.loop_seconds)?;
     d.set_item("warnings", out.warnings)?;
     d.set_item("iterations", out.iterations)?;
+    d.set_item(
+        "files",
+        out.files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>(),
+    )?;
     Ok(d)
 }
 
@@ -331,7 +338,10 @@ impl Scene {
         warm: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let specs = candidate_specs(&candidates)?;
-        let sweep = statopt::tools::force_sweep::SweepOptions { warm };
+        let sweep = statopt::tools::force_sweep::SweepOptions {
+            warm,
+            ..Default::default()
+        };
         let result = py.allow_threads(|| {
             let mut scene = self
                 .inner
@@ -348,10 +358,13 @@ impl Scene {
 /// scene. `candidates` is a list of dicts with `w0` (a number),
 /// `expressions` ({force name: Lepton text}) and `optimal_forces`
 /// ({actuator name: N}); `text`, when given, is the setup document read as
-/// if it were the file `setup`. Returns {"metric_names", "values" (per
-/// candidate, per metric), "failed", "frames", "loop_seconds", "warnings"}.
+/// if it were the file `setup`. With `tables`, a list of one folder per
+/// candidate, each candidate's tables are written there, named as a run of
+/// its own setup of one w0 names them. Returns {"metric_names", "values"
+/// (per candidate, per metric), "failed", "frames", "loop_seconds",
+/// "warnings", "files"}.
 #[pyfunction]
-#[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true))]
+#[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true, tables=None))]
 fn force_sweep<'py>(
     py: Python<'py>,
     setup: PathBuf,
@@ -359,6 +372,7 @@ fn force_sweep<'py>(
     text: Option<String>,
     threads: Option<usize>,
     warm: bool,
+    tables: Option<Vec<PathBuf>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use statopt::tools::force_sweep::{self, SweepOptions};
     let specs = candidate_specs(&candidates)?;
@@ -368,7 +382,14 @@ fn force_sweep<'py>(
         progress: Some(hook),
         ..Default::default()
     };
-    let sweep = SweepOptions { warm };
+    let sweep = SweepOptions {
+        warm,
+        tables: tables
+            .unwrap_or_default()
+            .into_iter()
+            .map(|dir| force_sweep::CandidateTables { dir, w0_tag: false })
+            .collect(),
+    };
     let result =
         py.allow_threads(|| force_sweep::run_file(&setup, text.as_deref(), &specs, &opts, &sweep));
     if let Some(e) = take_pending(&pending) {

@@ -73,6 +73,21 @@ pub struct SweepOutcome {
     /// Solver iterations over every candidate and frame (Newton's linear
     /// solves, see the diagnostics table's `iterations`).
     pub iterations: u64,
+    /// The candidates' tables written ([`SweepOptions::tables`]).
+    pub files: Vec<std::path::PathBuf>,
+}
+
+/// Where one candidate's tables go ([`SweepOptions::tables`]): the tables
+/// a run of the candidate's own setup writes (static optimization, joint
+/// reactions, KneeLoads, KneeContact; not its log or statistics), named as
+/// that run names them (`writers::names`).
+#[derive(Debug, Clone)]
+pub struct CandidateTables {
+    /// Its folder.
+    pub dir: std::path::PathBuf,
+    /// Whether the names carry the candidate's w0 tag (as the runs of a w0
+    /// sweep of several weights), or not (a run of one weight).
+    pub w0_tag: bool,
 }
 
 /// Sweep options.
@@ -81,11 +96,18 @@ pub struct SweepOptions {
     /// Warm-start each candidate from the previous one of the same w0 in
     /// the frame (answers equal cold starts up to rounding).
     pub warm: bool,
+    /// Per candidate, where its tables go; empty (the default): metrics
+    /// only. Every candidate's tables stay open while the motion streams:
+    /// meant for tens of candidates, not thousands.
+    pub tables: Vec<CandidateTables>,
 }
 
 impl Default for SweepOptions {
     fn default() -> Self {
-        SweepOptions { warm: true }
+        SweepOptions {
+            warm: true,
+            tables: Vec::new(),
+        }
     }
 }
 
@@ -387,6 +409,9 @@ struct FrameValues {
     iterations: u64,
     values: Vec<f64>,
     failed: Vec<bool>,
+    /// With tables: per candidate, its frame result and joint reactions'
+    /// rows (one per coupled JointReaction).
+    results: Vec<(FrameResult, Vec<Vec<f64>>)>,
 }
 
 /// What a sweep of a setup shares: the compiled problem, its coupled joint
@@ -400,6 +425,8 @@ struct Plan {
     probed: Vec<usize>,
     step_interval: usize,
     warnings: Vec<String>,
+    /// The StaticOptimization's name (the tables' prefix).
+    so_name: String,
 }
 
 impl Plan {
@@ -500,6 +527,7 @@ impl Plan {
             probed,
             step_interval: so.common.step_interval,
             warnings,
+            so_name: so.common.name.clone(),
         })
     }
 
@@ -553,6 +581,7 @@ impl Plan {
         cands: &[ForceCandidate],
         chain_of: &[usize],
         warm: bool,
+        tables: bool,
         frame: &mut PreparedFrame,
         buf: &mut CandidateBuffers,
     ) -> FrameValues {
@@ -569,6 +598,7 @@ impl Plan {
             iterations: 0,
             values: Vec::with_capacity(2 * nm * nc),
             failed: Vec::with_capacity(nc),
+            results: Vec::new(),
         };
         let nv = problem.controls.len();
         for (k, cand) in cands.iter().enumerate() {
@@ -653,6 +683,15 @@ impl Plan {
                         &mut buf.knee_rows[j],
                     );
                 }
+            }
+            if tables {
+                let rows = self
+                    .coupled
+                    .iter()
+                    .enumerate()
+                    .map(|(j, _)| buf.reaction_rows[j].clone())
+                    .collect();
+                out.results.push((buf.result.clone(), rows));
             }
             let mut diag = None;
             for m in self.metrics.iter() {
@@ -764,6 +803,7 @@ impl Collected {
             loop_seconds,
             warnings,
             iterations: self.iterations,
+            files: Vec::new(),
         })
     }
 }
@@ -844,9 +884,25 @@ fn run_streamed(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    let plan = Plan::compile(setup)?;
+    let mut plan = Plan::compile(setup)?;
+    if !sweep.tables.is_empty() {
+        // Every reaction table is written.
+        plan.coupled.iter_mut().for_each(|c| c.used = true);
+    }
     let cands = resolve_candidates(setup, &plan.problem, candidates)?;
     let chain_of = Plan::chains(&cands);
+    let mut tables = if sweep.tables.is_empty() {
+        None
+    } else {
+        Some(CandidateWriters::open(
+            setup,
+            &plan,
+            &cands,
+            &sweep.tables,
+            opts,
+        )?)
+    };
+    let with_tables = tables.is_some();
     let mut warnings = plan.warnings.clone();
     let mut stream = open_stream(setup, &plan, &mut warnings)?;
     let (i0, i1, step) = (stream.first_row, stream.last_row, plan.step_interval);
@@ -877,10 +933,13 @@ fn run_streamed(
                 &block.udot[i],
                 frame,
             )?;
-            Ok(plan_ref.solve(cands, chain_of, sweep.warm, frame, buf))
+            Ok(plan_ref.solve(cands, chain_of, sweep.warm, with_tables, frame, buf))
         },
         |fv| {
             collected.push(&fv);
+            if let Some(t) = tables.as_mut() {
+                t.write(&fv)?;
+            }
             progress.inc(1);
             Ok(())
         },
@@ -890,7 +949,148 @@ fn run_streamed(
     if !completed {
         return Err(Error::msg("the force sweep was stopped"));
     }
-    collected.outcome(&plan, loop_seconds, warnings)
+    let files = match tables {
+        Some(t) => t.finish(setup, &plan, opts)?,
+        None => Vec::new(),
+    };
+    let mut outcome = collected.outcome(&plan, loop_seconds, warnings)?;
+    outcome.files = files;
+    Ok(outcome)
+}
+
+/// Every candidate's open tables ([`SweepOptions::tables`]).
+struct CandidateWriters {
+    tables: Vec<crate::writers::so_tables::SoTables>,
+    /// Per candidate: its folder and its runs' naming.
+    runs: Vec<(std::path::PathBuf, crate::writers::names::Sweep<'static>)>,
+}
+
+impl CandidateWriters {
+    fn open(
+        setup: &AnalyzeSetup,
+        plan: &Plan,
+        cands: &[ForceCandidate],
+        specs: &[CandidateTables],
+        opts: &RunOptions,
+    ) -> Result<CandidateWriters> {
+        use crate::writers::names::{self, Sweep};
+        use crate::writers::so_tables::{SoTables, TablesSpec};
+        if specs.len() != cands.len() {
+            return Err(Error::input(
+                Location::file(&setup.setup_file),
+                format!(
+                    "force sweep: {} candidates but {} table folders",
+                    cands.len(),
+                    specs.len()
+                ),
+            ));
+        }
+        let precision = opts.precision.unwrap_or(setup.output_precision);
+        let mut tables = Vec::with_capacity(cands.len());
+        let mut runs = Vec::with_capacity(cands.len());
+        for (c, spec) in cands.iter().zip(specs) {
+            let run = if spec.w0_tag {
+                Sweep::Weight(c.w0)
+            } else {
+                Sweep::Single
+            };
+            std::fs::create_dir_all(&spec.dir).map_err(|e| Error::io(&spec.dir, e))?;
+            let reactions: Vec<(String, &[crate::reactions::ReactionSpec])> = plan
+                .coupled
+                .iter()
+                .map(|cp| {
+                    (
+                        names::prefix(&setup.name, &cp.name, run),
+                        cp.specs.as_slice(),
+                    )
+                })
+                .collect();
+            let prefix = names::prefix(&setup.name, &plan.so_name, run);
+            tables.push(SoTables::open(
+                &plan.problem,
+                &TablesSpec {
+                    setup_file: &setup.setup_file,
+                    dir: &spec.dir,
+                    prefix: &prefix,
+                    w0: c.w0,
+                    reactions: &reactions,
+                    precision,
+                    keep: None,
+                },
+            )?);
+            runs.push((spec.dir.clone(), run));
+        }
+        Ok(CandidateWriters { tables, runs })
+    }
+
+    /// One frame's rows of every candidate (frames in order).
+    fn write(&mut self, fv: &FrameValues) -> Result<()> {
+        for (t, (r, rows)) in self.tables.iter_mut().zip(&fv.results) {
+            t.write(r, rows)?;
+        }
+        Ok(())
+    }
+
+    /// Close the tables and write each candidate's KneeLoads and
+    /// KneeContact tables from its reactions, as a run does.
+    fn finish(
+        self,
+        setup: &AnalyzeSetup,
+        plan: &Plan,
+        opts: &RunOptions,
+    ) -> Result<Vec<std::path::PathBuf>> {
+        use crate::writers::names;
+        let precision = opts.precision.unwrap_or(setup.output_precision);
+        let problem = &plan.problem;
+        let needs_states = plan
+            .coupled
+            .iter()
+            .any(|c| c.knee.is_some() || c.knee_contact);
+        let states = if needs_states {
+            Some(crate::tools::analyze::load_states_with(
+                setup,
+                &problem.model,
+                &problem.contacts,
+            )?)
+        } else {
+            None
+        };
+        let mut files = Vec::new();
+        for (t, (dir, run)) in self.tables.into_iter().zip(&self.runs) {
+            files.extend(t.finish()?);
+            for c in &plan.coupled {
+                let table = dir.join(format!(
+                    "{}ReactionLoads.sto",
+                    names::prefix(&setup.name, &c.name, *run)
+                ));
+                let Some(states) = states.as_ref() else {
+                    continue;
+                };
+                if c.knee.is_some() {
+                    files.push(crate::tools::knee_loads::write(
+                        &problem.model,
+                        states,
+                        &table,
+                        &crate::tools::knee_loads::output_path(&table),
+                        &setup.setup_file,
+                        precision,
+                    )?);
+                }
+                if c.knee_contact {
+                    files.push(crate::tools::knee_contact::write(
+                        &problem.model,
+                        &problem.knees,
+                        states,
+                        &table,
+                        &dir.join(names::setup_file_name(&setup.name, *run, "KneeContact.sto")),
+                        &setup.setup_file,
+                        precision,
+                    )?);
+                }
+            }
+        }
+        Ok(files)
+    }
 }
 
 /// A setup compiled and every frame of its motion assembled once, kept in
@@ -969,12 +1169,18 @@ impl Scene {
         self.frames.len()
     }
 
-    /// Solve every frame for `candidates` (frames in parallel).
+    /// Solve every frame for `candidates` (frames in parallel); writes no
+    /// tables (`sweep.tables` must be empty: [`run`] writes them).
     pub fn run(
         &mut self,
         candidates: &[CandidateSpec],
         sweep: &SweepOptions,
     ) -> Result<SweepOutcome> {
+        if !sweep.tables.is_empty() {
+            return Err(Error::msg(
+                "a Scene solves metrics only: write candidates' tables with a force sweep (tools::force_sweep::run)",
+            ));
+        }
         let Scene {
             plan,
             setup,
@@ -991,7 +1197,7 @@ impl Scene {
             let values: Vec<FrameValues> = frames
                 .par_iter_mut()
                 .map_init(CandidateBuffers::default, |buf, frame| {
-                    plan.solve(&cands, &chain_of, sweep.warm, frame, buf)
+                    plan.solve(&cands, &chain_of, sweep.warm, false, frame, buf)
                 })
                 .collect();
             let mut collected = Collected::new(cands.len(), plan.metrics.len());
@@ -1008,6 +1214,7 @@ impl Scene {
 /// ```xml
 /// <ForceSweep name="cam_shapes" setup="leg_extension_rajagopal_cam2.xml">
 ///   <contact_weight>1 500 1000</contact_weight>   (default: the setup's)
+///   <write_tables>false</write_tables>   (default: metrics only)
 ///   <Candidate name="circular">
 ///     <expression force="cam_torque">-50</expression>
 ///     <optimal_force actuator="knee_angle_r_reserve">50</optimal_force>
@@ -1020,16 +1227,46 @@ impl Scene {
 /// Every candidate runs at every w0; the metrics (the setup's `<Metric>`s)
 /// go to `<out>/<name>_force_sweep.csv`, one row per (candidate, w0):
 /// `candidate`, `w0`, `frames`, `failed`, then the metrics (unrounded).
+/// With `<write_tables>true</write_tables>` each candidate's tables go to
+/// `<out>/<name>_force_sweep/<candidate>/`, named as a run of its own setup
+/// names them (w0-tagged when the element has several w0).
 /// `dir` is the study's folder (the setup's path is relative to it).
 pub fn run_element(
     el: &Element,
     dir: &std::path::Path,
     out: &std::path::Path,
     opts: &RunOptions,
-) -> Result<std::path::PathBuf> {
+) -> Result<Vec<std::path::PathBuf>> {
     let (setup, specs, names) = read_element(el, dir)?;
-    let outcome = run(&setup, &specs, opts, &SweepOptions::default())?;
     let name = el.attr("name").unwrap_or("force_sweep");
+    let mut sweep = SweepOptions::default();
+    let write_tables = match el.child("write_tables") {
+        Some(c) => match c.text.trim() {
+            "true" => true,
+            "false" => false,
+            other => return Err(c.error(format!("write_tables: '{other}' is not true or false"))),
+        },
+        None => false,
+    };
+    if write_tables {
+        let n_w0 = names.iter().filter(|n| *n == &names[0]).count();
+        let mut seen = std::collections::HashSet::new();
+        for n in names.iter().step_by(n_w0.max(1)) {
+            if !seen.insert(n) {
+                return Err(el.error(format!(
+                    "write_tables: two candidates are named '{n}' (their tables would share a folder)"
+                )));
+            }
+        }
+        sweep.tables = names
+            .iter()
+            .map(|n| CandidateTables {
+                dir: out.join(format!("{name}_force_sweep")).join(n),
+                w0_tag: n_w0 > 1,
+            })
+            .collect();
+    }
+    let outcome = run(&setup, &specs, opts, &sweep)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let path = out.join(format!("{name}_force_sweep.csv"));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
@@ -1058,7 +1295,9 @@ pub fn run_element(
         w.write_record(&rec).map_err(csv_err)?;
     }
     w.flush().map_err(|e| Error::io(&path, e))?;
-    Ok(path)
+    let mut files = vec![path];
+    files.extend(outcome.files);
+    Ok(files)
 }
 
 /// The setup, the candidates (each at every w0) and their names of a
@@ -1089,11 +1328,11 @@ pub fn read_element(
     let mut names = Vec::new();
     for (k, c) in el.children.iter().enumerate() {
         match c.name.as_str() {
-            "contact_weight" => continue,
+            "contact_weight" | "write_tables" => continue,
             "Candidate" => {}
             other => {
                 return Err(c.error(format!(
-                    "unknown element <{other}> in a ForceSweep (contact_weight, Candidate)"
+                    "unknown element <{other}> in a ForceSweep (contact_weight, write_tables, Candidate)"
                 )))
             }
         }

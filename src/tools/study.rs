@@ -686,7 +686,7 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     // Force sweeps: candidates of one setup on one compiled scene, their
     // metrics in <name>_force_sweep.csv (tools::force_sweep).
     for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {
-        summary.files.push(crate::tools::force_sweep::run_element(
+        summary.files.extend(crate::tools::force_sweep::run_element(
             sw, &dir, &out, opts,
         )?);
     }
