@@ -359,4 +359,13 @@ fn knee_contact_sweeps_w0_without_machine_contacts() {
     };
     assert!(peak("100") < peak("1000"));
     assert!(out.join("GC5_ss1_SO_w0_mean_force.sto").is_file());
+    // The KneeContact table's statistics over w0, as the other tables':
+    // the mean between min and max, the max the larger weight's values.
+    let (mean, a, b) = (peak("mean"), peak("100"), peak("1000"));
+    assert!(peak("min") <= mean && mean <= peak("max"), "{mean}");
+    assert!(
+        (peak("max") - a.max(b)).abs() < 1e-3,
+        "{} vs {a}, {b}",
+        peak("max")
+    );
 }

@@ -5,12 +5,14 @@ optimiser"): wall and CPU time (user + system, children included) of
   1, 500, 1000 (N x 3 rows), as a user runs it (a process, the figure
   included unless --no-figure);
 - ``cam_design_optimize.py`` (default settings);
+- both again with ``--knee-contact`` (the knee contact method's setup,
+  its total tibiofemoral force the goal);
 - the engine alone: ``statopt.force_sweep`` of the same N x 3 candidates
   (one thread and all), and ``statopt.Scene`` (compile once, then one
   batch);
 - for scale, ``statopt.run`` of one point (one shape at one w0).
 
-    python python/benchmarks/design_sweep.py [--ratios 1000] [--rounds 3]
+    python python/benchmarks/design_sweep.py [--ratios 1000] [--rounds 3] [--examples-only]
 
 Prints one line per measurement (median and best of the rounds) and the
 load average before and after, since other work on the machine inflates
@@ -58,6 +60,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--ratios", type=int, default=1000)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--examples-only", action="store_true", help="time the two examples only")
     a = ap.parse_args()
     print(f"load average before: {os.getloadavg()}; {os.cpu_count()} cores")
     ratios = [f"{r:.6f}" for r in np.linspace(0.3, 1.0, a.ratios)]
@@ -74,6 +77,14 @@ def main():
             lambda: example("cam_design_sweep.py", "--ratios", *ratios, "--w0", "1", "500", "1000",
                             "--no-figure"), a.rounds)
     measure("cam_design_optimize.py (defaults)", lambda: example("cam_design_optimize.py"), a.rounds)
+    measure(f"cam_design_sweep.py, {a.ratios} ratios x 3 w0, --knee-contact",
+            lambda: example("cam_design_sweep.py", "--ratios", *ratios, "--w0", "1", "500", "1000",
+                            "--knee-contact"), a.rounds)
+    measure("cam_design_optimize.py --knee-contact", lambda: example("cam_design_optimize.py", "--knee-contact"),
+            a.rounds)
+    if a.examples_only:
+        print(f"load average after: {os.getloadavg()}")
+        return
 
     expr = lambda r: f"-50*sqrt(1-{float(1 - float(r) ** 2)!r}*sin(q+0.08726646259971647)^2)"  # noqa: E731
     cands = [{"w0": w, "expressions": {"cam_torque": expr(r)}} for w in (1, 500, 1000) for r in ratios]

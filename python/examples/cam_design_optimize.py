@@ -7,7 +7,15 @@ cam's at every contact weight w0 of the band (robust to how the load is
 shared between muscles and contacts).
 
     python python/examples/cam_design_optimize.py [--out DIR] [--w0 1 500 1000]
-        [--min-work 0.9] [--ratios N]
+        [--min-work 0.9] [--ratios N] [--knee-contact]
+
+Which load is optimised: without --knee-contact, the peak over the movement
+of the plain joint reaction's tibiofemoral compression of the right knee
+(``peak_tf_compression_N``, KneeLoads ``tf_compression_r``); with
+--knee-contact the setup is solved with the knee contact method
+(setups/leg_extension_rajagopal_cam2_kc.xml, docs/knee_contact.md) and the
+goal is the peak of its total tibiofemoral force (``peak_tf_total_N``,
+KneeContact ``walker_knee_r_total_N``), for the grid and the optimum alike.
 
 The profile: torque values v_0 >= v_1 >= ... >= v_4 >= 0 at knee flexion 5,
 27.5, 50, 72.5 and 95 deg, v_0 <= 50 N m, joined by a monotone cubic
@@ -23,7 +31,8 @@ The grid it is compared with: the elliptical cams b/a = 0.3 ... 1.0
 (cam_design_sweep.py's family, one force sweep), whose best shape meeting
 the same constraint at every w0 is the one to beat.
 
-Writes to the output folder (default output/cam_design/): cam_optimum.csv
+Writes to the output folder (default output/cam_design/, with --knee-contact
+output/cam_design_kc/): cam_optimum.csv
 (one row per w0: w0, peak_tf_compression_N, work_vs_circular, the other
 metrics and the profile's parameters) and cam_optimum.png (torque
 profiles, knee compression over flexion, the grid's Pareto front of work
@@ -47,13 +56,14 @@ from scipy.optimize import minimize  # noqa: E402
 import statopt  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cam_design_sweep import SETUP, cam_expression, machine_expression, torque  # noqa: E402
+from cam_design_sweep import (  # noqa: E402
+    SETUP, SETUP_KC, cam_expression, compression_curves, goal_of, machine_expression, torque)
 
 REPO = Path(__file__).resolve().parents[2]
 W0 = [1.0, 500.0, 1000.0]
 PEAK = 50.0  # N m: the weight stack's torque on the circular cam
 KNOTS_DEG = np.linspace(5.0, 95.0, 5)  # knee flexion of the control points
-GOAL = "peak_tf_compression_N"
+GOAL = "peak_tf_compression_N"  # without --knee-contact (goal_of)
 WORK = "quadriceps_work_J"
 
 
@@ -95,10 +105,11 @@ def profile_torque(values, flexion_rad):
 class Evaluator:
     """Metrics of profiles at every w0, one force sweep per batch, cached."""
 
-    def __init__(self, w0s, work_circular):
+    def __init__(self, w0s, work_circular, setup=SETUP, goal=GOAL):
         # The setup compiled and every frame assembled once: each batch
         # only solves.
-        self.scene = statopt.Scene(SETUP)
+        self.scene = statopt.Scene(setup)
+        self.goal = goal
         self.w0s = w0s
         self.work_circular = work_circular  # per w0
         self.cache = {}
@@ -115,10 +126,20 @@ class Evaluator:
                 per = rows[i * len(self.w0s):(i + 1) * len(self.w0s)]
                 if any(r["failed"] for r in per):
                     raise RuntimeError(f"profile {z}: frames not solved")
-                self.cache[z] = (np.array([r[GOAL] for r in per]),
+                self.cache[z] = (np.array([r[self.goal] for r in per]),
                                  np.array([r[WORK] / self.work_circular[w] for r, w in zip(per, self.w0s)]),
                                  per)
         return [self.cache[tuple(np.round(z, 12))] for z in zs]
+
+    def best_feasible(self, min_work):
+        """The profile evaluated so far (iterates and their neighbours) with
+        the lowest worst-case goal among those meeting the work requirement
+        at every w0, or None."""
+        best = None
+        for z, (peaks, works, _) in self.cache.items():
+            if (works >= min_work).all() and (best is None or peaks.max() < best[0]):
+                best = (peaks.max(), z)
+        return None if best is None else np.array(best[1])
 
     def with_gradient(self, z, h=1e-4):
         """(peaks, works) at z and their forward-difference Jacobians."""
@@ -140,12 +161,12 @@ class Evaluator:
         return peak0, work0, jp, jw
 
 
-def ellipse_grid(ratios, w0s):
+def ellipse_grid(ratios, w0s, setup=SETUP):
     """The elliptical cams of cam_design_sweep.py at every w0 (one force sweep)."""
     template = machine_expression()
     expr = {r: cam_expression(r, template) for r in ratios}
     grid = {"contact_weight": w0s, "model_properties": [{"cam_torque/expression": expr[r]} for r in ratios]}
-    df = statopt.sweep(SETUP, grid, progress=False)
+    df = statopt.sweep(setup, grid, progress=False)
     if df.error.notna().any():
         raise SystemExit(df.error.dropna().iloc[0])
     df.insert(0, "b_over_a", [ratios[i % len(ratios)] for i in range(len(df))])
@@ -157,26 +178,36 @@ def ellipse_grid(ratios, w0s):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=str(REPO / "output" / "cam_design"), help="output folder")
+    ap.add_argument("--out", help="output folder (default output/cam_design, with --knee-contact "
+                    "output/cam_design_kc)")
     ap.add_argument("--w0", type=float, nargs="+", default=W0, help="contact weights (default 1 500 1000)")
     ap.add_argument("--min-work", type=float, default=0.9,
                     help="required quadriceps work at every w0, a fraction of the circular cam's (default 0.9)")
     ap.add_argument("--ratios", type=int, default=71, help="ellipses of the comparison grid (b/a 0.3 to 1.0)")
+    ap.add_argument("--knee-contact", action="store_true",
+                    help="solve with the knee contact method (setups/leg_extension_rajagopal_cam2_kc.xml) and "
+                    "minimise the peak of its total tibiofemoral force (peak_tf_total_N) instead of the plain "
+                    "reaction's tibiofemoral compression (peak_tf_compression_N)")
     a = ap.parse_args(argv)
+    setup = SETUP_KC if a.knee_contact else SETUP
+    goal = goal_of(a.knee_contact)
+    what = "total tibiofemoral force (knee contact)" if a.knee_contact else "tibiofemoral compression"
+    if a.out is None:
+        a.out = str(REPO / "output" / ("cam_design_kc" if a.knee_contact else "cam_design"))
     start = time.perf_counter()
     w0s = sorted(set(a.w0))
 
     # The grid: every ellipse at every w0; its best shape meeting the work
     # requirement at every w0 (lowest worst-case peak over the band).
     ratios = sorted({float(r) for r in np.round(np.linspace(0.3, 1.0, a.ratios), 6)} | {1.0})
-    grid, ellipse_expr, work_circ = ellipse_grid(ratios, w0s)
-    band = grid.groupby("b_over_a").agg(worst=(GOAL, "max"), least_work=("work_vs_circular", "min"))
+    grid, ellipse_expr, work_circ = ellipse_grid(ratios, w0s, setup)
+    band = grid.groupby("b_over_a").agg(worst=(goal, "max"), least_work=("work_vs_circular", "min"))
     feasible = band[band.least_work >= a.min_work]
     best_ratio = float(feasible.worst.idxmin())
     best_ellipse = float(feasible.worst.min())
 
     # Start from the best ellipse's profile (feasible), read at the knots.
-    ev = Evaluator(w0s, work_circ)
+    ev = Evaluator(w0s, work_circ, setup, goal)
     knots = np.radians(KNOTS_DEG)
     v = -torque(ellipse_expr[best_ratio], -knots)
     z0 = np.clip(np.r_[v[0] / PEAK, v[1:] / np.maximum(v[:-1], 1e-9)], 0, 1)
@@ -210,6 +241,15 @@ def main(argv=None):
                    constraints=[{"type": "ineq", "fun": cons, "jac": cons_jac}],
                    options={"maxiter": 60, "ftol": 1e-3})
     z = np.clip(res.x[:-1], 0, 1)
+    # SLSQP may stop at an iterate that grazes the work constraint (with the
+    # knee contact method the loads are not smooth in the profile: the
+    # compartments' l >= 0 and activation bounds switch on and off): then
+    # the answer is the best feasible profile it evaluated.
+    fallback = False
+    if not (ev.batch([z])[0][1] >= a.min_work).all():
+        zb = ev.best_feasible(a.min_work)
+        if zb is not None:
+            z, fallback = zb, True
     values = profile_values(z)
     expr = spline_expression(values)
     # The optimum, evaluated on its own (a force sweep of one profile).
@@ -217,30 +257,33 @@ def main(argv=None):
     opt = pd.DataFrame(rows)
     opt.insert(0, "w0", w0s)
     opt.insert(1, "work_vs_circular", [r[WORK] / work_circ[w] for r, w in zip(rows, w0s)])
-    cols = ["w0", GOAL, "work_vs_circular"] + [c for c in opt.columns if c not in ("w0", GOAL, "work_vs_circular")]
+    first = ["w0", GOAL, "work_vs_circular"] + ([goal] if goal != GOAL else [])
+    cols = first + [c for c in opt.columns if c not in first]
     opt = opt[cols]
     for k, (deg, val) in enumerate(zip(KNOTS_DEG, values)):
         opt[f"knot{k}_flexion_deg"] = deg
         opt[f"knot{k}_torque_Nm"] = val
     opt["expression"] = expr
     meets = bool((opt.work_vs_circular >= a.min_work).all())
-    worst = float(opt[GOAL].max())
+    worst = float(opt[goal].max())
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     opt.to_csv(out / "cam_optimum.csv", index=False)
     print(f"SLSQP: {res.message} ({res.nit} iterations, {ev.sweeps} force sweeps of up to "
           f"{(len(z0) + 1) * len(w0s)} candidates)")
+    if fallback:
+        print("SLSQP's last iterate misses the work constraint: the best feasible profile it evaluated is taken")
     print("profile (knee flexion deg: resistance N m): "
           + ", ".join(f"{d:g}: {t:.2f}" for d, t in zip(KNOTS_DEG, values)))
-    print(opt[["w0", GOAL, "work_vs_circular", WORK, "peak_pf_compression_N"]].to_string(
+    print(opt[[*first, WORK, "peak_pf_compression_N"]].to_string(
         index=False, float_format=lambda x: f"{x:.4f}"))
     print(f"work constraint (>= {a.min_work:.0%} of circular at every w0): {'met' if meets else 'NOT met'}")
-    print(f"worst-case peak tibiofemoral compression: optimum {worst:.1f} N, best feasible ellipse "
+    print(f"worst-case peak {what}: optimum {worst:.1f} N, best feasible ellipse "
           f"(b/a = {best_ratio:g}) {best_ellipse:.1f} N, circular {band.loc[1.0].worst:.1f} N")
 
     # Figure: profiles; compression over flexion (band over w0); Pareto front.
-    runs = {name: statopt.run(SETUP, contact_weight=w0s, progress=False,
+    runs = {name: statopt.run(setup, contact_weight=w0s, progress=False,
                               model_properties={"cam_torque/expression": e})
             for name, e in (("optimum", expr), (f"best ellipse b/a = {best_ratio:g}", ellipse_expr[best_ratio]),
                             ("circular", ellipse_expr[1.0]))}
@@ -255,12 +298,10 @@ def main(argv=None):
               ylim=(0, PEAK * 1.08))
     ax[0].invert_xaxis()
     for (name, r), c in zip(runs.items(), ["C3", "C0", "C7"]):
-        kl = r.table("KneeLoads")
-        flex = kl.knee_flexion_r.unstack(0).iloc[:, 0].to_numpy()
-        v = kl.tf_compression_r.unstack(0).to_numpy()
+        _, _, flex, v = compression_curves(r, a.knee_contact)[0]
         ax[1].fill_between(flex, v.min(axis=1), v.max(axis=1), color=c, alpha=0.2)
         ax[1].plot(flex, np.median(v, axis=1), color=c, label=f"{name} (band over w0)")
-    ax[1].set(xlabel="knee flexion (deg)", ylabel="tibiofemoral compression, right knee (N)",
+    ax[1].set(xlabel="knee flexion (deg)", ylabel=f"{what}, right knee (N)",
               title="Knee loads")
     ax[1].invert_xaxis()
     pts = band.reset_index()
@@ -275,7 +316,7 @@ def main(argv=None):
     ax[2].plot([opt.work_vs_circular.min() * 100], [worst], "*", color="C3", ms=16, label="optimum (spline)")
     ax[2].axvline(a.min_work * 100, color="k", ls=":", label=f"required work {a.min_work:.0%}")
     ax[2].set(xlabel="quadriceps work, least over w0 (% of circular)",
-              ylabel="peak tibiofemoral compression, worst over w0 (N)", title="Work against peak compression")
+              ylabel=f"peak {what}, worst over w0 (N)", title=f"Work against peak {what}")
     for x in ax:
         x.grid(alpha=0.3)
         x.legend(fontsize=8)

@@ -278,7 +278,10 @@ def run(
       ``{"tibia_pad_r/plane_origin": [0, 0.1, 0]}``), ``motion`` (a
       DataFrame, or a file, instead of the coordinates file; a DataFrame's
       rotational columns are in degrees unless ``df.attrs["in_degrees"]`` is
-      False), and any other setup element by name (``step_interval=2``,
+      False), ``external_load_scale`` (a number: every external load's force
+      and torque data times it; a dict ``{ExternalForce name: factor}``: those
+      loads'; a scaled copy of the data file is run), and any other setup
+      element by name (``step_interval=2``,
       ``lowpass_cutoff_frequency_for_coordinates=6``, ...). Paths given here
       are relative to the working directory; the setup's own paths still
       resolve against its folder.

@@ -18,7 +18,7 @@ import pandas as pd
 
 from . import _native
 from ._run import Result, _split_key, run
-from ._setup import edit_setup, is_study, metric_elements
+from ._setup import edit_setup, external_scales, is_study, metric_elements
 
 MetricsSpec = Union[None, Callable[[Result], Mapping[str, Any]], Mapping[str, Callable[[Result], Any]]]
 
@@ -126,8 +126,8 @@ def _batch_split(ov: Dict[str, Any]):
     """``(base overrides, candidate)`` when a point's overrides change the
     setup only in forces one compiled scene can share — one
     ``contact_weight``, expressions of ExpressionBasedCoordinateForces and
-    actuators' optimal forces set through ``model_properties`` — and
-    ``None`` otherwise."""
+    actuators' optimal forces set through ``model_properties``, an
+    ``external_load_scale`` — and ``None`` otherwise."""
     ov = dict(ov)
     w0 = ov.pop("contact_weight", None)
     if isinstance(w0, (list, tuple, np.ndarray)) and len(w0) == 1:
@@ -135,6 +135,11 @@ def _batch_split(ov: Dict[str, Any]):
     if not isinstance(w0, numbers.Real) or isinstance(w0, bool):
         return None
     cand: Dict[str, Any] = {"w0": float(w0), "expressions": {}, "optimal_forces": {}}
+    if "external_load_scale" in ov:
+        try:
+            cand["external_scales"] = external_scales(ov.pop("external_load_scale"))
+        except TypeError:
+            return None
     rest = {}
     for key, value in (ov.pop("model_properties", None) or {}).items():
         parts = [p for p in str(key).strip("/").split("/") if p]
@@ -163,25 +168,41 @@ def _freeze(v: Any):
 
 
 def force_sweep(setup, candidates: Sequence[Dict[str, Any]], *, threads: Optional[int] = None,
-                warm: bool = True, **overrides: Any) -> List[Dict[str, Any]]:
+                warm: bool = True, write_tables: Union[str, "os.PathLike[str]", None] = None,
+                **overrides: Any) -> List[Dict[str, Any]]:
     """Candidates of one setup that differ only in forces, on one compiled
     scene, in this process (the engine's ``tools::force_sweep``): one row
     per candidate, ``frames``, ``failed`` and the setup's ``<Metric>``
     values (unrounded). A candidate is ``{"w0": 500, "expressions":
-    {"cam_torque": "-50"}, "optimal_forces": {"reserve_x": 100}}``;
-    ``overrides`` (as :func:`statopt.run`'s, but ``contact_weight``) apply
-    to the setup they share. :func:`sweep` uses it for such points."""
+    {"cam_torque": "-50"}, "optimal_forces": {"reserve_x": 100},
+    "external_scales": {"plate1_left": 1.2}}`` (``"*"``: every external
+    load's force and torque data times the factor); ``overrides`` (as
+    :func:`statopt.run`'s, but ``contact_weight``) apply to the setup they
+    share. :func:`sweep` uses it for such points.
+
+    ``write_tables``: a folder; candidate k's tables then go to
+    ``<write_tables>/candidate_<k>/``, named as a run of its own setup (one
+    w0) names them, and its row's ``tables`` is that folder. Without it
+    (the default) only metrics are computed."""
     inputs = None
+    tables = None
+    if write_tables is not None:
+        tables = [os.path.join(os.fspath(write_tables), f"candidate_{k}") for k in range(len(candidates))]
     try:
         text = None
         if overrides:
             inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
             text = edit_setup(Path(setup), overrides, inputs)
-        out = _native.force_sweep(os.fspath(setup), list(candidates), text=text, threads=threads, warm=warm)
+        out = _native.force_sweep(os.fspath(setup), list(candidates), text=text, threads=threads, warm=warm,
+                                  tables=tables)
     finally:
         if inputs is not None:
             shutil.rmtree(inputs, ignore_errors=True)
-    return _rows(out)
+    rows = _rows(out)
+    if tables is not None:
+        for r, t in zip(rows, tables):
+            r["tables"] = t
+    return rows
 
 
 def _rows(out: Dict[str, Any]) -> List[Dict[str, Any]]:
@@ -313,9 +334,10 @@ def sweep(
     has run a second, True at once, False never.
 
     **Force sweeps.** Points that differ only in forces — one
-    ``contact_weight`` each, and ``model_properties`` that set an
+    ``contact_weight`` each, ``model_properties`` that set an
     ExpressionBasedCoordinateForce's ``expression`` or an actuator's
-    ``optimal_force`` — with the setup's ``<Metric>``s as metrics are
+    ``optimal_force``, and ``external_load_scale`` (a number, or
+    ``{ExternalForce name: factor}``) — with the setup's ``<Metric>``s as metrics are
     batched (``batch=None``; ``False`` never): every group of points that
     share everything else runs as one force sweep (:func:`force_sweep`) on
     one compiled scene, in this process without ``client``, split into one

@@ -66,6 +66,25 @@ def test_cam_design_sweep(repo, cli, tmp_path):
         assert row[k] == pytest.approx(cam2.metrics[k], abs=6e-7, rel=0), k
 
 
+def test_cam_design_sweep_knee_contact(repo, cli, tmp_path):
+    """--knee-contact: the knee contact method's total tibiofemoral force is
+    the goal; the circular cam at w0 = 500 equals the CLI's run of the cam 1
+    setup with the method (its w0 = 500 KneeContact table, 8 decimals)."""
+    stdout = run_example(repo, "cam_design_sweep.py", "--out", tmp_path, "--ratios", 0.5, 1.0,
+                         "--w0", 1, 500, "--knee-contact", "--no-figure")
+    df = pd.read_csv(tmp_path / "cam_design.csv")
+    assert len(df) == 4 and df.error.isna().all() and (df.failed == 0).all()
+    assert {"peak_tf_total_N", "peak_tf_compression_N", "work_vs_circular"} <= set(df.columns)
+    assert "lowest worst-case peak total tibiofemoral force (knee contact method)" in stdout
+    out = tmp_path / "cli_cam1_kc"
+    r = subprocess.run([str(cli), str(repo / "setups" / "leg_extension_rajagopal_cam1_kc.xml"), "-o", str(out),
+                        "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    kc = statopt.read_table(out / "leg_extension_rajagopal_cam1_kc_w0_500_KneeContact.sto")
+    circ = df[(df.b_over_a == 1.0) & (df.w0 == 500)].iloc[0]
+    assert circ.peak_tf_total_N == pytest.approx(kc.walker_knee_r_total_N.max(), rel=1e-6, abs=0)
+
+
 def test_cam_design_optimize(repo, tmp_path):
     stdout = run_example(repo, "cam_design_optimize.py", "--out", tmp_path, "--ratios", 15)
     assert (tmp_path / "cam_optimum.png").read_bytes().startswith(PNG)

@@ -303,6 +303,49 @@ def test_sweep_batches_points_that_differ_only_in_forces(repo):
         statopt.force_sweep(setup, [{"w0": 500, "expressions": {"cam": "-50"}}])
 
 
+def test_force_sweep_writes_tables_on_request(repo, tmp_path):
+    setup = repo / "setups" / "leg_extension_rajagopal_cam2.xml"
+    cands = [{"w0": 500, "expressions": {"cam_torque": "-50"}}, {"w0": 1, "expressions": {"cam_torque": "-40"}}]
+    rows = statopt.force_sweep(setup, cands, time_range=(0.0, 1.0), write_tables=tmp_path / "t")
+    own = statopt.run(setup, contact_weight=1, time_range=(0.0, 1.0), progress=False,
+                      model_properties={"cam_torque/expression": "-40"})
+    assert rows[1]["tables"] == str(tmp_path / "t" / "candidate_1")
+    mine = statopt.read_table(tmp_path / "t" / "candidate_1" / "leg_extension_rajagopal_cam2_JR_KneeLoads.sto")
+    theirs = own.table("KneeLoads")
+    assert list(mine.columns) == list(theirs.columns) and len(mine) == 21
+    assert np.allclose(mine.to_numpy(), theirs.to_numpy(), rtol=1e-7, atol=1e-6)
+    # metrics only by default
+    assert "tables" not in statopt.force_sweep(setup, cands[:1], time_range=(0.0, 1.0))[0]
+
+
+def test_sweep_batches_external_load_scales(repo, tmp_path):
+    """external_load_scale points of the GC5 trial (../shared; skipped
+    without it) run as one force sweep and equal runs of the scaled data."""
+    gc5 = repo.parent / "shared" / "models" / "knee_gc5"
+    if not (gc5 / "setup_ss1.xml").exists():
+        pytest.skip(f"SKIP {gc5} is absent")
+    text = (gc5 / "setup_ss1.xml").read_text()
+    for f in ("Rajagopal2015-scaled.osim", "ForceSet.xml", "residuals.xml", "GC5_ss1_loads.xml", "GC5_ss1.mot"):
+        text = text.replace(f">{f}", f">{gc5 / f}").replace(f" {f}<", f" {gc5 / f}<")
+    text = text.replace("<external_loads_file>", '<Metric name="peak_knee_fy" file="GC5_ss1_JR_ReactionLoads.sto" '
+                        'columns="walker_knee_l_on_tibia_l_in_tibia_l_fy" op="min"/>'
+                        '<Metric name="mean_vasint" file="GC5_ss1_SO_force.sto" columns="vasint_l" op="mean"/>'
+                        '<external_loads_file>')
+    setup = tmp_path / "setup_ss1.xml"
+    setup.write_text(text)
+    grid = {"external_load_scale": [0.8, {"plate1_left": 1.2}]}
+    df = statopt.sweep(setup, grid, contact_weight=1000, time_range=(0.0, 0.05), progress=False)
+    assert df.error.isna().all() and (df.frames == 7).all() and df.seconds.nunique() == 1, df
+    for _, row in df.iterrows():
+        own = statopt.run(setup, contact_weight=1000, time_range=(0.0, 0.05), progress=False, tables=False,
+                          external_load_scale=row.external_load_scale)
+        for k, v in own.metrics.items():
+            assert row[k] == pytest.approx(v, abs=6e-7, rel=0), k
+    assert df.peak_knee_fy.nunique() == 2
+    with pytest.raises(KeyError, match="no ExternalForce plate9"):
+        statopt.run(setup, external_load_scale={"plate9": 2.0}, time_range=(0.0, 0.05), progress=False)
+
+
 # -- studies, Ctrl-C ----------------------------------------------------------
 
 def test_study_and_ctrl_c(repo, tmp_path):

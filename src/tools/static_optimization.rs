@@ -275,6 +275,35 @@ pub fn run(
             }
         }
     }
+    if sweep && !problem.knees.is_empty() {
+        // The knee contact method's table: mean, min and max over w0 too.
+        let precision = opts.precision.unwrap_or(setup.output_precision);
+        let files: Vec<std::path::PathBuf> = weights
+            .iter()
+            .map(|w0| {
+                dir.join(names::setup_file_name(
+                    &setup.name,
+                    Sweep::Weight(*w0),
+                    "KneeContact.sto",
+                ))
+            })
+            .collect();
+        let stat_path = |stat: &str| {
+            dir.join(names::setup_file_name(
+                &setup.name,
+                Sweep::Stat(stat),
+                "KneeContact.sto",
+            ))
+        };
+        summary.files.extend(write_sweep_statistics(
+            &setup.setup_file,
+            &files,
+            &stat_path,
+            "KneeContact",
+            &weights,
+            precision,
+        )?);
+    }
     summary.files.extend(knee_files);
     warnings.extend(summary.warnings);
     summary.warnings = warnings;
