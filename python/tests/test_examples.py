@@ -97,3 +97,18 @@ def test_cam_design_optimize(repo, tmp_path):
     assert "work constraint (>= 90% of circular at every w0): met" in stdout
     best = float(stdout.split("best feasible ellipse (b/a = ")[1].split(") ")[1].split(" N")[0])
     assert df.peak_tf_compression_N.max() < best
+
+
+def test_cam_design_optimize_knee_contact(repo, tmp_path):
+    """--knee-contact: the knee contact method's total tibiofemoral force
+    is the goal; the optimum meets the work requirement at every w0 and
+    beats the grid's best feasible ellipse on it."""
+    stdout = run_example(repo, "cam_design_optimize.py", "--out", tmp_path, "--ratios", 15, "--knee-contact")
+    df = pd.read_csv(tmp_path / "cam_optimum.csv")
+    assert df.w0.tolist() == [1, 500, 1000]
+    assert {"peak_tf_total_N", "peak_tf_compression_N", "work_vs_circular"} <= set(df.columns)
+    assert (df.work_vs_circular >= 0.9).all()
+    assert "work constraint (>= 90% of circular at every w0): met" in stdout
+    assert "worst-case peak total tibiofemoral force (knee contact)" in stdout
+    best = float(stdout.split("best feasible ellipse (b/a = ")[1].split(") ")[1].split(" N")[0])
+    assert df.peak_tf_total_N.max() < best
