@@ -690,3 +690,36 @@ fn the_rajagopal_cam_setups_differ_only_in_the_cam() {
     }
     assert_eq!(cam1.lines().count(), cam2.lines().count());
 }
+
+/// The examples' --knee-contact setup is the cam 2 setup with the knee
+/// contact method and its KneeContact metrics, nothing else.
+#[test]
+fn the_knee_contact_cam2_setup_differs_only_in_the_method() {
+    let body = |name: &str| -> Vec<String> {
+        let text = std::fs::read_to_string(root().join(format!("setups/{name}.xml"))).unwrap();
+        // After the leading comment; without the method's own lines.
+        let start = text.find("-->").unwrap() + 3;
+        text[start..]
+            .replace(
+                "leg_extension_rajagopal_cam2_kc",
+                "leg_extension_rajagopal_cam2",
+            )
+            .lines()
+            .filter(|l| {
+                !l.contains("<knee_contact>")
+                    && !l.contains("KneeContact.sto")
+                    && !l.contains("knee contact method's total")
+            })
+            .map(String::from)
+            .collect()
+    };
+    let (kc, cam2) = (
+        body("leg_extension_rajagopal_cam2_kc"),
+        body("leg_extension_rajagopal_cam2"),
+    );
+    assert_eq!(kc, cam2);
+    let text =
+        std::fs::read_to_string(root().join("setups/leg_extension_rajagopal_cam2_kc.xml")).unwrap();
+    assert!(text.contains("<knee_contact>all</knee_contact>"));
+    assert!(text.contains("<Metric name=\"peak_tf_total_N\""));
+}
