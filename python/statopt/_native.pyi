@@ -38,6 +38,7 @@ def force_sweep(
     text: Optional[str] = None,
     threads: Optional[int] = None,
     warm: bool = True,
+    tables: Optional[List[str]] = None,
 ) -> Dict[str, Any]: ...
 class Scene:
     frames: int

@@ -11,10 +11,11 @@
 //! candidate warm-started from the previous candidate of the same w0 in
 //! the frame (the same answers as a cold start, up to rounding), its joint
 //! reactions from the frame's affine reaction basis
-//! ([`ReactionBasis`]). It writes no tables: each candidate's values of the
-//! setup's `<Metric>` elements are computed from the rows it would have
-//! written (the same `op`s, [`metric_value`]), with the candidate's own w0
-//! whatever w0 tag a metric's file names.
+//! ([`ReactionBasis`]). Each candidate's values of the setup's `<Metric>`
+//! elements are computed from the rows it would have written (the same
+//! `op`s, [`metric_value`]), with the candidate's own w0 whatever w0 tag a
+//! metric's file names; its tables are written only on request
+//! ([`SweepOptions::tables`]: those a run of its own setup writes).
 //!
 //! Candidates' metrics equal those of runs of each candidate's own setup
 //! (tests/force_sweep.rs: 1e-9 relative), as the frames are those runs'
