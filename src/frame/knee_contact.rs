@@ -327,6 +327,7 @@ mod tests {
             distal: vec![false, true],
             z: [side * h, -side * h],
             frontal: true,
+            capacity: 1272.0,
         }
     }
 
