@@ -237,8 +237,11 @@ impl SoProblem {
                 }
             }
         }
-        // Weights: every variable after the controls is a contact multiplier.
-        asm.problem.weights[nv..]
+        // Weights: the contact multipliers follow the controls (the knee
+        // compartments after them are weighted by their capacity, not w0:
+        // the frame's, every candidate's).
+        let nc3 = 3 * self.contacts.len();
+        asm.problem.weights[nv..nv + nc3]
             .iter_mut()
             .for_each(|w| *w = 1.0 / cand.w0);
         // Optimal forces: the column and the scale.
