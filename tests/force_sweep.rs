@@ -723,3 +723,47 @@ fn the_knee_contact_cam2_setup_differs_only_in_the_method() {
     assert!(text.contains("<knee_contact>all</knee_contact>"));
     assert!(text.contains("<Metric name=\"peak_tf_total_N\""));
 }
+
+/// A w0 sweep with the knee contact method writes the KneeContact table's
+/// mean, min and max over w0 (as the other tables'), which the cam 2 knee
+/// contact setup's metrics read (it stopped at a missing
+/// `_w0_mean_KneeContact.sto` before).
+#[test]
+fn a_knee_contact_w0_sweep_writes_its_statistics() {
+    let dir = tmp("kc_statistics");
+    let setup = root().join("setups/leg_extension_rajagopal_cam2_kc.xml");
+    let text = std::fs::read_to_string(&setup)
+        .unwrap()
+        .replace("<final_time>5</final_time>", "<final_time>1</final_time>");
+    let out = dir.join("out");
+    let summary = tools::run_setup_text(
+        &setup,
+        &text,
+        &RunOptions {
+            results_dir: Some(out.clone()),
+            threads: Some(2),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(summary.failed, 0);
+    let read = |tag: &str| {
+        storage::read(&out.join(format!(
+            "leg_extension_rajagopal_cam2_kc_w0_{tag}_KneeContact.sto"
+        )))
+        .unwrap()
+    };
+    let (mean, min, max) = (read("mean"), read("min"), read("max"));
+    let (w1, w1000) = (read("1"), read("1000"));
+    assert_eq!(mean.time.len(), 21);
+    let j = mean.column_index("walker_knee_r_total_N").unwrap();
+    for i in 0..21 {
+        let (lo, hi) = (min.rows[i][j], max.rows[i][j]);
+        assert!(lo <= mean.rows[i][j] && mean.rows[i][j] <= hi, "row {i}");
+        assert!(lo <= w1.rows[i][j].min(w1000.rows[i][j]) + 1e-6, "row {i}");
+        assert!(hi >= w1.rows[i][j].max(w1000.rows[i][j]) - 1e-6, "row {i}");
+    }
+    let metrics =
+        std::fs::read_to_string(out.join("leg_extension_rajagopal_cam2_kc_metrics.csv")).unwrap();
+    assert!(metrics.contains("peak_tf_total_N,"), "{metrics}");
+}
