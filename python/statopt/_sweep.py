@@ -68,16 +68,19 @@ def _metrics(res: Result, metrics: MetricsSpec) -> Dict[str, Any]:
 
 
 def _run_point(setup: str, overrides: Dict[str, Any], metrics: MetricsSpec,
-               threads: Optional[int]) -> Dict[str, Any]:
+               threads: Optional[int], results_dir: Optional[str] = None) -> Dict[str, Any]:
     """One point of a sweep (runs on a dask worker). Never raises: a failure
-    is returned as the row's ``error``."""
+    is returned as the row's ``error``. With ``results_dir`` its tables are
+    written there."""
     start = time.perf_counter()
     try:
         ov = dict(overrides)
         if not is_study(Path(setup)):
             ov["_drop_figures"] = True
-        res = run(setup, progress=False, threads=threads, **ov)
+        res = run(setup, progress=False, threads=threads, results_dir=results_dir, **ov)
         row = _metrics(res, metrics)
+        if results_dir is not None:
+            row["tables"] = results_dir
         row["error"] = None
     except Exception as e:  # reported in the row, never lost
         row = {"error": f"{type(e).__name__}: {e}"}
@@ -181,12 +184,15 @@ def force_sweep(setup, candidates: Sequence[Dict[str, Any]], *, threads: Optiona
     share. :func:`sweep` uses it for such points.
 
     ``write_tables``: a folder; candidate k's tables then go to
-    ``<write_tables>/candidate_<k>/``, named as a run of its own setup (one
-    w0) names them, and its row's ``tables`` is that folder. Without it
-    (the default) only metrics are computed."""
+    ``<write_tables>/candidate_<k>/`` (or a list of one folder per
+    candidate), named as a run of its own setup (one w0) names them, and
+    its row's ``tables`` is that folder. Without it (the default) only
+    metrics are computed."""
     inputs = None
     tables = None
-    if write_tables is not None:
+    if isinstance(write_tables, (list, tuple)):
+        tables = [os.fspath(t) for t in write_tables]
+    elif write_tables is not None:
         tables = [os.path.join(os.fspath(write_tables), f"candidate_{k}") for k in range(len(candidates))]
     try:
         text = None
@@ -260,11 +266,11 @@ class Scene:
 
 
 def _run_batch(setup: str, base: Dict[str, Any], cands: List[Dict[str, Any]],
-               threads: Optional[int]) -> List[Dict[str, Any]]:
+               threads: Optional[int], tables: Optional[List[str]] = None) -> List[Dict[str, Any]]:
     """One batch of a sweep (in-process or on a dask worker); raises on
     failure (the caller then runs its points one by one)."""
     start = time.perf_counter()
-    rows = force_sweep(setup, cands, threads=threads, **base)
+    rows = force_sweep(setup, cands, threads=threads, write_tables=tables, **base)
     seconds = (time.perf_counter() - start) / max(1, len(cands))
     for r in rows:
         r["error"] = None
@@ -305,6 +311,7 @@ def sweep(
     threads: Optional[int] = None,
     progress: Optional[bool] = None,
     batch: Optional[bool] = None,
+    write_tables: Union[str, "os.PathLike[str]", None] = None,
     **fixed: Any,
 ) -> pd.DataFrame:
     """Run many variants of a setup as independent tasks on dask.distributed
@@ -333,6 +340,12 @@ def sweep(
     ``progress``: None shows a tqdm bar of the points done once the sweep
     has run a second, True at once, False never.
 
+    ``write_tables``: a folder; point i's tables then go to
+    ``<write_tables>/point_<i>/`` (a batched point's as a run of its own
+    setup writes them, a point run on its own as ``statopt.run(...,
+    results_dir=...)`` does) and its row's ``tables`` names the folder.
+    Without it (the default) a batched point computes metrics only.
+
     **Force sweeps.** Points that differ only in forces — one
     ``contact_weight`` each, ``model_properties`` that set an
     ExpressionBasedCoordinateForce's ``expression`` or an actuator's
@@ -349,6 +362,8 @@ def sweep(
     points = _points(setup, grid)
     if not points:
         return pd.DataFrame()
+    folder = (lambda i: None) if write_tables is None else (
+        lambda i: os.path.join(os.fspath(write_tables), f"point_{i}"))
     fixed = dict(fixed)
     results: Dict[int, Dict[str, Any]] = {}
     # Points that differ only in forces: one force sweep per group.
@@ -357,7 +372,8 @@ def sweep(
         for idx in groups.values():
             s, base, _ = split[idx[0]]
             try:
-                rows = _run_batch(s, base, [split[i][2] for i in idx], threads)
+                rows = _run_batch(s, base, [split[i][2] for i in idx], threads,
+                                  None if write_tables is None else [folder(i) for i in idx])
             except Exception:  # noqa: BLE001 - its points run one by one below
                 continue
             results.update(zip(idx, rows))
@@ -368,8 +384,9 @@ def sweep(
             s, base, _ = split[idx[0]]
             for chunk in np.array_split(np.arange(len(idx)), min(workers, len(idx))):
                 ids = [idx[j] for j in chunk]
-                tasks.append((ids, client.submit(_run_batch, s, base, [split[i][2] for i in ids],
-                                                 threads, pure=False)))
+                tasks.append((ids, client.submit(_run_batch, s, base, [split[i][2] for i in ids], threads,
+                                                 None if write_tables is None else [folder(i) for i in ids],
+                                                 pure=False)))
         for ids, fut in tasks:
             try:
                 results.update(zip(ids, fut.result()))
@@ -391,7 +408,8 @@ def sweep(
             threads = max(1, (os.cpu_count() or 1) // n)
     try:
         futures = [
-            client.submit(_run_point, points[i][0], {**fixed, **points[i][1]}, metrics, threads, pure=False)
+            client.submit(_run_point, points[i][0], {**fixed, **points[i][1]}, metrics, threads, folder(i),
+                          pure=False)
             for i in todo
         ]
         bar = None

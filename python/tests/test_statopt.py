@@ -316,6 +316,23 @@ def test_force_sweep_writes_tables_on_request(repo, tmp_path):
     assert np.allclose(mine.to_numpy(), theirs.to_numpy(), rtol=1e-7, atol=1e-6)
     # metrics only by default
     assert "tables" not in statopt.force_sweep(setup, cands[:1], time_range=(0.0, 1.0))[0]
+    # a sweep: each point's tables in its folder, batched (w0 1, 500) or not (an artifact override)
+    grid = [{"contact_weight": 1, "model_properties": {"cam_torque/expression": "-40"}},
+            {"contact_weight": 500},
+            {"contact_weight": 1, "artifact_files": str(repo / "models" / "leg_extension" / "machine_cam1_rajagopal.osim")}]
+    df = statopt.sweep(setup, grid, time_range=(0.0, 1.0), progress=False, write_tables=tmp_path / "s")
+    assert df.error.isna().all(), df.error
+    assert df.tables.tolist() == [str(tmp_path / "s" / f"point_{i}") for i in range(3)]
+    first = statopt.read_table(tmp_path / "s" / "point_0" / "leg_extension_rajagopal_cam2_JR_KneeLoads.sto")
+    assert np.allclose(first.to_numpy(), theirs.to_numpy(), rtol=1e-7, atol=1e-6)
+    for i in (1, 2):
+        assert (tmp_path / "s" / f"point_{i}" / "leg_extension_rajagopal_cam2_SO_activation.sto").is_file()
+    # a point run on its own (batch=False) writes its run's tables there too
+    df = statopt.sweep(setup, [grid[0]], time_range=(0.0, 1.0), progress=False, batch=False,
+                       write_tables=tmp_path / "u")
+    assert df.error.isna().all() and df.tables[0] == str(tmp_path / "u" / "point_0")
+    own_run = statopt.read_table(tmp_path / "u" / "point_0" / "leg_extension_rajagopal_cam2_JR_KneeLoads.sto")
+    assert np.allclose(own_run.to_numpy(), first.to_numpy(), rtol=1e-7, atol=1e-6)
 
 
 def test_sweep_batches_external_load_scales(repo, tmp_path):
