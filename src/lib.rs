@@ -37,6 +37,7 @@ pub mod optimize;
 pub mod output;
 pub mod parse;
 pub mod paths;
+pub mod plan;
 pub mod plots;
 pub mod reactions;
 pub mod storage;

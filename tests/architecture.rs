@@ -9,9 +9,10 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The pipeline, in order: a stage may import from the stages before it.
-const PIPELINE: [&str; 15] = [
+const PIPELINE: [&str; 16] = [
     "functions",
     "parse",
+    "plan",
     "model",
     "motion",
     "dynamics",

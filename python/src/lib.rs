@@ -225,8 +225,8 @@ fn predict_grf<'py>(
 /// `optimal_forces` ({actuator: N}).
 fn candidate_specs(
     candidates: &[Bound<'_, PyDict>],
-) -> PyResult<Vec<statopt::tools::force_sweep::CandidateSpec>> {
-    use statopt::tools::force_sweep::CandidateSpec;
+) -> PyResult<Vec<statopt::plan::CandidateSpec>> {
+    use statopt::plan::CandidateSpec;
     let mut specs = Vec::with_capacity(candidates.len());
     for c in candidates {
         let w0: f64 = match c.get_item("w0")? {

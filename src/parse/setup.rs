@@ -373,7 +373,8 @@ impl Setup {
         Self::from_document(&xml::parse_str(text, path)?, path, allow_unknown)
     }
 
-    fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
+    /// The setup of a parsed document (the file `path`; see [`Setup::read_with`]).
+    pub fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
         let tool = tool_element(root)?;
         let dir = setup_dir(path);
         let found = super::known::setup_elements(tool);

@@ -37,16 +37,7 @@ use crate::tools::RunOptions;
 use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
 use crate::xml::Element;
 
-/// One candidate, by name: what it changes in the setup.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct CandidateSpec {
-    /// The contact weight w0.
-    pub w0: f64,
-    /// (force name, Lepton expression) of `ExpressionBasedCoordinateForce`s.
-    pub expressions: Vec<(String, String)>,
-    /// (actuator name, optimal force) of actuators other than muscles.
-    pub optimal_forces: Vec<(String, f64)>,
-}
+pub use crate::plan::force_sweep::CandidateSpec;
 
 /// What a sweep computed.
 #[derive(Debug, Clone, Default)]
@@ -944,16 +935,15 @@ impl Scene {
 /// Every candidate runs at every w0; the metrics (the setup's `<Metric>`s)
 /// go to `<out>/<name>_force_sweep.csv`, one row per (candidate, w0):
 /// `candidate`, `w0`, `frames`, `failed`, then the metrics (unrounded).
-/// `dir` is the study's folder (the setup's path is relative to it).
-pub fn run_element(
-    el: &Element,
-    dir: &std::path::Path,
+/// The sweep was read with the study (`plan::ForceSweepPlan`).
+pub fn run_plan(
+    sweep: &crate::plan::ForceSweepPlan,
     out: &std::path::Path,
     opts: &RunOptions,
 ) -> Result<std::path::PathBuf> {
-    let (setup, specs, names) = read_element(el, dir)?;
-    let outcome = run(&setup, &specs, opts, &SweepOptions::default())?;
-    let name = el.attr("name").unwrap_or("force_sweep");
+    let (specs, names) = (&sweep.specs, &sweep.names);
+    let outcome = run(&sweep.setup, specs, opts, &SweepOptions::default())?;
+    let name = &sweep.name;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let path = out.join(format!("{name}_force_sweep.csv"));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
@@ -968,7 +958,7 @@ pub fn run_element(
     w.write_record(&header).map_err(csv_err)?;
     for (((n, spec), values), failed) in names
         .iter()
-        .zip(&specs)
+        .zip(specs.iter())
         .zip(&outcome.values)
         .zip(&outcome.failed)
     {
@@ -983,77 +973,4 @@ pub fn run_element(
     }
     w.flush().map_err(|e| Error::io(&path, e))?;
     Ok(path)
-}
-
-/// The setup, the candidates (each at every w0) and their names of a
-/// `<ForceSweep>` element; checks it without running.
-pub fn read_element(
-    el: &Element,
-    dir: &std::path::Path,
-) -> Result<(AnalyzeSetup, Vec<CandidateSpec>, Vec<String>)> {
-    let file = el.attr("setup").ok_or_else(|| {
-        el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)")
-    })?;
-    let path = crate::parse::setup::resolve(dir, file);
-    let Setup::Analyze(setup) = Setup::read(&path)? else {
-        return Err(el.error(format!("setup=\"{file}\" is not an AnalyzeTool setup")));
-    };
-    let w0s: Vec<f64> = match el.child("contact_weight") {
-        Some(c) => c.numbers()?,
-        None => setup
-            .static_optimization()
-            .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
-            .contact_weights
-            .clone(),
-    };
-    if w0s.is_empty() {
-        return Err(el.error("contact_weight: give one or more w0"));
-    }
-    let mut specs = Vec::new();
-    let mut names = Vec::new();
-    for (k, c) in el.children.iter().enumerate() {
-        match c.name.as_str() {
-            "contact_weight" => continue,
-            "Candidate" => {}
-            other => {
-                return Err(c.error(format!(
-                    "unknown element <{other}> in a ForceSweep (contact_weight, Candidate)"
-                )))
-            }
-        }
-        let mut spec = CandidateSpec::default();
-        for p in &c.children {
-            match p.name.as_str() {
-                "expression" => spec.expressions.push((
-                    p.attr("force")
-                        .ok_or_else(|| p.error("an expression needs a force attribute"))?
-                        .to_string(),
-                    p.text.trim().to_string(),
-                )),
-                "optimal_force" => spec.optimal_forces.push((
-                    p.attr("actuator")
-                        .ok_or_else(|| p.error("an optimal_force needs an actuator attribute"))?
-                        .to_string(),
-                    p.numbers_n(1)?[0],
-                )),
-                other => {
-                    return Err(p.error(format!(
-                        "unknown element <{other}> in a Candidate (expression, optimal_force)"
-                    )))
-                }
-            }
-        }
-        let name = c
-            .attr("name")
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("candidate_{k}"));
-        for &w0 in &w0s {
-            specs.push(CandidateSpec { w0, ..spec.clone() });
-            names.push(name.clone());
-        }
-    }
-    if specs.is_empty() {
-        return Err(el.error("a ForceSweep needs at least one <Candidate>"));
-    }
-    Ok((setup, specs, names))
 }
