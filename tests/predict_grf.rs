@@ -307,6 +307,67 @@ fn without_measured_loads_the_prediction_uses_opensims_usual_names() {
     );
 }
 
+/// predict-grf's plan is the user's plan plus its root residuals and foot
+/// contacts, built in memory: the force-set files it writes are the record
+/// of what ran, not read back, so a message about an element of the user's
+/// force set names the user's file and line (it used to name the filtered
+/// copy, `..._force_set_0_without_root_residuals.xml`).
+#[test]
+fn the_prediction_plan_is_built_in_memory() {
+    let Some(root) = common::validation_dir("predict_grf plan in memory") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("predict_grf_plan_in_memory");
+    let forces = out.join("user_forces.xml");
+    std::fs::write(
+        &forces,
+        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n\
+         <OpenSimDocument Version=\"40000\">\n\
+         <ForceSet name=\"mine\">\n\
+         <objects>\n\
+         <CoordinateActuator name=\"tx\"><coordinate>pelvis_tx</coordinate><optimal_force>10</optimal_force></CoordinateActuator>\n\
+         <CoordinateActuator name=\"hip_r\">\n\
+         <coordinate>hip_flexion_r</coordinate>\n\
+         <optimal_forse>10</optimal_forse>\n\
+         </CoordinateActuator>\n\
+         </objects>\n\
+         </ForceSet>\n\
+         </OpenSimDocument>\n",
+    )
+    .unwrap();
+    setup.force_set_files = vec![forces.clone()];
+    setup.final_time = setup.initial_time + 0.1;
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    let copy = out.join(format!(
+        "{}_force_set_0_without_root_residuals.xml",
+        setup.name
+    ));
+    assert!(p.summary.files.contains(&copy), "the record is written");
+    let said: Vec<&String> = p
+        .summary
+        .warnings
+        .iter()
+        .filter(|w| w.contains("optimal_forse"))
+        .collect();
+    assert!(
+        !said.is_empty()
+            && said
+                .iter()
+                .all(|w| w.contains(&format!("{}, line 6", forces.display()))),
+        "{:?}",
+        p.summary.warnings
+    );
+}
+
 /// A floor height the user gives is used as it is: every point's contact
 /// plane is that level floor (no resting heights or tilt fitted).
 #[test]

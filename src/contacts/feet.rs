@@ -477,6 +477,12 @@ impl FootContactSet {
         Vector3::new(-self.floor_slope.0, 1.0, -self.floor_slope.1).normalize()
     }
 
+    /// [`FootContactSet::force_set_xml`] parsed, as if read from `path`
+    /// (where it is written): the contacts a prediction's plan adds.
+    pub fn force_set_document(&self, path: &std::path::Path) -> Result<crate::xml::Element> {
+        crate::forces::force_set_document(&self.force_set_xml(), path)
+    }
+
     /// The set as an OpenSim ForceSet document of PointOnPlaneContacts (a
     /// force-set file a setup can name).
     pub fn force_set_xml(&self) -> String {

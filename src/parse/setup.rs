@@ -27,6 +27,11 @@ pub struct AnalyzeSetup {
     pub artifact_files: Vec<PathBuf>,
     pub replace_force_set: bool,
     pub force_set_files: Vec<PathBuf>,
+    /// Force-set documents a tool adds in memory, read after
+    /// `force_set_files` (predict-grf's root residuals and foot contacts:
+    /// its plan is the user's plus these; each element keeps the file and
+    /// line it came from).
+    pub force_set_documents: Vec<Element>,
     pub results_directory: PathBuf,
     /// Where `<results_directory>` stands (the tool element when absent).
     pub results_directory_loc: crate::error::Location,
@@ -571,6 +576,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             .iter()
             .map(|p| resolve(dir, p))
             .collect(),
+        force_set_documents: Vec::new(),
         results_directory: resolve(
             dir,
             &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),
