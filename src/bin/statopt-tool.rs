@@ -154,6 +154,10 @@ enum Command {
         /// The floor is the ground (no belt): instead of deciding from the motion.
         #[arg(long)]
         overground: bool,
+        /// Read on past elements of the setup that neither OpenSim 4.6 nor statopt knows, with a
+        /// warning (without it they are errors).
+        #[arg(long)]
+        allow_unknown: bool,
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
@@ -456,11 +460,13 @@ fn main() -> ExitCode {
             floor_height,
             treadmill,
             overground,
+            allow_unknown,
             quiet,
         }) => {
             let opts = RunOptions {
                 results_dir: results_dir.clone(),
                 verbose: !quiet,
+                allow_unknown: *allow_unknown,
                 ..Default::default()
             };
             let motion = match (treadmill, overground) {
@@ -475,7 +481,7 @@ fn main() -> ExitCode {
                 height: *floor_height,
                 motion,
             };
-            let run = match statopt::parse::setup::Setup::read(setup) {
+            let run = match statopt::parse::setup::Setup::read_with(setup, *allow_unknown) {
                 Ok(statopt::parse::setup::Setup::Analyze(s)) => {
                     tools::predict_grf::run_with(&s, &opts, &floor)
                 }

@@ -693,14 +693,18 @@ pub fn run_file(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    let setup = read_setup(setup_file, text)?;
+    let setup = read_setup(setup_file, text, opts.allow_unknown)?;
     run(&setup, candidates, opts, sweep)
 }
 
-fn read_setup(setup_file: &std::path::Path, text: Option<&str>) -> Result<AnalyzeSetup> {
+fn read_setup(
+    setup_file: &std::path::Path,
+    text: Option<&str>,
+    allow_unknown: bool,
+) -> Result<AnalyzeSetup> {
     let setup = match text {
-        Some(t) => Setup::parse(t, setup_file)?,
-        None => Setup::read(setup_file)?,
+        Some(t) => Setup::parse_with(t, setup_file, allow_unknown)?,
+        None => Setup::read_with(setup_file, allow_unknown)?,
     };
     match setup {
         Setup::Analyze(s) => Ok(s),
@@ -830,7 +834,7 @@ impl Scene {
         text: Option<&str>,
         threads: Option<usize>,
     ) -> Result<Scene> {
-        let setup = read_setup(setup_file, text)?;
+        let setup = read_setup(setup_file, text, false)?;
         in_pool(threads, move || {
             let plan = Plan::compile(&setup)?;
             let mut warnings = plan.warnings.clone();

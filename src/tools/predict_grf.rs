@@ -371,8 +371,8 @@ pub fn run_setup(
 ) -> Result<Prediction> {
     use crate::parse::setup::Setup;
     let read = match text {
-        Some(t) => Setup::parse(t, setup)?,
-        None => Setup::read(setup)?,
+        Some(t) => Setup::parse_with(t, setup, opts.allow_unknown)?,
+        None => Setup::read_with(setup, opts.allow_unknown)?,
     };
     match read {
         Setup::Analyze(s) => run(&s, opts),
