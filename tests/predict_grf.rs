@@ -368,6 +368,49 @@ fn the_prediction_plan_is_built_in_memory() {
     );
 }
 
+/// predict-grf reads its setup as a run does: an element neither OpenSim
+/// nor statopt knows is an error naming the nearest name, and
+/// `allow_unknown` (`predict-grf --allow-unknown`) reads on with a warning
+/// (predict-grf refused it whatever the option said).
+#[test]
+fn predict_grf_refuses_unknown_elements_unless_allowed() {
+    let Some(root) = common::validation_dir("predict_grf unknown elements") else {
+        return;
+    };
+    let file = root.join("gait10dof18musc_walk/setup_SO.xml");
+    let text = std::fs::read_to_string(&file)
+        .unwrap()
+        .replace(
+            "<final_time>2.5</final_time>",
+            "<final_time>0.1</final_time>",
+        )
+        .replace(
+            "</StaticOptimization>",
+            "<contact_wieght>1</contact_wieght></StaticOptimization>",
+        );
+    assert!(text.contains("<final_time>0.1</final_time>") && text.contains("contact_wieght"));
+    let mut opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_unknown")),
+        verbose: false,
+        ..Default::default()
+    };
+    let e = predict_grf::run_setup(&file, Some(&text), &opts)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("did you mean contact_weight"), "{e}");
+    opts.allow_unknown = true;
+    let p = predict_grf::run_setup(&file, Some(&text), &opts).unwrap();
+    assert!(
+        p.summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("contact_wieght") && w.contains("--allow-unknown")),
+        "{:?}",
+        p.summary.warnings
+    );
+}
+
 /// A floor height the user gives is used as it is: every point's contact
 /// plane is that level floor (no resting heights or tilt fitted).
 #[test]
