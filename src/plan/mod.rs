@@ -19,7 +19,7 @@ pub use study::{StudyDocument, StudyPlan, StudyRun};
 /// The plan of a setup document.
 #[derive(Debug, Clone)]
 pub enum Plan {
-    Tool(Setup),
+    Tool(Box<Setup>),
     Study(Box<StudyPlan>),
 }
 
@@ -35,11 +35,11 @@ impl Plan {
                 allow_unknown,
             )?)))
         } else {
-            Ok(Plan::Tool(Setup::from_document(
+            Ok(Plan::Tool(Box::new(Setup::from_document(
                 &root,
                 path,
                 allow_unknown,
-            )?))
+            )?)))
         }
     }
 }

@@ -58,6 +58,7 @@ pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact met
 /// Write `out` from the knees' reaction table `reactions` (from
 /// [`reaction_specs`]), knee angles from the positions `q` at `time` at the
 /// table's times.
+#[allow(clippy::too_many_arguments)]
 pub fn write(
     model: &Model,
     knees: &[Knee],

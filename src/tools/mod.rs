@@ -60,7 +60,7 @@ pub struct RunOptions {
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
     let summary = match crate::plan::Plan::read(setup, opts.allow_unknown)? {
         crate::plan::Plan::Study(s) => study::run(&s, opts)?,
-        crate::plan::Plan::Tool(s) => run_parsed(s, opts)?,
+        crate::plan::Plan::Tool(s) => run_parsed(*s, opts)?,
     };
     synced(summary, opts)
 }
