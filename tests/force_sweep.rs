@@ -331,6 +331,12 @@ fn a_study_force_sweep_element_writes_its_metrics() {
         "{e}"
     );
     let report = statopt::tools::check::run(&study_file, false);
+    // The sweep's setup is checked too.
+    assert!(
+        report.checked.iter().any(|c| c.ends_with("setup.xml")),
+        "{:?}",
+        report.checked
+    );
     assert!(
         report
             .errors

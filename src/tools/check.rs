@@ -43,7 +43,16 @@ pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
                         ),
                     ));
                 }
-                let files = doc.setup_files.clone();
+                // The study's setups and its force sweeps' setups.
+                let mut files = doc.setup_files.clone();
+                for sw in &doc.sweeps {
+                    if let Some(f) = sw.attr("setup") {
+                        let p = crate::parse::setup::resolve(&doc.dir, f);
+                        if !files.contains(&p) {
+                            files.push(p);
+                        }
+                    }
+                }
                 // Unknown elements are reported above and per setup below.
                 if let Err(e) = crate::plan::StudyPlan::from_document(doc, true)
                     .and_then(|plan| study::check(&plan))
