@@ -491,7 +491,8 @@ fn words_or_all(el: &Element, name: &str) -> Vec<String> {
     }
 }
 
-fn read_common(a: &Element) -> Result<AnalysisCommon> {
+/// The properties every analysis has, of the analysis element `a`.
+pub fn read_common(a: &Element) -> Result<AnalysisCommon> {
     let step = match a.child("step_interval") {
         Some(s) if !s.text().is_empty() => {
             let v = s.int()?;
