@@ -307,9 +307,9 @@ fn crossing(key: &[f64], out: &[f64], f: impl Fn(usize) -> f64) -> Option<f64> {
 
 /// What the study knows of one of its setups before running it: where its
 /// tables go and which w0 runs it makes (for checking figure references).
-struct PlannedRun {
+struct PlannedRun<'a> {
     file: PathBuf,
-    setup: Setup,
+    setup: &'a Setup,
     /// The setup's own results folder, and where this run writes (moved
     /// under the study's `-o` folder when one is given).
     own_dir: PathBuf,
@@ -322,7 +322,7 @@ struct PlannedRun {
     only_file: Option<String>,
 }
 
-fn plan(file: &Path, setup: &Setup, moved_to: Option<&Path>) -> PlannedRun {
+fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRun<'a> {
     let mut only_file = None;
     let (own_dir, name, w0_tags) = match setup {
         Setup::Analyze(a) => {
@@ -350,7 +350,7 @@ fn plan(file: &Path, setup: &Setup, moved_to: Option<&Path>) -> PlannedRun {
     };
     PlannedRun {
         file: file.to_path_buf(),
-        setup: setup.clone(),
+        setup,
         own_dir,
         out_dir,
         name,
@@ -467,10 +467,10 @@ pub fn check(plan: &StudyPlan) -> Result<()> {
 /// Plan the runs, check every reference and metric, and say where figure
 /// references point once the runs have written.
 #[allow(clippy::type_complexity)]
-fn prepare(
-    study: &StudyPlan,
+fn prepare<'a>(
+    study: &'a StudyPlan,
     moved_to: Option<&Path>,
-) -> Result<(Vec<PlannedRun>, Vec<(PathBuf, Location)>, Moved)> {
+) -> Result<(Vec<PlannedRun<'a>>, Vec<(PathBuf, Location)>, Moved)> {
     let runs: Vec<PlannedRun> = study
         .runs
         .iter()
@@ -538,7 +538,7 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // Every setup's results folder before the first run writes anything.
     for r in &runs {
         if let Some(p) = crate::parse::setup::results_dir_problem(&r.out_dir) {
-            let loc = match &r.setup {
+            let loc = match r.setup {
                 Setup::Analyze(a) => a.results_directory_loc.clone(),
                 Setup::InverseDynamics(i) => i.results_directory_loc.clone(),
             };
@@ -564,7 +564,7 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
                 results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
                 ..opts.clone()
             };
-            match &r.setup {
+            match r.setup {
                 Setup::Analyze(a) => analyze::run(a, &run_opts),
                 Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts),
             }
