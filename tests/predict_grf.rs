@@ -441,6 +441,15 @@ fn treadmill_running_of_another_subject() {
     );
     let b = p.contacts.belt_velocity;
     assert!(b.x < -2.7 && b.x > -3.3 && b.z.abs() < 0.3, "belt {b:?}");
+    // The slip gate scales with the gait speed over the belt (about
+    // 3 m/s): a runner's landing foot still slides when it takes load.
+    let v = p.contacts.gait_speed;
+    assert!(v > 2.7 && v < 3.3, "gait speed {v}");
+    let gate = p.contacts.parameters.speed_weight;
+    assert!(
+        (gate.0 - 0.12 * v / 1.3).abs() < 1e-9 && (gate.1 - 0.8 * v / 1.3).abs() < 1e-9,
+        "gate {gate:?} at {v} m/s"
+    );
     let (rho_v, rmse_v) = mean(&p.metrics, 'y');
     let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
     println!("running subject02 3 m/s: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
@@ -554,9 +563,18 @@ fn one_step_torque_driven_walking() {
     println!("one step 2014001 C4_05: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
     // The bar (vertical 0.95 / 10 % BW) is NOT met on this trial
-    // (0.912 / 11.8 %: the landing heel loads two frames early; see
-    // docs/grf_prediction.md). Guarded here against getting worse.
-    assert!(rho_v >= 0.90 && rmse_v <= 12.5, "vertical {rho_v} {rmse_v}");
+    // (0.931 / 12.2 %: the landing heel loads two frames early; see
+    // docs/grf_prediction.md). Guarded here against getting worse: with
+    // the gate of 0.3 / 1.2 m/s used before, rho was 0.912.
+    assert!(
+        rho_v >= 0.925 && rmse_v <= 12.5,
+        "vertical {rho_v} {rmse_v}"
+    );
+    // Walking at about 1.4 m/s: the walking slip gate, hardly scaled.
+    let v = p.contacts.gait_speed;
+    assert!(v > 1.2 && v < 1.6, "gait speed {v}");
+    let gate = p.contacts.parameters.speed_weight;
+    assert!(gate.1 < 0.9, "gate {gate:?} at {v} m/s");
     // Torque-driven: w0 scaled by the actuators' strength (100 against the
     // muscles' 200 N m per coordinate): 10 x (1/2)^2.
     assert!(
