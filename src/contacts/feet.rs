@@ -105,6 +105,8 @@ impl Default for FootContactParameters {
             static_friction: 0.35,
             kinetic_friction: 0.25,
             v_trans: 0.8,
+            // Walking: none from 0.8 m/s, where AnyBody's foot contacts
+            // switch off (FootPlateConditionalContact, LimitVelHigh).
             speed_weight: (0.12, 0.8),
             speed_weight_gait_speed: 1.3,
             optimal_force: 100.0,
