@@ -1,7 +1,8 @@
 #!/bin/sh
 # The ingredient table of docs/knee_contact.md: GC5 trial ss1 (../shared/models/knee_gc5) run as OpenSim's
 # static optimization + JointReaction, with one axial contact per knee, with the knee contact method (two
-# compartments) and over w0; each compared with the eTibia by scripts/knee_contact_etibia.py.
+# compartments, default capacity 1.73 BW each) and over the compartment capacity; each compared with the
+# eTibia by scripts/knee_contact_etibia.py.
 # Usage: cargo build --release --bin statopt-tool && scripts/knee_contact_ingredients.sh [OUT]
 set -e
 cd "$(dirname "$0")/.."
@@ -19,6 +20,9 @@ variant() { # name extra-StaticOptimization-properties
 variant plain ""
 variant axial "<knee_contact>axial</knee_contact>"
 variant method "<knee_contact>all</knee_contact>"
-variant sweep "<knee_contact>all</knee_contact><contact_weight>10 100 300 1000 3000 10000</contact_weight>"
+CAPS="0.5 1 1.25 1.5 2 2.5 3 3.46 5 10"
+for c in $CAPS; do
+  variant "capacity_$c" "<knee_contact>all</knee_contact><knee_contact_capacity>$c</knee_contact_capacity>"
+done
 python3 scripts/knee_contact_etibia.py "$OUT/plain/GC5_ss1_JR_ReactionLoads.sto" "$OUT/axial/GC5_ss1_KneeContact.sto" \
-  "$OUT/method/GC5_ss1_KneeContact.sto" $(for w in 10 100 300 1000 3000 10000; do echo "$OUT/sweep/GC5_ss1_w0_${w}_KneeContact.sto"; done)
+  "$OUT/method/GC5_ss1_KneeContact.sto" $(for c in $CAPS; do echo "$OUT/capacity_$c/GC5_ss1_KneeContact.sto"; done)

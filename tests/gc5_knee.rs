@@ -236,24 +236,94 @@ fn knee_contact_on_ss1_against_the_etibia() {
         "knee contact, walker_knee_l vs eTibia (BW = {bw:.1} N): total RMSE {:.3} BW, first peak {:.3} vs {:.3} BW, second peak {:.3} vs {:.3} BW; medial RMSE {:.3} BW, lateral RMSE {:.3} BW",
         a.rmse, a.peak1.0, a.peak1.1, a.peak2.0, a.peak2.1, m.rmse, l.rmse
     );
-    // What the method gives at the run's w0 (the default 1000): better than
-    // OpenSim's static optimization (RMSE 0.91 BW, both peaks 4.26 BW) but
-    // short of issue 29's bar (RMSE <= 0.5 BW, peaks within 0.5 BW), which
-    // docs/knee_contact.md reports as not met. These bounds hold the
-    // measured 0.54 BW and 3.37 BW with a margin for rounding only.
-    assert!(a.rmse <= 0.56, "total RMSE {:.3} BW", a.rmse);
-    assert!(a.peak1.0 <= 3.45 && a.peak2.0 <= 3.45, "peaks");
+    // Issue 29's bar: RMSE <= 0.5 BW and both peaks within 0.5 BW of the
+    // eTibia's; medial and lateral RMSE <= 0.4 BW (reported there, held here).
+    // The method with its default capacity (1.73 BW per compartment, from
+    // Kutzner et al. 2010, not from this trial) measured RMSE 0.29 BW, peaks
+    // 2.22 and 2.18 BW (eTibia 2.19, 2.09), medial 0.24, lateral 0.27 BW;
+    // OpenSim's static optimization gives 0.91 BW and 4.26 BW.
+    assert!(a.rmse <= 0.5, "total RMSE {:.3} BW", a.rmse);
     assert!(
-        a.peak1.0 >= 1.69 && a.peak2.0 >= 1.59,
-        "peaks below the eTibia's by more than 0.5 BW"
+        (a.peak1.0 - a.peak1.1).abs() <= 0.5,
+        "first peak {:.3} vs {:.3} BW",
+        a.peak1.0,
+        a.peak1.1
     );
-    let bar = a.rmse <= 0.5
-        && (a.peak1.0 - a.peak1.1).abs() <= 0.5
-        && (a.peak2.0 - a.peak2.1).abs() <= 0.5;
-    println!(
-        "issue 29's bar (RMSE <= 0.5 BW, both peaks within 0.5 BW): {}",
-        if bar { "met" } else { "NOT met" }
+    assert!(
+        (a.peak2.0 - a.peak2.1).abs() <= 0.5,
+        "second peak {:.3} vs {:.3} BW",
+        a.peak2.0,
+        a.peak2.1
     );
+    assert!(
+        m.rmse <= 0.4 && l.rmse <= 0.4,
+        "medial {:.3}, lateral {:.3} BW",
+        m.rmse,
+        l.rmse
+    );
+}
+
+/// The compartment capacity is a parameter of the setup: a StaticOptimization's
+/// `<knee_contact_capacity>` (body weights) sets it. A smaller capacity makes
+/// compression dearer: in min f(a) + c·g(L) the optimal g(L) does not grow
+/// with c, so at every frame Σ L² over the compartments (newtons²) does not
+/// grow as the capacity falls. With a capacity far above any load, the
+/// method tends to OpenSim's static optimization.
+#[test]
+fn knee_contact_capacity_orders_the_knee_force() {
+    use statopt::parse::setup::Analysis;
+    let Some(dir) = gc5_dir("knee_contact_capacity_orders_the_knee_force") else {
+        return;
+    };
+    let loads = |cap: &str, tag: &str| -> (Vec<f64>, f64) {
+        let mut setup = match Setup::read(&dir.join("setup_ss1.xml")).unwrap() {
+            Setup::Analyze(s) => s,
+            _ => unreachable!(),
+        };
+        setup.final_time = 0.6;
+        for a in setup.analyses.iter_mut() {
+            if let Analysis::StaticOptimization(so) = a {
+                for (name, text) in [
+                    ("knee_contact", "walker_knee_l"),
+                    ("knee_contact_capacity", cap),
+                ] {
+                    **so = so.with_option(name, text).unwrap();
+                }
+            }
+        }
+        let out = common::out_dir(tag);
+        let opts = RunOptions {
+            results_dir: Some(out.clone()),
+            verbose: false,
+            ..Default::default()
+        };
+        let summary = analyze::run(&setup, &opts).unwrap();
+        assert_eq!(summary.failed, 0);
+        let t = storage::read(&out.join("GC5_ss1_KneeContact.sto")).unwrap();
+        let (m, l, tot) = (
+            t.column_index("walker_knee_l_medial_N").unwrap(),
+            t.column_index("walker_knee_l_lateral_N").unwrap(),
+            t.column_index("walker_knee_l_total_N").unwrap(),
+        );
+        (
+            t.rows.iter().map(|r| r[m] * r[m] + r[l] * r[l]).collect(),
+            t.rows.iter().map(|r| r[tot]).fold(0.0, f64::max),
+        )
+    };
+    let (small, default, huge) = (
+        loads("1", "gc5_cap_1"),
+        loads("1.73", "gc5_cap_173"),
+        loads("1000", "gc5_cap_1000"),
+    );
+    for i in 0..small.0.len() {
+        let tol = 1e-6 * huge.0[i] + 1.0;
+        assert!(small.0[i] <= default.0[i] + tol, "frame {i}");
+        assert!(default.0[i] <= huge.0[i] + tol, "frame {i}");
+    }
+    let sum = |v: &[f64]| v.iter().sum::<f64>();
+    assert!(sum(&small.0) < sum(&default.0) && sum(&default.0) < sum(&huge.0));
+    // OpenSim's static optimization peaks at 4.26 BW (3,133 N) on ss1.
+    assert!(huge.1 > 3000.0, "{}", huge.1);
 }
 
 /// The method's rows are the knee reaction the JointReaction computes
@@ -262,7 +332,6 @@ fn knee_contact_on_ss1_against_the_etibia() {
 /// the joint centre is the reaction's frontal-plane moment.
 #[test]
 fn knee_rows_are_the_joint_reaction_at_the_solution() {
-    use statopt::frame::knee_contact::UNIT_FORCE;
     use statopt::frame::Workspace;
     use statopt::tools::analyze::load_states;
     use statopt::tools::joint_reaction::static_optimization_reactions;
@@ -299,7 +368,7 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
         static_optimization_reactions(&problem, t, &r, &mut ws, &specs, &mut o).unwrap();
         for (ki, knee) in problem.knees.iter().enumerate() {
             let l = &r.solution.x[nvar + 2 * ki..nvar + 2 * ki + 2];
-            let (med, lat) = (UNIT_FORCE * l[0], UNIT_FORCE * l[1]);
+            let (med, lat) = (knee.capacity * l[0], knee.capacity * l[1]);
             let (fy, mx) = (o[9 * ki + 1], o[9 * ki + 3]);
             let scale = 1.0 + fy.abs();
             assert!(
@@ -319,14 +388,15 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
     }
 }
 
-/// A w0 sweep of the knee contact method on a setup without contacts writes
-/// one KneeContact table per w0 and the sweep's statistics (it used to stop
-/// at the contact tables such a run does not have). The knee force falls as
-/// w0 falls (the compartments cost more).
+/// The knee compartments cost by their capacity, not by the contact weight
+/// w0 (which weighs the contacts with the environment): a w0 sweep of the
+/// knee contact method on a setup without contacts is solved once, writes
+/// one KneeContact table without w0 in its name, and says why. (It used to
+/// write one table per w0, its knee force falling with w0.)
 #[test]
-fn knee_contact_sweeps_w0_without_machine_contacts() {
+fn knee_contact_ignores_w0_without_machine_contacts() {
     use statopt::parse::setup::Analysis;
-    let Some(dir) = gc5_dir("knee_contact_sweeps_w0_without_machine_contacts") else {
+    let Some(dir) = gc5_dir("knee_contact_ignores_w0_without_machine_contacts") else {
         return;
     };
     let mut setup = match Setup::read(&dir.join("setup_ss1.xml")).unwrap() {
@@ -351,12 +421,15 @@ fn knee_contact_sweeps_w0_without_machine_contacts() {
     };
     let summary = analyze::run(&setup, &opts).unwrap();
     assert_eq!(summary.failed, 0);
-    let peak = |w0: &str| {
-        let t = storage::read(&out.join(format!("GC5_ss1_w0_{w0}_KneeContact.sto"))).unwrap();
-        assert_eq!(t.labels.len(), 4, "walker_knee_l only");
-        let j = t.column_index("walker_knee_l_total_N").unwrap();
-        t.rows.iter().map(|r| r[j]).fold(0.0, f64::max)
-    };
-    assert!(peak("100") < peak("1000"));
-    assert!(out.join("GC5_ss1_SO_w0_mean_force.sto").is_file());
+    let t = storage::read(&out.join("GC5_ss1_KneeContact.sto")).unwrap();
+    assert_eq!(t.labels.len(), 4, "walker_knee_l only");
+    assert!(!out.join("GC5_ss1_w0_100_KneeContact.sto").exists());
+    assert!(
+        summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("no contacts, so w0 changes nothing")),
+        "{:?}",
+        summary.warnings
+    );
 }

@@ -159,8 +159,9 @@ enum Command {
         quiet: bool,
     },
     /// The setup's static optimization with statopt's knee contact method (docs/knee_contact.md):
-    /// each knee's medial and lateral compartments as unknown contact forces of the optimisation.
-    /// Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
+    /// each knee's medial and lateral compartments as unknown forces of the optimisation, each
+    /// costing (load / capacity)^2 like a muscle, capacity 1.73 body weights (the StaticOptimization's
+    /// <knee_contact_capacity> sets another). Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
     /// lateral force) and its figure.
     #[command(name = "knee-contact")]
     KneeContact {

@@ -128,8 +128,10 @@ impl SoProblem {
                 asm.problem.b[r] -= d;
             }
         }
-        // Weights: every variable after the controls is a contact multiplier.
-        asm.problem.weights[nv..]
+        // Weights: the contact multipliers follow the controls (knee
+        // compartments, refused in sweeps today, would keep weight 1).
+        let nc3 = 3 * self.contacts.len();
+        asm.problem.weights[nv..nv + nc3]
             .iter_mut()
             .for_each(|w| *w = 1.0 / cand.w0);
         // Optimal forces: the column and the scale.

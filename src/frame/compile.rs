@@ -202,8 +202,12 @@ impl SoProblem {
         }
         let mut knees = crate::frame::knee_contact::select(&model, &so.knee_contact)
             .map_err(|e| Error::msg(format!("{}: {e}", setup.setup_file.display())))?;
+        let bw = model.total_mass() * model.gravity.norm();
         for k in knees.iter_mut() {
             k.frontal = so.knee_contact_frontal;
+            // One axial contact carries the whole knee: twice a compartment.
+            let n = if k.frontal { 1.0 } else { 2.0 };
+            k.capacity = n * so.knee_contact_capacity_bw * bw;
         }
         if !knees.is_empty() && so.constraint_matrix == ConstraintMatrixKind::Perturbation {
             return Err(Error::msg(format!(

@@ -17,9 +17,16 @@
 //!   balanced by the two compartments' loads at ±[`CONDYLE_SPACING`]/2 from
 //!   the joint centre, Lerner et al. 2015),
 //!
-//! with `l ≥ 0` (cartilage only pushes) and each `l` a multiplier of
-//! [`UNIT_FORCE`] newtons weighted `1/w0` in the objective, as every contact
-//! of statopt. Shear and the other moments stay with the joint (ligaments,
+//! with `l ≥ 0` (cartilage only pushes). Each `l` is a compartment's load in
+//! units of its capacity C (newtons: [`Knee::capacity`]) and costs `l²` in
+//! the objective, as a muscle's activation does: a muscle costs
+//! `(F/F_max)²`, a compartment `(L/C)²`. C is the largest load a
+//! compartment habitually carries (the StaticOptimization's
+//! `<knee_contact_capacity>` in body weights, default
+//! [`DEFAULT_KNEE_CAPACITY_BW`]), as F_max is the largest force a muscle
+//! produces; it does not depend on the run's contact weight w0, which
+//! weighs the contacts with the environment (docs/knee_contact.md). Shear
+//! and the other moments stay with the joint (ligaments,
 //! menisci), as in OpenSim's reaction. The reaction the JointReaction
 //! reports afterwards is the same R(x) (tested), so the method changes the
 //! muscle forces, never how the reaction is computed.
@@ -42,10 +49,7 @@ use crate::paths::geometry;
 /// centres lie 73.5 − (33 + 34.8)/2 ≈ 40 mm apart.
 pub const CONDYLE_SPACING: f64 = 0.040;
 
-/// Newtons per unit multiplier of a compartment: statopt's default
-/// `optimal_force` of a contact (`contacts::element`), so a compartment is
-/// weighted as any other contact of the run, `(l / (F0 √w0))²`.
-pub const UNIT_FORCE: f64 = 100.0;
+pub use crate::parse::analyses::DEFAULT_KNEE_CAPACITY_BW;
 
 /// Which knees a StaticOptimization solves with the knee contact method
 /// (read with the setup, `parse::analyses`).
@@ -69,10 +73,16 @@ pub struct Knee {
     /// ingredient study, docs/knee_contact.md) the knee has one axial contact
     /// at its centre: the lateral multiplier is held at zero.
     pub frontal: bool,
+    /// Newtons per unit multiplier: a compartment's load capacity (the
+    /// setup's capacity in body weights × the model's weight; twice that for
+    /// the one axial contact, which carries the whole knee).
+    pub capacity: f64,
 }
 
 /// The knees `sel` names, or an error naming what is wrong.
 pub fn select(model: &Model, sel: &KneeSelection) -> Result<Vec<Knee>> {
+    let bw = model.total_mass() * model.gravity.norm();
+    let capacity = DEFAULT_KNEE_CAPACITY_BW * bw;
     let tibias: Vec<usize> = match sel {
         KneeSelection::Off => return Ok(Vec::new()),
         KneeSelection::All => {
@@ -130,6 +140,7 @@ pub fn select(model: &Model, sel: &KneeSelection) -> Result<Vec<Knee>> {
                 distal,
                 z: [side * h, -side * h],
                 frontal: true,
+                capacity,
             })
         })
         .collect()
@@ -280,12 +291,12 @@ impl SoProblem {
                 for j in 0..2 {
                     let col = col0 + 2 * kj + j;
                     let same = kj == ki;
-                    a[(ra, col)] = if same { UNIT_FORCE } else { 0.0 };
+                    a[(ra, col)] = if same { k.capacity } else { 0.0 };
                     a[(rb, col)] = match (same, k.frontal) {
                         (false, _) => 0.0,
-                        (true, true) => k.z[j] * UNIT_FORCE,
+                        (true, true) => k.z[j] * k.capacity,
                         // Without the frontal row: l_lat = 0.
-                        (true, false) => (j as f64) * UNIT_FORCE,
+                        (true, false) => (j as f64) * k.capacity,
                     };
                 }
             }
@@ -316,6 +327,7 @@ mod tests {
             distal: vec![false, true],
             z: [side * h, -side * h],
             frontal: true,
+            capacity: 1272.0,
         }
     }
 

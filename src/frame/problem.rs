@@ -459,9 +459,7 @@ impl SoProblem {
             problem
                 .upper
                 .extend(std::iter::repeat_n(f64::INFINITY, 2 * nk));
-            problem
-                .weights
-                .extend(std::iter::repeat_n(1.0 / self.w0(), 2 * nk));
+            problem.weights.extend(std::iter::repeat_n(1.0, 2 * nk));
             self.knee_rows(
                 data,
                 mf,
@@ -789,8 +787,10 @@ impl SoProblem {
         let m_r = self.assemble(t, q, u, udot_target, data, mf, asm);
         let nv = self.controls.len();
         for (k, (&w0, result)) in weights.iter().zip(out).enumerate() {
-            // Every variable after the controls is a contact multiplier.
-            asm.problem.weights[nv..]
+            // The contact multipliers follow the controls (the knee
+            // compartments after them keep their weight 1).
+            let nc3 = 3 * self.contacts.len();
+            asm.problem.weights[nv..nv + nc3]
                 .iter_mut()
                 .for_each(|w| *w = 1.0 / w0);
             let y0 = match &warm {

@@ -94,6 +94,10 @@ pub struct StaticOptimizationSetup {
     /// per knee instead of two compartments (the ingredient study of
     /// docs/knee_contact.md).
     pub knee_contact_frontal: bool,
+    /// statopt `<knee_contact_capacity>`: each compartment's load capacity in
+    /// body weights, the unit of its cost (default
+    /// [`DEFAULT_KNEE_CAPACITY_BW`]; `frame::knee_contact`).
+    pub knee_contact_capacity_bw: f64,
     /// Whether the element gives `<contact_weight>` (else
     /// [`DEFAULT_CONTACT_WEIGHT`] applies).
     pub contact_weights_given: bool,
@@ -224,6 +228,16 @@ impl StaticOptimizationSetup {
                 },
                 _ => SolverChoice::Auto,
             },
+            knee_contact_capacity_bw: match el.child("knee_contact_capacity") {
+                Some(c) if !c.text().trim().is_empty() => {
+                    let v = c.f64()?;
+                    if !(v > 0.0 && v.is_finite()) {
+                        return Err(c.error(format!("knee_contact_capacity is a compartment's load capacity in body weights and must be positive, found {v}")));
+                    }
+                    v
+                }
+                _ => DEFAULT_KNEE_CAPACITY_BW,
+            },
             knee_contact_frontal: !el
                 .child("knee_contact")
                 .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
@@ -256,6 +270,14 @@ impl StaticOptimizationSetup {
         })
     }
 }
+
+/// A knee compartment's load capacity in body weights when a
+/// StaticOptimization gives no `<knee_contact_capacity>`: half of 3.46 BW,
+/// the highest mean peak knee force of the activities of daily living
+/// measured with instrumented knee implants (stair descent; Kutzner et al.
+/// 2010, J Biomech 43:2164, five subjects), each compartment taking half
+/// (docs/knee_contact.md says why).
+pub const DEFAULT_KNEE_CAPACITY_BW: f64 = 1.73;
 
 /// w0 when a StaticOptimization has no `<contact_weight>`.
 pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;

@@ -46,6 +46,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "solver_tolerance",
             "solver",
             "knee_contact",
+            "knee_contact_capacity",
         ],
     ),
 ];

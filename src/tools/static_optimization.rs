@@ -99,7 +99,17 @@ pub fn run(
         summary.files.push(path);
         warnings.extend(r.summary_lines());
     }
-    let weights: Vec<f64> = if problem.contacts.is_empty() && problem.knees.is_empty() {
+    // w0 weighs the contacts with the environment only (the knee
+    // compartments of the knee contact method cost by their capacity): a
+    // setup without contacts is solved once.
+    let weights: Vec<f64> = if problem.contacts.is_empty() {
+        if so.contact_weights.len() > 1 {
+            warnings.push(format!(
+                "{}: <contact_weight> gives {} values of w0, but the model has no contacts, so w0 changes nothing: the setup is solved once, without w0 in the file names",
+                so.element.loc(),
+                so.contact_weights.len()
+            ));
+        }
         vec![so.contact_weights[0]]
     } else {
         so.contact_weights.clone()
