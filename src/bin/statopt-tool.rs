@@ -515,6 +515,13 @@ fn main() -> ExitCode {
                             p.contacts.belt_velocity.x,
                             p.contacts.belt_velocity.z
                         );
+                        eprintln!(
+                            "foot contacts: gait speed {:.2} m/s over the floor; a point sliding over it weakens from {:.2} m/s and carries nothing from {:.2} m/s (speed_weight, the walking gate scaled to gaits faster than {:.1} m/s)",
+                            p.contacts.gait_speed,
+                            p.contacts.parameters.speed_weight.0,
+                            p.contacts.parameters.speed_weight.1,
+                            p.contacts.parameters.speed_weight_gait_speed
+                        );
                         for m in &p.metrics {
                             eprintln!(
                                 "foot {} axis {}: rho {:.3}, RMSE {:.1} N = {:.2} % BW, peak error {:.1} N",
