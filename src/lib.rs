@@ -2,7 +2,7 @@
 //! OpenSim models, after Krueger & Wartzack (2017).
 //!
 //! The pipeline, one module per stage (docs/architecture.md): [`functions`]
-//! (OpenSim Functions) → [`parse`] (XML documents) → [`model`] (compiled once, immutable) → [`motion`]
+//! (OpenSim Functions) → [`parse`] (XML documents) → [`plan`] (a setup read once into its typed plan) → [`model`] (compiled once, immutable) → [`motion`]
 //! (coordinates filtered and splined into per-frame q, u, u̇) → per frame,
 //! over a per-thread workspace ([`frame::Workspace`]): [`dynamics`]
 //! (kinematics, inverse and forward dynamics) → [`paths`] and [`muscles`]
@@ -37,6 +37,7 @@ pub mod optimize;
 pub mod output;
 pub mod parse;
 pub mod paths;
+pub mod plan;
 pub mod plots;
 pub mod reactions;
 pub mod storage;

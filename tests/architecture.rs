@@ -9,9 +9,10 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The pipeline, in order: a stage may import from the stages before it.
-const PIPELINE: [&str; 15] = [
+const PIPELINE: [&str; 16] = [
     "functions",
     "parse",
+    "plan",
     "model",
     "motion",
     "dynamics",
@@ -180,6 +181,51 @@ fn every_stage_imports_only_from_the_stages_before_it() {
         violations.is_empty(),
         "imports against the pipeline's order:\n{}",
         violations.join("\n")
+    );
+}
+
+/// Tools receive a setup's plan (`src/plan/`) and never read setup XML
+/// again: outside test code, no file of `src/tools/` parses XML or reads a
+/// setup element (`from_xml` of a `...Setup`), and none rewrites an
+/// element's attributes (a study pointed its figures at moved outputs by
+/// rewriting them; study.rs and predict_grf.rs parsed XML). The one
+/// exception, `scene.rs`, edits model documents: it writes the composed
+/// `.osim`, never a setup. docs/architecture.md draws the plan stage.
+#[test]
+fn tools_receive_the_plan_and_read_no_setup_xml() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src/tools"), &mut files);
+    files.sort();
+    assert!(files.len() > 10, "{files:?}");
+    let mut offenders = Vec::new();
+    for f in files.iter().filter(|f| !f.ends_with("scene.rs")) {
+        let source = std::fs::read_to_string(f).unwrap();
+        let code = match source.find("#[cfg(test)]") {
+            Some(i) => &source[..i],
+            None => &source,
+        };
+        for (n, line) in code.lines().enumerate() {
+            let line = line.split("//").next().unwrap_or("");
+            for pat in [
+                "xml::parse_file",
+                "xml::parse_str",
+                "Setup::from_xml",
+                "attrs.iter_mut",
+                "fn set_attr",
+            ] {
+                if line.contains(pat) {
+                    offenders.push(format!("{}:{}: {pat}", f.display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(offenders.is_empty(), "{offenders:#?}");
+    assert!(root.join("src/plan/mod.rs").is_file());
+    let doc = std::fs::read_to_string(root.join("docs/architecture.md")).unwrap();
+    assert!(
+        doc.contains(" plan/ ") && doc.contains("parse XML ──► plan"),
+        "docs/architecture.md draws the plan stage"
     );
 }
 

@@ -658,11 +658,60 @@ fn a_study_force_sweep_element_writes_its_metrics() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("unknown element <Candidat>"), "{e}");
+    // Checked like every element of a setup document: file, line (the
+    // second Candidate's, after <write_tables>) and the nearest known name;
+    // `--check` finds it; `--allow-unknown` reads on.
+    assert!(
+        e.contains("study.xml, line 9") && e.contains("did you mean Candidate?"),
+        "{e}"
+    );
+    let report = statopt::tools::check::run(&study_file, false);
+    // The sweep's setup is checked too.
+    assert!(
+        report.checked.iter().any(|c| c.ends_with("setup.xml")),
+        "{:?}",
+        report.checked
+    );
+    assert!(
+        report
+            .errors
+            .iter()
+            .any(|e| e.to_string().contains("did you mean Candidate?")),
+        "{:?}",
+        report.errors
+    );
+    let lenient = RunOptions {
+        allow_unknown: true,
+        ..Default::default()
+    };
+    let summary = tools::run_setup(&study_file, &lenient).unwrap();
+    assert!(
+        summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("<Candidat>") && w.contains("--allow-unknown")),
+        "{:?}",
+        summary.warnings
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 3, "{text}");
+    // An attribute it does not know, likewise.
+    let bad = std::fs::read_to_string(&study_file)
+        .unwrap()
+        .replace("<Candidat name=\"cam2\">", "<Candidate nmae=\"cam2\">")
+        .replace("</Candidat>", "</Candidate>");
+    std::fs::write(&study_file, bad).unwrap();
+    let e = tools::run_setup(&study_file, &RunOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("nmae") && e.contains("did you mean name?"),
+        "{e}"
+    );
     // An external load scale is read (and checked against the setup's loads).
     let scaled = std::fs::read_to_string(&study_file)
         .unwrap()
-        .replace("<Candidat ", "<Candidate ")
-        .replace("</Candidat>", "</Candidate>")
+        .replace("nmae=", "name=")
         .replace(
             "<expression force=\"cam_torque\">-50</expression>",
             "<expression force=\"cam_torque\">-50</expression><external_scale>2</external_scale>",

@@ -10,6 +10,7 @@
 use std::path::PathBuf;
 
 use statopt::parse::setup::Setup;
+use statopt::plan::StudyPlan;
 use statopt::storage;
 use statopt::tools::{analyze, study, RunOptions};
 
@@ -116,10 +117,10 @@ fn study_document_draws_figures_and_metrics() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("study_figures");
     let _ = std::fs::remove_dir_all(&out);
     let setup = root().join("setups/leg_extension_study.xml");
-    assert!(study::is_study(&setup));
+    assert!(statopt::plan::is_study(&setup));
     // The study's setups write to ../output; its figures go to `out`.
     let s = study::run(
-        &setup,
+        &StudyPlan::read(&setup, false).unwrap(),
         &RunOptions {
             results_dir: Some(out.clone()),
             ..Default::default()
@@ -299,7 +300,8 @@ fn study_honours_the_thread_bound() {
         }))),
         ..Default::default()
     };
-    study::run(&root().join("setups/leg_extension_study.xml"), &opts).unwrap();
+    let plan = StudyPlan::read(&root().join("setups/leg_extension_study.xml"), false).unwrap();
+    study::run(&plan, &opts).unwrap();
     let events = events.lock().unwrap();
     let mut open: Option<&str> = None;
     let mut loops = 0;

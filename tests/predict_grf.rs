@@ -307,6 +307,110 @@ fn without_measured_loads_the_prediction_uses_opensims_usual_names() {
     );
 }
 
+/// predict-grf's plan is the user's plan plus its root residuals and foot
+/// contacts, built in memory: the force-set files it writes are the record
+/// of what ran, not read back, so a message about an element of the user's
+/// force set names the user's file and line (it used to name the filtered
+/// copy, `..._force_set_0_without_root_residuals.xml`).
+#[test]
+fn the_prediction_plan_is_built_in_memory() {
+    let Some(root) = common::validation_dir("predict_grf plan in memory") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("predict_grf_plan_in_memory");
+    let forces = out.join("user_forces.xml");
+    std::fs::write(
+        &forces,
+        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n\
+         <OpenSimDocument Version=\"40000\">\n\
+         <ForceSet name=\"mine\">\n\
+         <objects>\n\
+         <CoordinateActuator name=\"tx\"><coordinate>pelvis_tx</coordinate><optimal_force>10</optimal_force></CoordinateActuator>\n\
+         <CoordinateActuator name=\"hip_r\">\n\
+         <coordinate>hip_flexion_r</coordinate>\n\
+         <optimal_forse>10</optimal_forse>\n\
+         </CoordinateActuator>\n\
+         </objects>\n\
+         </ForceSet>\n\
+         </OpenSimDocument>\n",
+    )
+    .unwrap();
+    setup.force_set_files = vec![forces.clone()];
+    setup.final_time = setup.initial_time + 0.1;
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    let copy = out.join(format!(
+        "{}_force_set_0_without_root_residuals.xml",
+        setup.name
+    ));
+    assert!(p.summary.files.contains(&copy), "the record is written");
+    let said: Vec<&String> = p
+        .summary
+        .warnings
+        .iter()
+        .filter(|w| w.contains("optimal_forse"))
+        .collect();
+    assert!(
+        !said.is_empty()
+            && said
+                .iter()
+                .all(|w| w.contains(&format!("{}, line 6", forces.display()))),
+        "{:?}",
+        p.summary.warnings
+    );
+}
+
+/// predict-grf reads its setup as a run does: an element neither OpenSim
+/// nor statopt knows is an error naming the nearest name, and
+/// `allow_unknown` (`predict-grf --allow-unknown`) reads on with a warning
+/// (predict-grf refused it whatever the option said).
+#[test]
+fn predict_grf_refuses_unknown_elements_unless_allowed() {
+    let Some(root) = common::validation_dir("predict_grf unknown elements") else {
+        return;
+    };
+    let file = root.join("gait10dof18musc_walk/setup_SO.xml");
+    let text = std::fs::read_to_string(&file)
+        .unwrap()
+        .replace(
+            "<final_time>2.5</final_time>",
+            "<final_time>0.1</final_time>",
+        )
+        .replace(
+            "</StaticOptimization>",
+            "<contact_wieght>1</contact_wieght></StaticOptimization>",
+        );
+    assert!(text.contains("<final_time>0.1</final_time>") && text.contains("contact_wieght"));
+    let mut opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_unknown")),
+        verbose: false,
+        ..Default::default()
+    };
+    let e = predict_grf::run_setup(&file, Some(&text), &opts)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("did you mean contact_weight"), "{e}");
+    opts.allow_unknown = true;
+    let p = predict_grf::run_setup(&file, Some(&text), &opts).unwrap();
+    assert!(
+        p.summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("contact_wieght") && w.contains("--allow-unknown")),
+        "{:?}",
+        p.summary.warnings
+    );
+}
+
 /// A floor height the user gives is used as it is: every point's contact
 /// plane is that level floor (no resting heights or tilt fitted).
 #[test]
@@ -441,6 +545,15 @@ fn treadmill_running_of_another_subject() {
     );
     let b = p.contacts.belt_velocity;
     assert!(b.x < -2.7 && b.x > -3.3 && b.z.abs() < 0.3, "belt {b:?}");
+    // The slip gate scales with the gait speed over the belt (about
+    // 3 m/s): a runner's landing foot still slides when it takes load.
+    let v = p.contacts.gait_speed;
+    assert!(v > 2.7 && v < 3.3, "gait speed {v}");
+    let gate = p.contacts.parameters.speed_weight;
+    assert!(
+        (gate.0 - 0.12 * v / 1.3).abs() < 1e-9 && (gate.1 - 0.8 * v / 1.3).abs() < 1e-9,
+        "gate {gate:?} at {v} m/s"
+    );
     let (rho_v, rmse_v) = mean(&p.metrics, 'y');
     let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
     println!("running subject02 3 m/s: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
@@ -554,9 +667,18 @@ fn one_step_torque_driven_walking() {
     println!("one step 2014001 C4_05: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
     // The issue's bar (vertical 0.95 / 10 % BW) is NOT met on this trial
-    // (0.912 / 11.8 %: the landing heel loads two frames early; see
-    // docs/grf_prediction.md). Guarded here against getting worse.
-    assert!(rho_v >= 0.90 && rmse_v <= 12.5, "vertical {rho_v} {rmse_v}");
+    // (0.931 / 12.2 %: the landing heel loads two frames early; see
+    // docs/grf_prediction.md). Guarded here against getting worse: with
+    // the gate of 0.3 / 1.2 m/s used before, rho was 0.912.
+    assert!(
+        rho_v >= 0.925 && rmse_v <= 12.5,
+        "vertical {rho_v} {rmse_v}"
+    );
+    // Walking at about 1.4 m/s: the walking slip gate, hardly scaled.
+    let v = p.contacts.gait_speed;
+    assert!(v > 1.2 && v < 1.6, "gait speed {v}");
+    let gate = p.contacts.parameters.speed_weight;
+    assert!(gate.1 < 0.9, "gate {gate:?} at {v} m/s");
     // Torque-driven: w0 scaled by the actuators' strength (100 against the
     // muscles' 200 N m per coordinate): 10 x (1/2)^2.
     assert!(
@@ -564,4 +686,156 @@ fn one_step_torque_driven_walking() {
         "w0 {}",
         p.contact_weight
     );
+}
+
+/// An IK file as motion capture at 1200 Hz writes it: the Hamner running
+/// trial (subject02, 3 m/s; a SIMM header without `inDegrees`, degrees,
+/// 126 marker columns after the coordinates) resampled tenfold from 120 Hz
+/// by cubic Hermite (Catmull-Rom) interpolation, header and columns kept.
+/// It must read unchanged: the same floor and belt as the 120 Hz file, ten
+/// times the frames, and the same ground reactions at the 120 Hz frames
+/// (the coordinates differ between the samples by the interpolation only,
+/// which the 12 Hz low-pass removes).
+#[test]
+fn an_ik_file_at_1200_hz_reads_unchanged() {
+    let Some(d) = shared_models("running_hamner2013", "predict_grf 1200 Hz") else {
+        return;
+    };
+    let s = d.join("subject02");
+    let ik = s.join("ik/Run_3.mot");
+    let text = std::fs::read_to_string(&ik).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let end = lines.iter().position(|l| l.trim() == "endheader").unwrap();
+    assert!(
+        !lines[..end].iter().any(|l| l.contains("inDegrees")),
+        "the source's header has no inDegrees"
+    );
+    let labels = lines[end + 1];
+    let n_cols = labels.split('\t').count();
+    assert!(
+        labels.contains("LASI_tx"),
+        "marker columns after the coordinates"
+    );
+    let rows: Vec<Vec<f64>> = lines[end + 2..]
+        .iter()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.iter().all(|r| r.len() == n_cols));
+    // Catmull-Rom between rows i and i+1, ten samples per interval.
+    let k = 10;
+    let n = rows.len();
+    let mut out = Vec::with_capacity(k * n);
+    for i in 0..n - 1 {
+        let (p0, p1, p2, p3) = (
+            &rows[i.saturating_sub(1)],
+            &rows[i],
+            &rows[i + 1],
+            &rows[(i + 2).min(n - 1)],
+        );
+        for j in 0..k {
+            let u = j as f64 / k as f64;
+            let (h00, h10) = (
+                2.0 * u * u * u - 3.0 * u * u + 1.0,
+                u * u * u - 2.0 * u * u + u,
+            );
+            let (h01, h11) = (-2.0 * u * u * u + 3.0 * u * u, u * u * u - u * u);
+            let mut r: Vec<f64> = (0..n_cols)
+                .map(|c| {
+                    h00 * p1[c]
+                        + h10 * 0.5 * (p2[c] - p0[c])
+                        + h01 * p2[c]
+                        + h11 * 0.5 * (p3[c] - p1[c])
+                })
+                .collect();
+            r[0] = p1[0] + u * (p2[0] - p1[0]);
+            out.push(r);
+        }
+    }
+    out.push(rows[n - 1].clone());
+    let mut file = String::new();
+    for l in &lines[..end] {
+        if l.starts_with("nRows=") {
+            file.push_str(&format!("nRows={}\n", out.len()));
+        } else if l.starts_with("datarows") {
+            file.push_str(&format!("datarows {}\n", out.len()));
+        } else {
+            file.push_str(l);
+            file.push('\n');
+        }
+    }
+    file.push_str("endheader\n");
+    file.push_str(labels);
+    file.push('\n');
+    for r in &out {
+        let cells: Vec<String> = r.iter().map(|x| format!("{x:.8}")).collect();
+        file.push_str(&cells.join("\t"));
+        file.push('\n');
+    }
+    let dir = common::out_dir("predict_grf_1200hz_ik");
+    let ik_1200 = dir.join("Run_3_1200Hz.mot");
+    std::fs::write(&ik_1200, file).unwrap();
+
+    let (t0, _) = time_range(&ik);
+    let range = (t0 + 0.1, t0 + 1.1);
+    let model = s.join("model/subject02_adjusted_scaled.osim");
+    let loads = s.join("expData/Run_3_grf.xml");
+    let run = |name: &str, ik: &Path| {
+        let setup = bar_setup(name, &model, ik, &loads, range, 12.0, 10.0);
+        let opts = RunOptions {
+            results_dir: Some(common::out_dir(&format!("predict_grf_{name}"))),
+            verbose: false,
+            ..Default::default()
+        };
+        predict_grf::run(&setup, &opts).unwrap()
+    };
+    let a = run("run_s02_3_120hz", &ik);
+    let b = run("run_s02_3_1200hz", &ik_1200);
+    println!(
+        "120 Hz: {}\n1200 Hz: {}",
+        a.contacts.decision.reason, b.contacts.decision.reason
+    );
+    assert!(a.contacts.decision.treadmill && b.contacts.decision.treadmill);
+    let dv = (a.contacts.belt_velocity - b.contacts.belt_velocity).norm();
+    assert!(
+        dv < 0.05,
+        "belt {:?} vs {:?}",
+        a.contacts.belt_velocity,
+        b.contacts.belt_velocity
+    );
+    let (na, nb) = (a.predicted.time.len(), b.predicted.time.len());
+    assert!(
+        (nb as f64 / na as f64 - 10.0).abs() < 0.2,
+        "frames: {na} at 120 Hz, {nb} at 1200 Hz"
+    );
+    // The 1200 Hz prediction at the 120 Hz frames.
+    for side in 0..2 {
+        let mut sq = [0.0; 3];
+        let mut m = 0;
+        for (i, &t) in a.predicted.time.iter().enumerate() {
+            let j = b
+                .predicted
+                .time
+                .iter()
+                .position(|&u| (u - t).abs() < 1e-6)
+                .unwrap_or_else(|| panic!("no 1200 Hz frame at t = {t}"));
+            let e = a.predicted.force[side][i] - b.predicted.force[side][j];
+            for (s, x) in sq.iter_mut().zip(e.iter()) {
+                *s += x * x;
+            }
+            m += 1;
+        }
+        let rms: Vec<f64> = sq
+            .iter()
+            .map(|s| 100.0 * (s / m as f64).sqrt() / a.body_weight)
+            .collect();
+        println!(
+            "foot {side}: 120 vs 1200 Hz, RMS difference x {:.2} y {:.2} z {:.2} % BW over {m} frames",
+            rms[0], rms[1], rms[2]
+        );
+        assert!(rms[1] < 2.0 && rms[0] < 1.5 && rms[2] < 1.5, "{rms:?}");
+    }
+    let (va, vb) = (mean(&a.metrics, 'y'), mean(&b.metrics, 'y'));
+    println!("vertical rho / RMSE: 120 Hz {va:?}, 1200 Hz {vb:?}");
+    assert!((va.0 - vb.0).abs() < 0.01 && (va.1 - vb.1).abs() < 1.0);
 }

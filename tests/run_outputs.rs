@@ -683,3 +683,51 @@ fn sync_writes_the_same_tables_and_names_a_file_it_cannot_sync() {
         .to_string();
     assert!(e.contains("no_such_file.sto"), "{e}");
 }
+
+/// The motion is read once per run: the knee loads (and the knee contact
+/// table) take the knee angles of the frames the static-optimization pass
+/// solved, instead of reading the motion again after it (they read it a
+/// second time). Checked by moving the motion away once the pass is done.
+#[test]
+fn knee_loads_take_the_frames_of_the_pass_without_reading_the_motion_again() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut setup = match Setup::read(&root.join("setups/leg_extension_cam1.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("knee_loads_motion_once");
+    let motion = out.join("motion.mot");
+    std::fs::copy(setup.coordinates_file.as_ref().unwrap(), &motion).unwrap();
+    setup.coordinates_file = Some(motion.clone());
+    setup.final_time = setup.initial_time + 0.5;
+    setup.figures.clear();
+    let moved = out.join("motion_moved_away.mot");
+    let (from, to) = (motion.clone(), moved.clone());
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        threads: Some(1),
+        progress: Some(statopt::tools::progress::ProgressHook(std::sync::Arc::new(
+            move |_label: &str, done, total| {
+                if total > 0 && done == total && from.exists() {
+                    std::fs::rename(&from, &to).unwrap();
+                }
+            },
+        ))),
+        ..Default::default()
+    };
+    let s = analyze::run(&setup, &opts).unwrap();
+    assert!(
+        moved.exists() && !motion.exists(),
+        "the motion was moved away"
+    );
+    let knee: Vec<&PathBuf> = s
+        .files
+        .iter()
+        .filter(|f| f.to_string_lossy().ends_with("_KneeLoads.sto"))
+        .collect();
+    // One per w0 (1, 500, 1000) and the sweep's mean, min and max.
+    assert_eq!(knee.len(), 6, "{:?}", s.files);
+    let t = storage::read(knee[0]).unwrap();
+    assert_eq!(t.time.len(), s.frames);
+    assert!(s.frames > 5);
+}

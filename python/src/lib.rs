@@ -110,7 +110,7 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
 /// run cleanly (the tables keep the frames solved) and raises
 /// KeyboardInterrupt.
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None))]
+#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -123,6 +123,7 @@ fn run<'py>(
     resume: bool,
     sync: bool,
     progress: Option<PyObject>,
+    allow_unknown: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
     let opts = RunOptions {
@@ -134,8 +135,9 @@ fn run<'py>(
         reduce,
         sync,
         progress: Some(hook),
-        // Python callers get the CLI's rule: an unknown element is an error.
-        allow_unknown: false,
+        // The CLI's rule: an unknown element is an error, a warning with
+        // allow_unknown (`--allow-unknown`).
+        allow_unknown,
     };
     let result = py.allow_threads(|| match &text {
         Some(t) => tools::run_setup_text(&setup, t, &opts),
@@ -155,7 +157,7 @@ fn run<'py>(
 /// `"prediction"` (agreement with the measured loads per foot and axis,
 /// stance metrics, the foot contacts).
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None))]
+#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None, allow_unknown=false))]
 fn predict_grf<'py>(
     py: Python<'py>,
     setup: PathBuf,
@@ -163,6 +165,7 @@ fn predict_grf<'py>(
     results_dir: Option<PathBuf>,
     threads: Option<usize>,
     progress: Option<PyObject>,
+    allow_unknown: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
     let opts = RunOptions {
@@ -170,6 +173,7 @@ fn predict_grf<'py>(
         verbose: false,
         threads,
         progress: Some(hook),
+        allow_unknown,
         ..Default::default()
     };
     let result = py.allow_threads(|| tools::predict_grf::run_setup(&setup, text.as_deref(), &opts));
@@ -226,8 +230,8 @@ fn predict_grf<'py>(
 /// name or "*": factor}).
 fn candidate_specs(
     candidates: &[Bound<'_, PyDict>],
-) -> PyResult<Vec<statopt::tools::force_sweep::CandidateSpec>> {
-    use statopt::tools::force_sweep::CandidateSpec;
+) -> PyResult<Vec<statopt::plan::CandidateSpec>> {
+    use statopt::plan::CandidateSpec;
     let mut specs = Vec::with_capacity(candidates.len());
     for c in candidates {
         let w0: f64 = match c.get_item("w0")? {
@@ -364,7 +368,7 @@ impl Scene {
 /// (per candidate, per metric), "failed", "frames", "loop_seconds",
 /// "warnings", "files"}.
 #[pyfunction]
-#[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true, tables=None))]
+#[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true, allow_unknown=false, tables=None))]
 fn force_sweep<'py>(
     py: Python<'py>,
     setup: PathBuf,
@@ -372,6 +376,7 @@ fn force_sweep<'py>(
     text: Option<String>,
     threads: Option<usize>,
     warm: bool,
+    allow_unknown: bool,
     tables: Option<Vec<PathBuf>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use statopt::tools::force_sweep::{self, SweepOptions};
@@ -380,6 +385,7 @@ fn force_sweep<'py>(
     let opts = RunOptions {
         threads,
         progress: Some(hook),
+        allow_unknown,
         ..Default::default()
     };
     let sweep = SweepOptions {
@@ -524,8 +530,13 @@ fn write_table(
 /// `statopt-tool --check SETUP`: read and compile everything the setup names
 /// without running; returns (errors, warnings, files checked).
 #[pyfunction]
-fn check(py: Python<'_>, setup: PathBuf) -> (Vec<String>, Vec<String>, Vec<String>) {
-    let r = py.allow_threads(|| tools::check::run(&setup, false));
+#[pyo3(signature = (setup, allow_unknown=false))]
+fn check(
+    py: Python<'_>,
+    setup: PathBuf,
+    allow_unknown: bool,
+) -> (Vec<String>, Vec<String>, Vec<String>) {
+    let r = py.allow_threads(|| tools::check::run(&setup, allow_unknown));
     (
         r.errors.iter().map(|e| e.to_string()).collect(),
         r.warnings,

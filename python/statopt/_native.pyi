@@ -23,7 +23,9 @@ def run(
     threads: Optional[int] = None,
     reduce: bool = False,
     resume: bool = False,
+    sync: bool = False,
     progress: Optional[Callable[[str, int, int], Any]] = None,
+    allow_unknown: bool = False,
 ) -> Dict[str, Any]: ...
 def predict_grf(
     setup: str,
@@ -31,6 +33,7 @@ def predict_grf(
     results_dir: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Optional[Callable[[str, int, int], Any]] = None,
+    allow_unknown: bool = False,
 ) -> Dict[str, Any]: ...
 def force_sweep(
     setup: str,
@@ -38,6 +41,7 @@ def force_sweep(
     text: Optional[str] = None,
     threads: Optional[int] = None,
     warm: bool = True,
+    allow_unknown: bool = False,
     tables: Optional[List[str]] = None,
 ) -> Dict[str, Any]: ...
 class Scene:
@@ -58,6 +62,6 @@ def write_table(
     metadata: List[Tuple[str, str]],
     precision: int,
 ) -> None: ...
-def check(setup: str) -> Tuple[List[str], List[str], List[str]]: ...
+def check(setup: str, allow_unknown: bool = False) -> Tuple[List[str], List[str], List[str]]: ...
 def split_table_stem(stem: str, kind: str) -> Optional[Tuple[str, Optional[str]]]: ...
 def without_w0(file: str) -> str: ...

@@ -251,6 +251,7 @@ def run(
     reduce: bool = False,
     resume: bool = False,
     sync: bool = False,
+    allow_unknown: bool = False,
     tables: bool = True,
     **overrides: Any,
 ) -> Result:
@@ -286,8 +287,11 @@ def run(
       are relative to the working directory; the setup's own paths still
       resolve against its folder.
 
-    ``threads``, ``precision``, ``reduce``, ``resume``, ``sync`` are the
-    CLI's ``-j``, ``--precision``, ``--reduce``, ``--resume`` and ``--sync``.
+    ``threads``, ``precision``, ``reduce``, ``resume``, ``sync``,
+    ``allow_unknown`` are the CLI's ``-j``, ``--precision``, ``--reduce``,
+    ``--resume``, ``--sync`` and ``--allow-unknown`` (an element of the
+    setup that neither OpenSim 4.6 nor statopt knows is then a warning
+    instead of an InputError).
 
     Raises :class:`statopt.InputError` (bad input; the CLI's message naming
     the file, line and element) or :class:`statopt.StatoptError`. Frames
@@ -298,7 +302,7 @@ def run(
         raise ValueError("resume=True continues the run in results_dir: give results_dir")
     return _execute(_native.run, setup, results_dir, progress, tables, overrides,
                     dict(precision=precision, threads=threads, reduce=reduce, resume=resume,
-                         sync=sync))
+                         sync=sync, allow_unknown=allow_unknown))
 
 
 def predict_grf(
@@ -307,12 +311,13 @@ def predict_grf(
     progress: Union[bool, None, Callable[[str, int, int], Any]] = None,
     *,
     threads: Optional[int] = None,
+    allow_unknown: bool = False,
     tables: bool = True,
     **overrides: Any,
 ) -> Result:
     """``statopt-tool predict-grf SETUP``: ground reactions from kinematics
     alone (docs/grf_prediction.md), with :func:`run`'s ``results_dir``,
-    ``progress`` and overrides.
+    ``progress``, ``allow_unknown`` and overrides.
 
     ``result.predicted_grf`` is the predicted force, centre of pressure and
     free moment per foot; with measured loads in the setup ``result.metrics``
@@ -323,7 +328,7 @@ def predict_grf(
     contacts (points, floor height, belt velocity) and the body weight.
     """
     res = _execute(_native.predict_grf, setup, results_dir, progress, tables, overrides,
-                   dict(threads=threads))
+                   dict(threads=threads, allow_unknown=allow_unknown))
     pred = res.summary["prediction"]
     for m in pred["metrics"]:
         for k in ("rho", "rmse_N", "rmse_BW_percent", "peak_error_N"):
@@ -382,9 +387,10 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
             shutil.rmtree(out, ignore_errors=True)
 
 
-def check(setup: Union[str, "os.PathLike[str]"]) -> Dict[str, List[str]]:
+def check(setup: Union[str, "os.PathLike[str]"], *, allow_unknown: bool = False) -> Dict[str, List[str]]:
     """``statopt-tool --check SETUP``: read and compile everything the setup
     (or study) names without running. Returns ``{"errors": [...],
-    "warnings": [...], "checked": [...]}``."""
-    errors, warns, checked = _native.check(os.fspath(setup))
+    "warnings": [...], "checked": [...]}``; with ``allow_unknown``
+    (``--allow-unknown``) unknown elements are warnings, not errors."""
+    errors, warns, checked = _native.check(os.fspath(setup), allow_unknown=allow_unknown)
     return {"errors": errors, "warnings": warns, "checked": checked}

@@ -416,6 +416,26 @@ def test_check(repo, tmp_path):
     assert any("bad.xml" in e and "friction_cone" in e for e in r["errors"]), r
 
 
+
+def test_allow_unknown(repo, tmp_path):
+    # The CLI's --allow-unknown: a misspelled property is an error naming
+    # the element, file, line and nearest name; allowed, a warning.
+    bad = tmp_path / "misspelled.xml"
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    text = text.replace("../models", str(repo / "models")).replace("../motions", str(repo / "motions"))
+    assert "<contact_weight>" in text
+    # (An extra, misspelled element: the run itself stays the shipped one.)
+    bad.write_text(text.replace("<contact_weight>", "<contact_wieght>1</contact_wieght><contact_weight>", 1))
+    with pytest.raises(statopt.InputError, match="did you mean contact_weight"):
+        statopt.run(bad, progress=False, tables=False)
+    strict = statopt.check(bad)
+    assert any("contact_wieght" in e and "misspelled.xml" in e for e in strict["errors"]), strict
+    lenient = statopt.check(bad, allow_unknown=True)
+    assert not any("contact_wieght" in e for e in lenient["errors"]), lenient
+    assert any("contact_wieght" in w for w in lenient["warnings"]), lenient
+    res = statopt.run(bad, progress=False, tables=False, allow_unknown=True, time_range=(0.0, 0.05))
+    assert any("contact_wieght" in w and "--allow-unknown" in w for w in res.summary["warnings"])
+
 # -- predict-grf (reads ../shared in place; skipped without it) ---------------
 
 def test_predict_grf_equals_cli(repo, cli, tmp_path):

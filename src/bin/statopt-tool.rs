@@ -154,6 +154,10 @@ enum Command {
         /// The floor is the ground (no belt): instead of deciding from the motion.
         #[arg(long)]
         overground: bool,
+        /// Read on past elements of the setup that neither OpenSim 4.6 nor statopt knows, with a
+        /// warning (without it they are errors).
+        #[arg(long)]
+        allow_unknown: bool,
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
@@ -457,11 +461,13 @@ fn main() -> ExitCode {
             floor_height,
             treadmill,
             overground,
+            allow_unknown,
             quiet,
         }) => {
             let opts = RunOptions {
                 results_dir: results_dir.clone(),
                 verbose: !quiet,
+                allow_unknown: *allow_unknown,
                 ..Default::default()
             };
             let motion = match (treadmill, overground) {
@@ -476,7 +482,7 @@ fn main() -> ExitCode {
                 height: *floor_height,
                 motion,
             };
-            let run = match statopt::parse::setup::Setup::read(setup) {
+            let run = match statopt::parse::setup::Setup::read_with(setup, *allow_unknown) {
                 Ok(statopt::parse::setup::Setup::Analyze(s)) => {
                     tools::predict_grf::run_with(&s, &opts, &floor)
                 }
@@ -508,6 +514,13 @@ fn main() -> ExitCode {
                             p.contacts.floor_tilt_degrees().1,
                             p.contacts.belt_velocity.x,
                             p.contacts.belt_velocity.z
+                        );
+                        eprintln!(
+                            "foot contacts: gait speed {:.2} m/s over the floor; a point sliding over it weakens from {:.2} m/s and carries nothing from {:.2} m/s (speed_weight, the walking gate scaled to gaits faster than {:.1} m/s)",
+                            p.contacts.gait_speed,
+                            p.contacts.parameters.speed_weight.0,
+                            p.contacts.parameters.speed_weight.1,
+                            p.contacts.parameters.speed_weight_gait_speed
                         );
                         for m in &p.metrics {
                             eprintln!(

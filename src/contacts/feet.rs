@@ -60,10 +60,41 @@ pub struct FootContactParameters {
     pub static_friction: f64,
     pub kinetic_friction: f64,
     pub v_trans: f64,
-    /// `speed_weight`: full strength below, none above (m/s).
+    /// `speed_weight`: full strength below, none above (m/s), for a gait
+    /// no faster than [`Self::speed_weight_gait_speed`]; see
+    /// [`Self::for_gait_speed`].
     pub speed_weight: (f64, f64),
+    /// The gait speed (m/s) `speed_weight` holds for as given.
+    pub speed_weight_gait_speed: f64,
     /// Force per unit multiplier (N).
     pub optimal_force: f64,
+}
+
+impl FootContactParameters {
+    /// The parameters for a gait of speed `v` (m/s, the body's horizontal
+    /// speed over the floor): the slip-speed gate `speed_weight` is the
+    /// walking one up to [`Self::speed_weight_gait_speed`] and scales with
+    /// the speed above it. A landing foot sheds its forward speed over the
+    /// last centimetres of its swing, and how fast it still slides when the
+    /// floor takes its load scales with the speed it swings at, which
+    /// scales with the gait's: in the raw IK of the development trials the
+    /// heel slid at 0.2-0.3 v relative to the floor when the plates first
+    /// saw load, walking at 1.2 m/s and running at 4.7 m/s alike. A gate
+    /// fixed in m/s is either too loose for walking (the landing heel
+    /// loads early) or shuts the landing foot out in fast running (the
+    /// pelvis then carries the impact). A speed that is not finite leaves
+    /// the walking gate.
+    pub fn for_gait_speed(self, v: f64) -> FootContactParameters {
+        let k = if v.is_finite() {
+            (v / self.speed_weight_gait_speed).max(1.0)
+        } else {
+            1.0
+        };
+        FootContactParameters {
+            speed_weight: (k * self.speed_weight.0, k * self.speed_weight.1),
+            ..self
+        }
+    }
 }
 
 impl Default for FootContactParameters {
@@ -74,7 +105,10 @@ impl Default for FootContactParameters {
             static_friction: 0.35,
             kinetic_friction: 0.25,
             v_trans: 0.8,
-            speed_weight: (0.3, 1.2),
+            // Walking: none from 0.8 m/s, where AnyBody's foot contacts
+            // switch off (FootPlateConditionalContact, LimitVelHigh).
+            speed_weight: (0.12, 0.8),
+            speed_weight_gait_speed: 1.3,
             optimal_force: 100.0,
         }
     }
@@ -96,6 +130,11 @@ pub struct FootContactSet {
     pub belt_velocity: Vector3<f64>,
     /// Treadmill or ground, and why ([`super::floor`]).
     pub decision: FloorDecision,
+    /// The body's horizontal speed over the floor (m/s): the pelvis's mean
+    /// velocity less the belt's.
+    pub gait_speed: f64,
+    /// As used: `speed_weight` scaled to `gait_speed`
+    /// ([`FootContactParameters::for_gait_speed`]).
     pub parameters: FootContactParameters,
 }
 
@@ -252,6 +291,9 @@ pub fn build(
     let ev = floor::evidence(&time, &all, &pelvis, &pelvis_x, &tracks);
     let decision = floor::decide(ev, motion);
     let belt_velocity = decision.belt_velocity;
+    let over_floor = decision.evidence.pelvis_velocity - belt_velocity;
+    let gait_speed = over_floor.x.hypot(over_floor.z);
+    let parameters = parameters.for_gait_speed(gait_speed);
     let mut points = points;
     let mut dwell_samples = Vec::with_capacity(points.len());
     for (k, p) in points.iter_mut().enumerate() {
@@ -364,6 +406,7 @@ pub fn build(
         floor_height,
         belt_velocity,
         decision,
+        gait_speed,
         parameters,
     })
 }
@@ -477,6 +520,12 @@ impl FootContactSet {
         Vector3::new(-self.floor_slope.0, 1.0, -self.floor_slope.1).normalize()
     }
 
+    /// [`FootContactSet::force_set_xml`] parsed, as if read from `path`
+    /// (where it is written): the contacts a prediction's plan adds.
+    pub fn force_set_document(&self, path: &std::path::Path) -> Result<crate::xml::Element> {
+        crate::forces::force_set_document(&self.force_set_xml(), path)
+    }
+
     /// The set as an OpenSim ForceSet document of PointOnPlaneContacts (a
     /// force-set file a setup can name).
     pub fn force_set_xml(&self) -> String {
@@ -521,6 +570,29 @@ impl FootContactSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The slip-speed gate: the walking one (0.12 / 0.8 m/s) up to
+    /// 1.3 m/s, scaled with the gait's speed above it (a runner's foot
+    /// lands sliding faster), never below the walking one, and the walking
+    /// one for a speed that is not finite.
+    #[test]
+    fn the_slip_speed_gate_scales_with_a_faster_gait() {
+        let p = FootContactParameters::default();
+        assert_eq!(p.speed_weight, (0.12, 0.8));
+        for v in [0.0, 0.9, 1.3, f64::NAN] {
+            assert_eq!(p.for_gait_speed(v).speed_weight, (0.12, 0.8), "v = {v}");
+        }
+        let run = p.for_gait_speed(3.9).speed_weight;
+        assert!(
+            (run.0 - 0.36).abs() < 1e-12 && (run.1 - 2.4).abs() < 1e-12,
+            "{run:?}"
+        );
+        // Nothing else changes.
+        let q = p.for_gait_speed(5.0);
+        assert_eq!(q.static_friction, p.static_friction);
+        assert_eq!(q.contact_tolerance, p.contact_tolerance);
+        assert_eq!(q.v_trans, p.v_trans);
+    }
 
     /// Two points dwelling on a floor that rises 3 % along x and falls 1 %
     /// along z, at levels 1 cm apart and over different stretches: the slope

@@ -55,7 +55,8 @@ pub struct AnalysisModel {
     pub spec: ModelSpec,
     /// ForceSet elements: the composed model's own (those of the model and its
     /// artifacts, unless replace_force_set), then
-    /// each force_set_files set, in order. (They are moved here from
+    /// each force_set_files set, in order, then each of
+    /// `force_set_documents`. (They are moved here from
     /// `spec.forces`, which stays empty.)
     pub forces: Vec<Element>,
     pub warnings: Vec<String>,
@@ -75,9 +76,13 @@ pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<
         own
     };
     let mut warnings = model.warnings.clone();
-    for f in &setup.force_set_files {
-        let root = crate::xml::parse_file(f)?;
-        let members = crate::forces::force_set_members(&root)?;
+    let read: Vec<crate::xml::Element> = setup
+        .force_set_files
+        .iter()
+        .map(|f| crate::xml::parse_file(f))
+        .collect::<Result<_>>()?;
+    for root in read.iter().chain(&setup.force_set_documents) {
+        let members = crate::forces::force_set_members(root)?;
         let version = root.attr("Version").and_then(|v| v.trim().parse().ok());
         for m in &members {
             warnings.extend(crate::parse::known::unknown_properties_in_version(

@@ -801,3 +801,37 @@ impl ExternalForce {
         (f_g, p_g, t_g)
     }
 }
+
+/// One ExternalForce of an ExternalLoads file as it is written: its name,
+/// the body it is applied to and its data column identifiers (predict-grf
+/// writes its prediction with a measured file's layout).
+#[derive(Debug, Clone)]
+pub struct ForceLayout {
+    pub name: String,
+    pub body: String,
+    pub force_identifier: String,
+    pub point_identifier: String,
+    pub torque_identifier: String,
+}
+
+/// The ExternalForces of an ExternalLoads file, in file order.
+pub fn layout(path: &Path) -> Result<Vec<ForceLayout>> {
+    let root = crate::xml::parse_file(path)?;
+    let mut out = Vec::new();
+    let mut visit = vec![&root];
+    while let Some(el) = visit.pop() {
+        if el.name == "ExternalForce" {
+            let text = |n: &str| el.child_text(n).unwrap_or("").trim().to_string();
+            out.push(ForceLayout {
+                name: el.name_attr().to_string(),
+                body: text("applied_to_body"),
+                force_identifier: text("force_identifier"),
+                point_identifier: text("point_identifier"),
+                torque_identifier: text("torque_identifier"),
+            });
+        }
+        visit.extend(el.children.iter());
+    }
+    out.reverse();
+    Ok(out)
+}

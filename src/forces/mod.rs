@@ -28,6 +28,55 @@ pub fn read_force_set_file(path: &Path) -> Result<Vec<Element>> {
     force_set_members(&root)
 }
 
+/// A force-set file named by a setup, as its parsed document (see
+/// [`force_set_members`]; a tool that edits a plan's force sets in memory).
+pub fn read_force_set_document(path: &Path) -> Result<Element> {
+    xml::parse_file(path)
+}
+
+/// A force-set document a tool builds as text (predict-grf's foot
+/// contacts and root residuals), parsed as if it were the file `path` it
+/// is also written to: its elements' messages name that file and line.
+pub fn force_set_document(text: &str, path: &Path) -> Result<Element> {
+    xml::parse_str(text, path)
+}
+
+/// The force-set document `root` without its actuators that act on the
+/// root joint only: coordinate actuators on one of `root_coordinates`,
+/// point actuators on `root_body`, torque actuators with `root_body` as a
+/// body (a body path's last part counts). None when it holds none.
+pub fn without_root_actuators(
+    root: &Element,
+    root_coordinates: &[&str],
+    root_body: &str,
+) -> Option<Element> {
+    let is_root_actuator = |el: &Element| -> bool {
+        let text = |n: &str| el.child_text(n).map(str::trim).unwrap_or("");
+        let on_root_body = |n: &str| {
+            let b = text(n);
+            b == root_body || b.rsplit('/').next() == Some(root_body)
+        };
+        match el.name.as_str() {
+            "CoordinateActuator" => root_coordinates.contains(&text("coordinate")),
+            "PointActuator" => on_root_body("body"),
+            "TorqueActuator" => on_root_body("bodyA") || on_root_body("bodyB"),
+            _ => false,
+        }
+    };
+    let mut root = root.clone();
+    let mut removed = 0;
+    let mut stack = vec![&mut root];
+    while let Some(el) = stack.pop() {
+        if el.name == "objects" {
+            let before = el.children.len();
+            el.children.retain(|c| !is_root_actuator(c));
+            removed += before - el.children.len();
+        }
+        stack.extend(el.children.iter_mut());
+    }
+    (removed > 0).then_some(root)
+}
+
 /// The members of a force-set document already parsed (see [`read_force_set_file`]).
 pub fn force_set_members(root: &Element) -> Result<Vec<Element>> {
     let set = match root.name.as_str() {

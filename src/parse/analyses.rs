@@ -304,6 +304,18 @@ pub struct JointReactionSetup {
 }
 
 impl JointReactionSetup {
+    /// A `<JointReaction>` element given as text, read as if it stood in
+    /// the file `path` (paths in it resolve against `setup_dir`).
+    pub fn from_text(
+        text: &str,
+        path: &std::path::Path,
+        setup_dir: &std::path::Path,
+    ) -> Result<Self> {
+        let el = crate::xml::parse_str(text, path)?;
+        let common = crate::parse::setup::read_common(&el)?;
+        Self::from_xml(&el, common, setup_dir)
+    }
+
     pub fn from_xml(
         el: &Element,
         common: AnalysisCommon,

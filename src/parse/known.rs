@@ -388,7 +388,69 @@ pub fn figure_elements(el: &Element) -> Vec<crate::error::Error> {
     out
 }
 
-/// Unknown children of a `<StatoptStudy>` (and of its figures and metrics).
+/// statopt's `<ForceSweep>` element (in a study) and what it holds: per
+/// element, the attributes it reads and the elements it holds.
+#[allow(clippy::type_complexity)]
+pub const FORCE_SWEEP_ELEMENTS: &[(&str, &[&str], &[&str])] = &[
+    (
+        "ForceSweep",
+        &["name", "setup"],
+        &["contact_weight", "write_tables", "Candidate"],
+    ),
+    ("contact_weight", &[], &[]),
+    ("write_tables", &[], &[]),
+    (
+        "Candidate",
+        &["name"],
+        &["expression", "optimal_force", "external_scale"],
+    ),
+    ("expression", &["force"], &[]),
+    ("optimal_force", &["actuator"], &[]),
+    ("external_scale", &["force"], &[]),
+];
+
+/// Unknown attributes and children of a `<ForceSweep>` (and of what it
+/// holds), one error each, with the nearest known name.
+pub fn force_sweep_elements(el: &Element) -> Vec<crate::error::Error> {
+    let mut out = Vec::new();
+    let Some((_, attrs, children)) = FORCE_SWEEP_ELEMENTS.iter().find(|(t, _, _)| *t == el.name)
+    else {
+        return out;
+    };
+    for (a, _) in &el.attrs {
+        if !attrs.contains(&a.as_str()) {
+            out.push(el.error(format!(
+                "unknown attribute {a}=\"...\" of {}: {}",
+                el.describe(),
+                if attrs.is_empty() {
+                    "it takes no attributes".to_string()
+                } else {
+                    suggestion(a, attrs)
+                }
+            )));
+        }
+    }
+    for c in &el.children {
+        if children.contains(&c.name.as_str()) {
+            out.extend(force_sweep_elements(c));
+        } else {
+            out.push(c.error(format!(
+                "unknown element <{}> in {}: {} (statopt refuses elements it does not know in setup documents; --allow-unknown reads on with a warning)",
+                c.name,
+                el.describe(),
+                if children.is_empty() {
+                    "it holds no elements".to_string()
+                } else {
+                    suggestion(&c.name, children)
+                }
+            )));
+        }
+    }
+    out
+}
+
+/// Unknown children of a `<StatoptStudy>` (and of its figures, metrics
+/// and force sweeps).
 pub fn study_elements(study: &Element) -> Vec<crate::error::Error> {
     let mut out = Vec::new();
     for c in &study.children {
@@ -399,6 +461,8 @@ pub fn study_elements(study: &Element) -> Vec<crate::error::Error> {
                 study.describe(),
                 suggestion(&c.name, STUDY_CHILDREN)
             )));
+        } else if c.name == "ForceSweep" {
+            out.extend(force_sweep_elements(c));
         } else {
             out.extend(figure_elements(c));
         }

@@ -27,6 +27,11 @@ pub struct AnalyzeSetup {
     pub artifact_files: Vec<PathBuf>,
     pub replace_force_set: bool,
     pub force_set_files: Vec<PathBuf>,
+    /// Force-set documents a tool adds in memory, read after
+    /// `force_set_files` (predict-grf's root residuals and foot contacts:
+    /// its plan is the user's plus these; each element keeps the file and
+    /// line it came from).
+    pub force_set_documents: Vec<Element>,
     pub results_directory: PathBuf,
     /// Where `<results_directory>` stands (the tool element when absent).
     pub results_directory_loc: crate::error::Location,
@@ -373,7 +378,8 @@ impl Setup {
         Self::from_document(&xml::parse_str(text, path)?, path, allow_unknown)
     }
 
-    fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
+    /// The setup of a parsed document (the file `path`; see [`Setup::read_with`]).
+    pub fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
         let tool = tool_element(root)?;
         let dir = setup_dir(path);
         let found = super::known::setup_elements(tool);
@@ -485,7 +491,8 @@ fn words_or_all(el: &Element, name: &str) -> Vec<String> {
     }
 }
 
-fn read_common(a: &Element) -> Result<AnalysisCommon> {
+/// The properties every analysis has, of the analysis element `a`.
+pub fn read_common(a: &Element) -> Result<AnalysisCommon> {
     let step = match a.child("step_interval") {
         Some(s) if !s.text().is_empty() => {
             let v = s.int()?;
@@ -570,6 +577,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             .iter()
             .map(|p| resolve(dir, p))
             .collect(),
+        force_set_documents: Vec::new(),
         results_directory: resolve(
             dir,
             &opt_text(tool, "results_directory").unwrap_or_else(|| ".".into()),

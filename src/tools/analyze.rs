@@ -191,6 +191,7 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 &out,
                 &out,
                 &setup.name,
+                &Default::default(),
             )?);
         }
         Ok(summary)

@@ -29,28 +29,43 @@ pub struct CheckReport {
 /// warnings, as a run would read on past them.
 pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
     let mut report = CheckReport::default();
-    if study::is_study(path) {
-        match study::unknown_elements(path) {
-            Ok(unknown) => report.unknown(unknown, allow_unknown),
+    if crate::plan::is_study(path) {
+        match crate::plan::StudyDocument::read(path) {
+            Ok(mut doc) => {
+                let unknown = std::mem::take(&mut doc.unknown);
+                report.unknown(unknown, allow_unknown);
+                if let Some(p) = results_dir_problem(&doc.results_directory) {
+                    report.errors.push(Error::input(
+                        doc.results_directory_loc.clone(),
+                        format!(
+                            "<results_directory> names {}, which {p}",
+                            doc.results_directory.display()
+                        ),
+                    ));
+                }
+                // The study's setups and its force sweeps' setups.
+                let mut files = doc.setup_files.clone();
+                for sw in &doc.sweeps {
+                    if let Some(f) = sw.attr("setup") {
+                        let p = crate::parse::setup::resolve(&doc.dir, f);
+                        if !files.contains(&p) {
+                            files.push(p);
+                        }
+                    }
+                }
+                // Unknown elements are reported above and per setup below.
+                if let Err(e) = crate::plan::StudyPlan::from_document(doc, true)
+                    .and_then(|plan| study::check(&plan))
+                {
+                    report.errors.push(e);
+                }
+                // Every setup checked on its own, whatever the study's
+                // problems.
+                for s in files {
+                    check_setup(&s, allow_unknown, &mut report);
+                }
+            }
             Err(e) => report.errors.push(e),
-        }
-        if let Err(e) = study::check_results_directory(path) {
-            report.errors.push(e);
-        }
-        // Unknown elements are reported above and per setup below.
-        match study::check(path, true) {
-            Ok(setups) => {
-                for s in setups {
-                    check_setup(&s, allow_unknown, &mut report);
-                }
-            }
-            Err(e) => {
-                report.errors.push(e);
-                // The study's setups are still checked one by one.
-                for s in study::setup_files(path).unwrap_or_default() {
-                    check_setup(&s, allow_unknown, &mut report);
-                }
-            }
         }
         report.checked.push(path.display().to_string());
     } else {

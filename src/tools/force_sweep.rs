@@ -41,20 +41,7 @@ use crate::tools::RunOptions;
 use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
 use crate::xml::Element;
 
-/// One candidate, by name: what it changes in the setup.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct CandidateSpec {
-    /// The contact weight w0.
-    pub w0: f64,
-    /// (force name, Lepton expression) of `ExpressionBasedCoordinateForce`s.
-    pub expressions: Vec<(String, String)>,
-    /// (actuator name, optimal force) of actuators other than muscles.
-    pub optimal_forces: Vec<(String, f64)>,
-    /// (ExternalForce name, or `*` for every external load, factor): the
-    /// load's force and torque data scaled by the factor (factors of one
-    /// load multiply).
-    pub external_scales: Vec<(String, f64)>,
-}
+pub use crate::plan::force_sweep::CandidateSpec;
 
 /// What a sweep computed.
 #[derive(Debug, Clone, Default)]
@@ -818,14 +805,18 @@ pub fn run_file(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    let setup = read_setup(setup_file, text)?;
+    let setup = read_setup(setup_file, text, opts.allow_unknown)?;
     run(&setup, candidates, opts, sweep)
 }
 
-fn read_setup(setup_file: &std::path::Path, text: Option<&str>) -> Result<AnalyzeSetup> {
+fn read_setup(
+    setup_file: &std::path::Path,
+    text: Option<&str>,
+    allow_unknown: bool,
+) -> Result<AnalyzeSetup> {
     let setup = match text {
-        Some(t) => Setup::parse(t, setup_file)?,
-        None => Setup::read(setup_file)?,
+        Some(t) => Setup::parse_with(t, setup_file, allow_unknown)?,
+        None => Setup::read_with(setup_file, allow_unknown)?,
     };
     match setup {
         Setup::Analyze(s) => Ok(s),
@@ -964,6 +955,10 @@ struct CandidateWriters {
     tables: Vec<crate::writers::so_tables::SoTables>,
     /// Per candidate: its folder and its runs' naming.
     runs: Vec<(std::path::PathBuf, crate::writers::names::Sweep<'static>)>,
+    /// The frames' times and positions (for the knee loads' flexion), as
+    /// a run keeps them from its pass.
+    time: Vec<f64>,
+    q: Vec<Vec<f64>>,
 }
 
 impl CandidateWriters {
@@ -1021,11 +1016,20 @@ impl CandidateWriters {
             )?);
             runs.push((spec.dir.clone(), run));
         }
-        Ok(CandidateWriters { tables, runs })
+        Ok(CandidateWriters {
+            tables,
+            runs,
+            time: Vec::new(),
+            q: Vec::new(),
+        })
     }
 
     /// One frame's rows of every candidate (frames in order).
     fn write(&mut self, fv: &FrameValues) -> Result<()> {
+        if let Some((r, _)) = fv.results.first() {
+            self.time.push(r.time);
+            self.q.push(r.q.clone());
+        }
         for (t, (r, rows)) in self.tables.iter_mut().zip(&fv.results) {
             t.write(r, rows)?;
         }
@@ -1043,19 +1047,6 @@ impl CandidateWriters {
         use crate::writers::names;
         let precision = opts.precision.unwrap_or(setup.output_precision);
         let problem = &plan.problem;
-        let needs_states = plan
-            .coupled
-            .iter()
-            .any(|c| c.knee.is_some() || c.knee_contact);
-        let states = if needs_states {
-            Some(crate::tools::analyze::load_states_with(
-                setup,
-                &problem.model,
-                &problem.contacts,
-            )?)
-        } else {
-            None
-        };
         let mut files = Vec::new();
         for (t, (dir, run)) in self.tables.into_iter().zip(&self.runs) {
             files.extend(t.finish()?);
@@ -1064,13 +1055,11 @@ impl CandidateWriters {
                     "{}ReactionLoads.sto",
                     names::prefix(&setup.name, &c.name, *run)
                 ));
-                let Some(states) = states.as_ref() else {
-                    continue;
-                };
                 if c.knee.is_some() {
                     files.push(crate::tools::knee_loads::write(
                         &problem.model,
-                        states,
+                        &self.time,
+                        &self.q,
                         &table,
                         &crate::tools::knee_loads::output_path(&table),
                         &setup.setup_file,
@@ -1081,7 +1070,8 @@ impl CandidateWriters {
                     files.push(crate::tools::knee_contact::write(
                         &problem.model,
                         &problem.knees,
-                        states,
+                        &self.time,
+                        &self.q,
                         &table,
                         &dir.join(names::setup_file_name(&setup.name, *run, "KneeContact.sto")),
                         &setup.setup_file,
@@ -1115,7 +1105,7 @@ impl Scene {
         text: Option<&str>,
         threads: Option<usize>,
     ) -> Result<Scene> {
-        let setup = read_setup(setup_file, text)?;
+        let setup = read_setup(setup_file, text, false)?;
         in_pool(threads, move || {
             let plan = Plan::compile(&setup)?;
             let mut warnings = plan.warnings.clone();
@@ -1231,35 +1221,27 @@ impl Scene {
 /// With `<write_tables>true</write_tables>` each candidate's tables go to
 /// `<out>/<name>_force_sweep/<candidate>/`, named as a run of its own setup
 /// names them (w0-tagged when the element has several w0).
-/// `dir` is the study's folder (the setup's path is relative to it).
-pub fn run_element(
-    el: &Element,
-    dir: &std::path::Path,
+/// The sweep was read with the study (`plan::ForceSweepPlan`).
+pub fn run_plan(
+    sweep: &crate::plan::ForceSweepPlan,
     out: &std::path::Path,
     opts: &RunOptions,
 ) -> Result<Vec<std::path::PathBuf>> {
-    let (setup, specs, names) = read_element(el, dir)?;
-    let name = el.attr("name").unwrap_or("force_sweep");
-    let mut sweep = SweepOptions::default();
-    let write_tables = match el.child("write_tables") {
-        Some(c) => match c.text.trim() {
-            "true" => true,
-            "false" => false,
-            other => return Err(c.error(format!("write_tables: '{other}' is not true or false"))),
-        },
-        None => false,
-    };
-    if write_tables {
+    let (specs, names) = (&sweep.specs, &sweep.names);
+    let name = &sweep.name;
+    let mut options = SweepOptions::default();
+    if sweep.write_tables {
         let n_w0 = names.iter().filter(|n| *n == &names[0]).count();
         let mut seen = std::collections::HashSet::new();
         for n in names.iter().step_by(n_w0.max(1)) {
             if !seen.insert(n) {
-                return Err(el.error(format!(
-                    "write_tables: two candidates are named '{n}' (their tables would share a folder)"
-                )));
+                return Err(Error::input(
+                    sweep.loc.clone(),
+                    format!("write_tables: two candidates are named '{n}' (their tables would share a folder)"),
+                ));
             }
         }
-        sweep.tables = names
+        options.tables = names
             .iter()
             .map(|n| CandidateTables {
                 dir: out.join(format!("{name}_force_sweep")).join(n),
@@ -1267,7 +1249,7 @@ pub fn run_element(
             })
             .collect();
     }
-    let outcome = run(&setup, &specs, opts, &sweep)?;
+    let outcome = run(&sweep.setup, specs, opts, &options)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let path = out.join(format!("{name}_force_sweep.csv"));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
@@ -1282,7 +1264,7 @@ pub fn run_element(
     w.write_record(&header).map_err(csv_err)?;
     for (((n, spec), values), failed) in names
         .iter()
-        .zip(&specs)
+        .zip(specs.iter())
         .zip(&outcome.values)
         .zip(&outcome.failed)
     {
@@ -1299,81 +1281,4 @@ pub fn run_element(
     let mut files = vec![path];
     files.extend(outcome.files);
     Ok(files)
-}
-
-/// The setup, the candidates (each at every w0) and their names of a
-/// `<ForceSweep>` element; checks it without running.
-pub fn read_element(
-    el: &Element,
-    dir: &std::path::Path,
-) -> Result<(AnalyzeSetup, Vec<CandidateSpec>, Vec<String>)> {
-    let file = el.attr("setup").ok_or_else(|| {
-        el.error("a ForceSweep needs a setup attribute (an AnalyzeTool setup file)")
-    })?;
-    let path = crate::parse::setup::resolve(dir, file);
-    let Setup::Analyze(setup) = Setup::read(&path)? else {
-        return Err(el.error(format!("setup=\"{file}\" is not an AnalyzeTool setup")));
-    };
-    let w0s: Vec<f64> = match el.child("contact_weight") {
-        Some(c) => c.numbers()?,
-        None => setup
-            .static_optimization()
-            .ok_or_else(|| el.error(format!("{file} has no StaticOptimization")))?
-            .contact_weights
-            .clone(),
-    };
-    if w0s.is_empty() {
-        return Err(el.error("contact_weight: give one or more w0"));
-    }
-    let mut specs = Vec::new();
-    let mut names = Vec::new();
-    for (k, c) in el.children.iter().enumerate() {
-        match c.name.as_str() {
-            "contact_weight" | "write_tables" => continue,
-            "Candidate" => {}
-            other => {
-                return Err(c.error(format!(
-                    "unknown element <{other}> in a ForceSweep (contact_weight, write_tables, Candidate)"
-                )))
-            }
-        }
-        let mut spec = CandidateSpec::default();
-        for p in &c.children {
-            match p.name.as_str() {
-                "expression" => spec.expressions.push((
-                    p.attr("force")
-                        .ok_or_else(|| p.error("an expression needs a force attribute"))?
-                        .to_string(),
-                    p.text.trim().to_string(),
-                )),
-                "optimal_force" => spec.optimal_forces.push((
-                    p.attr("actuator")
-                        .ok_or_else(|| p.error("an optimal_force needs an actuator attribute"))?
-                        .to_string(),
-                    p.numbers_n(1)?[0],
-                )),
-                "external_scale" => spec.external_scales.push((
-                    p.attr("force").unwrap_or("*").to_string(),
-                    p.numbers_n(1)?[0],
-                )),
-                other => {
-                    return Err(p.error(format!(
-                        "unknown element <{other}> in a Candidate (expression, optimal_force, external_scale)"
-                    )))
-                }
-            }
-        }
-        let name = c
-            .attr("name")
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("candidate_{k}"));
-        for &w0 in &w0s {
-            specs.push(CandidateSpec { w0, ..spec.clone() });
-            names.push(name.clone());
-        }
-    }
-    if specs.is_empty() {
-        return Err(el.error("a ForceSweep needs at least one <Candidate>"));
-    }
-    Ok((setup, specs, names))
 }

@@ -140,7 +140,6 @@ mod tests {
     use crate::forces::actuators::{Actuator, ActuatorKind};
     use crate::model::{compile, Model};
     use crate::parse::osim::ModelSpec;
-    use crate::parse::setup::AnalysisCommon;
     use crate::paths::coupling;
     use nalgebra::Vector3;
     use std::path::Path;
@@ -213,21 +212,15 @@ mod tests {
     }
 
     fn spec(model: &Model, on_child: bool, frame: &str) -> ReactionSpec {
-        let el = crate::xml::parse_str(
+        let jr = JointReactionSetup::from_text(
             &format!(
                 "<JointReaction name=\"JR\"><joint_names>pin</joint_names><apply_on_bodies>{}</apply_on_bodies><express_in_frame>{frame}</express_in_frame></JointReaction>",
                 if on_child { "child" } else { "parent" }
             ),
             Path::new("setup.xml"),
+            Path::new("."),
         )
         .unwrap();
-        let common = AnalysisCommon {
-            name: "JR".into(),
-            on: true,
-            step_interval: 1,
-            in_degrees: true,
-        };
-        let jr = JointReactionSetup::from_xml(&el, common, Path::new(".")).unwrap();
         let (mut specs, w) = resolve_reactions(model, &jr).unwrap();
         assert!(w.is_empty());
         specs.remove(0)
@@ -449,19 +442,13 @@ mod tests {
     #[test]
     fn reaction_list_follows_opensim_rules() {
         let model = pendulum(&format!("0 -{G} 0"), true, "", "");
-        let common = AnalysisCommon {
-            name: "JR".into(),
-            on: true,
-            step_interval: 1,
-            in_degrees: true,
-        };
         let parse = |body: &str| {
-            let el = crate::xml::parse_str(
+            let jr = JointReactionSetup::from_text(
                 &format!("<JointReaction name=\"JR\">{body}</JointReaction>"),
                 Path::new("setup.xml"),
+                Path::new("."),
             )
             .unwrap();
-            let jr = JointReactionSetup::from_xml(&el, common.clone(), Path::new(".")).unwrap();
             resolve_reactions(&model, &jr)
         };
         // Defaults: all joints, on child, in ground.

@@ -17,7 +17,6 @@ use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Result};
 use crate::frame::knee_contact::{compartments, Knee};
 use crate::model::{Model, Transform};
-use crate::motion::states::States;
 use crate::parse::setup::{Analysis, Setup};
 use crate::reactions::ReactionSpec;
 use crate::storage::{self, StoWriter};
@@ -57,11 +56,14 @@ pub fn labels(knees: &[Knee]) -> Vec<String> {
 pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact method (docs/knee_contact.md): per knee, flexion in degrees (flexion positive); total_N = magnitude of the tibiofemoral reaction on the tibia; medial_N, lateral_N = the compartments' compressive loads (along the tibial long axis, balancing the frontal-plane moment at 40 mm apart). Units N.";
 
 /// Write `out` from the knees' reaction table `reactions` (from
-/// [`reaction_specs`]), knee angles from `states` at the table's times.
+/// [`reaction_specs`]), knee angles from the positions `q` at `time` at the
+/// table's times.
+#[allow(clippy::too_many_arguments)]
 pub fn write(
     model: &Model,
     knees: &[Knee],
-    states: &States,
+    time: &[f64],
+    q: &[Vec<f64>],
     reactions: &Path,
     out: &Path,
     setup_file: &Path,
@@ -106,8 +108,8 @@ pub fn write(
     let mut data = Data::new(model);
     let mut row = Vec::with_capacity(4 * knees.len());
     for (i, &t) in table.time.iter().enumerate() {
-        let k = crate::motion::coordinates::find_index(&states.time, t);
-        data.q.copy_from_slice(&states.q[k]);
+        let k = crate::motion::coordinates::find_index(time, t);
+        data.q.copy_from_slice(&q[k]);
         data.u.iter_mut().for_each(|x| *x = 0.0);
         kinematics::full(model, &mut data);
         row.clear();

@@ -32,7 +32,6 @@ use nalgebra::Vector3;
 use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Result};
 use crate::model::Model;
-use crate::motion::states::States;
 use crate::storage::{self, StoWriter};
 
 /// Column labels of the table, per side r then l; `pf_compression_<s>`
@@ -166,11 +165,12 @@ pub(crate) fn knee_row(
 }
 
 /// Write the knee loads of the reaction table `reactions` to `out`, knee
-/// angles from `states` at the table's times (each table time must be a
-/// state time).
+/// angles from the positions `q` at `time` at the table's times (each
+/// table time must be one of `time`).
 pub fn write(
     model: &Model,
-    states: &States,
+    time: &[f64],
+    q: &[Vec<f64>],
     reactions: &Path,
     out: &Path,
     setup_file: &Path,
@@ -190,8 +190,8 @@ pub fn write(
     let mut data = Data::new(model);
     let mut row = Vec::with_capacity(8);
     for (i, &t) in table.time.iter().enumerate() {
-        let k = crate::motion::coordinates::find_index(&states.time, t);
-        data.q.copy_from_slice(&states.q[k]);
+        let k = crate::motion::coordinates::find_index(time, t);
+        data.q.copy_from_slice(&q[k]);
         data.u.iter_mut().for_each(|x| *x = 0.0);
         kinematics::full(model, &mut data);
         knee_row(&data, &sides, patella, &table.rows[i], &mut row);

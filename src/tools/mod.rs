@@ -55,15 +55,12 @@ pub struct RunOptions {
 }
 
 /// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
-/// study document, an InverseDynamicsTool or an AnalyzeTool setup.
+/// study document, an InverseDynamicsTool or an AnalyzeTool setup, read
+/// once into its plan (`plan::Plan`).
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
-    let summary = if study::is_study(setup) {
-        study::run(setup, opts)?
-    } else {
-        run_parsed(
-            crate::parse::setup::Setup::read_with(setup, opts.allow_unknown)?,
-            opts,
-        )?
+    let summary = match crate::plan::Plan::read(setup, opts.allow_unknown)? {
+        crate::plan::Plan::Study(s) => study::run(&s, opts)?,
+        crate::plan::Plan::Tool(s) => run_parsed(*s, opts)?,
     };
     synced(summary, opts)
 }

@@ -371,8 +371,8 @@ pub fn run_setup(
 ) -> Result<Prediction> {
     use crate::parse::setup::Setup;
     let read = match text {
-        Some(t) => Setup::parse(t, setup)?,
-        None => Setup::read(setup)?,
+        Some(t) => Setup::parse_with(t, setup, opts.allow_unknown)?,
+        None => Setup::read_with(setup, opts.allow_unknown)?,
     };
     match read {
         Setup::Analyze(s) => run(&s, opts),
@@ -502,12 +502,21 @@ pub fn run_with(
         FootContactParameters::default(),
     )?;
     let dir = analyze::results_dir(&setup, opts)?;
+    // The prediction's plan: the user's, its force sets with the root
+    // residuals replaced, plus the foot contacts, all in memory (the files
+    // written here are the record of what ran, not read back).
     let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
-    std::fs::write(&contacts_file, contacts.force_set_xml())
-        .map_err(|e| Error::io(&contacts_file, e))?;
+    let contacts_xml = contacts.force_set_xml();
+    std::fs::write(&contacts_file, &contacts_xml).map_err(|e| Error::io(&contacts_file, e))?;
     let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
-    setup.force_set_files = force_sets;
-    setup.force_set_files.push(contacts_file.clone());
+    setup.force_set_files.clear();
+    setup.force_set_documents = force_sets;
+    setup
+        .force_set_documents
+        .push(crate::forces::force_set_document(
+            &contacts_xml,
+            &contacts_file,
+        )?);
     let mut summary = analyze::run(&setup, opts)?;
     summary.warnings.extend(contacts.warnings.iter().cloned());
     written.push(contacts_file);
@@ -602,7 +611,7 @@ pub fn run_with(
     // layout when there is one, else one ExternalForce per foot with
     // OpenSim's usual names.
     let layout = match &measured_file {
-        Some(mf) => external_forces_of(mf)?,
+        Some(mf) => crate::forces::external_loads::layout(mf)?,
         None => default_layout(),
     };
     let (mot, xml) = write_external_loads(
@@ -962,39 +971,7 @@ fn write_metrics(metrics: &[AxisMetrics], stance: &[StanceMetrics], path: &PathB
     w.flush().map_err(|e| Error::io(path, e))
 }
 
-/// One ExternalForce of a layout: its name, the foot body it is applied to
-/// and its data column identifiers.
-#[derive(Debug, Clone)]
-pub struct ForceLayout {
-    pub name: String,
-    pub body: String,
-    pub force_identifier: String,
-    pub point_identifier: String,
-    pub torque_identifier: String,
-}
-
-/// The ExternalForces of a measured ExternalLoads file (their columns are
-/// reused for the prediction).
-fn external_forces_of(path: &std::path::Path) -> Result<Vec<ForceLayout>> {
-    let root = crate::xml::parse_file(path)?;
-    let mut out = Vec::new();
-    let mut visit = vec![&root];
-    while let Some(el) = visit.pop() {
-        if el.name == "ExternalForce" {
-            let text = |n: &str| el.child_text(n).unwrap_or("").trim().to_string();
-            out.push(ForceLayout {
-                name: el.name_attr().to_string(),
-                body: text("applied_to_body"),
-                force_identifier: text("force_identifier"),
-                point_identifier: text("point_identifier"),
-                torque_identifier: text("torque_identifier"),
-            });
-        }
-        visit.extend(el.children.iter());
-    }
-    out.reverse();
-    Ok(out)
-}
+pub use crate::forces::external_loads::ForceLayout;
 
 /// OpenSim's usual names: right foot `ground_force_v`, left `1_ground_force_v`.
 fn default_layout() -> Vec<ForceLayout> {
@@ -1117,18 +1094,23 @@ pub const ROOT_RESIDUAL_OPTIMAL_FORCE: f64 = 1.0;
 /// folder), and one coordinate actuator per root coordinate, named
 /// `<coordinate>_residual`, with [`ROOT_RESIDUAL_OPTIMAL_FORCE`], is added
 /// in `<name>_root_residuals.xml`. The model's own ForceSet is left as it
-/// is. Returns the force-set files to use and the files written.
+/// is. Returns the force-set documents of the prediction's plan (each
+/// file read once) and the files written.
 fn weak_root_residuals(
     setup: &AnalyzeSetup,
     model: &crate::model::Model,
     dir: &std::path::Path,
     reserves: Option<f64>,
-) -> Result<(Vec<PathBuf>, Vec<PathBuf>)> {
+) -> Result<(Vec<crate::xml::Element>, Vec<PathBuf>)> {
+    let mut documents = setup.force_set_documents.clone();
+    for f in &setup.force_set_files {
+        documents.push(crate::forces::read_force_set_document(f)?);
+    }
     let roots: Vec<usize> = (0..model.nq())
         .filter(|&c| model.is_root_coordinate(c))
         .collect();
     if roots.is_empty() && reserves.is_none() {
-        return Ok((setup.force_set_files.clone(), Vec::new()));
+        return Ok((documents, Vec::new()));
     }
     let root_body = roots
         .first()
@@ -1138,45 +1120,20 @@ fn weak_root_residuals(
         .iter()
         .map(|&c| model.coordinates[c].name.as_str())
         .collect();
-    let is_root_residual = |el: &crate::xml::Element| -> bool {
-        let text = |n: &str| el.child_text(n).map(str::trim).unwrap_or("");
-        let on_root_body = |n: &str| {
-            let b = text(n);
-            b == root_body || b.rsplit('/').next() == Some(root_body.as_str())
-        };
-        match el.name.as_str() {
-            "CoordinateActuator" => root_names.contains(&text("coordinate")),
-            "PointActuator" => on_root_body("body"),
-            "TorqueActuator" => on_root_body("bodyA") || on_root_body("bodyB"),
-            _ => false,
-        }
-    };
-    let mut files = Vec::new();
     let mut written = Vec::new();
-    for (k, f) in setup.force_set_files.iter().enumerate() {
-        let mut root = crate::xml::parse_file(f)?;
-        let mut removed = 0;
-        let mut stack = vec![&mut root];
-        while let Some(el) = stack.pop() {
-            if el.name == "objects" {
-                let before = el.children.len();
-                el.children.retain(|c| !is_root_residual(c));
-                removed += before - el.children.len();
-            }
-            stack.extend(el.children.iter_mut());
-        }
-        if removed == 0 {
-            files.push(f.clone());
+    for (k, doc) in documents.iter_mut().enumerate() {
+        let Some(filtered) = crate::forces::without_root_actuators(doc, &root_names, &root_body)
+        else {
             continue;
-        }
+        };
         let out = dir.join(format!(
             "{}_force_set_{k}_without_root_residuals.xml",
             setup.name
         ));
-        std::fs::write(&out, crate::tools::scene::to_xml_string(&root))
+        std::fs::write(&out, crate::tools::scene::to_xml_string(&filtered))
             .map_err(|e| Error::io(&out, e))?;
-        files.push(out.clone());
         written.push(out);
+        *doc = filtered;
     }
     let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Weak root residuals of statopt predict-grf (docs/grf_prediction.md). -->\n<OpenSimDocument Version=\"40000\">\n\t<ForceSet name=\"root_residuals\">\n\t\t<objects>\n");
     for name in &root_names {
@@ -1198,10 +1155,10 @@ fn weak_root_residuals(
     }
     xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
     let out = dir.join(format!("{}_root_residuals.xml", setup.name));
-    std::fs::write(&out, xml).map_err(|e| Error::io(&out, e))?;
-    files.push(out.clone());
+    std::fs::write(&out, &xml).map_err(|e| Error::io(&out, e))?;
+    documents.push(crate::forces::force_set_document(&xml, &out)?);
     written.push(out);
-    Ok((files, written))
+    Ok((documents, written))
 }
 
 #[cfg(test)]

@@ -131,7 +131,6 @@ pub fn run(
         ));
     }
     let mut prefixes = Vec::new();
-    let mut knee_states = None;
     let mut knee_files = Vec::new();
     let specs: Vec<RunSpec> = weights
         .iter()
@@ -153,7 +152,11 @@ pub fn run(
             }
         })
         .collect();
-    let summaries = run_sweep(
+    // The knee loads and the knee contact table take the knee angles of
+    // the frames the pass solved (the motion is read once); a resumed pass
+    // solves only its remaining frames, and they read the motion again.
+    let wants_positions = reactions.iter().any(|jr| jr.knee_loads) || !problem.knees.is_empty();
+    let (summaries, positions) = run_sweep(
         &problem,
         stream,
         setup,
@@ -162,7 +165,9 @@ pub fn run(
         &specs,
         opts,
         &format!("{}_{so_name}", setup.name),
+        wants_positions,
     )?;
+    let mut knee_states = positions;
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
         if !stopped {
@@ -172,7 +177,8 @@ pub fn run(
                     let table = dir.join(format!("{p}ReactionLoads.sto"));
                     knee_files.push(crate::tools::knee_loads::write(
                         &problem.model,
-                        states,
+                        &states.0,
+                        &states.1,
                         &table,
                         &crate::tools::knee_loads::output_path(&table),
                         &setup.setup_file,
@@ -196,7 +202,8 @@ pub fn run(
             knee_files.push(crate::tools::knee_contact::write(
                 &problem.model,
                 &problem.knees,
-                states,
+                &states.0,
+                &states.1,
                 &dir.join(format!("{p}ReactionLoads.sto")),
                 &dir.join(out),
                 &setup.setup_file,
@@ -320,23 +327,25 @@ pub fn run(
     Ok(summary)
 }
 
-/// Frames among rows `i0..=i1` (see `analyze::frame_rows`).
-/// The run's states for the knee loads and the knee contact table, read
-/// once, on the first call.
+/// The frames' times and positions (`q`) for the knee loads and the knee
+/// contact table: those the pass solved (`cache`), or, when it did not keep
+/// them all (a resumed run), the run's states read from the motion once.
+#[allow(clippy::type_complexity)]
 fn knee_states_of<'a>(
-    cache: &'a mut Option<crate::motion::states::States>,
+    cache: &'a mut Option<Positions>,
     setup: &AnalyzeSetup,
     problem: &crate::frame::problem::SoProblem,
-) -> Result<&'a crate::motion::states::States> {
+) -> Result<&'a Positions> {
     if cache.is_none() {
-        *cache = Some(crate::tools::analyze::load_states_with(
-            setup,
-            &problem.model,
-            &problem.contacts,
-        )?);
+        let states =
+            crate::tools::analyze::load_states_with(setup, &problem.model, &problem.contacts)?;
+        *cache = Some((states.time, states.q));
     }
     Ok(cache.as_ref().expect("just read"))
 }
+
+/// Frames' times and generalized coordinates, in frame order.
+type Positions = (Vec<f64>, Vec<Vec<f64>>);
 
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     if i1 < i0 {
@@ -562,7 +571,8 @@ fn run_sweep(
     runs: &[RunSpec],
     opts: &RunOptions,
     label: &str,
-) -> Result<Vec<RunSummary>> {
+    keep_positions: bool,
+) -> Result<(Vec<RunSummary>, Option<Positions>)> {
     let log_names: Vec<LogNames> = runs
         .iter()
         .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
@@ -651,107 +661,119 @@ fn run_sweep(
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
-    let (completed, writers) = std::thread::scope(|scope| -> Result<(bool, Vec<RunWriters>)> {
-        let log_names = &log_names;
-        let release = &release;
-        let writer = scope.spawn(move || -> Result<Vec<RunWriters>> {
-            for results in rx {
-                for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
-                    w.write(r, rows)?;
+    let (completed, writers) =
+        std::thread::scope(|scope| -> Result<(bool, (Vec<RunWriters>, Positions))> {
+            let log_names = &log_names;
+            let release = &release;
+            let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, Positions)> {
+                let mut positions: Positions = Default::default();
+                for results in rx {
+                    if keep_positions {
+                        if let Some((r, _)) = results.first() {
+                            positions.0.push(r.time);
+                            positions.1.push(r.q.clone());
+                        }
+                    }
+                    for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
+                        w.write(r, rows)?;
+                    }
+                    release(results);
                 }
-                release(results);
+                Ok((writers, positions))
+            });
+            let log_writer = scope.spawn(move || -> Result<RunLogs> {
+                for results in log_rx {
+                    write_logs(&mut logs, log_names, problem, &results)?;
+                    release(results);
+                }
+                Ok(logs)
+            });
+            // Frames in fixed groups (frame::driver::GROUP): the first of a
+            // group solved cold, the others warm-started from the frame before.
+            let completed = for_each_frame_grouped(
+                &mut stream,
+                i0,
+                i1,
+                step_interval,
+                || Workspace::new(&problem.model, &problem.muscles),
+                |ws, block, i, pos| {
+                    // Groups every resumed run already holds whole are not
+                    // computed again; a group the resume point falls in is solved
+                    // from its start (for the same warm starts as an
+                    // uninterrupted run), its frames written from that point on.
+                    if block.time[pos.last] <= skip_until {
+                        return Ok(None);
+                    }
+                    // (A pooled buffer is held by nobody else: `release`.)
+                    let mut shared = recycled
+                        .lock()
+                        .ok()
+                        .and_then(|mut pool| pool.pop())
+                        .unwrap_or_default();
+                    let out = std::sync::Arc::get_mut(&mut shared)
+                        .ok_or_else(|| Error::internal("a pooled frame buffer still shared"))?;
+                    frame_outputs(
+                        problem,
+                        &weights,
+                        &reactions,
+                        ws,
+                        block.time[i],
+                        &block.q[i],
+                        &block.u[i],
+                        &block.udot[i],
+                        !pos.first,
+                        out,
+                    )?;
+                    if block.time[i] <= skip_until {
+                        release(shared);
+                        return Ok(None);
+                    }
+                    Ok(Some(shared))
+                },
+                |item| {
+                    let Some(results) = item else {
+                        return Ok(());
+                    };
+                    // The writers format and write in frame order; a closed
+                    // channel means one stopped on an error, reported below.
+                    if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
+                        return Err(Error::internal("the table writer stopped"));
+                    }
+                    progress.inc(1);
+                    Ok(())
+                },
+            );
+            drop(tx);
+            drop(log_tx);
+            let written = writer
+                .join()
+                .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
+            let logged = log_writer
+                .join()
+                .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
+            // The writers' own errors say more than the loop's closed channel.
+            let (mut writers, positions) = written?;
+            // Each log back to its run, finished with its tables.
+            for (w, (log, _)) in writers.iter_mut().zip(logged?) {
+                w.log = Some(log);
             }
-            Ok(writers)
-        });
-        let log_writer = scope.spawn(move || -> Result<RunLogs> {
-            for results in log_rx {
-                write_logs(&mut logs, log_names, problem, &results)?;
-                release(results);
-            }
-            Ok(logs)
-        });
-        // Frames in fixed groups (frame::driver::GROUP): the first of a
-        // group solved cold, the others warm-started from the frame before.
-        let completed = for_each_frame_grouped(
-            &mut stream,
-            i0,
-            i1,
-            step_interval,
-            || Workspace::new(&problem.model, &problem.muscles),
-            |ws, block, i, pos| {
-                // Groups every resumed run already holds whole are not
-                // computed again; a group the resume point falls in is solved
-                // from its start (for the same warm starts as an
-                // uninterrupted run), its frames written from that point on.
-                if block.time[pos.last] <= skip_until {
-                    return Ok(None);
-                }
-                // (A pooled buffer is held by nobody else: `release`.)
-                let mut shared = recycled
-                    .lock()
-                    .ok()
-                    .and_then(|mut pool| pool.pop())
-                    .unwrap_or_default();
-                let out = std::sync::Arc::get_mut(&mut shared)
-                    .ok_or_else(|| Error::internal("a pooled frame buffer still shared"))?;
-                frame_outputs(
-                    problem,
-                    &weights,
-                    &reactions,
-                    ws,
-                    block.time[i],
-                    &block.q[i],
-                    &block.u[i],
-                    &block.udot[i],
-                    !pos.first,
-                    out,
-                )?;
-                if block.time[i] <= skip_until {
-                    release(shared);
-                    return Ok(None);
-                }
-                Ok(Some(shared))
-            },
-            |item| {
-                let Some(results) = item else {
-                    return Ok(());
-                };
-                // The writers format and write in frame order; a closed
-                // channel means one stopped on an error, reported below.
-                if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
-                    return Err(Error::internal("the table writer stopped"));
-                }
-                progress.inc(1);
-                Ok(())
-            },
-        );
-        drop(tx);
-        drop(log_tx);
-        let written = writer
-            .join()
-            .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-        let logged = log_writer
-            .join()
-            .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
-        // The writers' own errors say more than the loop's closed channel.
-        let mut writers = written?;
-        // Each log back to its run, finished with its tables.
-        for (w, (log, _)) in writers.iter_mut().zip(logged?) {
-            w.log = Some(log);
-        }
-        Ok((completed?, writers))
-    })?;
+            Ok((completed?, (writers, positions)))
+        })?;
+    let (writers, positions) = writers;
+    // Every frame's, unless a resumed run skipped those it held.
+    let positions = (keep_positions && skip_until == f64::NEG_INFINITY).then_some(positions);
     progress.finish_and_clear();
     let shared = runs.len();
     let loop_seconds = start.elapsed().as_secs_f64() / shared as f64;
-    writers
+    let summaries = writers
         .into_iter()
         .map(|w| {
             let mut s = w.finish(nframes, loop_seconds, completed, shared)?;
             s.results_dirs = vec![dir.to_path_buf()];
             Ok(s)
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    Ok((summaries, positions))
 }
 
 /// One frame's results, shared by the table writer and the log thread.

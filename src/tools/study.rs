@@ -34,32 +34,44 @@
 
 use std::path::{Path, PathBuf};
 
+use std::collections::HashMap;
+
 use crate::error::{Error, Location, Result};
 use crate::parse::setup::{resolve, Setup};
+use crate::plan::StudyPlan;
 use crate::plots::{self, Chart, Layout, Series, Style};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, inverse_dynamics, RunOptions, RunSummary};
-use crate::xml::{self, Element};
+use crate::xml::Element;
 
-/// Whether an XML file is a study document.
-pub fn is_study(path: &Path) -> bool {
-    xml::parse_file(path)
-        .map(|r| r.name == "StatoptStudy" || r.child("StatoptStudy").is_some())
-        .unwrap_or(false)
-}
+/// Where figure and metric references point when a study moves its runs'
+/// outputs (`-o DIR`): the referenced path (resolved and normalised) and
+/// where the run writes that table.
+pub type Moved = HashMap<PathBuf, PathBuf>;
 
-/// The tables figures and metrics read (paths relative to `dir`), each read
-/// once however many curves and metrics use it.
+/// The tables figures and metrics read (paths relative to `dir`, moved as
+/// `moved` says), each read once however many curves and metrics use it.
 struct Tables<'a> {
     dir: &'a Path,
-    read: std::sync::Mutex<std::collections::HashMap<PathBuf, std::sync::Arc<Storage>>>,
+    moved: &'a Moved,
+    read: std::sync::Mutex<HashMap<PathBuf, std::sync::Arc<Storage>>>,
 }
 
 impl<'a> Tables<'a> {
-    fn new(dir: &'a Path) -> Self {
+    fn new(dir: &'a Path, moved: &'a Moved) -> Self {
         Tables {
             dir,
+            moved,
             read: Default::default(),
+        }
+    }
+
+    /// Where the table a reference names is.
+    fn path(&self, file: &str) -> PathBuf {
+        let path = resolve(self.dir, file);
+        match self.moved.get(&normalise(&path)) {
+            Some(m) => m.clone(),
+            None => path,
         }
     }
 
@@ -88,7 +100,7 @@ fn table_column(
     let file = el
         .attr(file_attr)
         .ok_or_else(|| el.error(format!("missing attribute {file_attr}")))?;
-    let path = resolve(tables.dir, file);
+    let path = tables.path(file);
     let t = tables
         .read(&path)
         .map_err(|e| e.context(format!("{} ({})", el.describe(), file)))?;
@@ -295,9 +307,9 @@ fn crossing(key: &[f64], out: &[f64], f: impl Fn(usize) -> f64) -> Option<f64> {
 
 /// What the study knows of one of its setups before running it: where its
 /// tables go and which w0 runs it makes (for checking figure references).
-struct PlannedRun {
+struct PlannedRun<'a> {
     file: PathBuf,
-    setup: Setup,
+    setup: &'a Setup,
     /// The setup's own results folder, and where this run writes (moved
     /// under the study's `-o` folder when one is given).
     own_dir: PathBuf,
@@ -310,10 +322,9 @@ struct PlannedRun {
     only_file: Option<String>,
 }
 
-fn plan(p: PathBuf, moved_to: Option<&Path>, allow_unknown: bool) -> Result<PlannedRun> {
-    let setup = Setup::read_with(&p, allow_unknown)?;
+fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRun<'a> {
     let mut only_file = None;
-    let (own_dir, name, w0_tags) = match &setup {
+    let (own_dir, name, w0_tags) = match setup {
         Setup::Analyze(a) => {
             let mut tags = Vec::new();
             if let Some(so) = a.static_optimization() {
@@ -337,15 +348,15 @@ fn plan(p: PathBuf, moved_to: Option<&Path>, allow_unknown: bool) -> Result<Plan
         Some(o) => o.join(own_dir.file_name().unwrap_or(std::ffi::OsStr::new(&name))),
         None => own_dir.clone(),
     };
-    Ok(PlannedRun {
-        file: p,
+    PlannedRun {
+        file: file.to_path_buf(),
         setup,
         own_dir,
         out_dir,
         name,
         w0_tags,
         only_file,
-    })
+    }
 }
 
 /// The attributes of a Figure's or Metric's elements that name tables.
@@ -370,16 +381,19 @@ fn normalise(p: &Path) -> PathBuf {
 }
 
 /// Check every table a figure or metric names against the planned runs,
-/// before anything is computed, and point it at where the run will write
-/// it. A table in a setup's results folder must be one that setup writes
-/// (its name, a w0 it runs); any other table must exist already.
-fn check_and_move_references(
-    elements: &mut [Element],
+/// before anything is computed, and say where the run will write it. A
+/// table in a setup's results folder must be one that setup writes (its
+/// name, a w0 it runs); any other table must exist already. Returns the
+/// tables the runs must write (with the element naming each) and where
+/// references point ([`Moved`]).
+fn check_references(
+    elements: &[Element],
     dir: &Path,
     runs: &[PlannedRun],
-) -> Result<Vec<(PathBuf, Location)>> {
+) -> Result<(Vec<(PathBuf, Location)>, Moved)> {
     let mut from_runs = Vec::new();
-    let mut visit = |el: &mut Element| -> Result<()> {
+    let mut moved_refs = Moved::new();
+    let mut visit = |el: &Element| -> Result<()> {
         for attr in FILE_ATTRS {
             let Some(value) = el.attr(attr).map(str::to_string) else {
                 continue;
@@ -431,137 +445,39 @@ fn check_and_move_references(
             let moved = std::path::absolute(run.out_dir.join(file))
                 .map_err(|e| Error::io(&run.out_dir, e))?;
             from_runs.push((moved.clone(), el.loc()));
-            set_attr(el, attr, &moved.to_string_lossy());
+            moved_refs.insert(path, moved);
         }
         Ok(())
     };
-    for e in elements.iter_mut() {
+    for e in elements {
         visit(e)?;
-        for c in e.children.iter_mut() {
+        for c in &e.children {
             visit(c)?;
         }
     }
-    Ok(from_runs)
+    Ok((from_runs, moved_refs))
 }
 
-fn set_attr(el: &mut Element, name: &str, value: &str) {
-    if let Some(a) = el.attrs.iter_mut().find(|(n, _)| n == name) {
-        a.1 = value.to_string();
-    }
+/// Everything [`run`] checks before its first run (figure and metric
+/// references against the runs, metric ops).
+pub fn check(plan: &StudyPlan) -> Result<()> {
+    prepare(plan, None).map(|_| ())
 }
 
-/// The study element of a study document.
-fn study_element(root: &Element) -> Result<&Element> {
-    if root.name == "StatoptStudy" {
-        Ok(root)
-    } else {
-        root.child("StatoptStudy")
-            .ok_or_else(|| root.error("no <StatoptStudy>"))
-    }
-}
-
-fn study_dir(path: &Path) -> PathBuf {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
-}
-
-/// The setup files a study document names.
-pub fn setup_files(path: &Path) -> Result<Vec<PathBuf>> {
-    let root = xml::parse_file(path)?;
-    let study = study_element(&root)?;
-    let dir = study_dir(path);
-    Ok(study
-        .child("setups")
-        .map(|s| s.words())
-        .unwrap_or_default()
-        .iter()
-        .map(|s| resolve(&dir, s))
-        .collect())
-}
-
-/// Everything [`run`] checks before its first run; returns the setup files.
-pub fn check(path: &Path, allow_unknown: bool) -> Result<Vec<PathBuf>> {
-    let root = xml::parse_file(path)?;
-    let study = study_element(&root)?;
-    let dir = study_dir(path);
-    let (runs, _, _, _) = prepare(study, &dir, None, allow_unknown)?;
-    Ok(runs.into_iter().map(|r| r.file).collect())
-}
-
-/// The study's own `<results_directory>` (its figures and metrics), if a
-/// run could not write there.
-pub fn check_results_directory(path: &Path) -> Result<()> {
-    let root = xml::parse_file(path)?;
-    let study = study_element(&root)?;
-    let dir = study_dir(path);
-    let out = resolve(&dir, study.child_text("results_directory").unwrap_or("."));
-    match crate::parse::setup::results_dir_problem(&out) {
-        Some(p) => Err(study
-            .child("results_directory")
-            .unwrap_or(study)
-            .error(format!(
-                "<results_directory> names {}, which {p}",
-                out.display()
-            ))),
-        None => Ok(()),
-    }
-}
-
-/// The elements of a study document neither statopt nor OpenSim knows
-/// (see `parse::known::study_elements`), one error each.
-pub fn unknown_elements(path: &Path) -> Result<Vec<Error>> {
-    let root = xml::parse_file(path)?;
-    Ok(crate::parse::known::study_elements(study_element(&root)?))
-}
-
-/// Plan the runs, check every reference and metric, and point figure
-/// references at where the runs will write.
-/// Also returns warnings: unknown elements read on (`allow_unknown`).
+/// Plan the runs, check every reference and metric, and say where figure
+/// references point once the runs have written.
 #[allow(clippy::type_complexity)]
-fn prepare(
-    study: &Element,
-    dir: &Path,
+fn prepare<'a>(
+    study: &'a StudyPlan,
     moved_to: Option<&Path>,
-    allow_unknown: bool,
-) -> Result<(
-    Vec<PlannedRun>,
-    Vec<Element>,
-    Vec<(PathBuf, Location)>,
-    Vec<String>,
-)> {
-    let unknown = crate::parse::known::study_elements(study);
-    let mut warnings = Vec::new();
-    if let Some(first) = unknown.into_iter().next() {
-        if !allow_unknown {
-            return Err(first);
-        }
-        warnings.push(format!("{first} (read on: --allow-unknown)"));
-    }
-    let setups = study.child("setups").map(|s| s.words()).unwrap_or_default();
-    let sweeps: Vec<&Element> = study
-        .children
+) -> Result<(Vec<PlannedRun<'a>>, Vec<(PathBuf, Location)>, Moved)> {
+    let runs: Vec<PlannedRun> = study
+        .runs
         .iter()
-        .filter(|c| c.name == "ForceSweep")
+        .map(|r| plan(&r.file, &r.setup, moved_to))
         .collect();
-    if setups.is_empty() && sweeps.is_empty() {
-        return Err(study.error("the study names no <setups> (and has no <ForceSweep>)"));
-    }
-    for sw in &sweeps {
-        crate::tools::force_sweep::read_element(sw, dir)?;
-    }
-    let runs: Vec<PlannedRun> = setups
-        .iter()
-        .map(|s| plan(resolve(dir, s), moved_to, allow_unknown))
-        .collect::<Result<_>>()?;
-    let mut elements: Vec<Element> = study
-        .children
-        .iter()
-        .filter(|c| c.name == "Figure" || c.name == "Metric")
-        .cloned()
-        .collect();
-    let expected = check_and_move_references(&mut elements, dir, &runs)?;
+    let elements = &study.figures;
+    let (expected, moved) = check_references(elements, &study.dir, &runs)?;
     for m in elements.iter().filter(|e| e.name == "Metric") {
         let op = m.attr("op").unwrap_or("max");
         if !METRIC_OPS.contains(&op) {
@@ -580,14 +496,14 @@ fn prepare(
             return Err(m.error("op 'at' needs a numeric value attribute"));
         }
     }
-    Ok((runs, elements, expected, warnings))
+    Ok((runs, expected, moved))
 }
 
 /// Run a study document. Everything it names is checked before the first
 /// run starts; its figures and metrics draw only tables its own runs wrote;
 /// with `-o DIR` every output goes under DIR (each setup's tables in
 /// DIR/<its results folder's name>).
-pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run(plan: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // `--threads N` bounds the whole study: one pool of N threads runs the
     // setups side by side and, nested in it, each setup's frames and the
     // figures (the setups' own runs then use that pool instead of each
@@ -602,31 +518,27 @@ pub fn run(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
                 threads: None,
                 ..opts.clone()
             };
-            pool.install(|| run_study(path, &inner))
+            pool.install(|| run_study(plan, &inner))
         }
-        None => run_study(path, opts),
+        None => run_study(plan, opts),
     }
 }
 
-fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
-    let root = xml::parse_file(path)?;
-    let study = study_element(&root)?;
-    let dir = study_dir(path);
-    let (runs, elements, expected, warnings) =
-        prepare(study, &dir, opts.results_dir.as_deref(), opts.allow_unknown)?;
+fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
+    let (runs, expected, moved) = prepare(study, opts.results_dir.as_deref())?;
     let out = opts
         .results_dir
         .clone()
-        .unwrap_or_else(|| resolve(&dir, study.child_text("results_directory").unwrap_or(".")));
+        .unwrap_or_else(|| study.results_directory.clone());
     crate::parse::setup::create_results_dir(
         &out,
-        &study.child("results_directory").unwrap_or(study).loc(),
+        &study.results_directory_loc,
         opts.results_dir.is_some(),
     )?;
     // Every setup's results folder before the first run writes anything.
     for r in &runs {
         if let Some(p) = crate::parse::setup::results_dir_problem(&r.out_dir) {
-            let loc = match &r.setup {
+            let loc = match r.setup {
                 Setup::Analyze(a) => a.results_directory_loc.clone(),
                 Setup::InverseDynamics(i) => i.results_directory_loc.clone(),
             };
@@ -652,14 +564,14 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
                 results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
                 ..opts.clone()
             };
-            match &r.setup {
+            match r.setup {
                 Setup::Analyze(a) => analyze::run(a, &run_opts),
                 Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts),
             }
         })
         .collect();
     let mut summary = RunSummary {
-        warnings,
+        warnings: study.warnings.clone(),
         ..Default::default()
     };
     for (r, done) in runs.iter().zip(done) {
@@ -685,32 +597,35 @@ fn run_study(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
     }
     // Force sweeps: candidates of one setup on one compiled scene, their
     // metrics in <name>_force_sweep.csv (tools::force_sweep).
-    for sw in study.children.iter().filter(|c| c.name == "ForceSweep") {
-        summary.files.extend(crate::tools::force_sweep::run_element(
-            sw, &dir, &out, opts,
-        )?);
+    for sw in &study.sweeps {
+        summary
+            .files
+            .extend(crate::tools::force_sweep::run_plan(sw, &out, opts)?);
     }
-    summary.files.extend(draw(
-        &elements,
-        &dir,
-        &out,
-        study.attr("name").unwrap_or("study"),
-    )?);
+    summary
+        .files
+        .extend(draw(&study.figures, &study.dir, &out, &study.name, &moved)?);
     if !summary.results_dirs.contains(&out) {
         summary.results_dirs.push(out);
     }
     Ok(summary)
 }
 
-/// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`)
-/// into `out`; metrics go to `<name>_metrics.csv`.
-pub fn draw(elements: &[Element], dir: &Path, out: &Path, name: &str) -> Result<Vec<PathBuf>> {
+/// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`,
+/// moved as `moved` says) into `out`; metrics go to `<name>_metrics.csv`.
+pub fn draw(
+    elements: &[Element],
+    dir: &Path,
+    out: &Path,
+    name: &str,
+    moved: &Moved,
+) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     // Figures and metrics are independent: drawn and computed in parallel,
     // listed in the study's order.
     use rayon::prelude::*;
-    let tables = Tables::new(dir);
+    let tables = Tables::new(dir, moved);
     let figures: Vec<Vec<PathBuf>> = elements
         .par_iter()
         .filter(|e| e.name == "Figure")

@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""Where predict-grf's errors come from, per development trial (issue 27;
+docs/grf_prediction.md, "Diagnosis"). Reads the outputs that
+scripts/grf_dev_table.py left in --out (default /tmp/grf_dev_table) and the
+measured plates named by each setup in --setups. Needs numpy.
+
+Per trial:
+- kinematics: the force the filtered motion requires of the world on the
+  pelvis translations (`pelvis_tx/ty_required` of
+  GeneralizedForcesBySource: m a_COM, plus m g vertically) against the sum of
+  the plates, rho and RMSE (% BW). No contact model can do better than this
+  on the sum of the feet; in single support (running) the sum is the foot;
+- the same with the requirement set to zero where the plates measure
+  nothing (flight): what feet that carry exactly what the motion requires
+  whenever one is down would score;
+- the prediction's sum of the feet against the plates' sum, and the mean
+  over the feet (the bar's figure): the gap between the sum and the feet is
+  the split between the feet (double support);
+- frames with a root residual above 25 % BW: in flight (plates < 20 N),
+  within 30 ms of a measured touchdown or toe-off, or in mid-stance; and
+  among the on-floor ones, those where a foot point is within the contact
+  band (w(d) >= 0.5) but its slip speed gate (speed_weight) is below 0.5;
+- friction: the share of stance frames (plates' Fy > 10 % BW) where the
+  plates' |shear| / Fy exceeds the contacts' static coefficient 0.35.
+"""
+import argparse, os, re, sys
+import numpy as np
+
+D_TOL, D_TRANS, SW = 0.005, 0.03, (0.3, 1.2)
+
+
+def read(p):
+    L = open(p).read().splitlines()
+    i = [k for k, l in enumerate(L) if l.strip().lower() == "endheader"][0]
+    lab = [c.strip() for c in L[i + 1].split("\t")]
+    a = np.array([list(map(float, l.split())) for l in L[i + 2:] if l.strip()])
+    return lab, a
+
+
+def tag(xml, t):
+    m = re.search(rf"<{t}>\s*([^<]*?)\s*</{t}>", xml)
+    return m.group(1) if m else None
+
+
+def rho_rmse(a, b, bw):
+    return np.corrcoef(a, b)[0, 1], 100 * np.sqrt(np.mean((a - b) ** 2)) / bw
+
+
+def wd(d):
+    w = 0.5 * (1 + np.tanh(-np.pi * (2 * (d - D_TOL) - D_TRANS) / D_TRANS))
+    return np.where(d > D_TOL + D_TRANS, 0.0, w)
+
+
+def gate(s):
+    x = np.clip((s - SW[0]) / (SW[1] - SW[0]), 0, 1)
+    return 1 - x * x * (3 - 2 * x)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", default="/tmp/grf_dev_table")
+    ap.add_argument("--setups", default="target/grf_dev_setups")
+    ap.add_argument("--only", default="")
+    a = ap.parse_args()
+    if not os.path.isdir(a.setups):
+        print(f"SKIP: {a.setups} is absent (run scripts/grf_dev_setups.py)")
+        return 0
+    print("| trial | required vs plates: vertical rho / RMSE, AP rho / RMSE | required, zero in flight | feet summed: vertical, AP | per foot (mean): vertical, AP | root > 25 % BW: flight / touchdown / toe-off / mid-stance (in band but speed-gated) | stance frames with plates' shear/Fy > 0.35 |")
+    print("|---|---|---|---|---|---|---|")
+    for f in sorted(os.listdir(a.setups)):
+        if not f.endswith(".xml") or (a.only and a.only not in f):
+            continue
+        name = f[:-4]
+        out = os.path.join(a.out, name)
+        gen = os.path.join(out, f"{name}_StaticOptimization_GeneralizedForcesBySource.sto")
+        if not os.path.isfile(gen):
+            continue
+        setup = open(os.path.join(a.setups, f)).read()
+        model = open(tag(setup, "model_file")).read()
+        bw = sum(float(x) for x in re.findall(r"<mass>([^<]+)</mass>", model)) * 9.80665
+        loads_xml = tag(setup, "external_loads_file")
+        lx = open(loads_xml).read()
+        mot = os.path.join(os.path.dirname(loads_xml), tag(lx, "datafile"))
+        ids = re.findall(r"<force_identifier>\s*([^<]*?)\s*</force_identifier>", lx)
+        bodies = re.findall(r"<applied_to_body>\s*([^<]*?)\s*</applied_to_body>", lx)
+        gl, g = read(mot)
+        gl_, gen_ = read(gen)
+        t = gen_[:, 0]
+        meas = {}
+        for ax in "xy":
+            meas[ax] = sum(np.interp(t, g[:, 0], g[:, gl.index(i + ax)]) for i in ids)
+        feet_meas = {}
+        for i, b in zip(ids, bodies):
+            s = b[-1]
+            for ax in "xy":
+                feet_meas[(s, ax)] = feet_meas.get((s, ax), 0) + np.interp(t, g[:, 0], g[:, gl.index(i + ax)])
+        req = {"x": gen_[:, gl_.index("pelvis_tx_required")], "y": gen_[:, gl_.index("pelvis_ty_required")]}
+        pl, p = read(os.path.join(out, f"{name}_predicted_grf.sto"))
+        pred = {ax: p[:, pl.index(f"r_force_v{ax}")] + p[:, pl.index(f"l_force_v{ax}")] for ax in "xy"}
+        cells = []
+        cells.append(" , ".join("%.3f / %.1f" % rho_rmse(req[ax], meas[ax], bw) for ax in "yx"))
+        # The same, but zero where the plates measure nothing (flight): what
+        # feet that carry exactly the required force whenever one is down
+        # would give.
+        down = meas["y"] > 20
+        cells.append(" , ".join("%.3f / %.1f" % rho_rmse(np.where(down, req[ax], 0), meas[ax], bw) for ax in "yx"))
+        cells.append(" , ".join("%.3f / %.1f" % rho_rmse(pred[ax], meas[ax], bw) for ax in "yx"))
+        per = []
+        for ax in "yx":
+            v = [rho_rmse(p[:, pl.index(f"{s}_force_v{ax}")], feet_meas[(s, ax)], bw) for s in "rl"]
+            per.append("%.3f / %.1f" % (np.mean([x[0] for x in v]), np.mean([x[1] for x in v])))
+        cells.append(" , ".join(per))
+        # Root residual frames over 25 % BW, classified.
+        rl, rr = read(os.path.join(out, f"{name}_root_residual.sto"))
+        over = rr[:, 2] > 25.0
+        cl, c = read(os.path.join(out, f"{name}_StaticOptimization_ContactForces.sto"))
+        kinds = {"flight": 0, "touchdown": 0, "toe-off": 0, "mid": 0, "gated": 0}
+        for k in np.flatnonzero(over):
+            tk = t[k]
+            if meas["y"][k] < 20:
+                kinds["flight"] += 1
+                continue
+            near = None
+            for s in "rl":
+                fy = np.interp(g[:, 0], g[:, 0], sum(g[:, gl.index(i + "y")] for i, b in zip(ids, bodies) if b[-1] == s))
+                on = fy > 20
+                e = np.flatnonzero(np.diff(on.astype(int)))
+                for j in e:
+                    te = g[j + 1, 0]
+                    if abs(te - tk) <= 0.03:
+                        near = "touchdown" if not on[j] else "toe-off"
+            kinds[near or "mid"] += 1
+            pts = [x[:-len("_distance")] for x in cl if x.endswith("_distance")]
+            gated = any(wd(c[k, cl.index(q + "_distance")]) >= 0.5 and gate(c[k, cl.index(q + "_slip_speed")]) < 0.5 for q in pts)
+            kinds["gated"] += gated
+        cells.append(f"{kinds['flight']} / {kinds['touchdown']} / {kinds['toe-off']} / {kinds['mid']} ({kinds['gated']})")
+        st = meas["y"] > 0.1 * bw
+        ratio = np.abs(meas["x"][st]) / meas["y"][st]
+        cells.append("%.0f %% (max %.2f)" % (100 * np.mean(ratio > 0.35), ratio.max()))
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
