@@ -107,6 +107,22 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()).max(1.0)
 }
 
+/// A candidate's own run: the setup text run into `out`, written at 20
+/// digits so that the comparisons see the solver's answers, not rounding.
+fn own_run(setup: &Path, text: &str, out: &Path) -> statopt::tools::RunSummary {
+    tools::run_setup_text(
+        setup,
+        text,
+        &RunOptions {
+            results_dir: Some(out.to_path_buf()),
+            precision: Some(20),
+            threads: Some(2),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
 #[test]
 fn candidates_equal_their_own_runs() {
     let dir = tmp("equal");
@@ -187,17 +203,7 @@ fn candidates_equal_their_own_runs() {
         let machine = machine_with(expr, &d);
         let text = setup_text(Some(w0), reserve, Some(&machine));
         let out = d.join("out");
-        let summary = tools::run_setup_text(
-            &root().join(SETUP),
-            &text,
-            &RunOptions {
-                results_dir: Some(out.clone()),
-                precision: Some(20),
-                threads: Some(2),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let summary = own_run(&root().join(SETUP), &text, &out);
         assert_eq!(summary.failed, warm.failed[k], "case {k}");
         let own = metrics_of_run(&text, &out);
         for (m, (name, v)) in own.iter().enumerate() {
@@ -395,17 +401,7 @@ fn knee_contact_candidates_equal_their_own_runs() {
         std::fs::create_dir_all(&d).unwrap();
         let text = kc_setup_text(w0, &machine_with(expr, &d));
         let out = d.join("out");
-        let summary = tools::run_setup_text(
-            &setup,
-            &text,
-            &RunOptions {
-                results_dir: Some(out.clone()),
-                precision: Some(20),
-                threads: Some(2),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let summary = own_run(&setup, &text, &out);
         assert_eq!(summary.failed, sweep.failed[k], "case {k}");
         // SO (7 with contacts, the contact loads' .mot and .xml), JR and
         // KneeContact reactions, KneeLoads, KneeContact.
@@ -553,17 +549,7 @@ fn external_load_scales_equal_runs_of_scaled_data() {
             std::fs::create_dir_all(&d).unwrap();
             let text = setup_text(&scaled_loads(&d, plates, s), knee_contact);
             let out = d.join("out");
-            let summary = tools::run_setup_text(
-                &setup,
-                &text,
-                &RunOptions {
-                    results_dir: Some(out.clone()),
-                    precision: Some(20),
-                    threads: Some(2),
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let summary = own_run(&setup, &text, &out);
             assert_eq!(summary.failed, sweep.failed[k], "case {k}");
             let own = metrics_of_run_at(&setup, &text, &out);
             assert_eq!(own.len(), if knee_contact { 5 } else { 3 });
