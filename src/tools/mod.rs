@@ -259,7 +259,8 @@ impl RunSummary {
         out.push(first);
         if let Some((v, at)) = &self.reserve_peak {
             out.push(format!(
-                "reserve actuators carried at most {v:.6} (N or N m), {at}"
+                "reserve actuators carried at most {} (N or N m), {at}",
+                amount(*v)
             ));
         }
         if let Some((v, at)) = &self.root_force_peak {
@@ -268,12 +269,14 @@ impl RunSummary {
                 _ => String::new(),
             };
             out.push(format!(
-                "residual actuators on the root joint carried at most {v:.3} N{share}, {at}"
+                "residual actuators on the root joint carried at most {} N{share}, {at}",
+                amount(*v)
             ));
         }
         if let Some((v, at)) = &self.root_moment_peak {
             out.push(format!(
-                "residual actuators on the root joint carried at most {v:.3} N m, {at}"
+                "residual actuators on the root joint carried at most {} N m, {at}",
+                amount(*v)
             ));
         }
         if !self.unused_properties.is_empty() {
@@ -309,5 +312,38 @@ impl RunSummary {
                 self.first_failure.as_deref().unwrap_or("?")
             )
         })
+    }
+}
+
+/// A force or moment in a summary line: three decimals (millinewtons), or
+/// four significant digits below that, so that neither 165.510778 nor 0.000
+/// is printed.
+fn amount(v: f64) -> String {
+    if v == 0.0 || v.abs() >= 1e-3 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+#[cfg(test)]
+mod summary_tests {
+    use super::*;
+
+    /// The summary's peaks print as amounts, not float noise: the reserve
+    /// peak read "165.510778" beside "165.511 N" for the same force.
+    #[test]
+    fn peaks_print_three_decimals_or_significant_digits() {
+        let s = RunSummary {
+            reserve_peak: Some((165.510778, "pelvis_ty_reserve at t=2.93".into())),
+            root_force_peak: Some((3.2e-8, "pelvis_ty at t=0.5".into())),
+            ..Default::default()
+        };
+        let r = s.report();
+        assert!(
+            r.iter().any(|l| l.contains("at most 165.511 (N or N m)")),
+            "{r:?}"
+        );
+        assert!(r.iter().any(|l| l.contains("at most 3.200e-8 N")), "{r:?}");
     }
 }
