@@ -5,8 +5,11 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    // storage::read takes a path: one file per fuzzing process.
-    let path = std::env::temp_dir().join(format!("statopt_fuzz_{}.mot", std::process::id()));
+    // storage::read takes a path: one file per fuzzing process, in the fuzz
+    // crate's own target/ (ignored by git), removed after each input.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("statopt_fuzz_{}.mot", std::process::id()));
     std::fs::write(&path, data).unwrap();
     match statopt::storage::read(&path) {
         Ok(st) => {
@@ -31,4 +34,5 @@ fuzz_target!(|data: &[u8]| {
             }
         }
     }
+    let _ = std::fs::remove_file(&path);
 });
