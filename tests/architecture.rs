@@ -242,7 +242,9 @@ fn tests_take_scratch_folders_that_clean_up() {
     rust_files(&root.join("src"), &mut files);
     rust_files(&root.join("tests"), &mut files);
     rust_files(&root.join("fuzz/fuzz_targets"), &mut files);
-    assert!(files.iter().any(|f| f.ends_with("fuzz_targets/storage_reader.rs")));
+    assert!(files
+        .iter()
+        .any(|f| f.ends_with("fuzz_targets/storage_reader.rs")));
     let allowed = ["src/test_dir.rs", "src/tools/bench.rs"];
     let offenders: Vec<String> = files
         .iter()
