@@ -200,15 +200,13 @@ impl SoProblem {
                 force_labels.extend(ef.labels.iter().cloned());
             }
         }
-        let mut knees = crate::frame::knee_contact::select(&model, &so.knee_contact)
-            .map_err(|e| Error::msg(format!("{}: {e}", setup.setup_file.display())))?;
-        let bw = model.total_mass() * model.gravity.norm();
-        for k in knees.iter_mut() {
-            k.frontal = so.knee_contact_frontal;
-            // One axial contact carries the whole knee: twice a compartment.
-            let n = if k.frontal { 1.0 } else { 2.0 };
-            k.capacity = n * so.knee_contact_capacity_bw * bw;
-        }
+        let knees = crate::frame::knee_contact::select(
+            &model,
+            &so.knee_contact,
+            so.knee_contact_frontal,
+            so.knee_contact_capacity_bw,
+        )
+        .map_err(|e| Error::msg(format!("{}: {e}", setup.setup_file.display())))?;
         if !knees.is_empty() && so.constraint_matrix == ConstraintMatrixKind::Perturbation {
             return Err(Error::msg(format!(
                 "{}: knee_contact needs <constraint_matrix>analytic</constraint_matrix> (its rows are the knee reaction at the target accelerations)",

@@ -79,10 +79,18 @@ pub struct Knee {
     pub capacity: f64,
 }
 
-/// The knees `sel` names, or an error naming what is wrong.
-pub fn select(model: &Model, sel: &KneeSelection) -> Result<Vec<Knee>> {
+/// The knees `sel` names, or an error naming what is wrong. `frontal`: two
+/// compartments (the method) or one axial contact per knee; `capacity_bw`:
+/// a compartment's capacity in body weights (the axial contact, carrying
+/// the whole knee, gets twice that).
+pub fn select(
+    model: &Model,
+    sel: &KneeSelection,
+    frontal: bool,
+    capacity_bw: f64,
+) -> Result<Vec<Knee>> {
     let bw = model.total_mass() * model.gravity.norm();
-    let capacity = DEFAULT_KNEE_CAPACITY_BW * bw;
+    let capacity = if frontal { 1.0 } else { 2.0 } * capacity_bw * bw;
     let tibias: Vec<usize> = match sel {
         KneeSelection::Off => return Ok(Vec::new()),
         KneeSelection::All => {
@@ -139,7 +147,7 @@ pub fn select(model: &Model, sel: &KneeSelection) -> Result<Vec<Knee>> {
                 femur,
                 distal,
                 z: [side * h, -side * h],
-                frontal: true,
+                frontal,
                 capacity,
             })
         })
