@@ -6,9 +6,11 @@
 //! row, so that an interrupted run leaves a valid file.
 
 mod read;
+mod source;
 mod write;
 
-pub use read::{open_rows, read, RowMark, RowReader};
+pub use read::{open_rows, open_rows_in, read, read_file, RowMark, RowReader};
+pub use source::{times_opened, TableFile, IN_MEMORY_LIMIT};
 /// A frame time as a message says it: rounded to the nanosecond with
 /// trailing zeros dropped, so that a time computed on the motion's grid
 /// (`0.5833328799999886`) reads as the motion's own row time

@@ -1,5 +1,6 @@
 //! Reading `.sto` / `.mot` files (semantics §1.2–1.4).
 
+use super::source::TableFile;
 use super::Storage;
 use crate::error::{Error, Location, Result};
 use std::path::Path;
@@ -22,13 +23,27 @@ use std::path::Path;
 /// strictly increase. Each violation is an [`Error::Input`] naming the file,
 /// the line and (where there is one) the column.
 pub fn read(path: &Path) -> Result<Storage> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
+    let bytes = super::source::read_bytes(path)?;
+    read_text(path, &bytes)
+}
+
+/// [`read`] on a [`TableFile`]: from its bytes when they are in memory,
+/// else from the disk.
+pub fn read_file(file: &TableFile) -> Result<Storage> {
+    match file.bytes() {
+        Some(bytes) => read_text(file.path(), bytes),
+        None => read(file.path()),
+    }
+}
+
+/// [`read`] on the bytes of the file `path`.
+fn read_text(path: &Path, bytes: &[u8]) -> Result<Storage> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
         Error::input(
             Location::file(path),
             format!(
                 "file is not valid UTF-8 text (byte offset {})",
-                e.utf8_error().valid_up_to()
+                e.valid_up_to()
             ),
         )
     })?;
@@ -690,10 +705,14 @@ pub struct RowMark {
 
 /// Lines of a file with their byte offsets (trailing CR removed).
 struct LineSource {
-    reader: std::io::BufReader<std::fs::File>,
+    reader: Box<dyn BufReadSeek>,
     offset: u64,
     buf: Vec<u8>,
 }
+
+/// What a [`LineSource`] reads from: a file (buffered) or bytes in memory.
+trait BufReadSeek: std::io::BufRead + std::io::Seek + Send + Sync {}
+impl<T: std::io::BufRead + std::io::Seek + Send + Sync> BufReadSeek for T {}
 
 impl LineSource {
     /// The next line (in a buffer reused from line to line); an error of
@@ -741,9 +760,19 @@ enum RowFormat {
 
 /// Open `path` for [`RowReader::next_row`].
 pub fn open_rows(path: &Path) -> Result<RowReader> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    open_rows_in(&TableFile::on_disk(path))
+}
+
+/// [`open_rows`] on a [`TableFile`]: its bytes in memory when it holds
+/// them (the file is not opened again), else the file on disk.
+pub fn open_rows_in(file: &TableFile) -> Result<RowReader> {
+    let path = file.path();
+    let reader: Box<dyn BufReadSeek> = match file.bytes() {
+        Some(bytes) => Box::new(std::io::Cursor::new(bytes.clone())),
+        None => Box::new(std::io::BufReader::new(super::source::open_file(path)?)),
+    };
     let mut lines = LineSource {
-        reader: std::io::BufReader::new(file),
+        reader,
         offset: 0,
         buf: Vec::new(),
     };

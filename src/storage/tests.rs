@@ -526,3 +526,83 @@ fn frame_times_print_without_float_noise() {
     assert_eq!(fmt_time(-0.0000000001), "0");
     assert_eq!(fmt_time(-0.25), "-0.25");
 }
+
+/// A [`TableFile`] read once into memory is one opening of the file; its
+/// readers (whole and row by row, with seeks) then give what reading the
+/// file gives, errors included, and do not open the file again. Above the
+/// size limit it stays on the disk and each reader opens the file.
+#[test]
+fn table_file_in_memory_reads_as_the_file() {
+    let tmp = crate::test_dir::TempDir::new("statopt-tablefile");
+    let dir = tmp.path().to_path_buf();
+    let good = dir.join("good.mot");
+    std::fs::write(
+        &good,
+        "m\nversion=1\nnRows=4\nnColumns=3\ninDegrees=yes\nendheader\ntime\ta\tb\n\
+         0\t1\t2\n0.1\t3\t4\n0.2\t5\t6.5\n0.3\t7\t8\n",
+    )
+    .unwrap();
+    let file = TableFile::read(&good).unwrap();
+    assert!(file.in_memory());
+    assert_eq!(times_opened(&good), 1);
+    let whole = read(&good).unwrap();
+    assert_eq!(times_opened(&good), 2);
+    assert_eq!(read_file(&file).unwrap(), whole);
+    let mut r = open_rows_in(&file).unwrap();
+    let mut row = Vec::new();
+    let mut marks = Vec::new();
+    let mut i = 0;
+    loop {
+        marks.push(r.mark());
+        let Some(t) = r.next_row(&mut row).unwrap() else {
+            break;
+        };
+        assert_eq!((t, &row), (whole.time[i], &whole.rows[i]));
+        i += 1;
+    }
+    assert_eq!(i, 4);
+    r.seek(&marks[2]).unwrap();
+    assert_eq!(r.next_row(&mut row).unwrap(), Some(0.2));
+    assert_eq!(row, whole.rows[2]);
+    assert_eq!(
+        times_opened(&good),
+        2,
+        "the bytes in memory are not the file"
+    );
+
+    let bad = dir.join("bad.sto");
+    std::fs::write(
+        &bad,
+        "x\nversion=1\nnRows=2\nnColumns=2\nendheader\ntime a\n0 1\n1 zz\n",
+    )
+    .unwrap();
+    let want = read(&bad).unwrap_err().to_string();
+    let file = TableFile::read(&bad).unwrap();
+    assert_eq!(read_file(&file).unwrap_err().to_string(), want);
+    let mut r = open_rows_in(&file).unwrap();
+    let got = loop {
+        match r.next_row(&mut row) {
+            Ok(Some(_)) => continue,
+            Ok(None) => panic!("no error"),
+            Err(e) => break e.to_string(),
+        }
+    };
+    assert_eq!(got, want);
+    assert!(
+        want.contains("bad.sto") && want.contains("line 8"),
+        "{want}"
+    );
+
+    let big = TableFile::read_up_to(&good, 10).unwrap();
+    assert!(!big.in_memory());
+    let before = times_opened(&good);
+    assert_eq!(read_file(&big).unwrap(), whole);
+    open_rows_in(&big).unwrap();
+    assert_eq!(times_opened(&good), before + 2);
+
+    let missing = dir.join("missing.mot");
+    assert_eq!(
+        TableFile::read(&missing).unwrap_err().to_string(),
+        read(&missing).unwrap_err().to_string()
+    );
+}

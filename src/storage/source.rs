@@ -1,0 +1,121 @@
+//! Where a table's bytes come from: its file on disk, or the file's bytes
+//! read once into memory ([`TableFile`]).
+//!
+//! A run reads its coordinates file once ([`TableFile::read`]) and hands the
+//! value to every reader of the motion (the states stream and its passes,
+//! the `<reduce_model>` scan, predict-grf's feet, the in-memory fallbacks).
+//! Each reader parses those bytes with the same code as a file
+//! ([`super::read_file`], [`super::open_rows_in`]), so results are those of
+//! reading the file, bit for bit, and messages name the file and line as
+//! they do.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Error, Result};
+
+/// Largest file [`TableFile::read`] holds in memory: 256 MiB. A motion is
+/// about 16 bytes per value, so this is some 400,000 rows of 40 columns,
+/// longer than any recorded trial (10 minutes at 200 Hz is 120,000 rows).
+/// Holding it adds the file's size to the run's memory and saves reading
+/// and decoding it from disk again for each reader. A larger file (the
+/// 1,000,000-frame stress motions) is read from the disk by every pass, as
+/// [`crate::motion::stream`] is designed to, so that memory stays bounded
+/// whatever the length of the motion; the operating system's page cache
+/// serves the repeated passes.
+pub const IN_MEMORY_LIMIT: u64 = 256 << 20;
+
+/// A table file: its path and, when it was read into memory, its bytes.
+/// Cloning shares the bytes.
+#[derive(Clone)]
+pub struct TableFile {
+    path: PathBuf,
+    bytes: Option<Arc<[u8]>>,
+}
+
+impl std::fmt::Debug for TableFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TableFile")
+            .field("path", &self.path)
+            .field("in_memory_bytes", &self.bytes.as_ref().map(|b| b.len()))
+            .finish()
+    }
+}
+
+impl TableFile {
+    /// Read `path` into memory, once (the one disk read of the file for
+    /// every reader given this value), unless it is larger than
+    /// [`IN_MEMORY_LIMIT`]: then the readers read the file from the disk.
+    pub fn read(path: &Path) -> Result<TableFile> {
+        Self::read_up_to(path, IN_MEMORY_LIMIT)
+    }
+
+    /// [`read`](Self::read) with the size limit `limit` (bytes).
+    pub fn read_up_to(path: &Path, limit: u64) -> Result<TableFile> {
+        let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+        if meta.is_file() && meta.len() > limit {
+            return Ok(Self::on_disk(path));
+        }
+        let bytes = read_bytes(path)?;
+        Ok(TableFile {
+            path: path.to_path_buf(),
+            bytes: Some(bytes.into()),
+        })
+    }
+
+    /// The file `path`, read from the disk by each reader.
+    pub fn on_disk(path: &Path) -> TableFile {
+        TableFile {
+            path: path.to_path_buf(),
+            bytes: None,
+        }
+    }
+
+    /// The file's path (what messages name).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether the bytes are held in memory.
+    pub fn in_memory(&self) -> bool {
+        self.bytes.is_some()
+    }
+
+    /// The bytes, when held in memory.
+    pub(super) fn bytes(&self) -> Option<&Arc<[u8]>> {
+        self.bytes.as_ref()
+    }
+}
+
+/// How many times each path was opened for reading by this module's readers
+/// ([`super::read`], [`super::open_rows`], [`TableFile::read`], ...), so that
+/// tests can check that a run reads its motion once.
+static OPENED: Mutex<Option<HashMap<PathBuf, usize>>> = Mutex::new(None);
+
+/// Count one opening of `path`.
+pub(super) fn count_open(path: &Path) {
+    let mut m = OPENED.lock().unwrap_or_else(|e| e.into_inner());
+    *m.get_or_insert_with(HashMap::new)
+        .entry(path.to_path_buf())
+        .or_insert(0) += 1;
+}
+
+/// How many times the table readers opened the file `path` (as spelled by
+/// the caller that opened it) since the process started.
+pub fn times_opened(path: &Path) -> usize {
+    let m = OPENED.lock().unwrap_or_else(|e| e.into_inner());
+    m.as_ref().and_then(|m| m.get(path)).copied().unwrap_or(0)
+}
+
+/// The whole file, counted as one opening.
+pub(super) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    count_open(path);
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The file opened for reading, counted as one opening.
+pub(super) fn open_file(path: &Path) -> Result<std::fs::File> {
+    count_open(path);
+    std::fs::File::open(path).map_err(|e| Error::io(path, e))
+}
