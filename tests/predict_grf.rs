@@ -368,6 +368,40 @@ fn the_prediction_plan_is_built_in_memory() {
     );
 }
 
+/// predict-grf reads the motion once: its feet (`feet::build`) and its
+/// static optimization read the same bytes (the file was opened by the feet's
+/// states, then by every pass of the run's stream).
+#[test]
+fn the_prediction_opens_the_motion_once() {
+    let Some(root) = common::validation_dir("predict_grf motion read once") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("predict_grf_motion_read_once");
+    let given = setup.coordinates_file.clone().unwrap();
+    let motion = out.join(given.file_name().unwrap());
+    std::fs::copy(&given, &motion).unwrap();
+    setup.coordinates_file = Some(motion.clone());
+    setup.final_time = setup.initial_time + 0.1;
+    let opts = RunOptions {
+        results_dir: Some(out.join("results")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    assert!(p.summary.frames > 0);
+    assert_eq!(
+        statopt::storage::times_opened(&motion),
+        1,
+        "openings of {}",
+        motion.display()
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 /// predict-grf reads its setup as a run does: an element neither OpenSim
 /// nor statopt knows is an error naming the nearest name, and
 /// `allow_unknown` (`predict-grf --allow-unknown`) reads on with a warning

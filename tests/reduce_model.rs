@@ -422,3 +422,25 @@ fn bad_reduce_model_value_is_a_located_error() {
     assert!(e.contains("line 6"), "{e}");
     assert!(e.contains("maybe"), "{e}");
 }
+
+/// The `<reduce_model>` scan of the motion and the static optimization after
+/// it read the motion the run read once: the coordinates file is opened
+/// once (the scan opened it, then the static optimization's stream again).
+#[test]
+fn a_reduced_run_opens_the_motion_once() {
+    let dir = common::out_dir("reduce_motion_read_once");
+    let setup = write_case(&dir, false, "true", "knee");
+    run(&setup).unwrap();
+    let motion = match Setup::read(&setup).unwrap() {
+        Setup::Analyze(s) => s.coordinates_file.unwrap(),
+        _ => unreachable!(),
+    };
+    assert!(dir.join("out/case_SO_activation.sto").is_file());
+    assert_eq!(
+        storage::times_opened(&motion),
+        1,
+        "openings of {}",
+        motion.display()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -272,6 +272,12 @@ pub fn load_coordinates(path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
     filter_coordinates(storage::read(path)?, path, lowpass_cutoff)
 }
 
+/// [`load_coordinates`] on a [`storage::TableFile`] (a run's motion, read
+/// once).
+pub fn load_coordinates_in(file: &storage::TableFile, lowpass_cutoff: f64) -> Result<Storage> {
+    filter_coordinates(storage::read_file(file)?, file.path(), lowpass_cutoff)
+}
+
 /// [`load_coordinates`] on a table already read from `path`.
 pub fn filter_coordinates(mut table: Storage, path: &Path, lowpass_cutoff: f64) -> Result<Storage> {
     if lowpass_cutoff >= 0.0 {

@@ -41,6 +41,14 @@
 //! chunk) rows, whatever the length of the file and whichever part of it
 //! (padding included) is analysed.
 //!
+//! A run hands the stream its motion as a [`TableFile`]
+//! ([`StateStream::open_in`]): the file's bytes, read once by the run's
+//! driver, which every pass above parses with the same row reader
+//! ([`crate::storage::open_rows_in`]); then memory grows by the file's size
+//! (at most [`crate::storage::IN_MEMORY_LIMIT`]). A larger file, or a
+//! stream opened on a path ([`StateStream::open`]), reads each pass from
+//! the disk, and memory stays O(block + overlaps + chunk) rows.
+//!
 //! The InverseDynamicsTool's states ([`StatesKind::InverseDynamics`]) come
 //! from the same windows: q = S, u = S′, u̇ = S″ of each coordinate's spline
 //! at the rows, no assembly.
@@ -58,7 +66,7 @@ use crate::model::{Model, MotionType};
 use crate::motion::coordinates::{column_for, units_error};
 use crate::motion::filter::{butterworth, iir_pass, pole_radius, MAX_RESAMPLE_SIZE};
 use crate::motion::states::assemble;
-use crate::storage::{open_rows, RowMark, RowReader};
+use crate::storage::{open_rows_in, RowMark, RowReader, TableFile};
 
 /// Knots of overlap on each side of a spline window: 0.43¹⁰⁰ ≈ 10⁻³⁷.
 pub const SPLINE_OVERLAP: usize = 100;
@@ -216,8 +224,40 @@ impl<'m> StateStream<'m> {
         final_: f64,
         block: usize,
     ) -> Result<StateStream<'m>> {
+        Self::open_in_with_block(
+            model,
+            &TableFile::on_disk(file),
+            cutoff,
+            initial,
+            final_,
+            block,
+        )
+    }
+
+    /// As [`open`](Self::open) on a [`TableFile`]: every pass reads the
+    /// bytes it holds (a run's motion, read once), or the file on disk.
+    pub fn open_in(
+        model: &'m Model,
+        source: &TableFile,
+        cutoff: f64,
+        initial: f64,
+        final_: f64,
+    ) -> Result<StateStream<'m>> {
+        Self::open_in_with_block(model, source, cutoff, initial, final_, DEFAULT_BLOCK)
+    }
+
+    /// As [`open_in`](Self::open_in) with `block` rows per block.
+    pub fn open_in_with_block(
+        model: &'m Model,
+        source: &TableFile,
+        cutoff: f64,
+        initial: f64,
+        final_: f64,
+        block: usize,
+    ) -> Result<StateStream<'m>> {
+        let file = source.path();
         let block = block.max(1);
-        let reader = open_rows(file)?;
+        let reader = open_rows_in(source)?;
         // Columns the model needs, in the order first needed.
         let mut sel: Vec<usize> = Vec::new();
         let mut coord_cols = Vec::with_capacity(model.nq());
@@ -307,7 +347,7 @@ impl<'m> StateStream<'m> {
         if filtering && n >= 2 {
             let mut min_step = f64::INFINITY;
             let mut prev = 0.0;
-            for_each_time(file, &index, &mut |k, t| {
+            for_each_time(source, &index, &mut |k, t| {
                 if k >= 1 {
                     min_step = min_step.min(t - prev);
                     if p > 0 && k >= 2 && k <= p {
@@ -367,7 +407,7 @@ impl<'m> StateStream<'m> {
         } else {
             let (mut c_init, mut c_final) = (0usize, 0usize);
             if n > 0 {
-                for_each_time(file, &index, &mut |k, t| {
+                for_each_time(source, &index, &mut |k, t| {
                     p_time(k, t, &mut |pt| {
                         c_init += (pt <= initial) as usize;
                         c_final += (pt <= final_) as usize;
@@ -421,7 +461,7 @@ impl<'m> StateStream<'m> {
                 i += 1;
             }
             let (mut below, mut upto) = (0usize, 0usize);
-            for_each_time(file, &index, &mut |kk, t| {
+            for_each_time(source, &index, &mut |kk, t| {
                 p_time(kk, t, &mut |pt| {
                     below += (pt < t_lo) as usize;
                     upto += (pt <= t_hi) as usize;
@@ -429,7 +469,7 @@ impl<'m> StateStream<'m> {
             })?;
             let js = below.saturating_sub(SPLINE_OVERLAP + 2);
             let je = (upto + SPLINE_OVERLAP + 2).min(m);
-            let src = PSource::new(file, sel.clone(), index, p, js, je);
+            let src = PSource::new(source, sel.clone(), index, p, js, je);
             let g = GSource::Resampled {
                 p: src,
                 knots: VecDeque::new(),
@@ -447,7 +487,7 @@ impl<'m> StateStream<'m> {
             };
             (js, je, g)
         } else {
-            let src = PSource::new(file, sel.clone(), index, p, gs, ge);
+            let src = PSource::new(source, sel.clone(), index, p, gs, ge);
             (gs, ge, GSource::Direct(src))
         };
         let _ = (js, je);
@@ -884,14 +924,14 @@ fn index_file(
 
 /// `f(k, time of raw row k)` for every row, in order: from the rows
 /// [`index_file`] kept, else read from the file again.
-fn for_each_time(file: &Path, idx: &RawIndex, f: &mut dyn FnMut(usize, f64)) -> Result<()> {
+fn for_each_time(file: &TableFile, idx: &RawIndex, f: &mut dyn FnMut(usize, f64)) -> Result<()> {
     if let Some(rows) = &idx.rows {
         for (k, r) in rows.iter().enumerate() {
             f(k, r.0);
         }
         return Ok(());
     }
-    let mut r = open_rows(file)?;
+    let mut r = open_rows_in(file)?;
     let mut row = Vec::new();
     let mut k = 0;
     while let Some(t) = r.next_row(&mut row)? {
@@ -917,12 +957,19 @@ struct PSource {
     rand: Option<RowReader>,
     chunk: Vec<(f64, Vec<f64>)>,
     chunk_lo: usize,
-    file: PathBuf,
+    file: TableFile,
     buf: Vec<f64>,
 }
 
 impl PSource {
-    fn new(file: &Path, sel: Vec<usize>, idx: RawIndex, p: usize, js: usize, je: usize) -> PSource {
+    fn new(
+        file: &TableFile,
+        sel: Vec<usize>,
+        idx: RawIndex,
+        p: usize,
+        js: usize,
+        je: usize,
+    ) -> PSource {
         PSource {
             sel,
             idx,
@@ -933,7 +980,7 @@ impl PSource {
             rand: None,
             chunk: Vec::new(),
             chunk_lo: 0,
-            file: file.to_path_buf(),
+            file: file.clone(),
             buf: Vec::new(),
         }
     }
@@ -971,13 +1018,13 @@ impl PSource {
                 (k + CHUNK).min(self.idx.n)
             };
             if self.rand.is_none() {
-                self.rand = Some(open_rows(&self.file)?);
+                self.rand = Some(open_rows_in(&self.file)?);
             }
             let r = self.rand.as_mut().expect("opened above");
             r.seek_row(lo, &self.idx.marks)?;
             self.chunk.clear();
             for _ in lo..hi {
-                let row = Self::read_one(r, &self.sel, &mut self.buf, &self.file)?;
+                let row = Self::read_one(r, &self.sel, &mut self.buf, self.file.path())?;
                 self.chunk.push(row);
             }
             self.chunk_lo = lo;
@@ -1004,12 +1051,12 @@ impl PSource {
                 return Ok(Some(rows[k].clone()));
             }
             if self.seq.is_none() {
-                let mut r = open_rows(&self.file)?;
+                let mut r = open_rows_in(&self.file)?;
                 r.seek_row(k, &self.idx.marks)?;
                 self.seq = Some(r);
             }
             let r = self.seq.as_mut().expect("opened above");
-            let row = Self::read_one(r, &self.sel, &mut self.buf, &self.file)?;
+            let row = Self::read_one(r, &self.sel, &mut self.buf, self.file.path())?;
             if k + 1 == n {
                 self.seq = None;
             }

@@ -8,7 +8,8 @@ pub use crate::frame::driver::{for_each_frame, frame_rows, is_frame};
 use crate::motion::states::States;
 use crate::motion::stream::StateStream;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
-use crate::tools::loading::load_coordinates;
+use crate::storage::TableFile;
+use crate::tools::loading::load_coordinates_in;
 use crate::tools::{joint_reaction, muscle_analysis, static_optimization, RunOptions, RunSummary};
 
 /// The setup's coordinates file, refusing states and speeds files.
@@ -57,6 +58,13 @@ fn check_time_range(
     Ok(())
 }
 
+/// The setup's coordinates file, read once for the whole run
+/// ([`TableFile::read`]): the driver of a run ([`run`], predict-grf, force
+/// sweeps) reads it and hands it to every reader of the motion.
+pub fn read_motion(setup: &AnalyzeSetup) -> Result<TableFile> {
+    TableFile::read(coordinates_file(setup)?)
+}
+
 /// Read the setup's motion into states.
 pub fn load_states(setup: &AnalyzeSetup, model: &crate::model::Model) -> Result<States> {
     load_states_with(setup, model, &[])
@@ -70,8 +78,19 @@ pub fn load_states_with(
     model: &crate::model::Model,
     contacts: &[Contact],
 ) -> Result<States> {
-    let file = coordinates_file(setup)?;
-    let mut table = load_coordinates(file, setup.lowpass_cutoff)?;
+    load_motion_states(setup, &read_motion(setup)?, model, contacts)
+}
+
+/// [`load_states_with`] on the run's motion, `motion` (the setup's
+/// coordinates file, [`read_motion`]).
+pub fn load_motion_states(
+    setup: &AnalyzeSetup,
+    motion: &TableFile,
+    model: &crate::model::Model,
+    contacts: &[Contact],
+) -> Result<States> {
+    let file = motion.path();
+    let mut table = load_coordinates_in(motion, setup.lowpass_cutoff)?;
     if !setup.close_contacts.is_empty() {
         close_setup_contacts(setup, model, contacts, &mut table)?;
     }
@@ -104,10 +123,22 @@ pub fn open_state_stream_with<'m>(
     model: &'m crate::model::Model,
     contacts: &[Contact],
 ) -> Result<StateStream<'m>> {
-    let file = coordinates_file(setup)?;
-    let opened = StateStream::open(
+    open_motion_stream(setup, &read_motion(setup)?, model, contacts)
+}
+
+/// [`open_state_stream_with`] on the run's motion, `motion` (the setup's
+/// coordinates file, [`read_motion`]): the stream, and the in-memory
+/// fallback, parse its bytes; the file is not opened again.
+pub fn open_motion_stream<'m>(
+    setup: &AnalyzeSetup,
+    motion: &TableFile,
+    model: &'m crate::model::Model,
+    contacts: &[Contact],
+) -> Result<StateStream<'m>> {
+    let file = motion.path();
+    let opened = StateStream::open_in(
         model,
-        file,
+        motion,
         setup.lowpass_cutoff,
         setup.initial_time,
         setup.final_time,
@@ -138,7 +169,7 @@ pub fn open_state_stream_with<'m>(
         match streamed {
             Ok(stream) => stream,
             Err(_) => {
-                let states = load_states_with(setup, model, contacts)?;
+                let states = load_motion_states(setup, motion, model, contacts)?;
                 let udot = states.speed_derivatives(file)?;
                 let mut stream = StateStream::in_memory(
                     model,
@@ -147,7 +178,7 @@ pub fn open_state_stream_with<'m>(
                     setup.initial_time,
                     setup.final_time,
                 );
-                let raw = crate::storage::read(file)?;
+                let raw = crate::storage::read_file(motion)?;
                 stream.warnings = crate::motion::checks::time_warnings(
                     file,
                     &crate::motion::checks::TimeSteps::of(&raw.time),
@@ -171,16 +202,37 @@ pub fn open_state_stream_with<'m>(
     Ok(stream)
 }
 
+/// Run the setup's analyses. The coordinates file is read once
+/// ([`read_motion`]) and every analysis reads the motion from those bytes.
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
+    run_in(setup, None, opts)
+}
+
+/// [`run`] on the run's motion, `motion`, already read by the caller (the
+/// setup's coordinates file, [`read_motion`]; predict-grf reads it once
+/// for its feet and its run).
+pub fn run_motion(
+    setup: &AnalyzeSetup,
+    motion: &TableFile,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
+    run_in(setup, Some(motion), opts)
+}
+
+fn run_in(
+    setup: &AnalyzeSetup,
+    motion: Option<&TableFile>,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
     match opts.threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
                 .build()
                 .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
-            pool.install(|| run_analyses(setup, opts))
+            pool.install(|| run_analyses(setup, motion, opts))
         }
-        None => run_analyses(setup, opts),
+        None => run_analyses(setup, motion, opts),
     }
     .and_then(|mut summary| {
         if !setup.figures.is_empty() && summary.stopped.is_none() {
@@ -198,7 +250,11 @@ pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
     })
 }
 
-fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
+fn run_analyses(
+    setup: &AnalyzeSetup,
+    motion: Option<&TableFile>,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
     let mut summary = RunSummary {
         warnings: setup.warnings.clone(),
         unused_properties: setup.unused_properties.clone(),
@@ -225,17 +281,22 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
             _ => None,
         })
         .collect();
+    // The motion, read once for every analysis below.
+    let motion = match motion {
+        Some(m) => m.clone(),
+        None => read_motion(setup)?,
+    };
     for a in active {
         match a {
             Analysis::MuscleAnalysis(m) => {
-                let s = muscle_analysis::run(setup, m, opts)?;
+                let s = muscle_analysis::run(setup, m, &motion, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
                 }
             }
             Analysis::StaticOptimization(so) => {
-                let s = static_optimization::run(setup, so, &coupled, opts)?;
+                let s = static_optimization::run(setup, so, &coupled, &motion, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
@@ -245,7 +306,7 @@ fn run_analyses(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
                 if coupled.iter().any(|c| c.common.name == jr.common.name) {
                     continue; // computed inside static optimization
                 }
-                let s = joint_reaction::run(setup, jr, opts)?;
+                let s = joint_reaction::run(setup, jr, &motion, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);

@@ -106,14 +106,10 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     // quintic splines (`StatesKind::InverseDynamics`): memory stays flat
     // however long the trial.
     let (t0, t1) = setup.time_range;
-    let mut stream = StateStream::open(
-        &model,
-        &setup.coordinates_file,
-        setup.lowpass_cutoff,
-        t0,
-        t1,
-    )?
-    .for_inverse_dynamics();
+    // The coordinates file is read once; the stream's passes parse its bytes.
+    let motion = crate::storage::TableFile::read(&setup.coordinates_file)?;
+    let mut stream =
+        StateStream::open_in(&model, &motion, setup.lowpass_cutoff, t0, t1)?.for_inverse_dynamics();
     warnings.extend(stream.motion_warnings(&[]));
     let (file_first, file_last) = stream.file_times;
     warnings.extend(crate::motion::checks::time_range_warnings(

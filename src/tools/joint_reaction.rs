@@ -44,7 +44,8 @@ use crate::error::Result;
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::StoWriter;
-use crate::tools::analyze::{for_each_frame, is_frame, open_state_stream, results_dir};
+use crate::storage::TableFile;
+use crate::tools::analyze::{for_each_frame, is_frame, open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 
 // The JointReaction analysis's parts are the `reactions` stage (the table's
@@ -58,10 +59,15 @@ pub use crate::reactions::problem::{JointReactionProblem, WithForces};
 pub use crate::reactions::setup::{resolve_reactions, JointReactionSetup};
 pub use crate::writers::tables::JOINT_REACTION_DESCRIPTION as DESCRIPTION;
 
-pub fn run(setup: &AnalyzeSetup, jr: &JointReactionSetup, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run(
+    setup: &AnalyzeSetup,
+    jr: &JointReactionSetup,
+    motion: &TableFile,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
     let (problem, mut warnings) = JointReactionProblem::build(setup, jr)?;
     // States streamed block by block (motion::stream): flat memory.
-    let mut stream = open_state_stream(setup, &problem.model)?;
+    let mut stream = open_motion_stream(setup, motion, &problem.model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));
     warnings.extend(crate::tools::analyze::missing_columns_warning(
         setup,

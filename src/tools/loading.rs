@@ -8,4 +8,4 @@ pub use crate::forces::analysis_model::{
     applies_force, force_kind, load_analysis_model, AnalysisModel, ForceKind,
 };
 pub use crate::model::load::{load_composed_model, load_model};
-pub use crate::motion::filter::{filter_coordinates, load_coordinates};
+pub use crate::motion::filter::{filter_coordinates, load_coordinates, load_coordinates_in};

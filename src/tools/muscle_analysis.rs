@@ -12,7 +12,8 @@ use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
-use crate::tools::analyze::{for_each_frame, open_state_stream, results_dir};
+use crate::storage::TableFile;
+use crate::tools::analyze::{for_each_frame, open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 
@@ -27,6 +28,7 @@ fn select<'a>(list: &[String], all: impl Iterator<Item = &'a str>) -> Vec<String
 pub fn run(
     setup: &AnalyzeSetup,
     ma: &MuscleAnalysisSetup,
+    motion: &TableFile,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let AnalysisModel {
@@ -37,7 +39,7 @@ pub fn run(
     } = load_analysis_model(setup)?;
     let set = MuscleSet::compile(&spec, &forces, &model)?;
     // States streamed block by block (motion::stream): flat memory.
-    let mut stream = open_state_stream(setup, &model)?;
+    let mut stream = open_motion_stream(setup, motion, &model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));
     warnings.extend(crate::tools::analyze::missing_columns_warning(
         setup,

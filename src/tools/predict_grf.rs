@@ -492,7 +492,9 @@ pub fn run_with(
     };
     let (contact_weight, given_weight) = use_contact_weight(&mut setup, default_weight);
     let model = am.model;
-    let states = analyze::load_states(&setup, &model)?;
+    // The motion is read once: for the feet here and for the run below.
+    let motion = analyze::read_motion(&setup)?;
+    let states = analyze::load_motion_states(&setup, &motion, &model, &[])?;
     let contacts = feet::build(
         &model,
         &states,
@@ -517,7 +519,7 @@ pub fn run_with(
             &contacts_xml,
             &contacts_file,
         )?);
-    let mut summary = analyze::run(&setup, opts)?;
+    let mut summary = analyze::run_motion(&setup, &motion, opts)?;
     summary.warnings.extend(contacts.warnings.iter().cloned());
     written.push(contacts_file);
     summary.files.extend(written);

@@ -66,7 +66,8 @@ use crate::muscles::set::MuscleSet;
 use crate::parse::setup::AnalyzeSetup;
 use crate::paths::PointKind;
 use crate::reactions::{resolve_reactions, JointReactionSetup};
-use crate::tools::analyze::{is_frame, open_state_stream};
+use crate::storage::TableFile;
+use crate::tools::analyze::{is_frame, open_motion_stream};
 use crate::tools::loading::{applies_force, force_kind, AnalysisModel, ForceKind};
 use crate::xml::Element;
 
@@ -213,12 +214,13 @@ impl Clusters {
 /// contact: whether w(d) > 0 on some frame. Returns the frame count too.
 fn scan(
     setup: &AnalyzeSetup,
+    motion: &TableFile,
     model: &Model,
     contacts: &[Contact],
     step_interval: usize,
 ) -> Result<(Vec<bool>, Vec<f64>, Vec<bool>, usize)> {
     let nq = model.nq();
-    let mut stream = open_state_stream(setup, model)?;
+    let mut stream = open_motion_stream(setup, motion, model, &[])?;
     let (i0, i1) = (stream.first_row, stream.last_row);
     let mut lo = vec![f64::INFINITY; nq];
     let mut hi = vec![f64::NEG_INFINITY; nq];
@@ -284,6 +286,7 @@ fn scan(
 /// motion, and what was removed (see the module docs).
 pub fn reduce(
     setup: &AnalyzeSetup,
+    motion: &TableFile,
     am: &AnalysisModel,
     step_interval: usize,
     passive_fiber_forces: bool,
@@ -310,7 +313,8 @@ pub fn reduce(
         }
     }
     let contact_list: Vec<Contact> = contacts.iter().map(|(_, c)| c.clone()).collect();
-    let (moving, value, engaged, frames) = scan(setup, model, &contact_list, step_interval)?;
+    let (moving, value, engaged, frames) =
+        scan(setup, motion, model, &contact_list, step_interval)?;
 
     // Joints of JointReactions: never rigid for dropping; their child's
     // subtree and their parent are kept.

@@ -23,7 +23,8 @@ use crate::parse::setup::AnalyzeSetup;
 use crate::reactions::{
     resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
-use crate::tools::analyze::{is_frame, open_state_stream_with, results_dir};
+use crate::storage::TableFile;
+use crate::tools::analyze::{is_frame, open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
 use crate::writers::resume::resume_point;
@@ -49,12 +50,14 @@ pub fn run(
     setup: &AnalyzeSetup,
     so: &StaticOptimizationSetup,
     reactions: &[JointReactionSetup],
+    motion: &TableFile,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let (problem, mut warnings, reduction) = if setup.reduce_model {
         let am = load_analysis_model(setup)?;
         let (am, r) = crate::tools::reduce::reduce(
             setup,
+            motion,
             &am,
             so.common.step_interval,
             so.passive_fiber_forces,
@@ -69,7 +72,7 @@ pub fn run(
     // The states are streamed block by block (motion::stream): memory stays
     // flat however long the trial. Opened once: for the checks, the missing
     // coordinates and the frame count, then streamed by the one pass below.
-    let stream = open_state_stream_with(setup, &problem.model, &problem.contacts)?;
+    let stream = open_motion_stream(setup, motion, &problem.model, &problem.contacts)?;
     // Columns of coordinates a reduction removed are not the user's typos.
     let dropped = reduction
         .as_ref()
@@ -173,7 +176,7 @@ pub fn run(
         if !stopped {
             for (jr_setup, (p, _)) in reactions.iter().zip(&spec.reactions) {
                 if jr_setup.knee_loads {
-                    let states = knee_states_of(&mut knee_states, setup, &problem)?;
+                    let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
                     let table = dir.join(format!("{p}ReactionLoads.sto"));
                     knee_files.push(crate::tools::knee_loads::write(
                         &problem.model,
@@ -188,7 +191,7 @@ pub fn run(
             }
         }
         if !stopped && !problem.knees.is_empty() {
-            let states = knee_states_of(&mut knee_states, setup, &problem)?;
+            let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
             let (p, _) = spec.reactions.last().expect("the knee contact reactions");
             let out = names::setup_file_name(
                 &setup.name,
@@ -334,11 +337,16 @@ pub fn run(
 fn knee_states_of<'a>(
     cache: &'a mut Option<Positions>,
     setup: &AnalyzeSetup,
+    motion: &TableFile,
     problem: &crate::frame::problem::SoProblem,
 ) -> Result<&'a Positions> {
     if cache.is_none() {
-        let states =
-            crate::tools::analyze::load_states_with(setup, &problem.model, &problem.contacts)?;
+        let states = crate::tools::analyze::load_motion_states(
+            setup,
+            motion,
+            &problem.model,
+            &problem.contacts,
+        )?;
         *cache = Some((states.time, states.q));
     }
     Ok(cache.as_ref().expect("just read"))
