@@ -31,7 +31,7 @@ pub fn read(path: &Path) -> Result<Storage> {
 /// else from the disk.
 pub fn read_file(file: &TableFile) -> Result<Storage> {
     match file.bytes() {
-        Some(bytes) => read_text(file.path(), bytes),
+        Some(bytes) => read_text(file.path(), bytes.as_ref()),
         None => read(file.path()),
     }
 }

@@ -31,14 +31,25 @@ pub const IN_MEMORY_LIMIT: u64 = 256 << 20;
 #[derive(Clone)]
 pub struct TableFile {
     path: PathBuf,
-    bytes: Option<Arc<[u8]>>,
+    bytes: Option<SharedBytes>,
+}
+
+/// A file's bytes, shared by the readers of a [`TableFile`] (kept in the
+/// `Vec` they were read into: no second copy).
+#[derive(Clone)]
+pub(super) struct SharedBytes(Arc<Vec<u8>>);
+
+impl AsRef<[u8]> for SharedBytes {
+    fn as_ref(&self) -> &[u8] {
+        &self.0
+    }
 }
 
 impl std::fmt::Debug for TableFile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("TableFile")
             .field("path", &self.path)
-            .field("in_memory_bytes", &self.bytes.as_ref().map(|b| b.len()))
+            .field("in_memory_bytes", &self.bytes.as_ref().map(|b| b.0.len()))
             .finish()
     }
 }
@@ -60,7 +71,7 @@ impl TableFile {
         let bytes = read_bytes(path)?;
         Ok(TableFile {
             path: path.to_path_buf(),
-            bytes: Some(bytes.into()),
+            bytes: Some(SharedBytes(Arc::new(bytes))),
         })
     }
 
@@ -83,7 +94,7 @@ impl TableFile {
     }
 
     /// The bytes, when held in memory.
-    pub(super) fn bytes(&self) -> Option<&Arc<[u8]>> {
+    pub(super) fn bytes(&self) -> Option<&SharedBytes> {
         self.bytes.as_ref()
     }
 }
