@@ -577,6 +577,10 @@ fn physically_impossible_bodies() {
         err.contains("triangle inequality") && err.contains("model.osim"),
         "{err}"
     );
+    // Said once, where it is (file and line), and what is done with it.
+    let said: Vec<&str> = err.lines().filter(|l| l.contains("inertia")).collect();
+    assert_eq!(said.len(), 1, "one warning about the inertia: {err}");
+    assert!(said[0].contains("used as given"), "{err}");
 }
 
 /// Degrees in a file that says radians (and radians read as degrees the
