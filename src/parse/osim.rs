@@ -349,7 +349,8 @@ fn read_body(b: &Element, warnings: &mut Vec<String>) -> Result<BodySpec> {
     if let Some((fatal, why)) = invalid_inertia(&inertia) {
         let el = b.child("inertia").unwrap_or(b);
         let msg = format!(
-            "body inertia [Ixx Iyy Izz Ixy Ixz Iyz] = {inertia:?} is not physically possible: {why}"
+            "body '{}' inertia [Ixx Iyy Izz Ixy Ixz Iyz] = {inertia:?} is not physically possible: {why}",
+            b.name_attr()
         );
         if fatal {
             return Err(el.error(format!("{msg} (a sign error or wrong units?)")));
