@@ -112,3 +112,44 @@ fn inverse_dynamics_opens_the_motion_once() {
     assert_eq!(times_opened(&motion), 1, "openings of {}", motion.display());
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `--resume` on a run whose tables are complete: the knee loads need the
+/// knee angles of every frame, which the (empty) pass did not solve, so they
+/// come from the motion; the resumed run opens the coordinates file once
+/// (the static optimization's stream, then the knee states again).
+#[test]
+fn a_resumed_run_opens_the_motion_once() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = common::out_dir("motion_read_once_resume");
+    let mut setup = match Setup::read(&repo.join("setups/leg_extension_cam1.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let motion = own_copy(setup.coordinates_file.as_ref().unwrap(), &out);
+    setup.coordinates_file = Some(motion.clone());
+    setup.final_time = setup.initial_time + 0.2;
+    setup.figures.clear();
+    let mut opts = RunOptions {
+        results_dir: Some(out.join("results")),
+        threads: Some(1),
+        ..Default::default()
+    };
+    analyze::run(&setup, &opts).unwrap();
+    assert_eq!(times_opened(&motion), 1, "openings of {}", motion.display());
+    opts.resume = true;
+    let s = analyze::run(&setup, &opts).unwrap();
+    assert!(
+        s.files
+            .iter()
+            .any(|f| f.to_string_lossy().ends_with("_KneeLoads.sto")),
+        "{:?}",
+        s.files
+    );
+    assert_eq!(
+        times_opened(&motion),
+        2,
+        "openings of {} after the resumed run",
+        motion.display()
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
