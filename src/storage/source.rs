@@ -18,12 +18,12 @@ use crate::error::{Error, Result};
 /// Largest file [`TableFile::read`] holds in memory: 256 MiB. A motion is
 /// about 16 bytes per value, so this is some 400,000 rows of 40 columns,
 /// longer than any recorded trial (10 minutes at 200 Hz is 120,000 rows).
-/// Holding it adds the file's size to the run's memory and saves reading
-/// and decoding it from disk again for each reader. A larger file (the
-/// 1,000,000-frame stress motions) is read from the disk by every pass, as
-/// [`crate::motion::stream`] is designed to, so that memory stays bounded
-/// whatever the length of the motion; the operating system's page cache
-/// serves the repeated passes.
+/// Holding it adds the file's size to the run's memory, and no reader opens
+/// or reads the file again (each still parses the bytes it needs). A larger
+/// file (1,000,000 rows of 40 columns is about 640 MB) is read from the
+/// disk by every pass, as [`crate::motion::stream`] is designed to, so that
+/// memory stays bounded whatever the length of the motion; the operating
+/// system's page cache serves the repeated passes.
 pub const IN_MEMORY_LIMIT: u64 = 256 << 20;
 
 /// A table file: its path and, when it was read into memory, its bytes.
