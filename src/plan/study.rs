@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location, Result};
+use crate::parse::figures::{FigureOrMetric, FigureSpec, MetricSpec};
 use crate::parse::setup::{resolve, Setup};
 use crate::plan::force_sweep::ForceSweepPlan;
 use crate::xml::Element;
@@ -32,7 +33,8 @@ pub struct StudyDocument {
     pub setup_files: Vec<PathBuf>,
     /// `<ForceSweep>` elements.
     pub sweeps: Vec<Element>,
-    /// `<Figure>` and `<Metric>` elements, in the document's order.
+    /// `<Figure>` and `<Metric>` elements, in the document's order (typed
+    /// by [`StudyPlan::from_document`]).
     pub figures: Vec<Element>,
     /// Elements neither statopt nor OpenSim knows, one error each.
     pub unknown: Vec<Error>,
@@ -106,9 +108,9 @@ pub struct StudyPlan {
     pub results_directory_loc: Location,
     pub runs: Vec<StudyRun>,
     pub sweeps: Vec<ForceSweepPlan>,
-    /// `<Figure>` and `<Metric>` elements (checked against
-    /// `parse::known::FIGURE_ELEMENTS`), in the document's order.
-    pub figures: Vec<Element>,
+    /// `<Figure>` and `<Metric>` elements as typed values (every attribute
+    /// read and checked, `plan::figures`), in the document's order.
+    pub figures: Vec<FigureOrMetric>,
     /// Unknown elements read on past (`allow_unknown`).
     pub warnings: Vec<String>,
 }
@@ -149,6 +151,14 @@ impl StudyPlan {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
+        let figures = doc
+            .figures
+            .iter()
+            .map(|el| match el.name.as_str() {
+                "Figure" => FigureSpec::from_xml(el).map(FigureOrMetric::Figure),
+                _ => MetricSpec::from_xml(el).map(FigureOrMetric::Metric),
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(StudyPlan {
             file: doc.file,
             dir: doc.dir,
@@ -157,7 +167,7 @@ impl StudyPlan {
             results_directory_loc: doc.results_directory_loc,
             runs,
             sweeps,
-            figures: doc.figures,
+            figures,
             warnings,
         })
     }
