@@ -31,8 +31,11 @@ pub struct StudyDocument {
     pub results_directory_loc: Location,
     /// `<setups>`, resolved against [`StudyDocument::dir`].
     pub setup_files: Vec<PathBuf>,
-    /// `<ForceSweep>` elements.
+    /// `<ForceSweep>` elements (read by [`StudyPlan::from_document`]).
     pub sweeps: Vec<Element>,
+    /// The setups the force sweeps name (their `setup` attributes),
+    /// resolved against [`StudyDocument::dir`].
+    pub sweep_setup_files: Vec<PathBuf>,
     /// `<Figure>` and `<Metric>` elements, in the document's order (typed
     /// by [`StudyPlan::from_document`]).
     pub figures: Vec<Element>,
@@ -72,6 +75,13 @@ impl StudyDocument {
                 .iter()
                 .filter(|c| c.name == "ForceSweep")
                 .cloned()
+                .collect(),
+            sweep_setup_files: study
+                .children
+                .iter()
+                .filter(|c| c.name == "ForceSweep")
+                .filter_map(|c| c.attr("setup"))
+                .map(|f| resolve(&dir, f))
                 .collect(),
             figures: study
                 .children

@@ -46,12 +46,9 @@ pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
                 }
                 // The study's setups and its force sweeps' setups.
                 let mut files = doc.setup_files.clone();
-                for sw in &doc.sweeps {
-                    if let Some(f) = sw.attr("setup") {
-                        let p = crate::parse::setup::resolve(&doc.dir, f);
-                        if !files.contains(&p) {
-                            files.push(p);
-                        }
+                for p in &doc.sweep_setup_files {
+                    if !files.contains(p) {
+                        files.push(p.clone());
                     }
                 }
                 // Unknown elements are reported above and per setup below.
