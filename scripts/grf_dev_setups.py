@@ -2,8 +2,9 @@
 """Write predict-grf setups for the development trials of issue 27.
 
 The trials in ../shared/models/running_hamner2013 (treadmill running, 92
-muscles) and ../shared/models/walk_schreiber2019 (one overground step,
-torque-driven models) come without setups. Each is run as the issue's "Bar"
+muscles), ../shared/models/walk_schreiber2019 (one overground step,
+torque-driven models) and ../shared/models/knee_gc5 (one overground gait
+cycle, 80 muscles, three plates) come without predict-grf setups. Each is run as the issue's "Bar"
 says: an AnalyzeTool with StaticOptimization, <reserve_actuators> 10 on the
 muscle-driven models and 100 on the torque-driven ones, coordinates low-passed
 at 12 Hz (running) or 6 Hz (walking), the IK's time range less 0.1 s (running)
@@ -88,6 +89,13 @@ def trials(shared):
                 yield ("running", f"{subject}_{stem}", model,
                        os.path.join(d, "ik", ik),
                        os.path.join(d, "expData", f"{stem}_grf.xml"))
+    gc5 = os.path.join(shared, "models", "knee_gc5")
+    if os.path.isfile(os.path.join(gc5, "GC5_ss1.mot")):
+        # Overground walking, one gait cycle, three plates, 80 muscles.
+        yield ("walking_muscle", "knee_gc5_ss1",
+               os.path.join(gc5, "Rajagopal2015-scaled.osim"),
+               os.path.join(gc5, "GC5_ss1.mot"),
+               os.path.join(gc5, "GC5_ss1_loads.xml"))
     walk = os.path.join(shared, "models", "walk_schreiber2019")
     if os.path.isdir(walk):
         for subject in sorted(os.listdir(walk)):
@@ -102,7 +110,8 @@ def trials(shared):
 
 
 # The issue's bar: per kind, (trim at each end s, low-pass Hz, reserves' optimal force).
-RULES = {"running": (0.1, 12, 10), "walking_torque": (0.03, 6, 100)}
+RULES = {"running": (0.1, 12, 10), "walking_torque": (0.03, 6, 100),
+         "walking_muscle": (0.03, 6, 10)}
 
 
 def main():

@@ -577,6 +577,24 @@ fn physically_impossible_bodies() {
         err.contains("triangle inequality") && err.contains("model.osim"),
         "{err}"
     );
+    // Said once, where it is (file and line), and what is done with it.
+    let said: Vec<&str> = err.lines().filter(|l| l.contains("inertia")).collect();
+    assert_eq!(said.len(), 1, "one warning about the inertia: {err}");
+    assert!(said[0].contains("used as given"), "{err}");
+    // It names the body even when the location is the <inertia> element.
+    let body = Files::analyze().get("model.osim").to_string();
+    let line = body
+        .lines()
+        .position(|l| l.contains("0.11 0.02 0.11 0 0 0"))
+        .unwrap();
+    let name = body
+        .lines()
+        .take(line)
+        .filter_map(|l| l.split("<Body name=\"").nth(1))
+        .last()
+        .unwrap();
+    let name = &name[..name.find('"').unwrap()];
+    assert!(said[0].contains(&format!("body '{name}'")), "{err}");
 }
 
 /// Degrees in a file that says radians (and radians read as degrees the

@@ -529,10 +529,7 @@ fn main() -> ExitCode {
                             );
                         }
                         for st in &p.stance {
-                            eprintln!(
-                                "foot {}: centre of pressure off by {:.0} mm over stance; heel strike {:.0} ms, toe-off {:.0} ms",
-                                st.side, st.cop_error_mm, st.heel_strike_error_ms, st.toe_off_error_ms
-                            );
+                            eprintln!("{}", st.summary());
                         }
                         for n in &p.summary.notes {
                             eprintln!("{n}");

@@ -431,26 +431,8 @@ fn checked_inertia(b: &crate::parse::osim::BodySpec, warnings: &mut Vec<String>)
         }
         return Matrix3::zeros();
     }
-    let tol = 1e-12 * (xx.abs() + yy.abs() + zz.abs()).max(1e-300);
-    let valid = xx >= -tol
-        && yy >= -tol
-        && zz >= -tol
-        && xx + yy + tol >= zz
-        && xx + zz + tol >= yy
-        && yy + zz + tol >= xx;
-    if !valid {
-        // OpenSim's Body::getInertia would replace it by a spherical inertia
-        // only if SimTK::Inertia's constructor threw, but that check
-        // (`Inertia::errChk`) is compiled out of release builds (NDEBUG): the
-        // released OpenSim 4.6 keeps the invalid matrix as given (verified:
-        // `Model('leg6dof9musc.osim').getBodySet().get('toes_r').getInertia()`
-        // returns moments [0, 0, 0.00090462] in the opensim 4.6 Python package,
-        // and its joint reactions match only with that matrix).
-        warnings.push(format!(
-            "body '{}' has a physically invalid inertia {:?} (triangle inequality or sign); used as given, as OpenSim 4.6 release builds do",
-            b.name, b.inertia
-        ));
-    }
+    // A physically impossible matrix is used as given, as OpenSim 4.6
+    // release builds do; parse::osim warns about it, naming file and line.
     m
 }
 

@@ -349,14 +349,28 @@ fn read_body(b: &Element, warnings: &mut Vec<String>) -> Result<BodySpec> {
     if let Some((fatal, why)) = invalid_inertia(&inertia) {
         let el = b.child("inertia").unwrap_or(b);
         let msg = format!(
-            "body inertia [Ixx Iyy Izz Ixy Ixz Iyz] = {inertia:?} is not physically possible: {why}"
+            "body '{}' inertia [Ixx Iyy Izz Ixy Ixz Iyz] = {inertia:?} is not physically possible: {why}",
+            b.name_attr()
         );
         if fatal {
             return Err(el.error(format!("{msg} (a sign error or wrong units?)")));
         }
         // OpenSim's own planar models (leg6dof9musc) hold such inertias and
-        // OpenSim 4.6 accepts them: warn only.
-        warnings.push(format!("{}: {msg}", el.loc()));
+        // OpenSim 4.6 accepts them: warn only. (A massless body's inertia
+        // is not used: model::compile takes zero, as OpenSim does, and says so.)
+        // OpenSim's Body::getInertia would replace it by a spherical inertia
+        // only if SimTK::Inertia's constructor threw, but that check
+        // (`Inertia::errChk`) is compiled out of release builds (NDEBUG): the
+        // released OpenSim 4.6 keeps the invalid matrix as given (verified:
+        // `Model('leg6dof9musc.osim').getBodySet().get('toes_r').getInertia()`
+        // returns moments [0, 0, 0.00090462] in the opensim 4.6 Python package,
+        // and its joint reactions match only with that matrix).
+        if mass != 0.0 {
+            warnings.push(format!(
+                "{}: {msg}; used as given, as OpenSim 4.6 release builds do",
+                el.loc()
+            ));
+        }
     }
     Ok(BodySpec {
         name: b.name_attr().to_string(),

@@ -206,9 +206,45 @@ pub const STANCE_THRESHOLD: f64 = 20.0;
 #[derive(Debug, Clone)]
 pub struct StanceMetrics {
     pub side: char,
+    /// NaN when no frame has both feet's forces over the threshold.
     pub cop_error_mm: f64,
+    /// NaN unless both the plates and the prediction have one.
     pub heel_strike_error_ms: f64,
     pub toe_off_error_ms: f64,
+    /// How many heel strikes (toe-offs) the plates and the prediction show
+    /// in the trial: (measured, predicted).
+    pub heel_strikes: (usize, usize),
+    pub toe_offs: (usize, usize),
+}
+
+impl StanceMetrics {
+    /// The run's line for this foot, saying in words what has no number
+    /// (e.g. a heel strike before the trial's first frame).
+    pub fn summary(&self) -> String {
+        let event = |what: &str, ms: f64, (measured, predicted): (usize, usize)| match (
+            measured, predicted,
+        ) {
+            (0, 0) => format!("no {what} in the trial"),
+            (0, n) => format!("{what}: none on the plates, {n} predicted"),
+            (n, 0) => format!("{what}: {n} on the plates, none predicted"),
+            _ => format!("{what} {ms:.0} ms"),
+        };
+        let cop = if self.cop_error_mm.is_finite() {
+            format!(
+                "centre of pressure off by {:.0} mm over stance",
+                self.cop_error_mm
+            )
+        } else {
+            "centre of pressure: no frame where both the plates and the prediction load the foot"
+                .to_string()
+        };
+        format!(
+            "foot {}: {cop}; {}, {}",
+            self.side,
+            event("heel strike", self.heel_strike_error_ms, self.heel_strikes),
+            event("toe-off", self.toe_off_error_ms, self.toe_offs)
+        )
+    }
 }
 
 /// Times where the vertical force crosses the stance threshold upwards
@@ -267,6 +303,8 @@ pub fn stance_metrics(side: char, pred: &FootLoads, meas: &FootLoads, s: usize) 
         },
         heel_strike_error_ms: event_error_ms(&mon, &pon),
         toe_off_error_ms: event_error_ms(&moff, &poff),
+        heel_strikes: (mon.len(), pon.len()),
+        toe_offs: (moff.len(), poff.len()),
     }
 }
 
@@ -1164,6 +1202,45 @@ fn weak_root_residuals(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A foot already on the plate at the trial's first frame has no heel
+    /// strike to time: the line says so in words, never "NaN ms".
+    #[test]
+    fn stance_line_says_what_has_no_number() {
+        let time: Vec<f64> = (0..10).map(|i| 0.01 * i as f64).collect();
+        let fy = |on: &dyn Fn(usize) -> bool| -> Vec<Vector3<f64>> {
+            (0..10)
+                .map(|i| Vector3::new(0.0, if on(i) { 500.0 } else { 0.0 }, 0.0))
+                .collect()
+        };
+        let loads = |off_at: usize| FootLoads {
+            time: time.clone(),
+            force: [fy(&|i| i < off_at), fy(&|i| i >= 3)],
+            cop: [vec![Vector3::zeros(); 10], vec![Vector3::zeros(); 10]],
+            free_moment: [vec![0.0; 10], vec![0.0; 10]],
+        };
+        let (meas, pred) = (loads(6), loads(5));
+        let right = stance_metrics('r', &pred, &meas, 0);
+        assert_eq!(right.heel_strikes, (0, 0));
+        assert_eq!(right.toe_offs, (1, 1));
+        let line = right.summary();
+        assert!(!line.contains("NaN"), "{line}");
+        assert!(line.contains("no heel strike in the trial"), "{line}");
+        assert!(line.contains("toe-off 10 ms"), "{line}");
+        let left = stance_metrics('l', &pred, &meas, 1).summary();
+        assert!(
+            left.contains("heel strike 0 ms") && left.contains("no toe-off in the trial"),
+            "{left}"
+        );
+        // Predicted but not measured.
+        let mut late = loads(6);
+        late.force[0] = fy(&|i| (2..6).contains(&i));
+        let line = stance_metrics('r', &late, &meas, 0).summary();
+        assert!(
+            line.contains("heel strike: none on the plates, 1 predicted"),
+            "{line}"
+        );
+    }
 
     /// The honesty bar: more than 5 % of the frames with a root residual
     /// above 25 % body weight rejects the prediction and names times of the
