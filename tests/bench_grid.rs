@@ -25,11 +25,7 @@ fn read_setup(p: &Path) -> AnalyzeSetup {
 }
 
 fn so_setup(setup: &AnalyzeSetup) -> StaticOptimizationSetup {
-    let (el, c) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    StaticOptimizationSetup::from_xml(&el, c).unwrap_or_else(|e| panic!("{e}"))
+    setup.static_optimization().unwrap().clone()
 }
 
 /// A block on a level floor (n = +y, so the contact's e1 = +z, e2 = +x)
