@@ -229,6 +229,86 @@ fn tools_receive_the_plan_and_read_no_setup_xml() {
     );
 }
 
+/// The plan is edited as typed values, never by rewriting a copy of its
+/// XML: `StaticOptimizationSetup::with_option` re-read a copy of the raw
+/// element with one property replaced, which also undid every typed edit
+/// made before it (`bench --grid` on a setup sweeping w0 ran the whole
+/// sweep in its reference run and then failed looking for the single-w0
+/// tables). No source, test or bench calls or defines it.
+#[test]
+fn the_plan_is_edited_as_typed_values() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["src", "tests", "benches"] {
+        if root.join(dir).is_dir() {
+            rust_files(&root.join(dir), &mut files);
+        }
+    }
+    assert!(files.len() > 50, "{}", files.len());
+    let word = ["with", "_option("].concat();
+    let mut offenders = Vec::new();
+    for f in &files {
+        let source = std::fs::read_to_string(f).unwrap();
+        for (n, line) in source.lines().enumerate() {
+            let mut rest = line;
+            while let Some(i) = rest.find(&word) {
+                // The name on its own (not mcap's
+                // `new_with_options` or `create_with_options`).
+                let before = rest[..i].chars().next_back();
+                if !before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+                    offenders.push(format!("{}:{}", f.display(), n + 1));
+                }
+                rest = &rest[i + word.len()..];
+            }
+        }
+    }
+    assert!(offenders.is_empty(), "{offenders:#?}");
+}
+
+/// Tools work from typed values only: outside test code, no file of
+/// `src/tools/` names `crate::xml` or its `Element`. A study's figures and
+/// metrics are `plan::figures` values, checked once when the study or
+/// setup is read. The exceptions edit or read *model* documents, whose
+/// elements keep their parsers in their stages: `scene.rs` (composes and
+/// writes the `.osim`), `reduce.rs` (writes the reduced model's force
+/// set), `motion_gen.rs` and `predict_grf.rs` (a model's force elements).
+#[test]
+fn tools_hold_no_xml_elements() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src/tools"), &mut files);
+    files.sort();
+    let model_documents = ["scene.rs", "reduce.rs", "motion_gen.rs", "predict_grf.rs"];
+    let mut offenders = Vec::new();
+    let mut checked = 0;
+    for f in &files {
+        let name = f.file_name().unwrap().to_string_lossy().to_string();
+        if model_documents.contains(&name.as_str()) {
+            continue;
+        }
+        checked += 1;
+        let source = std::fs::read_to_string(f).unwrap();
+        let code = match source.find("#[cfg(test)]") {
+            Some(i) => &source[..i],
+            None => &source,
+        };
+        for (n, line) in code.lines().enumerate() {
+            let line = line.split("//").next().unwrap_or("");
+            let element = line.match_indices("Element").any(|(i, _)| {
+                let before = line[..i].chars().next_back();
+                let after = line[i + "Element".len()..].chars().next();
+                !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                    && !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+            });
+            if element || line.contains("crate::xml") || line.contains("xml::") {
+                offenders.push(format!("src/tools/{name}:{}: {}", n + 1, line.trim()));
+            }
+        }
+    }
+    assert!(checked >= 14, "{checked} files checked");
+    assert!(offenders.is_empty(), "{offenders:#?}");
+}
+
 /// Tests leave nothing in the system's temporary directory: unit tests
 /// take their scratch folders from `test_dir` (removed when dropped),
 /// integration tests write under `CARGO_TARGET_TMPDIR`, the fuzz targets

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::DMatrix;
 use statopt::dynamics::Data;
 use statopt::muscles::set::MuscleFrame;
+use statopt::parse::analyses::{FrictionModel, SolverChoice};
 use statopt::parse::setup::{AnalyzeSetup, Setup};
 use statopt::tools::bench_grid::{self, Choice, GridOptions, GridRow};
 use statopt::tools::static_optimization::{ConstraintMatrix, SoProblem, StaticOptimizationSetup};
@@ -24,11 +25,7 @@ fn read_setup(p: &Path) -> AnalyzeSetup {
 }
 
 fn so_setup(setup: &AnalyzeSetup) -> StaticOptimizationSetup {
-    let (el, c) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    StaticOptimizationSetup::from_xml(&el, c).unwrap_or_else(|e| panic!("{e}"))
+    setup.static_optimization().unwrap().clone()
 }
 
 /// A block on a level floor (n = +y, so the contact's e1 = +z, e2 = +x)
@@ -176,25 +173,22 @@ fn grid_errors_on_a_contact_case() {
     let setup = read_setup(&contact_case("grid_contact", ""));
     let out = common::out_dir("grid_contact_out");
     let choices = vec![
-        Choice::so_options(
-            "perturbation",
-            1,
-            &[
-                ("constraint_matrix", "perturbation"),
-                ("solver_tolerance", "1e-10"),
-            ],
-        ),
-        Choice::so_options("pyramid4", 1, &[("friction_cone", "pyramid4")]),
-        Choice::so_options(
-            "tol 1e-2",
-            1,
-            &[("solver", "clarabel"), ("solver_tolerance", "1e-2")],
-        ),
-        Choice::so_options(
-            "tol 1e-9",
-            1,
-            &[("solver", "clarabel"), ("solver_tolerance", "1e-9")],
-        ),
+        Choice::so("perturbation", 1, |so| {
+            so.constraint_matrix = ConstraintMatrix::Perturbation;
+            so.set_solver_tolerance(1e-10)
+        }),
+        Choice::so("pyramid4", 1, |so| {
+            so.friction = FrictionModel::Pyramid4;
+            Ok(())
+        }),
+        Choice::so("tol 1e-2", 1, |so| {
+            so.solver = SolverChoice::Clarabel;
+            so.set_solver_tolerance(1e-2)
+        }),
+        Choice::so("tol 1e-9", 1, |so| {
+            so.solver = SolverChoice::Clarabel;
+            so.set_solver_tolerance(1e-9)
+        }),
         Choice::new("threads 2", 2, |_| Ok(())),
     ];
     let opts = GridOptions {
@@ -283,6 +277,64 @@ fn grid_command_writes_table_and_chart() {
         assert!(files.contains(&out.join(f)));
         assert!(std::fs::metadata(out.join(f)).unwrap().len() > 1000);
     }
+}
+
+/// A setup that sweeps w0 runs the grid at one w0 (its first): the
+/// choices edit the typed plan, so the reference's edits keep the single
+/// w0. (Editing by re-reading a copy of the StaticOptimization element
+/// brought the sweep back: the reference run wrote w0-tagged tables and
+/// the grid failed to find `<setup>_SO_activation.sto`.)
+#[test]
+fn grid_runs_one_w0_of_a_sweeping_setup() {
+    let file = contact_case("grid_sweep", "");
+    let text = std::fs::read_to_string(&file).unwrap().replace(
+        "<contact_weight>1000</contact_weight>",
+        "<contact_weight>1000 1</contact_weight>",
+    );
+    std::fs::write(&file, text).unwrap();
+    let setup = read_setup(&file);
+    assert_eq!(
+        setup.static_optimization().unwrap().contact_weights,
+        [1000.0, 1.0]
+    );
+    let out = common::out_dir("grid_sweep_out");
+    let choices = vec![Choice::so("clarabel", 1, |so| {
+        so.solver = SolverChoice::Clarabel;
+        Ok(())
+    })];
+    let opts = GridOptions {
+        out: out.clone(),
+        repeat: 1,
+        ..Default::default()
+    };
+    let rows = bench_grid::run_grid(&setup, &bench_grid::reference_choice(), &choices, &opts)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rows.len(), 2);
+    assert_eq!(row(&rows, "reference").frames, 31);
+    assert!(row(&rows, "clarabel").max_dactivation < 1e-6, "{rows:?}");
+}
+
+/// A typed edit is checked as the value read from a setup is, and its
+/// error names the StaticOptimization element.
+#[test]
+fn typed_edits_are_checked_as_when_read() {
+    let setup = read_setup(&contact_case("grid_edit_checks", ""));
+    let mut so = setup.static_optimization().unwrap().clone();
+    let e = so.set_solver_tolerance(2.0).unwrap_err().to_string();
+    assert!(
+        e.contains("solver_tolerance must lie in (0, 1)")
+            && e.contains("<StaticOptimization name=\"SO\">"),
+        "{e}"
+    );
+    let e = so.set_contact_weights(&[1e13]).unwrap_err().to_string();
+    assert!(e.contains("lies outside"), "{e}");
+    let e = so.set_knee_contact(&[]).unwrap_err().to_string();
+    assert!(e.contains("knee_contact is empty"), "{e}");
+    so.set_knee_contact(&["axial".to_string()]).unwrap();
+    assert!(!so.knee_contact_frontal);
+    so.set_contact_weights(&[1.0, 500.0]).unwrap();
+    assert!(so.contact_weights_given);
+    assert_eq!(so.contact_weights, [1.0, 500.0]);
 }
 
 #[test]

@@ -22,6 +22,7 @@ use statopt::muscles::set::MuscleFrame;
 use statopt::optimize::{
     self, dual, FrameProblem, FrameSolution, SolveStatus, SolverChoice, SolverKind,
 };
+use statopt::parse::analyses::FrictionModel;
 use statopt::parse::setup::Setup;
 use statopt::tools::analyze::{frame_rows, load_states};
 use statopt::tools::static_optimization::{Control, SoProblem, StaticOptimizationSetup};
@@ -53,19 +54,16 @@ fn scene(test: &str, friction: &str, step: usize) -> Option<Scene> {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };
-    let (mut el, common) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    let extra = statopt::xml::parse_str(
-        &format!(
-            "<x><friction_cone>{friction}</friction_cone><contact_weight>1000</contact_weight></x>"
-        ),
-        std::path::Path::new("scene"),
-    )
-    .unwrap();
-    el.children.extend(extra.children);
-    let so = StaticOptimizationSetup::from_xml(&el, common).unwrap();
+    // The plan edited as typed values (as `<friction_cone>` and
+    // `<contact_weight>1000</contact_weight>` would set them).
+    let mut so: StaticOptimizationSetup = setup.static_optimization().unwrap().clone();
+    so.friction = match friction {
+        "cone" => FrictionModel::Cone,
+        "pyramid" | "pyramid4" => FrictionModel::Pyramid4,
+        "pyramid8" => FrictionModel::Pyramid8,
+        other => panic!("friction model '{other}'"),
+    };
+    so.set_contact_weights(&[1000.0]).unwrap();
     let (problem, _) = SoProblem::build(&setup, &so).unwrap();
     let states = load_states(&setup, &problem.model).unwrap();
     let udot = states

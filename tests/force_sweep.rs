@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use statopt::parse::setup::Setup;
+use statopt::plan::figures::FigureOrMetric;
 use statopt::storage;
 use statopt::tools::force_sweep::{self, CandidateSpec, SweepOptions};
 use statopt::tools::{self, study, RunOptions};
@@ -87,18 +88,21 @@ fn metrics_of_run_at(setup: &Path, setup_text: &str, out: &Path) -> Vec<(String,
     };
     s.figures
         .iter()
-        .filter(|e| e.name == "Metric")
-        .map(|el| {
-            let t = storage::read(&out.join(el.attr("file").unwrap())).unwrap();
+        .filter_map(|e| match e {
+            FigureOrMetric::Metric(m) => Some(m),
+            FigureOrMetric::Figure(_) => None,
+        })
+        .map(|m| {
+            let t = storage::read(&out.join(&m.file)).unwrap();
             let mut y = vec![0.0; t.time.len()];
-            for c in el.attr("columns").unwrap().split_whitespace() {
+            for c in m.columns.split_whitespace() {
                 let j = t.column_index(c).unwrap();
                 for (v, r) in y.iter_mut().zip(&t.rows) {
                     *v += r[j];
                 }
             }
-            let v = study::metric_value(el, &t.time, &y, || unreachable!()).unwrap();
-            (el.attr("name").unwrap().to_string(), v)
+            let v = study::metric_value(m.op, &t.time, &y, || unreachable!()).unwrap();
+            (m.name.clone(), v)
         })
         .collect()
 }

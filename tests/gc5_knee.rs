@@ -283,12 +283,8 @@ fn knee_contact_capacity_orders_the_knee_force() {
         setup.final_time = 0.6;
         for a in setup.analyses.iter_mut() {
             if let Analysis::StaticOptimization(so) = a {
-                for (name, text) in [
-                    ("knee_contact", "walker_knee_l"),
-                    ("knee_contact_capacity", cap),
-                ] {
-                    **so = so.with_option(name, text).unwrap();
-                }
+                so.set_knee_contact(&["walker_knee_l".to_string()]).unwrap();
+                so.set_knee_contact_capacity(cap.parse().unwrap()).unwrap();
             }
         }
         let out = common::out_dir(tag);
@@ -343,11 +339,8 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };
-    let so: StaticOptimizationSetup = setup
-        .static_optimization()
-        .unwrap()
-        .with_option("knee_contact", "all")
-        .unwrap();
+    let mut so: StaticOptimizationSetup = setup.static_optimization().unwrap().clone();
+    so.set_knee_contact(&["all".to_string()]).unwrap();
     let (problem, _) = SoProblem::build(&setup, &so).unwrap();
     assert_eq!(problem.knees.len(), 2);
     let states = load_states(&setup, &problem.model).unwrap();
@@ -405,12 +398,8 @@ fn knee_contact_ignores_w0_without_machine_contacts() {
     };
     for a in setup.analyses.iter_mut() {
         if let Analysis::StaticOptimization(so) = a {
-            for (name, text) in [
-                ("knee_contact", "walker_knee_l"),
-                ("contact_weight", "100 1000"),
-            ] {
-                **so = so.with_option(name, text).unwrap();
-            }
+            so.set_knee_contact(&["walker_knee_l".to_string()]).unwrap();
+            so.set_contact_weights(&[100.0, 1000.0]).unwrap();
         }
     }
     let out = common::out_dir("gc5_knee_contact_sweep");

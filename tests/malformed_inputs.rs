@@ -1356,3 +1356,45 @@ fn check_finds_a_setups_bad_figure_reference() {
         ],
     );
 }
+
+/// A setup's `<Figure>`s and `<Metric>`s are read into typed values with
+/// the setup: a metric op without its `where` column, or a `fill_between`
+/// naming a series its panel lacks, is an error of reading the setup,
+/// found by `--check` and by a run before any frame is computed (a run
+/// wrote every table and failed only when it drew; `--check` passed).
+#[test]
+fn a_setups_bad_figure_or_metric_is_refused_before_the_run() {
+    for (tag, element, needles) in [
+        (
+            "metric_where",
+            "<Metric name=\"peak\" file=\"run_SO_force.sto\" columns=\"r1\" op=\"argmax\"/>",
+            &["<Metric name=\"peak\">", "op 'argmax' needs a where attribute"][..],
+        ),
+        (
+            "fill_between",
+            "<Figure name=\"fig\"><Series file=\"run_SO_force.sto\" column=\"r1\"/><fill_between>0 1</fill_between></Figure>",
+            &["<fill_between>", "names a series that does not exist"][..],
+        ),
+    ] {
+        let mut f = Files::analyze();
+        let line = f.replace(
+            "setup.xml",
+            "<coordinates_file>motion.mot</coordinates_file>",
+            &format!("{element}\n<coordinates_file>motion.mot</coordinates_file>"),
+        );
+        let mut expected = vec!["setup.xml".to_string(), format!("line {line}")];
+        expected.extend(needles.iter().map(|n| n.to_string()));
+        let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+        let check = format!("figure_plan_{tag}_check");
+        expect_input_error(&check, run_with(&check, &f, "setup.xml", &["--check"]), &expected);
+        let test = format!("figure_plan_{tag}");
+        expect_input_error(&test, run(&test, &f, "setup.xml"), &expected);
+        let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("malformed_{test}"))
+            .join("out");
+        assert!(
+            !out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(),
+            "{test}: the run wrote tables before refusing its figure"
+        );
+    }
+}

@@ -123,30 +123,112 @@ pub enum ConstraintMatrix {
 /// Clarabel's feasibility/gap tolerance unless the setup asks for tighter.
 pub const DEFAULT_TOLERANCE: f64 = 1e-8;
 
-impl StaticOptimizationSetup {
-    /// The same settings with property `name` set to `text` (as if the
-    /// element said `<name>text</name>`), checked as when read: e.g.
-    /// `("friction_cone", "pyramid4")` (`statopt-tool bench --grid`).
-    pub fn with_option(&self, name: &str, text: &str) -> Result<Self> {
-        let mut el = self.element.clone();
-        match el.children.iter_mut().find(|c| c.name == name) {
-            Some(c) => {
-                c.text = text.to_string();
-                c.children.clear();
-            }
-            None => {
-                let child = Element {
-                    name: name.to_string(),
-                    attrs: Vec::new(),
-                    children: Vec::new(),
-                    text: text.to_string(),
-                    line: el.line,
-                    file: el.file.clone(),
-                };
-                el.children.push(child);
-            }
+impl KneeSelection {
+    /// The knees the words of `<knee_contact>` select, and whether each
+    /// knee has two compartments (false when a word is `axial`: one axial
+    /// contact per knee): `all`/`true` (or only `axial`) every knee,
+    /// `false`/`off`/`none` none, else the named joints. The same check
+    /// whether the words come from a setup or from an edit of its plan
+    /// (`statopt-tool knee-contact`).
+    pub fn from_words(words: &[String]) -> std::result::Result<(KneeSelection, bool), String> {
+        let frontal = !words.iter().any(|w| w.eq_ignore_ascii_case("axial"));
+        let mut named: Vec<String> = words
+            .iter()
+            .filter(|w| !w.eq_ignore_ascii_case("axial"))
+            .cloned()
+            .collect();
+        if named.is_empty() && !words.is_empty() {
+            named.push("all".into());
         }
-        Self::from_xml(&el, self.common.clone())
+        let lower: Vec<String> = named.iter().map(|w| w.to_ascii_lowercase()).collect();
+        let selection = match lower.as_slice() {
+            [] => {
+                return Err(
+                    "knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'"
+                        .to_string(),
+                )
+            }
+            [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
+            [w] if w == "true" || w == "all" => KneeSelection::All,
+            _ => KneeSelection::Joints(named),
+        };
+        Ok((selection, frontal))
+    }
+}
+
+/// Why `w0` cannot be a list of contact weights (`text`: how the setup
+/// gave them), or None.
+fn contact_weights_problem(v: &[f64], text: &str) -> Option<String> {
+    if v.is_empty() || v.iter().any(|x| !(*x > 0.0 && x.is_finite())) {
+        return Some(format!(
+            "contact_weight must be one or more positive numbers, found '{text}'"
+        ));
+    }
+    v.iter()
+        .find(|x| !(CONTACT_WEIGHT_RANGE.0..=CONTACT_WEIGHT_RANGE.1).contains(*x))
+        .map(|x| format!(
+            "contact_weight {x:e} lies outside [{:e}, {:e}]: the objective weighs contacts by 1/w0, and past these bounds one term no longer counts in double precision (the answer saturates long before: beyond w0 = 1e4 contacts carry more than 99.99 %, below 1e-4 muscles do)",
+            CONTACT_WEIGHT_RANGE.0, CONTACT_WEIGHT_RANGE.1
+        ))
+}
+
+/// Why `v` cannot be a knee compartment's capacity in body weights, or None.
+fn knee_capacity_problem(v: f64) -> Option<String> {
+    (!(v > 0.0 && v.is_finite())).then(|| format!(
+        "knee_contact_capacity is a compartment's load capacity in body weights and must be positive, found {v}"
+    ))
+}
+
+/// Why `v` cannot be Clarabel's tolerance, or None.
+fn solver_tolerance_problem(v: f64) -> Option<String> {
+    (!(v > 0.0 && v < 1.0)).then(|| format!("solver_tolerance must lie in (0, 1), found {v}"))
+}
+
+/// Typed edits of the plan (`statopt-tool knee-contact`, `bench --grid`,
+/// tests), checked as the same values are when read from a setup; an error
+/// names the StaticOptimization element.
+impl StaticOptimizationSetup {
+    /// Solve the knees `words` select ([`KneeSelection::from_words`]) with
+    /// the knee contact method.
+    pub fn set_knee_contact(&mut self, words: &[String]) -> Result<()> {
+        let (selection, frontal) =
+            KneeSelection::from_words(words).map_err(|m| self.element.error(m))?;
+        self.knee_contact = selection;
+        self.knee_contact_frontal = frontal;
+        Ok(())
+    }
+
+    /// The contact weights w0 (a sweep when several).
+    pub fn set_contact_weights(&mut self, w0: &[f64]) -> Result<()> {
+        let text = w0
+            .iter()
+            .map(|w| w.to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
+        if let Some(m) = contact_weights_problem(w0, &text) {
+            return Err(self.element.error(m));
+        }
+        self.contact_weights = w0.to_vec();
+        self.contact_weights_given = true;
+        Ok(())
+    }
+
+    /// Each knee compartment's load capacity in body weights.
+    pub fn set_knee_contact_capacity(&mut self, bw: f64) -> Result<()> {
+        if let Some(m) = knee_capacity_problem(bw) {
+            return Err(self.element.error(m));
+        }
+        self.knee_contact_capacity_bw = bw;
+        Ok(())
+    }
+
+    /// Clarabel's tolerance exactly (`<solver_tolerance>`).
+    pub fn set_solver_tolerance(&mut self, tol: f64) -> Result<()> {
+        if let Some(m) = solver_tolerance_problem(tol) {
+            return Err(self.element.error(m));
+        }
+        self.solver_tolerance = Some(tol);
+        Ok(())
     }
 }
 
@@ -162,6 +244,10 @@ impl StaticOptimizationSetup {
                 .req("optimizer_max_iterations")?
                 .error("optimizer_max_iterations must be positive"));
         }
+        let (knee_contact, knee_contact_frontal) = match el.child("knee_contact") {
+            None => (KneeSelection::Off, true),
+            Some(k) => KneeSelection::from_words(&k.words()).map_err(|m| k.error(m))?,
+        };
         Ok(StaticOptimizationSetup {
             common,
             contact_weights_given: el.child("contact_weight").is_some(),
@@ -180,14 +266,8 @@ impl StaticOptimizationSetup {
                 }
                 Some(w) => {
                     let v = w.numbers()?;
-                    if v.is_empty() || v.iter().any(|x| !(*x > 0.0 && x.is_finite())) {
-                        return Err(w.error(format!("contact_weight must be one or more positive numbers, found '{}'", w.text())));
-                    }
-                    if let Some(x) = v.iter().find(|x| !(CONTACT_WEIGHT_RANGE.0..=CONTACT_WEIGHT_RANGE.1).contains(*x)) {
-                        return Err(w.error(format!(
-                            "contact_weight {x:e} lies outside [{:e}, {:e}]: the objective weighs contacts by 1/w0, and past these bounds one term no longer counts in double precision (the answer saturates long before: beyond w0 = 1e4 contacts carry more than 99.99 %, below 1e-4 muscles do)",
-                            CONTACT_WEIGHT_RANGE.0, CONTACT_WEIGHT_RANGE.1
-                        )));
+                    if let Some(m) = contact_weights_problem(&v, w.text()) {
+                        return Err(w.error(m));
                     }
                     v
                 }
@@ -213,8 +293,8 @@ impl StaticOptimizationSetup {
             solver_tolerance: match el.child("solver_tolerance") {
                 Some(r) if !r.text().is_empty() => {
                     let v = r.f64()?;
-                    if !(v > 0.0 && v < 1.0) {
-                        return Err(r.error(format!("solver_tolerance must lie in (0, 1), found {v}")));
+                    if let Some(m) = solver_tolerance_problem(v) {
+                        return Err(r.error(m));
                     }
                     Some(v)
                 }
@@ -231,32 +311,15 @@ impl StaticOptimizationSetup {
             knee_contact_capacity_bw: match el.child("knee_contact_capacity") {
                 Some(c) if !c.text().trim().is_empty() => {
                     let v = c.f64()?;
-                    if !(v > 0.0 && v.is_finite()) {
-                        return Err(c.error(format!("knee_contact_capacity is a compartment's load capacity in body weights and must be positive, found {v}")));
+                    if let Some(m) = knee_capacity_problem(v) {
+                        return Err(c.error(m));
                     }
                     v
                 }
                 _ => DEFAULT_KNEE_CAPACITY_BW,
             },
-            knee_contact_frontal: !el
-                .child("knee_contact")
-                .is_some_and(|k| k.words().iter().any(|w| w.eq_ignore_ascii_case("axial"))),
-            knee_contact: match el.child("knee_contact") {
-                None => KneeSelection::Off,
-                Some(k) => {
-                    let mut words = k.words();
-                    words.retain(|w| !w.eq_ignore_ascii_case("axial"));
-                    if words.is_empty() && !k.words().is_empty() {
-                        words.push("all".into());
-                    }
-                    match words.iter().map(|w| w.to_ascii_lowercase()).collect::<Vec<_>>().as_slice() {
-                        [] => return Err(k.error("knee_contact is empty: give 'all' (every knee of the model), knee joint names, or 'false'")),
-                        [w] if w == "false" || w == "off" || w == "none" => KneeSelection::Off,
-                        [w] if w == "true" || w == "all" => KneeSelection::All,
-                        _ => KneeSelection::Joints(words),
-                    }
-                }
-            },
+            knee_contact_frontal,
+            knee_contact,
             reserve_actuators: match el.child("reserve_actuators") {
                 Some(r) if !r.text().is_empty() => {
                     let v = r.f64()?;

@@ -56,9 +56,9 @@ pub struct AnalyzeSetup {
     /// and speeds (`<coordinate_spline>gcv5|cubic</coordinate_spline>`): 5,
     /// OpenSim's quintic GCV spline (default), or 3, a natural cubic.
     pub coordinate_spline: usize,
-    /// statopt: `<Figure>` and `<Metric>` elements (see `tools::study`),
-    /// drawn from the run's tables after the analyses.
-    pub figures: Vec<Element>,
+    /// statopt: `<Figure>` and `<Metric>` elements (`parse::figures`; see
+    /// `tools::study`), drawn from the run's tables after the analyses.
+    pub figures: Vec<crate::parse::figures::FigureOrMetric>,
     pub analyses: Vec<Analysis>,
     /// Non-fatal remarks (unknown elements read on with `--allow-unknown`,
     /// see `parse::known`).
@@ -620,12 +620,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
             },
             _ => 5,
         },
-        figures: tool
-            .children
-            .iter()
-            .filter(|c| c.name == "Figure" || c.name == "Metric")
-            .cloned()
-            .collect(),
+        figures: crate::parse::figures::FigureOrMetric::read_children(tool)?,
         analyses,
         warnings: Vec::new(),
         unused_properties: Vec::new(),

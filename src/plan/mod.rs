@@ -10,6 +10,9 @@
 pub mod force_sweep;
 pub mod study;
 
+/// A study's or setup's figures and metrics, typed (`parse::figures`).
+pub use crate::parse::figures;
+
 use std::path::Path;
 
 pub use crate::parse::setup::{Analysis, AnalyzeSetup, InverseDynamicsSetup, Setup};

@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location, Result};
+use crate::parse::figures::{FigureOrMetric, FigureSpec, MetricSpec};
 use crate::parse::setup::{resolve, Setup};
 use crate::plan::force_sweep::ForceSweepPlan;
 use crate::xml::Element;
@@ -30,9 +31,13 @@ pub struct StudyDocument {
     pub results_directory_loc: Location,
     /// `<setups>`, resolved against [`StudyDocument::dir`].
     pub setup_files: Vec<PathBuf>,
-    /// `<ForceSweep>` elements.
+    /// `<ForceSweep>` elements (read by [`StudyPlan::from_document`]).
     pub sweeps: Vec<Element>,
-    /// `<Figure>` and `<Metric>` elements, in the document's order.
+    /// The setups the force sweeps name (their `setup` attributes),
+    /// resolved against [`StudyDocument::dir`].
+    pub sweep_setup_files: Vec<PathBuf>,
+    /// `<Figure>` and `<Metric>` elements, in the document's order (typed
+    /// by [`StudyPlan::from_document`]).
     pub figures: Vec<Element>,
     /// Elements neither statopt nor OpenSim knows, one error each.
     pub unknown: Vec<Error>,
@@ -71,6 +76,13 @@ impl StudyDocument {
                 .filter(|c| c.name == "ForceSweep")
                 .cloned()
                 .collect(),
+            sweep_setup_files: study
+                .children
+                .iter()
+                .filter(|c| c.name == "ForceSweep")
+                .filter_map(|c| c.attr("setup"))
+                .map(|f| resolve(&dir, f))
+                .collect(),
             figures: study
                 .children
                 .iter()
@@ -106,9 +118,9 @@ pub struct StudyPlan {
     pub results_directory_loc: Location,
     pub runs: Vec<StudyRun>,
     pub sweeps: Vec<ForceSweepPlan>,
-    /// `<Figure>` and `<Metric>` elements (checked against
-    /// `parse::known::FIGURE_ELEMENTS`), in the document's order.
-    pub figures: Vec<Element>,
+    /// `<Figure>` and `<Metric>` elements as typed values (every attribute
+    /// read and checked, `plan::figures`), in the document's order.
+    pub figures: Vec<FigureOrMetric>,
     /// Unknown elements read on past (`allow_unknown`).
     pub warnings: Vec<String>,
 }
@@ -149,6 +161,14 @@ impl StudyPlan {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
+        let figures = doc
+            .figures
+            .iter()
+            .map(|el| match el.name.as_str() {
+                "Figure" => FigureSpec::from_xml(el).map(FigureOrMetric::Figure),
+                _ => MetricSpec::from_xml(el).map(FigureOrMetric::Metric),
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(StudyPlan {
             file: doc.file,
             dir: doc.dir,
@@ -157,7 +177,7 @@ impl StudyPlan {
             results_directory_loc: doc.results_directory_loc,
             runs,
             sweeps,
-            figures: doc.figures,
+            figures,
             warnings,
         })
     }

@@ -1,10 +1,10 @@
 //! `statopt-tool bench SETUP.xml --grid`: speed against accuracy of the
 //! method choices of static optimization.
 //!
-//! A setup runs once per [`Choice`] — a name, a thread count and an edit of
-//! the setup (an option of the StaticOptimization element such as
-//! `<constraint_matrix>`, `<friction_cone>`, `<solver_tolerance>`, or of the
-//! AnalyzeTool such as `<coordinate_spline>` or the low-pass cut-off) — and
+//! A setup runs once per [`Choice`] — a name, a thread count and a typed
+//! edit of the setup's plan (a field of its StaticOptimization such as the
+//! constraint matrix, friction model or solver tolerance, or of the
+//! AnalyzeTool such as the coordinate spline or the low-pass cut-off) — and
 //! each run's time per frame (the whole per-frame loop, best of the repeats)
 //! is set against its error relative to a reference run of the same frames
 //! ([`reference_choice`]: exact friction cone, the dual Newton solver,
@@ -20,7 +20,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{Error, Location, Result};
-use crate::parse::analyses::StaticOptimizationSetup;
+use crate::parse::analyses::{
+    ConstraintMatrix, FrictionModel, SolverChoice, StaticOptimizationSetup,
+};
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plots::{self, RefLine, Scatter, ScatterPoint};
 use crate::storage::{self, Storage};
@@ -52,18 +54,13 @@ impl Choice {
         }
     }
 
-    /// Several StaticOptimization options `(element, text)` at once.
-    pub fn so_options(name: impl Into<String>, threads: usize, options: &[(&str, &str)]) -> Choice {
-        let options: Vec<(String, String)> = options
-            .iter()
-            .map(|(a, b)| (a.to_string(), b.to_string()))
-            .collect();
-        Choice::new(name, threads, move |s| {
-            for (k, v) in &options {
-                set_so_option(s, k, v)?;
-            }
-            Ok(())
-        })
+    /// An edit of the setup's StaticOptimization (the one that is on).
+    pub fn so(
+        name: impl Into<String>,
+        threads: usize,
+        edit: impl Fn(&mut StaticOptimizationSetup) -> Result<()> + Send + Sync + 'static,
+    ) -> Choice {
+        Choice::new(name, threads, move |s| edit(so_analysis(s)?))
     }
 }
 
@@ -139,24 +136,18 @@ fn so_analysis(setup: &mut AnalyzeSetup) -> Result<&mut StaticOptimizationSetup>
         })
 }
 
-/// Set property `name` of the setup's StaticOptimization to `text` (as if
-/// its element said `<name>text</name>`).
-pub fn set_so_option(setup: &mut AnalyzeSetup, name: &str, text: &str) -> Result<()> {
-    let so = so_analysis(setup)?;
-    *so = so.with_option(name, text)?;
-    Ok(())
-}
-
 /// The reference: exact friction cone, the dual Newton solver (solver
 /// tolerance 1e-10 for Clarabel where it falls back), analytic matrix,
 /// OpenSim's quintic spline, the setup's filtering, one thread.
 pub fn reference_choice() -> Choice {
     Choice::new("reference", 1, |s| {
         s.coordinate_spline = 5;
-        set_so_option(s, "friction_cone", "cone")?;
-        set_so_option(s, "solver", "auto")?;
-        set_so_option(s, "solver_tolerance", "1e-10")?;
-        set_so_option(s, "constraint_matrix", "analytic")
+        let so = so_analysis(s)?;
+        so.friction = FrictionModel::Cone;
+        so.solver = SolverChoice::Auto;
+        so.set_solver_tolerance(1e-10)?;
+        so.constraint_matrix = ConstraintMatrix::Analytic;
+        Ok(())
     })
 }
 
@@ -165,25 +156,40 @@ pub fn reference_choice() -> Choice {
 /// its tolerance, spline, filter, threads — and a few combinations.
 pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> {
     let mut v = vec![Choice::new("default", 1, |_| Ok(()))];
-    v.push(Choice::so_options(
-        "perturbation",
-        1,
-        &[("constraint_matrix", "perturbation")],
-    ));
+    v.push(Choice::so("perturbation", 1, |so| {
+        so.constraint_matrix = ConstraintMatrix::Perturbation;
+        Ok(())
+    }));
     if has_contacts {
-        for f in ["pyramid4", "pyramid8", "cone"] {
-            v.push(Choice::so_options(f, 1, &[("friction_cone", f)]));
+        for (name, f) in [
+            ("pyramid4", FrictionModel::Pyramid4),
+            ("pyramid8", FrictionModel::Pyramid8),
+            ("cone", FrictionModel::Cone),
+        ] {
+            v.push(Choice::so(name, 1, move |so| {
+                so.friction = f;
+                Ok(())
+            }));
         }
     }
     // Clarabel instead of the dual Newton solver, at several tolerances
     // (the Newton solver always solves to 1e-12 relative).
-    v.push(Choice::so_options("clarabel", 1, &[("solver", "clarabel")]));
-    for tol in ["1e-3", "1e-4", "1e-5", "1e-6", "1e-8", "1e-10"] {
-        v.push(Choice::so_options(
-            format!("clarabel tol {tol}"),
-            1,
-            &[("solver", "clarabel"), ("solver_tolerance", tol)],
-        ));
+    v.push(Choice::so("clarabel", 1, |so| {
+        so.solver = SolverChoice::Clarabel;
+        Ok(())
+    }));
+    for (name, tol) in [
+        ("1e-3", 1e-3),
+        ("1e-4", 1e-4),
+        ("1e-5", 1e-5),
+        ("1e-6", 1e-6),
+        ("1e-8", 1e-8),
+        ("1e-10", 1e-10),
+    ] {
+        v.push(Choice::so(format!("clarabel tol {name}"), 1, move |so| {
+            so.solver = SolverChoice::Clarabel;
+            so.set_solver_tolerance(tol)
+        }));
     }
     v.push(Choice::new("cubic spline", 1, |s| {
         s.coordinate_spline = 3;
@@ -210,30 +216,32 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         }));
     }
     // Combinations.
-    v.push(Choice::so_options(
+    v.push(Choice::so(
         "perturbation, clarabel tol 1e-4 (OpenSim-like)",
         1,
-        &[
-            ("constraint_matrix", "perturbation"),
-            ("solver", "clarabel"),
-            ("solver_tolerance", "1e-4"),
-        ],
+        |so| {
+            so.constraint_matrix = ConstraintMatrix::Perturbation;
+            so.solver = SolverChoice::Clarabel;
+            so.set_solver_tolerance(1e-4)
+        },
     ));
-    let mut fast = vec![("solver", "clarabel"), ("solver_tolerance", "1e-4")];
-    if has_contacts {
-        fast.push(("friction_cone", "pyramid4"));
-    }
     let name = if has_contacts {
         "clarabel tol 1e-4, pyramid4, 2 threads"
     } else {
         "clarabel tol 1e-4, 2 threads"
     };
-    v.push(Choice::so_options(name, 2, &fast));
-    v.push(Choice::so_options(
-        "cubic, clarabel tol 1e-6, 2 threads",
-        2,
-        &[("solver", "clarabel"), ("solver_tolerance", "1e-6")],
-    ));
+    v.push(Choice::so(name, 2, move |so| {
+        so.solver = SolverChoice::Clarabel;
+        so.set_solver_tolerance(1e-4)?;
+        if has_contacts {
+            so.friction = FrictionModel::Pyramid4;
+        }
+        Ok(())
+    }));
+    v.push(Choice::so("cubic, clarabel tol 1e-6, 2 threads", 2, |so| {
+        so.solver = SolverChoice::Clarabel;
+        so.set_solver_tolerance(1e-6)
+    }));
     if let Some(c) = v.last_mut() {
         let so = c.edit.clone();
         c.edit = Arc::new(move |s| {

@@ -9,6 +9,7 @@
 use std::path::Path;
 
 use crate::error::Error;
+use crate::parse::figures::FigureOrMetric;
 use crate::parse::setup::{
     missing_input_files, results_dir_problem, unknown_elements, Analysis, AnalyzeSetup,
     InverseDynamicsSetup, Setup,
@@ -45,12 +46,9 @@ pub fn run(path: &Path, allow_unknown: bool) -> CheckReport {
                 }
                 // The study's setups and its force sweeps' setups.
                 let mut files = doc.setup_files.clone();
-                for sw in &doc.sweeps {
-                    if let Some(f) = sw.attr("setup") {
-                        let p = crate::parse::setup::resolve(&doc.dir, f);
-                        if !files.contains(&p) {
-                            files.push(p);
-                        }
+                for p in &doc.sweep_setup_files {
+                    if !files.contains(p) {
+                        files.push(p.clone());
                     }
                 }
                 // Unknown elements are reported above and per setup below.
@@ -237,41 +235,38 @@ fn check_figure_references(setup: &AnalyzeSetup, report: &mut CheckReport) {
             .collect(),
         _ => Vec::new(),
     };
-    let mut visit = |el: &crate::xml::Element| {
-        for attr in ["file", "mean", "min", "max"] {
-            let Some(value) = el.attr(attr) else { continue };
-            let path = crate::parse::setup::resolve(&setup.results_directory, value);
-            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
-            let ours = file.starts_with(&format!("{}_", setup.name))
-                && path.parent() == Some(setup.results_directory.as_path());
-            if !ours {
-                if !path.is_file() {
-                    report.errors.push(el.error(format!(
-                        "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results directory)",
-                        path.display(),
-                        setup.name
-                    )));
-                }
-                continue;
+    for r in setup.figures.iter().flat_map(FigureOrMetric::tables) {
+        let (attr, value) = (r.attr, r.value);
+        let path = crate::parse::setup::resolve(&setup.results_directory, value);
+        let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+        let ours = file.starts_with(&format!("{}_", setup.name))
+            && path.parent() == Some(setup.results_directory.as_path());
+        if !ours {
+            if !path.is_file() {
+                report.errors.push(Error::input(
+                    r.loc.clone(),
+                    format!(
+                    "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results directory)",
+                    path.display(),
+                    setup.name
+                )));
             }
-            if let Some(tag) = names::w0_tag_in(file) {
-                if !tags.iter().any(|t| t == tag) {
-                    report.errors.push(el.error(format!(
+            continue;
+        }
+        if let Some(tag) = names::w0_tag_in(file) {
+            if !tags.iter().any(|t| t == tag) {
+                report.errors.push(Error::input(
+                    r.loc.clone(),
+                    format!(
                         "{attr}=\"{value}\": names w0 = {tag}, but the setup runs {}",
                         if tags.is_empty() {
                             "a single w0 (its tables carry no w0 in their names)".to_string()
                         } else {
                             format!("w0 = {}", tags[..tags.len() - 3].join(", "))
                         }
-                    )));
-                }
+                    ),
+                ));
             }
-        }
-    };
-    for f in &setup.figures {
-        visit(f);
-        for c in &f.children {
-            visit(c);
         }
     }
 }

@@ -33,13 +33,13 @@ use crate::frame::problem::{status_code, Control, FrameResult, SoProblem};
 use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, CONTACT_WEIGHT_RANGE};
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
+use crate::plan::figures::{FigureOrMetric, MetricOp, MetricSpec};
 use crate::reactions::linear::ReactionBasis;
 use crate::reactions::{column_labels, resolve_reactions, ReactionSpec};
 use crate::tools::analyze::open_state_stream_with;
 use crate::tools::study::metric_value;
 use crate::tools::RunOptions;
 use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
-use crate::xml::Element;
 
 pub use crate::plan::force_sweep::CandidateSpec;
 
@@ -121,7 +121,7 @@ enum Source {
 /// A `<Metric>` compiled against the problem: its columns in the row of
 /// its table.
 struct MetricPlan {
-    el: Element,
+    op: MetricOp,
     name: String,
     source: Source,
     columns: Vec<usize>,
@@ -161,19 +161,15 @@ fn table_stem(file: &str) -> &str {
 }
 
 fn plan_metric(
-    el: &Element,
+    m: &MetricSpec,
     setup: &AnalyzeSetup,
     so_name: &str,
     problem: &SoProblem,
     coupled: &mut [Coupled],
 ) -> Result<MetricPlan> {
-    let name = el
-        .attr("name")
-        .ok_or_else(|| el.error("a Metric needs a name attribute"))?
-        .to_string();
-    let file = el
-        .attr("file")
-        .ok_or_else(|| el.error("missing attribute file"))?;
+    let err = |msg: String| Error::input(m.loc.clone(), msg);
+    let name = m.name.clone();
+    let file = m.file.as_str();
     let stem = table_stem(file);
     let so_prefix = format!("{}_{so_name}_", setup.name);
     let mut source = None;
@@ -205,7 +201,7 @@ fn plan_metric(
         }
     }
     let Some(source) = source else {
-        return Err(el.error(format!(
+        return Err(err(format!(
             "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({so_prefix}..._<{}>.sto), of its coupled joint reactions (ReactionLoads, KneeLoads) and of the knee contact method ({kc_stem}.sto)",
             SO_KINDS.map(|k| k.0).join("|")
         )));
@@ -232,30 +228,20 @@ fn plan_metric(
         labels
             .iter()
             .position(|l| l == c)
-            .ok_or_else(|| el.error(format!("{file} has no column '{c}'")))
+            .ok_or_else(|| err(format!("{file} has no column '{c}'")))
     };
-    let columns = el
-        .attr("columns")
-        .ok_or_else(|| el.error("missing attribute columns"))?
+    let columns = m
+        .columns
         .split_whitespace()
         .map(&column)
         .collect::<Result<Vec<_>>>()?;
-    let located = el.attr("where").map(&column).transpose()?;
-    let scale = match el.attr("scale") {
-        Some(s) => s
-            .trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| el.error(format!("scale '{s}' is not a finite number")))?,
-        None => 1.0,
-    };
+    let located = m.where_column.as_deref().map(&column).transpose()?;
     Ok(MetricPlan {
-        el: el.clone(),
+        op: m.op,
         name,
         source,
         columns,
-        scale,
+        scale: m.scale,
         located,
     })
 }
@@ -497,8 +483,11 @@ impl Plan {
         let metrics = setup
             .figures
             .iter()
-            .filter(|e| e.name == "Metric")
-            .map(|el| plan_metric(el, setup, &so.common.name, &problem, &mut coupled))
+            .filter_map(|e| match e {
+                FigureOrMetric::Metric(m) => Some(m),
+                FigureOrMetric::Figure(_) => None,
+            })
+            .map(|m| plan_metric(m, setup, &so.common.name, &problem, &mut coupled))
             .collect::<Result<Vec<_>>>()?;
         let mut probed: Vec<usize> = Vec::new();
         for p in &problem.passive {
@@ -779,7 +768,7 @@ impl Collected {
                 plan.metrics
                     .iter()
                     .zip(per)
-                    .map(|(m, (y, w))| metric_value(&m.el, time, y, || Ok(w.clone())))
+                    .map(|(m, (y, w))| metric_value(m.op, time, y, || Ok(w.clone())))
                     .collect::<Result<Vec<f64>>>()
             })
             .collect::<Result<Vec<_>>>()?;

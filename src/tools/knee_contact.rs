@@ -144,11 +144,11 @@ pub fn run(setup_file: &Path, joints: &[String], opts: &RunOptions) -> Result<Ru
     for a in setup.analyses.iter_mut() {
         if let Analysis::StaticOptimization(so) = a {
             let words = if joints.is_empty() {
-                "all".to_string()
+                vec!["all".to_string()]
             } else {
-                joints.join(" ")
+                joints.to_vec()
             };
-            **so = so.with_option("knee_contact", &words)?;
+            so.set_knee_contact(&words)?;
             found = true;
         }
     }

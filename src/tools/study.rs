@@ -38,11 +38,14 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Location, Result};
 use crate::parse::setup::{resolve, Setup};
+use crate::plan::figures::{
+    self, FigureOrMetric, FigureSpec, MetricOp, MetricSpec, PanelSpec, SeriesData, SeriesSpec,
+    TableRef,
+};
 use crate::plan::StudyPlan;
 use crate::plots::{self, Chart, Layout, Series, Style};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, inverse_dynamics, RunOptions, RunSummary};
-use crate::xml::Element;
 
 /// Where figure and metric references point when a study moves its runs'
 /// outputs (`-o DIR`): the referenced path (resolved and normalised) and
@@ -89,116 +92,79 @@ impl<'a> Tables<'a> {
 }
 
 /// The time column and one data column (or the sum of the space-separated
-/// `columns`), scaled by the `scale` attribute, of the table named by the
-/// attribute `file_attr`.
+/// `column`s), times `scale`, of the table `file` that the element at `loc`
+/// names.
 fn table_column(
-    el: &Element,
     tables: &Tables,
-    file_attr: &str,
+    file: &str,
     column: &str,
+    scale: f64,
+    loc: &Location,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
-    let file = el
-        .attr(file_attr)
-        .ok_or_else(|| el.error(format!("missing attribute {file_attr}")))?;
     let path = tables.path(file);
-    let t = tables
-        .read(&path)
-        .map_err(|e| e.context(format!("{} ({})", el.describe(), file)))?;
+    let t = tables.read(&path).map_err(|e| {
+        e.context(format!(
+            "{} ({})",
+            loc.element.as_deref().unwrap_or_default(),
+            file
+        ))
+    })?;
     let mut y = vec![0.0; t.time.len()];
     for c in column.split_whitespace() {
-        let j = t
-            .column_index(c)
-            .ok_or_else(|| el.error(format!("{} has no column '{c}'", path.display())))?;
+        let j = t.column_index(c).ok_or_else(|| {
+            figures::error(loc, format!("{} has no column '{c}'", path.display()))
+        })?;
         for (v, r) in y.iter_mut().zip(&t.rows) {
             *v += r[j];
         }
     }
-    let scale: f64 = el
-        .attr("scale")
-        .map(|s| {
-            s.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| el.error(format!("scale '{s}' is not a finite number")))
-        })
-        .transpose()?
-        .unwrap_or(1.0);
     Ok((t.time.clone(), y.into_iter().map(|v| v * scale).collect()))
 }
 
-fn figure(el: &Element, tables: &Tables, out: &Path) -> Result<Vec<PathBuf>> {
-    let name = el
-        .attr("name")
-        .ok_or_else(|| el.error("a Figure needs a name attribute"))?;
-    let mut panels: Vec<Chart> = Vec::new();
-    let new_chart = |el: &Element| Chart {
-        title: el.attr("title").unwrap_or("").to_string(),
-        x_label: el.attr("x_label").unwrap_or("time (s)").to_string(),
-        y_label: el.attr("y_label").unwrap_or("").to_string(),
-        fill_label: el.attr("fill_label").unwrap_or("").to_string(),
+fn style(s: &SeriesSpec) -> Style {
+    if s.dashed {
+        Style::dashed(s.color)
+    } else {
+        Style::color(s.color)
+    }
+}
+
+fn chart(p: &PanelSpec, tables: &Tables) -> Result<Chart> {
+    let mut chart = Chart {
+        title: p.title.clone(),
+        x_label: p.x_label.clone(),
+        y_label: p.y_label.clone(),
+        fill_label: p.fill_label.clone(),
+        fill_between: p.fill_between,
         ..Chart::default()
     };
-    let style = |c: &Element| -> Result<Style> {
-        let color = match c.attr("color") {
-            Some(v) => v
-                .trim()
-                .parse::<usize>()
-                .map_err(|_| c.error(format!("color '{v}' is not a palette index")))?,
-            None => 0,
-        };
-        Ok(if c.attr("dashed") == Some("true") {
-            Style::dashed(color)
-        } else {
-            Style::color(color)
-        })
-    };
-    let mut chart = new_chart(el);
-    for c in &el.children {
-        match c.name.as_str() {
-            "Series" => {
-                let column = c
-                    .attr("column")
-                    .ok_or_else(|| c.error("missing attribute column"))?;
-                let (x, y) = table_column(c, tables, "file", column)?;
-                chart.series.push(Series::new(
-                    c.attr("label").unwrap_or(column),
-                    x,
-                    y,
-                    style(c)?,
-                ));
+    for s in &p.series {
+        let series = match &s.data {
+            SeriesData::Line { file } => {
+                let (x, y) = table_column(tables, file, &s.column, s.scale, &s.loc)?;
+                Series::new(s.label.as_str(), x, y, style(s))
             }
-            "Band" => {
-                let column = c
-                    .attr("column")
-                    .ok_or_else(|| c.error("missing attribute column"))?;
-                let (x, mean) = table_column(c, tables, "mean", column)?;
-                let (_, lo) = table_column(c, tables, "min", column)?;
-                let (_, hi) = table_column(c, tables, "max", column)?;
-                let mut series = Series::new(c.attr("label").unwrap_or(column), x, mean, style(c)?);
+            SeriesData::Band { mean, min, max } => {
+                let (x, m) = table_column(tables, mean, &s.column, s.scale, &s.loc)?;
+                let (_, lo) = table_column(tables, min, &s.column, s.scale, &s.loc)?;
+                let (_, hi) = table_column(tables, max, &s.column, s.scale, &s.loc)?;
+                let mut series = Series::new(s.label.as_str(), x, m, style(s));
                 series.band = Some((lo, hi));
-                chart.series.push(series);
+                series
             }
-            "fill_between" => {
-                let v = c.numbers_n(2)?;
-                chart.fill_between = Some((v[0] as usize, v[1] as usize));
-                if let Some(l) = c.attr("label") {
-                    chart.fill_label = l.to_string();
-                }
-            }
-            "panel" => {
-                let next = new_chart(c);
-                panels.push(std::mem::replace(&mut chart, next));
-            }
-            other => {
-                return Err(c.error(format!(
-                    "unknown element <{other}> in a Figure (Series, Band, fill_between, panel)"
-                )))
-            }
-        }
+        };
+        chart.series.push(series);
     }
-    panels.push(chart);
-    let stem = out.join(name);
+    Ok(chart)
+}
+
+fn figure(f: &FigureSpec, tables: &Tables, out: &Path) -> Result<Vec<PathBuf>> {
+    let mut panels = f
+        .panels
+        .iter()
+        .map(|p| chart(p, tables))
+        .collect::<Result<Vec<Chart>>>()?;
+    let stem = out.join(&f.name);
     if panels.len() == 1 {
         // 1600 px wide: read at a page's or screen's width, the text has
         // its normal size.
@@ -211,54 +177,46 @@ fn figure(el: &Element, tables: &Tables, out: &Path) -> Result<Vec<PathBuf>> {
     }
 }
 
-fn metric(el: &Element, tables: &Tables) -> Result<(String, f64)> {
-    let name = el
-        .attr("name")
-        .ok_or_else(|| el.error("a Metric needs a name attribute"))?
-        .to_string();
-    let columns = el
-        .attr("columns")
-        .ok_or_else(|| el.error("missing attribute columns"))?;
-    let (t, y) = table_column(el, tables, "file", columns)?;
+fn metric(m: &MetricSpec, tables: &Tables) -> Result<(String, f64)> {
+    let (t, y) = table_column(tables, &m.file, &m.columns, m.scale, &m.loc)?;
     // The column that locates a value (`where`): e.g. knee_flexion_r.
-    let v = metric_value(el, &t, &y, || {
-        let w = el.attr("where").unwrap_or_default();
-        Ok(table_column(el, tables, "file", w)?.1)
+    let v = metric_value(m.op, &t, &y, || {
+        let w = m.where_column.as_deref().unwrap_or_default();
+        Ok(table_column(tables, &m.file, w, m.scale, &m.loc)?.1)
     })?;
-    Ok((name, v))
+    Ok((m.name.clone(), v))
 }
 
-/// A `<Metric>`'s value (its `op` and `value` attributes) over the series
-/// `y` at times `t`; `where_column` gives its `where` column's values when
-/// the op needs them. (Force sweeps compute their candidates' metrics with
-/// it, from series they never write: `tools::force_sweep`.)
+/// A `<Metric>`'s value (its op) over the series `y` at times `t`;
+/// `where_column` gives its `where` column's values when the op needs them
+/// (the plan holds one for every such op). (Force sweeps compute their
+/// candidates' metrics with it, from series they never write:
+/// `tools::force_sweep`.)
 pub fn metric_value(
-    el: &Element,
+    op: MetricOp,
     t: &[f64],
     y: &[f64],
     where_column: impl Fn() -> Result<Vec<f64>>,
 ) -> Result<f64> {
-    // The column that locates a value (`where`): e.g. knee_flexion_r.
-    let located = || -> Result<Vec<f64>> {
-        if el.attr("where").is_none() {
-            return Err(el.error("this op needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"));
-        }
-        where_column()
-    };
-    let op = el.attr("op").unwrap_or("max");
     Ok(match op {
-        "max" => y.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
-        "min" => y.iter().cloned().fold(f64::INFINITY, f64::min),
-        "absmax" => y.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-        "mean" => y.iter().sum::<f64>() / y.len().max(1) as f64,
-        "integral" => t
+        MetricOp::Max => y.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        MetricOp::Min => y.iter().cloned().fold(f64::INFINITY, f64::min),
+        MetricOp::AbsMax => y.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+        MetricOp::Mean => y.iter().sum::<f64>() / y.len().max(1) as f64,
+        MetricOp::Integral => t
             .windows(2)
             .zip(y.windows(2))
             .map(|(t, y)| 0.5 * (y[0] + y[1]) * (t[1] - t[0]))
             .sum(),
-        "argmax" | "argmin" => {
-            let w = located()?;
-            let better = |a: f64, b: f64| if op == "argmax" { a > b } else { a < b };
+        MetricOp::ArgMax | MetricOp::ArgMin => {
+            let w = where_column()?;
+            let better = |a: f64, b: f64| {
+                if op == MetricOp::ArgMax {
+                    a > b
+                } else {
+                    a < b
+                }
+            };
             let mut k = 0;
             for i in 1..y.len() {
                 if better(y[i], y[k]) {
@@ -267,26 +225,16 @@ pub fn metric_value(
             }
             w.get(k).copied().unwrap_or(f64::NAN)
         }
-        "at" => {
-            let w = located()?;
-            let x: f64 = el
-                .attr("value")
-                .and_then(|s| s.trim().parse().ok())
-                .ok_or_else(|| el.error("op at needs a numeric value attribute (the where column's value to read at)"))?;
+        MetricOp::At(x) => {
+            let w = where_column()?;
             crossing(&w, y, |i| w[i] - x).unwrap_or(f64::NAN)
         }
-        "crossing" => {
-            let w = located()?;
+        MetricOp::Crossing => {
+            let w = where_column()?;
             crossing(y, &w, |i| y[i]).unwrap_or(f64::NAN)
         }
-        other => return Err(el.error(format!("unknown op '{other}' ({})", METRIC_OPS.join(", ")))),
     })
 }
-
-/// The operations a `<Metric>` knows.
-pub const METRIC_OPS: [&str; 9] = [
-    "max", "min", "absmax", "mean", "integral", "argmax", "argmin", "at", "crossing",
-];
 
 /// `out` linearly interpolated at the first sign change of `f(i)` (i over
 /// the rows of `key`); None when `f` keeps one sign.
@@ -359,9 +307,6 @@ fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRu
     }
 }
 
-/// The attributes of a Figure's or Metric's elements that name tables.
-const FILE_ATTRS: [&str; 4] = ["file", "mean", "min", "max"];
-
 /// Lexically normalised path (no `.`/`..`), so references and output
 /// folders compare whether or not they exist yet.
 fn normalise(p: &Path) -> PathBuf {
@@ -387,73 +332,67 @@ fn normalise(p: &Path) -> PathBuf {
 /// tables the runs must write (with the element naming each) and where
 /// references point ([`Moved`]).
 fn check_references(
-    elements: &[Element],
+    elements: &[FigureOrMetric],
     dir: &Path,
     runs: &[PlannedRun],
 ) -> Result<(Vec<(PathBuf, Location)>, Moved)> {
     let mut from_runs = Vec::new();
     let mut moved_refs = Moved::new();
-    let mut visit = |el: &Element| -> Result<()> {
-        for attr in FILE_ATTRS {
-            let Some(value) = el.attr(attr).map(str::to_string) else {
-                continue;
-            };
-            let path = normalise(&resolve(dir, &value));
-            let run = runs
-                .iter()
-                .find(|r| path.parent() == Some(normalise(&r.own_dir).as_path()));
-            let Some(run) = run else {
-                if !path.is_file() {
-                    return Err(el.error(format!(
-                        "{attr}=\"{value}\": {} does not exist and no setup of the study writes to its folder",
-                        path.display()
-                    )));
-                }
-                continue;
-            };
-            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
-            if let Some(only) = &run.only_file {
-                if file != only {
-                    return Err(el.error(format!(
-                        "{attr}=\"{value}\": {} writes only {only} to that folder",
-                        run.file.display()
-                    )));
-                }
-            } else if !file.starts_with(&format!("{}_", run.name)) {
-                return Err(el.error(format!(
-                    "{attr}=\"{value}\": {} is in the results folder of {}, whose tables are named {}_...",
-                    file,
-                    run.file.display(),
-                    run.name
+    let mut visit = |r: TableRef| -> Result<()> {
+        let (attr, value) = (r.attr, r.value);
+        let err = |msg: String| figures::error(r.loc, msg);
+        let path = normalise(&resolve(dir, value));
+        let run = runs
+            .iter()
+            .find(|p| path.parent() == Some(normalise(&p.own_dir).as_path()));
+        let Some(run) = run else {
+            if !path.is_file() {
+                return Err(err(format!(
+                    "{attr}=\"{value}\": {} does not exist and no setup of the study writes to its folder",
+                    path.display()
                 )));
             }
-            if let Some(tag) = crate::writers::names::w0_tag_in(file) {
-                if !run.w0_tags.iter().any(|t| t == tag) {
-                    return Err(el.error(format!(
-                        "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
-                        run.file.display(),
-                        if run.w0_tags.is_empty() {
-                            "a single w0 (its tables carry no w0 in their names)".to_string()
-                        } else {
-                            format!("w0 = {}", run.w0_tags[..run.w0_tags.len() - 3].join(", "))
-                        }
-                    )));
-                }
+            return Ok(());
+        };
+        let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+        if let Some(only) = &run.only_file {
+            if file != only {
+                return Err(err(format!(
+                    "{attr}=\"{value}\": {} writes only {only} to that folder",
+                    run.file.display()
+                )));
             }
-            // Absolute, so that drawing (which resolves against the
-            // study's folder) finds it wherever the study was started.
-            let moved = std::path::absolute(run.out_dir.join(file))
-                .map_err(|e| Error::io(&run.out_dir, e))?;
-            from_runs.push((moved.clone(), el.loc()));
-            moved_refs.insert(path, moved);
+        } else if !file.starts_with(&format!("{}_", run.name)) {
+            return Err(err(format!(
+                "{attr}=\"{value}\": {} is in the results folder of {}, whose tables are named {}_...",
+                file,
+                run.file.display(),
+                run.name
+            )));
         }
+        if let Some(tag) = crate::writers::names::w0_tag_in(file) {
+            if !run.w0_tags.iter().any(|t| t == tag) {
+                return Err(err(format!(
+                    "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
+                    run.file.display(),
+                    if run.w0_tags.is_empty() {
+                        "a single w0 (its tables carry no w0 in their names)".to_string()
+                    } else {
+                        format!("w0 = {}", run.w0_tags[..run.w0_tags.len() - 3].join(", "))
+                    }
+                )));
+            }
+        }
+        // Absolute, so that drawing (which resolves against the
+        // study's folder) finds it wherever the study was started.
+        let moved =
+            std::path::absolute(run.out_dir.join(file)).map_err(|e| Error::io(&run.out_dir, e))?;
+        from_runs.push((moved.clone(), r.loc.clone()));
+        moved_refs.insert(path, moved);
         Ok(())
     };
-    for e in elements {
-        visit(e)?;
-        for c in &e.children {
-            visit(c)?;
-        }
+    for r in elements.iter().flat_map(FigureOrMetric::tables) {
+        visit(r)?;
     }
     Ok((from_runs, moved_refs))
 }
@@ -476,26 +415,9 @@ fn prepare<'a>(
         .iter()
         .map(|r| plan(&r.file, &r.setup, moved_to))
         .collect();
-    let elements = &study.figures;
-    let (expected, moved) = check_references(elements, &study.dir, &runs)?;
-    for m in elements.iter().filter(|e| e.name == "Metric") {
-        let op = m.attr("op").unwrap_or("max");
-        if !METRIC_OPS.contains(&op) {
-            return Err(m.error(format!("unknown op '{op}' ({})", METRIC_OPS.join(", "))));
-        }
-        if ["argmax", "argmin", "at", "crossing"].contains(&op) && m.attr("where").is_none() {
-            return Err(m.error(format!(
-                "op '{op}' needs a where attribute naming the column that locates the value (e.g. where=\"knee_flexion_r\")"
-            )));
-        }
-        if op == "at"
-            && m.attr("value")
-                .and_then(|v| v.trim().parse::<f64>().ok())
-                .is_none()
-        {
-            return Err(m.error("op 'at' needs a numeric value attribute"));
-        }
-    }
+    // (Every figure's and metric's attributes, its op among them, were
+    // checked when the study was read: `plan::figures`.)
+    let (expected, moved) = check_references(&study.figures, &study.dir, &runs)?;
     Ok((runs, expected, moved))
 }
 
@@ -614,7 +536,7 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
 /// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`,
 /// moved as `moved` says) into `out`; metrics go to `<name>_metrics.csv`.
 pub fn draw(
-    elements: &[Element],
+    elements: &[FigureOrMetric],
     dir: &Path,
     out: &Path,
     name: &str,
@@ -628,14 +550,18 @@ pub fn draw(
     let tables = Tables::new(dir, moved);
     let figures: Vec<Vec<PathBuf>> = elements
         .par_iter()
-        .filter(|e| e.name == "Figure")
-        .map(|f| figure(f, &tables, out))
+        .filter_map(|e| match e {
+            FigureOrMetric::Figure(f) => Some(figure(f, &tables, out)),
+            FigureOrMetric::Metric(_) => None,
+        })
         .collect::<Result<_>>()?;
     files.extend(figures.into_iter().flatten());
     let metrics: Vec<(String, f64)> = elements
         .par_iter()
-        .filter(|e| e.name == "Metric")
-        .map(|m| metric(m, &tables))
+        .filter_map(|e| match e {
+            FigureOrMetric::Metric(m) => Some(metric(m, &tables)),
+            FigureOrMetric::Figure(_) => None,
+        })
         .collect::<Result<_>>()?;
     if !metrics.is_empty() {
         let p = out.join(format!("{name}_metrics.csv"));

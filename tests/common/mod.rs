@@ -132,11 +132,7 @@ pub fn so_case(
         Setup::Analyze(s) => s,
         _ => unreachable!(),
     };
-    let (el, common_) = setup
-        .analysis_element("StaticOptimization")
-        .map(|(e, c)| (e.clone(), c.clone()))
-        .unwrap();
-    let mut so = StaticOptimizationSetup::from_xml(&el, common_).unwrap();
+    let mut so: StaticOptimizationSetup = setup.static_optimization().unwrap().clone();
     if let Some(f) = friction {
         so.friction = f;
     }
