@@ -37,14 +37,28 @@ const ROOT_ITEMS: [(&str, &str); 3] = [
     ("Location", "error"),
 ];
 
+/// A source text up to its first `#[cfg(test)]`: the code that ships.
+fn before_tests(source: &str) -> &str {
+    match source.find("#[cfg(test)]") {
+        Some(i) => &source[..i],
+        None => source,
+    }
+}
+
+/// Whether `line` holds `word` as a name of its own at byte `i` (not part
+/// of a longer identifier on either side).
+fn word_at(line: &str, i: usize, word: &str) -> bool {
+    let before = line[..i].chars().next_back();
+    let after = line[i + word.len()..].chars().next();
+    let ident = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+    !ident(before) && !ident(after)
+}
+
 /// The modules of the crate a source text refers to (`crate::m`, and each
 /// `m` of `use crate::{m::..., ...}`), outside `//` comments and from the
 /// first `#[cfg(test)]` on.
 fn referenced_modules(source: &str) -> BTreeSet<String> {
-    let code = match source.find("#[cfg(test)]") {
-        Some(i) => &source[..i],
-        None => source,
-    };
+    let code = before_tests(source);
     let mut out = BTreeSet::new();
     for line in code.lines() {
         let line = match line.find("//") {
@@ -201,10 +215,7 @@ fn tools_receive_the_plan_and_read_no_setup_xml() {
     let mut offenders = Vec::new();
     for f in files.iter().filter(|f| !f.ends_with("scene.rs")) {
         let source = std::fs::read_to_string(f).unwrap();
-        let code = match source.find("#[cfg(test)]") {
-            Some(i) => &source[..i],
-            None => &source,
-        };
+        let code = before_tests(&source);
         for (n, line) in code.lines().enumerate() {
             let line = line.split("//").next().unwrap_or("");
             for pat in [
@@ -245,20 +256,19 @@ fn the_plan_is_edited_as_typed_values() {
         }
     }
     assert!(files.len() > 50, "{}", files.len());
-    let word = ["with", "_option("].concat();
+    // The name on its own (not mcap's `new_with_options` or
+    // `create_with_options`), outside comments.
+    let word = ["with", "_option"].concat();
     let mut offenders = Vec::new();
     for f in &files {
         let source = std::fs::read_to_string(f).unwrap();
         for (n, line) in source.lines().enumerate() {
-            let mut rest = line;
-            while let Some(i) = rest.find(&word) {
-                // The name on its own (not mcap's
-                // `new_with_options` or `create_with_options`).
-                let before = rest[..i].chars().next_back();
-                if !before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
-                    offenders.push(format!("{}:{}", f.display(), n + 1));
-                }
-                rest = &rest[i + word.len()..];
+            let line = line.split("//").next().unwrap_or("");
+            if line
+                .match_indices(&word)
+                .any(|(i, _)| word_at(line, i, &word))
+            {
+                offenders.push(format!("{}:{}", f.display(), n + 1));
             }
         }
     }
@@ -288,18 +298,12 @@ fn tools_hold_no_xml_elements() {
         }
         checked += 1;
         let source = std::fs::read_to_string(f).unwrap();
-        let code = match source.find("#[cfg(test)]") {
-            Some(i) => &source[..i],
-            None => &source,
-        };
+        let code = before_tests(&source);
         for (n, line) in code.lines().enumerate() {
             let line = line.split("//").next().unwrap_or("");
-            let element = line.match_indices("Element").any(|(i, _)| {
-                let before = line[..i].chars().next_back();
-                let after = line[i + "Element".len()..].chars().next();
-                !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
-                    && !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
-            });
+            let element = line
+                .match_indices("Element")
+                .any(|(i, _)| word_at(line, i, "Element"));
             if element || line.contains("crate::xml") || line.contains("xml::") {
                 offenders.push(format!("src/tools/{name}:{}: {}", n + 1, line.trim()));
             }
