@@ -1,4 +1,4 @@
-//! A run reads its motion once (issue 28): the driver reads the coordinates
+//! A run reads its motion once (issue 28), and its model once: the driver reads the coordinates
 //! file into memory and every reader (each analysis's states stream and its
 //! passes, the coupled and the forces-file JointReaction, the in-memory
 //! fallbacks) parses those bytes. `storage::times_opened` counts the
@@ -56,12 +56,22 @@ fn analyses_of_one_run_open_the_motion_once() {
     };
     let motion = own_copy(setup.coordinates_file.as_ref().unwrap(), &out);
     setup.coordinates_file = Some(motion.clone());
+    let model = own_copy(&setup.model_file, &out);
+    setup.model_file = model.clone();
     let opts = RunOptions {
         results_dir: Some(out.join("results")),
         threads: Some(1),
         ..Default::default()
     };
     let summary = analyze::run(&setup, &opts).unwrap();
+    // The model too is parsed once for the three analyses that run on it
+    // (it was parsed once by each: 3 times).
+    assert_eq!(
+        statopt::xml::times_parsed(&model),
+        1,
+        "parses of {}",
+        model.display()
+    );
     for table in [
         "arm26_MuscleAnalysis_Length.sto",
         "arm26_StaticOptimization_activation.sto",

@@ -5,7 +5,9 @@
 
 use crate::error::{Error, Location, Result};
 use crate::forces::actuators::Actuator;
-use crate::forces::analysis_model::{applies_force, force_kind, load_analysis_model, ForceKind};
+use crate::forces::analysis_model::{
+    applies_force, force_kind, load_analysis_model, AnalysisModel, ForceKind,
+};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
 use crate::frame::problem::Control;
@@ -39,7 +41,16 @@ impl JointReactionProblem {
         setup: &AnalyzeSetup,
         jr: &JointReactionSetup,
     ) -> Result<(JointReactionProblem, Vec<String>)> {
-        let am = load_analysis_model(setup)?;
+        Self::build_from(setup, jr, load_analysis_model(setup)?)
+    }
+
+    /// [`build`](Self::build) on an already loaded model (the run's, when
+    /// several analyses share it: `tools::analyze`).
+    pub fn build_from(
+        setup: &AnalyzeSetup,
+        jr: &JointReactionSetup,
+        am: AnalysisModel,
+    ) -> Result<(JointReactionProblem, Vec<String>)> {
         let model = am.model;
         let mut warnings = am.warnings;
         let mut forces = Vec::new();

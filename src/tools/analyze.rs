@@ -286,17 +286,34 @@ fn run_analyses(
         Some(m) => m.clone(),
         None => read_motion(setup)?,
     };
+    // The model with its force set, loaded once when several analyses run
+    // on it; a single analysis loads its own (static optimization reads
+    // the external loads on a second thread meanwhile).
+    let on_model = active
+        .iter()
+        .filter(|a| match a {
+            Analysis::MuscleAnalysis(_) | Analysis::StaticOptimization(_) => true,
+            Analysis::JointReaction(jr) => !coupled.iter().any(|c| c.common.name == jr.common.name),
+            Analysis::Unsupported { .. } => false,
+        })
+        .count();
+    let shared = if on_model > 1 {
+        Some(crate::tools::loading::load_analysis_model(setup)?)
+    } else {
+        None
+    };
+    let model = shared.as_ref();
     for a in active {
         match a {
             Analysis::MuscleAnalysis(m) => {
-                let s = muscle_analysis::run(setup, m, &motion, opts)?;
+                let s = muscle_analysis::run(setup, m, &motion, model, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
                 }
             }
             Analysis::StaticOptimization(so) => {
-                let s = static_optimization::run(setup, so, &coupled, &motion, opts)?;
+                let s = static_optimization::run(setup, so, &coupled, &motion, model, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);
@@ -306,7 +323,7 @@ fn run_analyses(
                 if coupled.iter().any(|c| c.common.name == jr.common.name) {
                     continue; // computed inside static optimization
                 }
-                let s = joint_reaction::run(setup, jr, &motion, opts)?;
+                let s = joint_reaction::run(setup, jr, &motion, model, opts)?;
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);

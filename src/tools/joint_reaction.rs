@@ -63,9 +63,13 @@ pub fn run(
     setup: &AnalyzeSetup,
     jr: &JointReactionSetup,
     motion: &TableFile,
+    model: Option<&crate::forces::analysis_model::AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    let (problem, mut warnings) = JointReactionProblem::build(setup, jr)?;
+    let (problem, mut warnings) = match model {
+        Some(am) => JointReactionProblem::build_from(setup, jr, am.clone())?,
+        None => JointReactionProblem::build(setup, jr)?,
+    };
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_motion_stream(setup, motion, &problem.model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));

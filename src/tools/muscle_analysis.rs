@@ -29,6 +29,7 @@ pub fn run(
     setup: &AnalyzeSetup,
     ma: &MuscleAnalysisSetup,
     motion: &TableFile,
+    model: Option<&AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let AnalysisModel {
@@ -36,7 +37,10 @@ pub fn run(
         spec,
         forces,
         mut warnings,
-    } = load_analysis_model(setup)?;
+    } = match model {
+        Some(am) => am.clone(),
+        None => load_analysis_model(setup)?,
+    };
     let set = MuscleSet::compile(&spec, &forces, &model)?;
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_motion_stream(setup, motion, &model, &[])?;

@@ -16,7 +16,7 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::forces::analysis_model::load_analysis_model;
+use crate::forces::analysis_model::{load_analysis_model, AnalysisModel};
 use crate::frame::driver::for_each_frame_grouped;
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::AnalyzeSetup;
@@ -51,10 +51,14 @@ pub fn run(
     so: &StaticOptimizationSetup,
     reactions: &[JointReactionSetup],
     motion: &TableFile,
+    model: Option<&AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let (problem, mut warnings, reduction) = if setup.reduce_model {
-        let am = load_analysis_model(setup)?;
+        let am = match model {
+            Some(am) => am.clone(),
+            None => load_analysis_model(setup)?,
+        };
         let (am, r) = crate::tools::reduce::reduce(
             setup,
             motion,
@@ -65,6 +69,9 @@ pub fn run(
         )?;
         let (p, w) = SoProblem::build_from(setup, so, am)?;
         (p, w, Some(r))
+    } else if let Some(am) = model {
+        let (p, w) = SoProblem::build_from(setup, so, am.clone())?;
+        (p, w, None)
     } else {
         let (p, w) = SoProblem::build(setup, so)?;
         (p, w, None)
