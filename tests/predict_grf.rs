@@ -385,6 +385,9 @@ fn the_prediction_opens_the_motion_once() {
     let motion = out.join(given.file_name().unwrap());
     std::fs::copy(&given, &motion).unwrap();
     setup.coordinates_file = Some(motion.clone());
+    let model = out.join(setup.model_file.file_name().unwrap());
+    std::fs::copy(&setup.model_file, &model).unwrap();
+    setup.model_file = model.clone();
     setup.final_time = setup.initial_time + 0.1;
     let opts = RunOptions {
         results_dir: Some(out.join("results")),
@@ -393,6 +396,15 @@ fn the_prediction_opens_the_motion_once() {
     };
     let p = predict_grf::run(&setup, &opts).unwrap();
     assert!(p.summary.frames > 0);
+    // The model is parsed once too: completed with the user's force sets
+    // to fit the feet, with the prediction's for the run (it was parsed
+    // twice).
+    assert_eq!(
+        statopt::xml::times_parsed(&model),
+        1,
+        "parses of {}",
+        model.display()
+    );
     assert_eq!(
         statopt::storage::times_opened(&motion),
         1,

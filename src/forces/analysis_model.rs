@@ -63,17 +63,55 @@ pub struct AnalysisModel {
 }
 
 pub fn load_analysis_model(setup: &crate::parse::setup::AnalyzeSetup) -> Result<AnalysisModel> {
+    with_force_sets(load_composed_model_of(setup)?, setup)
+}
+
+/// The setup's model and artifacts, parsed and compiled, with the model's
+/// own force elements kept apart: what [`with_force_sets`] completes with
+/// a setup's force sets. A tool that runs the same model with other force
+/// sets (predict-grf: the user's, then its own with the foot contacts)
+/// loads it once.
+#[derive(Clone)]
+pub struct ComposedModel {
+    pub model: Model,
+    pub spec: ModelSpec,
+    /// The model's and its artifacts' own force elements (moved out of
+    /// `spec.forces`, which stays empty).
+    pub own_forces: Vec<Element>,
+}
+
+/// Parse and compile the setup's model and artifacts.
+pub fn load_composed_model_of(setup: &crate::parse::setup::AnalyzeSetup) -> Result<ComposedModel> {
     // Artifacts are merged before compilation and force-set files are read
     // after it: contacts in a force-set file resolve their bodies against the
     // composed model.
     let (mut spec, model) = load_composed_model(&setup.model_file, &setup.artifact_files)?;
-    // The model's own force elements move to `forces` (not copied: 92
+    // The model's own force elements move to `own_forces` (not copied: 92
     // muscles' elements on gait2392); `spec.forces` is left empty.
-    let own = std::mem::take(&mut spec.forces);
+    let own_forces = std::mem::take(&mut spec.forces);
+    Ok(ComposedModel {
+        model,
+        spec,
+        own_forces,
+    })
+}
+
+/// The [`AnalysisModel`] of `setup` on a model already composed: its own
+/// forces (unless `replace_force_set`), then the setup's force-set files
+/// and documents.
+pub fn with_force_sets(
+    composed: ComposedModel,
+    setup: &crate::parse::setup::AnalyzeSetup,
+) -> Result<AnalysisModel> {
+    let ComposedModel {
+        model,
+        spec,
+        own_forces,
+    } = composed;
     let mut forces = if setup.replace_force_set {
         Vec::new()
     } else {
-        own
+        own_forces
     };
     let mut warnings = model.warnings.clone();
     let read: Vec<crate::xml::Element> = setup

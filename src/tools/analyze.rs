@@ -9,7 +9,7 @@ use crate::motion::states::States;
 use crate::motion::stream::StateStream;
 use crate::parse::setup::{Analysis, AnalyzeSetup};
 use crate::storage::TableFile;
-use crate::tools::loading::load_coordinates_in;
+use crate::tools::loading::{load_coordinates_in, AnalysisModel};
 use crate::tools::{joint_reaction, muscle_analysis, static_optimization, RunOptions, RunSummary};
 
 /// The setup's coordinates file, refusing states and speeds files.
@@ -205,7 +205,7 @@ pub fn open_motion_stream<'m>(
 /// Run the setup's analyses. The coordinates file is read once
 /// ([`read_motion`]) and every analysis reads the motion from those bytes.
 pub fn run(setup: &AnalyzeSetup, opts: &RunOptions) -> Result<RunSummary> {
-    run_in(setup, None, opts)
+    run_in(setup, None, None, opts)
 }
 
 /// [`run`] on the run's motion, `motion`, already read by the caller (the
@@ -216,12 +216,25 @@ pub fn run_motion(
     motion: &TableFile,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    run_in(setup, Some(motion), opts)
+    run_in(setup, Some(motion), None, opts)
+}
+
+/// [`run_motion`] on the model the caller loaded for this setup (its force
+/// sets included: `forces::analysis_model::with_force_sets`), which every
+/// analysis then runs on (predict-grf loads its model once).
+pub fn run_prepared(
+    setup: &AnalyzeSetup,
+    motion: &TableFile,
+    model: AnalysisModel,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
+    run_in(setup, Some(motion), Some(model), opts)
 }
 
 fn run_in(
     setup: &AnalyzeSetup,
     motion: Option<&TableFile>,
+    model: Option<AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     match opts.threads {
@@ -230,9 +243,9 @@ fn run_in(
                 .num_threads(n.max(1))
                 .build()
                 .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
-            pool.install(|| run_analyses(setup, motion, opts))
+            pool.install(|| run_analyses(setup, motion, model, opts))
         }
-        None => run_analyses(setup, motion, opts),
+        None => run_analyses(setup, motion, model, opts),
     }
     .and_then(|mut summary| {
         if !setup.figures.is_empty() && summary.stopped.is_none() {
@@ -253,6 +266,7 @@ fn run_in(
 fn run_analyses(
     setup: &AnalyzeSetup,
     motion: Option<&TableFile>,
+    model: Option<AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let mut summary = RunSummary {
@@ -297,10 +311,10 @@ fn run_analyses(
             Analysis::Unsupported { .. } => false,
         })
         .count();
-    let shared = if on_model > 1 {
-        Some(crate::tools::loading::load_analysis_model(setup)?)
-    } else {
-        None
+    let shared = match model {
+        Some(am) => Some(am),
+        None if on_model > 1 => Some(crate::tools::loading::load_analysis_model(setup)?),
+        None => None,
     };
     let model = shared.as_ref();
     for a in active {

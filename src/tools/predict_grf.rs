@@ -22,7 +22,7 @@ use crate::error::{Error, Location, Result};
 use crate::forces::external_loads::ExternalLoads;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::{self, StoWriter};
-use crate::tools::{analyze, loading, RunOptions, RunSummary};
+use crate::tools::{analyze, RunOptions, RunSummary};
 
 /// Per frame and foot: force on the foot (N, ground), centre of pressure
 /// on the floor (m) and free moment about the floor normal (N·m).
@@ -522,7 +522,10 @@ pub fn run_with(
     let mut setup = setup.clone();
     let measured_file = setup.external_loads_file.take();
     let reserves = take_reserve_actuators(&mut setup)?;
-    let am = loading::load_analysis_model(&setup)?;
+    // The model is parsed and compiled once: completed with the user's
+    // force sets here, with the prediction's for the run below.
+    let composed = crate::forces::analysis_model::load_composed_model_of(&setup)?;
+    let am = crate::forces::analysis_model::with_force_sets(composed.clone(), &setup)?;
     let strength = torque_driven_strength(&am.forces, &am.model, reserves);
     let default_weight = match strength {
         Some(s) => DEFAULT_CONTACT_WEIGHT * (s / MUSCLE_STRENGTH_REFERENCE).powi(2),
@@ -557,7 +560,8 @@ pub fn run_with(
             &contacts_xml,
             &contacts_file,
         )?);
-    let mut summary = analyze::run_motion(&setup, &motion, opts)?;
+    let run_model = crate::forces::analysis_model::with_force_sets(composed, &setup)?;
+    let mut summary = analyze::run_prepared(&setup, &motion, run_model, opts)?;
     summary.warnings.extend(contacts.warnings.iter().cloned());
     written.push(contacts_file);
     summary.files.extend(written);
