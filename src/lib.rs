@@ -27,6 +27,7 @@
 pub mod contacts;
 pub mod dynamics;
 pub mod error;
+pub mod file_counts;
 pub mod forces;
 pub mod frame;
 pub mod functions;

@@ -28,28 +28,19 @@ pub struct Element {
 
 /// Parse an XML file into its root element.
 pub fn parse_file(path: &Path) -> Result<Element> {
-    count_parse(path);
+    PARSED.count(path);
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     parse_str(&text, path)
 }
 
 /// How many times [`parse_file`] read each path, so that tests can check
 /// that a run parses its model once.
-static PARSED: std::sync::Mutex<Option<std::collections::HashMap<std::path::PathBuf, usize>>> =
-    std::sync::Mutex::new(None);
-
-fn count_parse(path: &Path) {
-    let mut m = PARSED.lock().unwrap_or_else(|e| e.into_inner());
-    *m.get_or_insert_with(Default::default)
-        .entry(path.to_path_buf())
-        .or_insert(0) += 1;
-}
+static PARSED: crate::file_counts::PathCounts = crate::file_counts::PathCounts::new();
 
 /// How many times [`parse_file`] read the file `path` (as spelled by its
 /// caller) since the process started.
 pub fn times_parsed(path: &Path) -> usize {
-    let m = PARSED.lock().unwrap_or_else(|e| e.into_inner());
-    m.as_ref().and_then(|m| m.get(path)).copied().unwrap_or(0)
+    PARSED.get(path)
 }
 
 /// Parse XML text; `file` is used only for error messages.

@@ -29,7 +29,15 @@ const PIPELINE: [&str; 16] = [
 ];
 /// Modules any stage may use; they import only each other (`test_dir`:
 /// unit tests' scratch folders).
-const BASE: [&str; 6] = ["error", "xml", "storage", "output", "plots", "test_dir"];
+const BASE: [&str; 7] = [
+    "error",
+    "file_counts",
+    "xml",
+    "storage",
+    "output",
+    "plots",
+    "test_dir",
+];
 /// Items the crate root re-exports from `error`.
 const ROOT_ITEMS: [(&str, &str); 3] = [
     ("Error", "error"),

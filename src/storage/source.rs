@@ -9,9 +9,8 @@
 //! reading the file, bit for bit, and messages name the file and line as
 //! they do.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use crate::error::{Error, Result};
 
@@ -102,21 +101,17 @@ impl TableFile {
 /// How many times each path was opened for reading by this module's readers
 /// ([`super::read`], [`super::open_rows`], [`TableFile::read`], ...), so that
 /// tests can check that a run reads its motion once.
-static OPENED: Mutex<Option<HashMap<PathBuf, usize>>> = Mutex::new(None);
+static OPENED: crate::file_counts::PathCounts = crate::file_counts::PathCounts::new();
 
 /// Count one opening of `path`.
 pub(super) fn count_open(path: &Path) {
-    let mut m = OPENED.lock().unwrap_or_else(|e| e.into_inner());
-    *m.get_or_insert_with(HashMap::new)
-        .entry(path.to_path_buf())
-        .or_insert(0) += 1;
+    OPENED.count(path);
 }
 
 /// How many times the table readers opened the file `path` (as spelled by
 /// the caller that opened it) since the process started.
 pub fn times_opened(path: &Path) -> usize {
-    let m = OPENED.lock().unwrap_or_else(|e| e.into_inner());
-    m.as_ref().and_then(|m| m.get(path)).copied().unwrap_or(0)
+    OPENED.get(path)
 }
 
 /// The whole file, counted as one opening.
