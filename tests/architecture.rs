@@ -45,12 +45,79 @@ const ROOT_ITEMS: [(&str, &str); 3] = [
     ("Location", "error"),
 ];
 
-/// A source text up to its first `#[cfg(test)]`: the code that ships.
-fn before_tests(source: &str) -> &str {
-    match source.find("#[cfg(test)]") {
-        Some(i) => &source[..i],
-        None => source,
+/// A source text with every item under `#[cfg(test)]` blanked out (a test
+/// module, a test-only field, method or block), keeping its line breaks so
+/// that line numbers stay those of the file: the code that ships. A
+/// `#[cfg(test)]` may stand above shipped code (a test-only field in a
+/// struct, a test helper method in an `impl`), so the scan goes on after it.
+fn shipped_code(source: &str) -> String {
+    const MARK: &str = "#[cfg(test)]";
+    let bytes = source.as_bytes();
+    let mut out = String::with_capacity(source.len());
+    let mut at = 0;
+    while let Some(found) = source[at..].find(MARK) {
+        let start = at + found;
+        out.push_str(&source[at..start]);
+        let end = item_end(bytes, start + MARK.len());
+        out.extend(
+            source[start..end]
+                .chars()
+                .map(|c| if c == '\n' { '\n' } else { ' ' }),
+        );
+        at = end;
     }
+    out.push_str(&source[at..]);
+    out
+}
+
+/// Where the item that starts at or after `i` ends: after a `;` or `,` at
+/// its own depth, or after the `}` that closes its body. Brackets inside
+/// string and character literals and comments do not count.
+fn item_end(b: &[u8], mut i: usize) -> usize {
+    let mut depth = 0usize;
+    let mut opened = false;
+    while i < b.len() {
+        match b[i] {
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < b.len() && b[i] != b'"' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'\'' if b.get(i + 2) == Some(&b'\'') => i += 2,
+            b'\'' if b.get(i + 1) == Some(&b'\\') => {
+                i += 2;
+                while i < b.len() && b[i] != b'\'' {
+                    i += 1;
+                }
+            }
+            b'(' | b'[' => depth += 1,
+            b'{' => {
+                depth += 1;
+                opened = true;
+            }
+            b')' | b']' => depth = depth.saturating_sub(1),
+            b'}' => {
+                if depth == 0 {
+                    return i; // the enclosing scope closes: the item ended
+                }
+                depth -= 1;
+                if depth == 0 && opened {
+                    return i + 1;
+                }
+            }
+            b';' | b',' if depth == 0 => return i + 1,
+            _ => {}
+        }
+        i += 1;
+    }
+    b.len()
 }
 
 /// Whether `line` holds `word` as a name of its own at byte `i` (not part
@@ -63,10 +130,10 @@ fn word_at(line: &str, i: usize, word: &str) -> bool {
 }
 
 /// The modules of the crate a source text refers to (`crate::m`, and each
-/// `m` of `use crate::{m::..., ...}`), outside `//` comments and from the
-/// first `#[cfg(test)]` on.
+/// `m` of `use crate::{m::..., ...}`), outside `//` comments and outside
+/// items under `#[cfg(test)]`.
 fn referenced_modules(source: &str) -> BTreeSet<String> {
-    let code = before_tests(source);
+    let code = shipped_code(source);
     let mut out = BTreeSet::new();
     for line in code.lines() {
         let line = match line.find("//") {
@@ -155,6 +222,16 @@ fn the_scanner_finds_paths_and_groups_outside_comments_and_tests() {
                #[cfg(test)]\nmod tests { use crate::reactions::x; }";
     let found: Vec<String> = referenced_modules(src).into_iter().collect();
     assert_eq!(found, ["dynamics", "error", "model", "tools"]);
+    // A `#[cfg(test)]` above shipped code (a test-only field, method or
+    // block) hides only its own item: what follows it is still scanned.
+    let src = "struct W {\n    #[cfg(test)]\n    n: crate::plots::P,\n    m: u8,\n}\n\
+               impl W {\n    #[cfg(test)]\n    fn held(&self) -> usize { crate::tools::x(\"}\") }\n\
+               fn f(&mut self) {\n        #[cfg(test)]\n        {\n            self.n += 1;\n        }\n\
+               crate::reactions::go(); }\n}\n\
+               #[cfg(test)]\nmod tests { use crate::model::x; }\nuse crate::frame::Workspace;";
+    let found: Vec<String> = referenced_modules(src).into_iter().collect();
+    assert_eq!(found, ["frame", "reactions"]);
+    assert_eq!(shipped_code(src).lines().count(), src.lines().count());
     assert!(allowed("frame").unwrap().contains("optimize"));
     assert!(!allowed("optimize").unwrap().contains("frame"));
     assert!(!allowed("storage").unwrap().contains("model"));
@@ -223,7 +300,7 @@ fn tools_receive_the_plan_and_read_no_setup_xml() {
     let mut offenders = Vec::new();
     for f in files.iter().filter(|f| !f.ends_with("scene.rs")) {
         let source = std::fs::read_to_string(f).unwrap();
-        let code = before_tests(&source);
+        let code = shipped_code(&source);
         for (n, line) in code.lines().enumerate() {
             let line = line.split("//").next().unwrap_or("");
             for pat in [
@@ -306,7 +383,7 @@ fn tools_hold_no_xml_elements() {
         }
         checked += 1;
         let source = std::fs::read_to_string(f).unwrap();
-        let code = before_tests(&source);
+        let code = shipped_code(&source);
         for (n, line) in code.lines().enumerate() {
             let line = line.split("//").next().unwrap_or("");
             let element = line
