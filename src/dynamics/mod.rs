@@ -4,6 +4,7 @@
 //! dynamics) / [`jacobian`] (station Jacobians) / [`mass_matrix`] →
 //! [`forward`] (constrained forward dynamics).
 
+pub mod body_kinematics;
 pub mod data;
 pub mod forward;
 pub mod jacobian;

@@ -170,6 +170,8 @@ pub const SETUP_ELEMENT_TYPES: &[&str] = &[
     "StaticOptimization",
     "MuscleAnalysis",
     "JointReaction",
+    "BodyKinematics",
+    "PointKinematics",
 ];
 
 /// Properties OpenSim 4.6 defines for setup elements that statopt accepts
@@ -196,6 +198,8 @@ pub const UNUSED_SETUP_PROPERTIES: &[(&str, &[&str])] = &[
     ),
     ("MuscleAnalysis", &["start_time", "end_time", "in_degrees"]),
     ("JointReaction", &["start_time", "end_time", "in_degrees"]),
+    ("BodyKinematics", &["start_time", "end_time"]),
+    ("PointKinematics", &["start_time", "end_time", "in_degrees"]),
 ];
 
 /// What checking a setup document's elements found.

@@ -2,6 +2,7 @@
 pub mod analyses;
 pub mod compose;
 pub mod figures;
+pub mod kinematics;
 pub mod known;
 mod known_properties;
 pub mod osim;

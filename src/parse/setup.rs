@@ -85,6 +85,8 @@ pub enum Analysis {
     MuscleAnalysis(MuscleAnalysisSetup),
     StaticOptimization(Box<StaticOptimizationSetup>),
     JointReaction(Box<JointReactionSetup>),
+    /// BodyKinematics or PointKinematics (`parse::kinematics`).
+    Kinematics(Box<crate::parse::kinematics::KinematicsSetup>),
     /// An analysis OpenSim knows that statopt does not run (refused when
     /// it is on).
     Unsupported {
@@ -100,6 +102,7 @@ impl Analysis {
             Analysis::MuscleAnalysis(m) => &m.common,
             Analysis::StaticOptimization(s) => &s.common,
             Analysis::JointReaction(j) => &j.common,
+            Analysis::Kinematics(k) => k.common(),
             Analysis::Unsupported { common, .. } => common,
         }
     }
@@ -545,6 +548,10 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
                 "JointReaction" => {
                     Analysis::JointReaction(Box::new(JointReactionSetup::from_xml(a, common, dir)?))
                 }
+                "BodyKinematics" | "PointKinematics" => Analysis::Kinematics(Box::new(
+                    crate::parse::kinematics::KinematicsSetup::from_xml(a, common)?
+                        .expect("a kinematics element"),
+                )),
                 _ => Analysis::Unsupported {
                     common,
                     element: a.clone(),

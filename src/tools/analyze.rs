@@ -306,7 +306,9 @@ fn run_analyses(
     let on_model = active
         .iter()
         .filter(|a| match a {
-            Analysis::MuscleAnalysis(_) | Analysis::StaticOptimization(_) => true,
+            Analysis::MuscleAnalysis(_)
+            | Analysis::StaticOptimization(_)
+            | Analysis::Kinematics(_) => true,
             Analysis::JointReaction(jr) => !coupled.iter().any(|c| c.common.name == jr.common.name),
             Analysis::Unsupported { .. } => false,
         })
@@ -343,9 +345,16 @@ fn run_analyses(
                     return Ok(summary);
                 }
             }
+            Analysis::Kinematics(k) => {
+                let s = crate::tools::kinematics::run(setup, k, &motion, model, opts)?;
+                summary.absorb(s, None);
+                if summary.stopped.is_some() {
+                    return Ok(summary);
+                }
+            }
             Analysis::Unsupported { element, .. } => {
                 return Err(element.error(format!(
-                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction",
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction, BodyKinematics, PointKinematics",
                     element.name
                 )));
             }

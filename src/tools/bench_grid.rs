@@ -269,6 +269,7 @@ fn bench_setup(setup: &AnalyzeSetup, w0: Option<f64>) -> Result<AnalyzeSetup> {
     for a in s.analyses.iter_mut() {
         match a {
             Analysis::MuscleAnalysis(m) => m.common.on = false,
+            Analysis::Kinematics(k) => k.common_mut().on = false,
             Analysis::StaticOptimization(_) => {}
             // Joint reactions from a forces file run on their own.
             Analysis::JointReaction(jr) => {

@@ -172,9 +172,14 @@ fn check_analyze(setup: &AnalyzeSetup, report: &mut CheckReport) {
                     report.errors.push(e);
                 }
             }
+            Analysis::Kinematics(k) if k.common().on => {
+                if let Err(e) = crate::tools::kinematics::check(&am, k) {
+                    report.errors.push(e);
+                }
+            }
             Analysis::Unsupported { element, common } if common.on => {
                 report.errors.push(element.error(format!(
-                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction",
+                    "the analysis '{}' is not supported yet; supported: MuscleAnalysis, StaticOptimization, JointReaction, BodyKinematics, PointKinematics",
                     element.name
                 )));
             }

@@ -8,6 +8,7 @@ pub mod force_sweep;
 pub use crate::frame::interrupt;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
+pub mod kinematics;
 pub mod knee_contact;
 pub mod knee_loads;
 pub mod loading;

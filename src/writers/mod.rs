@@ -12,10 +12,13 @@
 //!   frames its tables and log hold completely);
 //! - [`sweep_statistics`]: a contact-weight sweep's mean, minimum and
 //!   maximum tables;
+//! - [`kinematics_tables`]: the BodyKinematics and PointKinematics
+//!   analyses' position, velocity and acceleration tables;
 //! - [`run_statistics`]: what a run reports besides its tables (unsolved
 //!   frames, worst residual, bounds reached, reserve and root residual
 //!   peaks) and the warnings made from it.
 pub mod frame_log;
+pub mod kinematics_tables;
 pub mod names;
 pub mod resume;
 pub mod run_statistics;

@@ -57,6 +57,25 @@ pub fn setup_file_name(setup: &str, sweep: Sweep, kind: &str) -> String {
     }
 }
 
+/// The three files of OpenSim's BodyKinematics analysis `analysis` of
+/// setup `setup`: `<setup>_<analysis>_pos_global.sto`, `_vel_global.sto`,
+/// `_acc_global.sto` (`_bodyLocal` for the velocities and accelerations
+/// when they are expressed in the bodies' frames).
+pub fn body_kinematics_files(setup: &str, analysis: &str, body_frame: bool) -> [String; 3] {
+    let frame = if body_frame { "bodyLocal" } else { "global" };
+    [
+        format!("{setup}_{analysis}_pos_global.sto"),
+        format!("{setup}_{analysis}_vel_{frame}.sto"),
+        format!("{setup}_{analysis}_acc_{frame}.sto"),
+    ]
+}
+
+/// The three files of OpenSim's PointKinematics analysis `analysis` of
+/// setup `setup`: `<setup>_<analysis>_<point>_pos.sto`, `_vel.sto`, `_acc.sto`.
+pub fn point_kinematics_files(setup: &str, analysis: &str, point: &str) -> [String; 3] {
+    ["pos", "vel", "acc"].map(|k| format!("{setup}_{analysis}_{point}_{k}.sto"))
+}
+
 /// A table's file stem (no extension) ending in `_<kind>` split into the
 /// run's name without the w0 part and the w0 tag, if any:
 /// `a_SO_w0_500_force` with kind `force` → (`a_SO`, Some(`500`)),
