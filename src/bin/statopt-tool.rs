@@ -244,7 +244,7 @@ enum Command {
         /// Repetitions (hold, there, hold, back) end to end; more than one needs --return.
         #[arg(long, value_name = "N", default_value_t = 1)]
         repeat: usize,
-        /// A force-set file holding contacts for --touch (repeatable; with --setup its
+        /// A force-set file holding contacts for --touch and --plant (repeatable; with --setup its
         /// force_set_files are used too).
         #[arg(long = "force-set", value_name = "FILE")]
         force_sets: Vec<PathBuf>,
