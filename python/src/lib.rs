@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::{PyBytes, PyDict, PyList};
 
 use statopt::storage::{self, Storage};
 use statopt::tools::{self, progress::ProgressHook, RunOptions, RunSummary};
@@ -59,6 +59,20 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     d.set_item("root_body_weight", s.root_body_weight)?;
     d.set_item("loop_seconds", s.loop_seconds)?;
     d.set_item("warnings", s.warnings.clone())?;
+    let contacts = PyList::empty(py);
+    for f in &s.contacts {
+        let c = PyDict::new(py);
+        c.set_item("run", f.run.clone())?;
+        c.set_item("contact", f.contact.clone())?;
+        c.set_item("kind", f.kind.as_str())?;
+        c.set_item("frames", f.frames)?;
+        c.set_item("value", f.value)?;
+        c.set_item("time", f.time)?;
+        c.set_item("reserve_body", f.reserve_body.clone())?;
+        c.set_item("message", f.message.clone())?;
+        contacts.append(c)?;
+    }
+    d.set_item("contacts", contacts)?;
     d.set_item("notes", s.notes.clone())?;
     d.set_item("files", paths(&s.files))?;
     d.set_item("results_dirs", paths(&s.results_dirs))?;

@@ -172,6 +172,11 @@ pub struct RunSummary {
     /// OpenSim properties the setups hold that statopt accepts but does not
     /// use (listed once in the report).
     pub unused_properties: Vec<String>,
+    /// What the contacts did that the user must know (each also a warning):
+    /// slid or more than 1 mm into their plane while loaded, carried
+    /// nothing (`writers::contact_findings`); `run` names the w0 of a sweep
+    /// or the setup of a study.
+    pub contacts: Vec<crate::writers::contact_findings::ContactFinding>,
 }
 
 /// Exit status of a run in which some frames could not be solved (the
@@ -211,6 +216,16 @@ impl RunSummary {
         keep_max(&mut self.root_force_peak, other.root_force_peak);
         keep_max(&mut self.root_moment_peak, other.root_moment_peak);
         self.root_force_series.extend(other.root_force_series);
+        self.contacts
+            .extend(other.contacts.into_iter().map(|mut f| {
+                if let Some(l) = label {
+                    f.run = Some(match f.run {
+                        Some(r) => format!("{l}: {r}"),
+                        None => l.to_string(),
+                    });
+                }
+                f
+            }));
         self.root_body_weight = self.root_body_weight.or(other.root_body_weight);
         self.notes.extend(other.notes);
         for d in other.results_dirs {

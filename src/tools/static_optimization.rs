@@ -556,6 +556,7 @@ impl<'a> RunWriters<'a> {
             root_force_peak: stats.root_peaks[0].clone(),
             root_moment_peak: stats.root_peaks[1].clone(),
             root_force_series: std::mem::take(&mut stats.root_force_series),
+            contacts: stats.contact_findings(problem),
             notes: vec![note],
             results_dirs: Vec::new(),
             unused_properties: Vec::new(),

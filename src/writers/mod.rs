@@ -16,7 +16,11 @@
 //!   analyses' position, velocity and acceleration tables;
 //! - [`run_statistics`]: what a run reports besides its tables (unsolved
 //!   frames, worst residual, bounds reached, reserve and root residual
-//!   peaks) and the warnings made from it.
+//!   peaks) and the warnings made from it;
+//! - [`contact_findings`]: what the run's contacts did that the summary
+//!   names (slid or too deep while loaded, carried nothing, at a limit on
+//!   an unsolved frame), from the rows the ContactForces table holds.
+pub mod contact_findings;
 pub mod frame_log;
 pub mod kinematics_tables;
 pub mod names;

@@ -5,7 +5,8 @@
 //! written. Gathered frame by frame, in frame order, by the table writer;
 //! turned into the run's warnings at its end.
 
-use crate::frame::problem::{FrameResult, SoProblem};
+use crate::frame::problem::{FrameResult, SoProblem, CONTACT_COLUMNS};
+use crate::writers::contact_findings::{contacts_at_limits, ContactFinding, ContactTally};
 
 /// Root residual force, as a share of body weight, above which a run warns.
 pub const ROOT_RESIDUAL_WARNING: f64 = 0.05;
@@ -37,6 +38,8 @@ pub struct RunStatistics {
     pub last: Option<f64>,
     /// Frames observed (a resumed run's kept frames included).
     pub frames: usize,
+    /// What the contacts did (writers::contact_findings).
+    contacts: ContactTally,
 }
 
 impl RunStatistics {
@@ -79,6 +82,7 @@ impl RunStatistics {
             at_bound: Vec::new(),
             last: None,
             frames: 0,
+            contacts: ContactTally::new(problem),
         }
     }
 
@@ -93,12 +97,14 @@ impl RunStatistics {
             &r.solution.x,
             |v| r.forces[v],
             &r.by_source,
+            &r.contacts.contact,
         );
     }
 
     /// Take in one frame: its time, why it failed (None: solved), its
-    /// equation residual, controls `x`, each control's force and the
-    /// generalized forces by source (4 per row of the problem).
+    /// equation residual, controls `x`, each control's force, the
+    /// generalized forces by source (4 per row of the problem) and the
+    /// contacts' row of the ContactForces table.
     #[allow(clippy::too_many_arguments)]
     fn observe_values(
         &mut self,
@@ -109,12 +115,15 @@ impl RunStatistics {
         x: &[f64],
         force: impl Fn(usize) -> f64,
         by_source: &[f64],
+        contacts: &[f64],
     ) {
         let at = crate::storage::fmt_time(time);
         self.frames += 1;
+        self.contacts.observe(time, contacts, by_source);
         if let Some(status) = failed {
             self.failures.push(format!(
-                "t={at}: {status}, equation residual {eq_residual:.3e}"
+                "t={at}: {status}, equation residual {eq_residual:.3e}{}",
+                unsolved_detail(problem, by_source, contacts)
             ));
         } else {
             self.worst_residual = self.worst_residual.max(eq_residual);
@@ -189,15 +198,33 @@ impl RunStatistics {
             .iter()
             .map(|l| force.column_index(l))
             .collect();
+        // The contacts' columns, in the table's own order of the run's.
+        let contact = if problem.contacts.is_empty() {
+            None
+        } else {
+            let table = read("ContactForces")?;
+            let cols = problem
+                .contact_labels()
+                .iter()
+                .map(|l| column(&table, l, "ContactForces"))
+                .collect::<crate::error::Result<Vec<usize>>>()?;
+            Some((table, cols))
+        };
+        let mut contact_row = Vec::new();
         let rows = keep
             .min(act.rows.len())
             .min(force.rows.len())
             .min(diag.rows.len())
-            .min(src.rows.len());
+            .min(src.rows.len())
+            .min(contact.as_ref().map_or(usize::MAX, |(t, _)| t.rows.len()));
         for i in 0..rows {
             let d = &diag.rows[i];
             let failed = (d[status] < 0.0).then(|| "failed (status -1)".to_string());
             let f = &force.rows[i];
+            contact_row.clear();
+            if let Some((t, cols)) = &contact {
+                contact_row.extend(cols.iter().map(|&j| t.rows[i][j]));
+            }
             self.observe_values(
                 problem,
                 diag.time[i],
@@ -206,6 +233,7 @@ impl RunStatistics {
                 &act.rows[i],
                 |v| force_cols[v].map_or(0.0, |j| f[j]),
                 &src.rows[i],
+                &contact_row,
             );
         }
         Ok(())
@@ -224,6 +252,13 @@ impl RunStatistics {
             let body = problem.model.coordinates[problem.rows[k]].body;
             problem.model.subtree_mass(body) * problem.model.gravity.norm()
         })
+    }
+
+    /// What the run's contacts did that its user must be told
+    /// (writers::contact_findings): contacts that slid or went more than
+    /// 1 mm into their plane while loaded, contacts that carried nothing.
+    pub fn contact_findings(&self, problem: &SoProblem) -> Vec<ContactFinding> {
+        self.contacts.findings(problem)
     }
 
     /// The run's warnings: unsolved frames (of `nframes`; their
@@ -272,6 +307,57 @@ impl RunStatistics {
                 ));
             }
         }
+        warnings.extend(
+            self.contact_findings(problem)
+                .into_iter()
+                .map(|f| f.message),
+        );
         warnings
     }
+}
+
+/// What an unsolved frame's line adds to its equation residual: the
+/// coordinates whose equations were furthest from balanced (the three
+/// largest |b − A x| of the frame's rows, at least 1e-3 of the largest,
+/// from its generalized forces by
+/// source: required − muscles − actuators − contacts), and the contacts
+/// at a limit of their friction model.
+fn unsolved_detail(problem: &SoProblem, by_source: &[f64], contacts: &[f64]) -> String {
+    let mut rows: Vec<(f64, usize)> = by_source
+        .chunks_exact(4)
+        .enumerate()
+        .map(|(k, s)| (s[0] - s[1] - s[2] - s[3], k))
+        .filter(|(r, _)| *r != 0.0)
+        .collect();
+    rows.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+    // Rows a thousand times below the largest are rounding, not the reason.
+    let largest = rows.first().map_or(0.0, |r| r.0.abs());
+    rows.retain(|r| r.0.abs() >= 1e-3 * largest);
+    let mut out = String::new();
+    if !rows.is_empty() {
+        let list: Vec<String> = rows
+            .iter()
+            .take(3)
+            .map(|&(r, k)| {
+                let c = &problem.model.coordinates[problem.rows[k]];
+                let unit = match c.motion_type {
+                    crate::model::MotionType::Translational => "N",
+                    crate::model::MotionType::Rotational => "N m",
+                    crate::model::MotionType::Coupled => "N or N m",
+                };
+                format!("{} {r:.3e} {unit}", c.name)
+            })
+            .collect();
+        out.push_str(&format!(
+            "; unbalanced (required − supplied generalized force): {}",
+            list.join(", ")
+        ));
+    }
+    if contacts.len() == CONTACT_COLUMNS.len() * problem.contacts.len() {
+        let at = contacts_at_limits(problem, contacts);
+        if !at.is_empty() {
+            out.push_str(&format!("; contacts at a limit: {}", at.join(", ")));
+        }
+    }
+    out
 }

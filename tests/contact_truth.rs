@@ -1,0 +1,378 @@
+//! Contacts that tell the truth: the run's summary names every contact that
+//! slid or went more than 1 mm into its plane while loaded (more than 10 N),
+//! and every contact that carried nothing (with the reason when a body held
+//! by reserve actuators only explains it), exactly as its own ContactForces
+//! table shows; an unsolved frame's line names the coordinates whose
+//! equations were not balanced and the contacts at a limit. Small scenes
+//! whose truth is known (docs/contact_model.md, "What the summary says
+//! about contacts").
+
+mod common;
+
+use std::path::Path;
+
+use statopt::parse::setup::Setup;
+use statopt::storage::{self, Storage};
+use statopt::tools::{analyze, RunOptions, RunSummary};
+use statopt::writers::contact_findings::{
+    ContactFinding, FindingKind, LOADED_FORCE, PENETRATION_LIMIT, UNLOADED_FORCE,
+};
+
+const G: f64 = common::G;
+
+fn run_setup(p: &Path) -> RunSummary {
+    let s = match Setup::read(p).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    analyze::run(&s, &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn col(t: &Storage, label: &str) -> Vec<f64> {
+    t.column(
+        t.column_index(label)
+            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
+    )
+}
+
+/// A motion of the named coordinates, `rows` rows over `span` seconds.
+fn motion(names: &[&str], rows: usize, span: f64, f: impl Fn(f64) -> Vec<f64>) -> String {
+    let mut s = format!(
+        "motion\nversion=1\nnRows={rows}\nnColumns={}\ninDegrees=no\nendheader\ntime\t{}\n",
+        names.len() + 1,
+        names.join("\t")
+    );
+    for k in 0..rows {
+        let t = k as f64 * span / (rows - 1) as f64;
+        let v: Vec<String> = f(t).iter().map(|x| format!("{x:.15}")).collect();
+        s.push_str(&format!("{t:.6}\t{}\n", v.join("\t")));
+    }
+    s
+}
+
+fn setup(name: &str, so_extra: &str, span: f64) -> String {
+    format!(
+        r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000"><AnalyzeTool name="{name}">
+<model_file>model.osim</model_file><results_directory>out</results_directory><output_precision>14</output_precision>
+<initial_time>0</initial_time><final_time>{span}</final_time>
+<AnalysisSet name="Analyses"><objects><StaticOptimization name="SO">{so_extra}</StaticOptimization></objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file><lowpass_cutoff_frequency_for_coordinates>-1</lowpass_cutoff_frequency_for_coordinates>
+</AnalyzeTool></OpenSimDocument>"#
+    )
+}
+
+/// Write a case and run it: (its output folder, the summary).
+fn run_case(
+    name: &str,
+    model: &str,
+    motion_text: &str,
+    so_extra: &str,
+    span: f64,
+) -> (std::path::PathBuf, RunSummary) {
+    let dir = common::out_dir(&format!("contact_truth_{name}"));
+    std::fs::write(dir.join("model.osim"), model).unwrap();
+    std::fs::write(dir.join("motion.mot"), motion_text).unwrap();
+    std::fs::write(dir.join("setup.xml"), setup(name, so_extra, span)).unwrap();
+    let s = run_setup(&dir.join("setup.xml"));
+    (dir.join("out"), s)
+}
+
+/// The block of tests/common on a floor contact (its origin on the ground
+/// plane y = 0; `floor` its extra properties) and a wall contact whose
+/// plane at x = 5 m is out of reach (w = 0 on every frame).
+fn block_on_floor(floor: &str) -> String {
+    common::block_model(&format!(
+        r#"<PointOnPlaneContact name="floor"><point_body>block</point_body><point_location>0 0 0</point_location>
+<plane_body>ground</plane_body><plane_origin>0 0 0</plane_origin><plane_normal>0 1 0</plane_normal>
+<kinetic_friction>0.5</kinetic_friction><optimal_force>100</optimal_force>{floor}</PointOnPlaneContact>
+<PointOnPlaneContact name="wall"><point_body>block</point_body><point_location>0 0 0</point_location>
+<plane_body>ground</plane_body><plane_origin>5 0 0</plane_origin><plane_normal>-1 0 0</plane_normal>
+<contact_tolerance>0</contact_tolerance><contact_transition_zone>0.01</contact_transition_zone></PointOnPlaneContact>"#
+    ))
+}
+
+/// What a contact's table shows, computed here from the table alone: frames
+/// sliding (regime > 0) while loaded (|f| > 10 N) with the largest slip
+/// speed; frames more than 1 mm deep while loaded with the deepest
+/// distance; the largest force.
+struct TableTruth {
+    slid: usize,
+    slip_max: f64,
+    deep: usize,
+    deepest: f64,
+    force_max: f64,
+}
+
+fn table_truth(cf: &Storage, c: &str) -> TableTruth {
+    let (fx, fy, fz) = (
+        col(cf, &format!("{c}_fx")),
+        col(cf, &format!("{c}_fy")),
+        col(cf, &format!("{c}_fz")),
+    );
+    let d = col(cf, &format!("{c}_distance"));
+    let slip = col(cf, &format!("{c}_slip_speed"));
+    let regime = col(cf, &format!("{c}_regime"));
+    let mut t = TableTruth {
+        slid: 0,
+        slip_max: 0.0,
+        deep: 0,
+        deepest: 0.0,
+        force_max: 0.0,
+    };
+    for i in 0..cf.time.len() {
+        let f = (fx[i] * fx[i] + fy[i] * fy[i] + fz[i] * fz[i]).sqrt();
+        t.force_max = t.force_max.max(f);
+        if f > LOADED_FORCE && regime[i] > 0.0 {
+            t.slid += 1;
+            t.slip_max = t.slip_max.max(slip[i]);
+        }
+        if f > LOADED_FORCE && d[i] < -PENETRATION_LIMIT {
+            t.deep += 1;
+            t.deepest = t.deepest.min(d[i]);
+        }
+    }
+    t
+}
+
+fn finding<'a>(
+    s: &'a RunSummary,
+    run: Option<&str>,
+    c: &str,
+    kind: FindingKind,
+) -> Option<&'a ContactFinding> {
+    s.contacts
+        .iter()
+        .find(|f| f.run.as_deref() == run && f.contact == c && f.kind == kind)
+}
+
+/// Every finding is also a warning line of the summary.
+fn assert_in_warnings(s: &RunSummary) {
+    for f in &s.contacts {
+        assert!(
+            s.warnings.iter().any(|w| w.ends_with(&f.message)),
+            "finding not among the warnings: {}",
+            f.message
+        );
+    }
+}
+
+/// The summary names a contact exactly when its table shows it sliding or
+/// deeper than 1 mm while loaded, with the same frame counts and extreme
+/// values; per w0 of a sweep (at w0 = 0.001 the floor carries about 0.1 N:
+/// it is not loaded, so it did not slide, and it carried nothing).
+#[test]
+fn summary_names_exactly_the_contacts_the_table_shows_sliding_or_too_deep() {
+    // Speed 0.5 t: static below t = 0.2 s (v_trans 0.1 m/s), kinetic above;
+    // depth 4 mm/s: more than 1 mm deep after t = 0.25 s.
+    let model = block_on_floor("<v_trans>0.1</v_trans>");
+    let text = motion(&["tx", "ty", "tz"], 41, 2.0, |t| {
+        vec![0.25 * t * t, -0.004 * t, 0.0]
+    });
+    let (out, s) = run_case(
+        "sweep",
+        &model,
+        &text,
+        "<contact_weight>0.001 1000</contact_weight>",
+        2.0,
+    );
+    assert_in_warnings(&s);
+    for (w0, tag) in [(0.001, "0.001"), (1000.0, "1000")] {
+        let run = format!("w0 = {w0}");
+        let cf = storage::read(&out.join(format!("sweep_SO_w0_{tag}_ContactForces.sto"))).unwrap();
+        for c in ["floor", "wall"] {
+            let truth = table_truth(&cf, c);
+            let slid = finding(&s, Some(&run), c, FindingKind::Slid);
+            let deep = finding(&s, Some(&run), c, FindingKind::TooDeep);
+            let nothing = finding(&s, Some(&run), c, FindingKind::CarriedNothing);
+            println!(
+                "{run} {c}: table slid {} (max {:.4} m/s), deep {} (deepest {:.5} m), max force {:.4} N",
+                truth.slid, truth.slip_max, truth.deep, truth.deepest, truth.force_max
+            );
+            assert_eq!(slid.map_or(0, |f| f.frames), truth.slid, "{run} {c} slid");
+            assert_eq!(deep.map_or(0, |f| f.frames), truth.deep, "{run} {c} deep");
+            if let Some(f) = slid {
+                assert!((f.value - truth.slip_max).abs() <= 1e-9 * (1.0 + truth.slip_max));
+                assert!(f.message.contains(c) && f.message.contains("slid"));
+            }
+            if let Some(f) = deep {
+                assert!((f.value - truth.deepest).abs() <= 1e-9);
+                assert!(f
+                    .message
+                    .contains(&format!("{:.1} mm", -1e3 * truth.deepest)));
+            }
+            assert_eq!(
+                nothing.is_some(),
+                truth.force_max <= UNLOADED_FORCE,
+                "{run} {c} carried nothing"
+            );
+        }
+    }
+    // The truth of this scene, from its physics: at w0 = 1000 the floor
+    // carries nearly the block's weight, slides from t = 0.25 s (slip speed
+    // 0.5 t > 0.1 m/s on 36 of 41 frames) and is more than 1 mm deep from
+    // t = 0.3 s (35 frames; exactly 1 mm at 0.25 s), 8 mm at t = 2 s; the
+    // wall carries nothing.
+    let hi = Some("w0 = 1000");
+    let slid = finding(&s, hi, "floor", FindingKind::Slid).expect("the floor slid");
+    assert_eq!(slid.frames, 36);
+    assert!((slid.value - 1.0).abs() < 1e-6, "slip speed {}", slid.value);
+    let deep = finding(&s, hi, "floor", FindingKind::TooDeep).expect("the floor too deep");
+    assert_eq!(deep.frames, 35);
+    assert!((deep.value + 0.008).abs() < 1e-9, "deepest {}", deep.value);
+    let wall = finding(&s, hi, "wall", FindingKind::CarriedNothing).expect("the wall");
+    assert!(
+        wall.message.contains("out of reach on every frame"),
+        "{}",
+        wall.message
+    );
+    let lo = Some("w0 = 0.001");
+    assert!(finding(&s, lo, "floor", FindingKind::Slid).is_none());
+    let floor = finding(&s, lo, "floor", FindingKind::CarriedNothing).expect("floor at 0.001");
+    assert!(floor.value < 0.2 && floor.frames == 41, "{floor:?}");
+    // The block is a root joint: no reserve is blamed.
+    assert!(floor.reserve_body.is_none());
+}
+
+/// A block at rest on the floor, static and on the surface: the summary
+/// says nothing of the floor (no false alarm); the wall carried nothing.
+#[test]
+fn a_static_contact_on_its_surface_is_not_named() {
+    let model = block_on_floor("<v_trans>0.1</v_trans>");
+    let text = motion(&["tx", "ty", "tz"], 21, 1.0, |_| vec![0.0, -0.0005, 0.0]);
+    let (_, s) = run_case("rest", &model, &text, "", 1.0);
+    assert_in_warnings(&s);
+    let named: Vec<_> = s.contacts.iter().map(|f| (&f.contact, f.kind)).collect();
+    assert_eq!(
+        named,
+        vec![(&"wall".to_string(), FindingKind::CarriedNothing)],
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// A leg-press-like scene: a pelvis (planar, tx and ty) on a seat with
+/// friction, pushed back by the legs (a fixed 200 N), and an upright trunk
+/// (its mass centre at the lumbar joint) on a lumbar pin held by a reserve
+/// actuator of 1 N m; a backrest contact 0.4 m above the lumbar joint. A
+/// backrest force F would need F · 0.4 N m from the reserve: the optimum
+/// gives the backrest of the order of 200/(1 + 0.4² · 100² · 1000) =
+/// 1.2e-4 N (measured 2.9e-4 N: its friction lifts the trunk a little too)
+/// and the seat's friction the rest, and the summary says why. With a
+/// TorqueActuator (not a reserve) on the lumbar joint it names the contact
+/// without that reason.
+#[test]
+fn a_backrest_on_a_trunk_held_by_reserves_is_named_with_the_reason() {
+    let scene = |lumbar_actuator: &str| {
+        format!(
+            r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000"><Model name="press"><gravity>0 -{G} 0</gravity>
+<BodySet><objects>
+<Body name="pelvis"><mass>10</mass><mass_center>0 0 0</mass_center><inertia>0.1 0.1 0.1 0 0 0</inertia></Body>
+<Body name="trunk"><mass>30</mass><mass_center>0 0 0</mass_center><inertia>1 1 1 0 0 0</inertia></Body>
+</objects></BodySet>
+<JointSet><objects>
+<CustomJoint name="seat_slide"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/pelvis</socket_child_frame>
+<coordinates><Coordinate name="pelvis_tx"><range>-1 1</range></Coordinate><Coordinate name="pelvis_ty"><range>-1 1</range></Coordinate></coordinates>
+<SpatialTransform>
+<TransformAxis name="rotation1"><coordinates/><axis>1 0 0</axis></TransformAxis>
+<TransformAxis name="rotation2"><coordinates/><axis>0 1 0</axis></TransformAxis>
+<TransformAxis name="rotation3"><coordinates/><axis>0 0 1</axis></TransformAxis>
+<TransformAxis name="translation1"><coordinates>pelvis_tx</coordinates><axis>1 0 0</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>
+<TransformAxis name="translation2"><coordinates>pelvis_ty</coordinates><axis>0 1 0</axis><LinearFunction name="function"><coefficients>1 0</coefficients></LinearFunction></TransformAxis>
+<TransformAxis name="translation3"><coordinates/><axis>0 0 1</axis></TransformAxis>
+</SpatialTransform></CustomJoint>
+<PinJoint name="lumbar_joint"><socket_parent_frame>pelvis_offset</socket_parent_frame><socket_child_frame>trunk_offset</socket_child_frame>
+<coordinates><Coordinate name="lumbar"><range>-1 1</range></Coordinate></coordinates>
+<frames>
+<PhysicalOffsetFrame name="pelvis_offset"><socket_parent>/bodyset/pelvis</socket_parent><translation>0 0.1 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
+<PhysicalOffsetFrame name="trunk_offset"><socket_parent>/bodyset/trunk</socket_parent><translation>0 0 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
+</frames></PinJoint>
+</objects></JointSet>
+<ForceSet><objects>
+<PointActuator name="legs"><body>pelvis</body><point>0 0 0</point><direction>-1 0 0</direction><force_is_global>true</force_is_global><optimal_force>200</optimal_force><min_control>1</min_control><max_control>1</max_control></PointActuator>
+{lumbar_actuator}
+<PointOnPlaneContact name="seat"><point_body>pelvis</point_body><point_location>0 0 0</point_location>
+<plane_body>ground</plane_body><plane_origin>0 0 0</plane_origin><plane_normal>0 1 0</plane_normal><optimal_force>100</optimal_force></PointOnPlaneContact>
+<PointOnPlaneContact name="backrest"><point_body>trunk</point_body><point_location>-0.1 0.4 0</point_location>
+<plane_body>ground</plane_body><plane_origin>-0.1 0 0</plane_origin><plane_normal>1 0 0</plane_normal><optimal_force>100</optimal_force></PointOnPlaneContact>
+</objects></ForceSet></Model></OpenSimDocument>"#
+        )
+    };
+    let text = motion(&["pelvis_tx", "pelvis_ty", "lumbar"], 21, 1.0, |_| {
+        vec![0.0, 0.0, 0.0]
+    });
+    let reserve = r#"<CoordinateActuator name="lumbar_reserve"><coordinate>lumbar</coordinate><optimal_force>1</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></CoordinateActuator>"#;
+    let (out, s) = run_case("backrest", &scene(reserve), &text, "", 1.0);
+    assert_eq!(s.failed, 0);
+    assert_in_warnings(&s);
+    let cf = storage::read(&out.join("backrest_SO_ContactForces.sto")).unwrap();
+    let truth = table_truth(&cf, "backrest");
+    println!("backrest: max force {:.3e} N", truth.force_max);
+    // Within reach (w = 1) and pressed by nothing but the optimum's choice:
+    // of the order of 200/(1 + 0.4² · 100² · 1000) = 1.2e-4 N (its friction
+    // can also lift the trunk a little), far below 1 N.
+    assert!(
+        truth.force_max > 0.0 && truth.force_max < 1e-3,
+        "backrest carried {} N",
+        truth.force_max
+    );
+    let f = finding(&s, None, "backrest", FindingKind::CarriedNothing).expect("backrest named");
+    assert_eq!(f.reserve_body.as_deref(), Some("trunk"));
+    assert!(
+        f.message.contains("lumbar") && f.message.contains("lumbar_reserve"),
+        "{}",
+        f.message
+    );
+    // The seat carried the push: not named.
+    assert!(
+        s.contacts.iter().all(|f| f.contact != "seat"),
+        "{:?}",
+        s.contacts
+    );
+    // Not a reserve: the contact is named, the reason is not given.
+    let torque = r#"<TorqueActuator name="lumbar_torque"><bodyA>trunk</bodyA><bodyB>pelvis</bodyB><axis>0 0 1</axis><torque_is_global>true</torque_is_global><optimal_force>1</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></TorqueActuator>"#;
+    let (_, s) = run_case("backrest_torque", &scene(torque), &text, "", 1.0);
+    let f = finding(&s, None, "backrest", FindingKind::CarriedNothing).expect("backrest named");
+    assert!(f.reserve_body.is_none(), "{}", f.message);
+    assert!(!f.message.contains("reserve"), "{}", f.message);
+}
+
+/// Too weak an actuator: the push (at most 100 N) cannot give the 10 kg
+/// block its 20 m/s². Every frame but the first is unsolved (at t = 0 static
+/// friction pushes too); the best point lets the lift actuator hold the
+/// block, so that no kinetic friction opposes the slide: the floor's normal
+/// force is at zero and tx lacks exactly 200 − 100 = 100 N. The first
+/// unsolved frame's line names tx with that residual, and the floor's limit.
+#[test]
+fn an_unsolved_frame_names_its_coordinate_and_the_contacts_at_a_limit() {
+    let model = block_on_floor("<v_trans>0.1</v_trans>").replacen(
+        "<min_control>-Inf</min_control><max_control>Inf</max_control>",
+        "<min_control>0</min_control><max_control>1</max_control>",
+        1,
+    );
+    let text = motion(&["tx", "ty", "tz"], 21, 1.0, |t| {
+        vec![10.0 * t * t, 0.0, 0.0]
+    });
+    let (out, s) = run_case("weak", &model, &text, "", 1.0);
+    assert!(s.failed > 0, "frames should fail");
+    let first = s.first_failure.clone().expect("a failure line");
+    println!("{first}");
+    let src = storage::read(&out.join("weak_SO_GeneralizedForcesBySource.sto")).unwrap();
+    let diag = storage::read(&out.join("weak_SO_diagnostics.sto")).unwrap();
+    let i = col(&diag, "status").iter().position(|&v| v < 0.0).unwrap();
+    let unbalanced =
+        ["required", "muscles", "actuators", "contacts"].map(|k| col(&src, &format!("tx_{k}"))[i]);
+    let r = unbalanced[0] - unbalanced[1] - unbalanced[2] - unbalanced[3];
+    let missing = 10.0 * 20.0 - 100.0;
+    assert!(
+        (r - missing).abs() < 1e-3 * missing,
+        "tx residual {r} vs {missing}"
+    );
+    assert!(
+        first.contains(&format!("tx {r:.3e} N")),
+        "the line should name tx with {r:.3e} N: {first}"
+    );
+    assert!(first.contains("floor normal force at zero"), "{first}");
+    assert!(!first.contains("ty ") && !first.contains("tz "), "{first}");
+}
