@@ -354,7 +354,7 @@ fn minimum_jerk_motion_file() {
         duration: t_end,
         rate,
         links: vec![parse_link("lever_angle=1*knee_angle+12.5").unwrap()],
-        touch: vec![],
+        ..MinJerkMotion::default()
     };
     let (table, warnings) = generate(&model, &m, &[]).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");

@@ -220,16 +220,36 @@ enum Command {
         /// lever_angle=1*knee_angle_r+0 (repeatable, applied in order).
         #[arg(long, value_name = "TARGET=A*SOURCE+B", allow_hyphen_values = true)]
         link: Vec<String>,
-        /// Set COORDINATE on every row so that CONTACT's point lies on its plane (Newton from its
-        /// --link value if it has one, else from the previous row). Repeatable.
+        /// Keep CONTACT's point on its plane on every row by solving COORDINATE. Repeatable; all
+        /// --touch and --plant contacts are solved together over all their coordinates (a contact
+        /// or coordinate may appear more than once), each within 1e-9 m on every row.
         #[arg(long, value_name = "CONTACT=COORDINATE")]
         touch: Vec<String>,
-        /// A force-set file holding contacts for --touch (repeatable; with --setup its
+        /// Close CONTACT and keep its point where it was on the first row, in the plane body's
+        /// frame (two in-plane conditions), solving the coordinates given too. Repeatable.
+        #[arg(long, value_name = "CONTACT[=COORD,...]")]
+        plant: Vec<String>,
+        /// After the movement (and --hold-end), move back to --from (minimum jerk).
+        #[arg(long = "return")]
+        back: bool,
+        /// Seconds of the way back (default: --duration).
+        #[arg(long, value_name = "S", requires = "back")]
+        return_duration: Option<f64>,
+        /// Seconds held at --from before each movement.
+        #[arg(long, value_name = "S", default_value_t = 0.0)]
+        hold_start: f64,
+        /// Seconds held at --to after each movement.
+        #[arg(long, value_name = "S", default_value_t = 0.0)]
+        hold_end: f64,
+        /// Repetitions (hold, there, hold, back) end to end; more than one needs --return.
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        repeat: usize,
+        /// A force-set file holding contacts for --touch and --plant (repeatable; with --setup its
         /// force_set_files are used too).
         #[arg(long = "force-set", value_name = "FILE")]
         force_sets: Vec<PathBuf>,
-        /// Digits after the decimal point.
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=20))]
+        /// Digits after the decimal point (contacts are checked closed on the rounded values).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u8).range(1..=20))]
         precision: u8,
         /// The .mot file to write.
         #[arg(short = 'o', long = "output", value_name = "FILE")]
@@ -285,6 +305,12 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
         also,
         link,
         touch,
+        plant,
+        back,
+        return_duration,
+        hold_start,
+        hold_end,
+        repeat,
         force_sets,
         precision,
         output,
@@ -297,7 +323,8 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
     let mut force_set_files = force_sets.clone();
     let (model_file, artifact_files) = match (model, setup) {
         (Some(m), _) => (m.clone(), artifacts.clone()),
-        (None, Some(s)) => match Setup::read(s)? {
+        // The setup's motion is the file this command writes: it may not exist yet.
+        (None, Some(s)) => match Setup::read_for_model(s)? {
             Setup::Analyze(s) => {
                 force_set_files.extend(s.force_set_files);
                 (s.model_file, s.artifact_files)
@@ -326,6 +353,16 @@ fn run_motion(cmd: &Command) -> statopt::Result<()> {
             .iter()
             .map(|t| tools::motion_gen::parse_touch(t))
             .collect::<statopt::Result<_>>()?,
+        plant: plant
+            .iter()
+            .map(|t| tools::motion_gen::parse_plant(t))
+            .collect::<statopt::Result<_>>()?,
+        repeat: *repeat,
+        hold_start: *hold_start,
+        hold_end: *hold_end,
+        back: *back,
+        return_duration: *return_duration,
+        precision: Some(usize::from(*precision)),
     };
     let (table, warnings) = tools::motion_gen::generate(&compiled, &motion, &forces)?;
     for w in &warnings {

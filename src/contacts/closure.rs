@@ -219,3 +219,219 @@ impl crate::motion::stream::RowTransform for StreamClosure<'_> {
         Ok(())
     }
 }
+
+/// A closed chain solved as one system: every contact's point on its plane
+/// (distance 0) and, for a planted contact, its point held at an in-plane
+/// position on the plane body (along the contact's body-fixed axes e1, e2),
+/// by changing the `unknowns` coordinates together (`statopt-tool motion
+/// --touch/--plant`).
+#[derive(Debug, Clone)]
+pub struct Chain {
+    pub contacts: Vec<Contact>,
+    /// Per contact: its in-plane position (m, along e1 and e2 from the
+    /// plane's origin, in the plane body) is held at this value.
+    pub anchors: Vec<Option<[f64; 2]>>,
+    /// The coordinates solved (indices into the model's coordinates).
+    pub unknowns: Vec<usize>,
+}
+
+/// The tolerance every closed row is held to (m): distance and in-plane
+/// drift of every contact of a [`Chain`].
+pub const CHAIN_TOLERANCE: f64 = 1e-9;
+
+/// Which quantity a residual of a [`Chain`] is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ResidualKind {
+    /// The distance of the contact's point from its plane.
+    Distance,
+    /// The in-plane drift along the contact's axis e1 or e2 (1 or 2).
+    Drift(u8),
+}
+
+/// The worst residual of a row: which contact, what, how much (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Worst {
+    pub contact: usize,
+    pub kind: ResidualKind,
+    pub value: f64,
+}
+
+impl Chain {
+    /// The number of residuals (a distance per contact, two per anchor).
+    pub fn residual_count(&self) -> usize {
+        self.contacts.len() + 2 * self.anchors.iter().filter(|a| a.is_some()).count()
+    }
+
+    /// The in-plane position (along e1, e2 in the plane body) of contact
+    /// `k`'s point at the current positions of `data`.
+    pub fn in_plane(&self, data: &Data, k: usize) -> [f64; 2] {
+        let rel = self.relative(data, k);
+        let c = &self.contacts[k];
+        [rel.dot(&c.e1), rel.dot(&c.e2)]
+    }
+
+    /// Contact k's point relative to its plane's origin, in the plane body.
+    fn relative(&self, data: &Data, k: usize) -> nalgebra::Vector3<f64> {
+        let c = &self.contacts[k];
+        let p = data.station_position(c.point_body, &c.point);
+        let o = data.station_position(c.plane_body, &c.origin);
+        data.rotation[c.plane_body].transpose() * (p - o)
+    }
+
+    /// Positions at `q` (after `prepare`, which sets the coordinates that
+    /// follow others, e.g. coupler dependents), then the residuals into
+    /// `out` (resized), each with its contact and kind.
+    pub fn residuals(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &mut [f64],
+        prepare: &dyn Fn(&mut [f64]),
+        out: &mut Vec<(usize, ResidualKind, f64)>,
+    ) {
+        prepare(q);
+        data.q.copy_from_slice(q);
+        kinematics::positions(model, data);
+        out.clear();
+        for (k, c) in self.contacts.iter().enumerate() {
+            let rel = self.relative(data, k);
+            out.push((k, ResidualKind::Distance, rel.dot(&c.normal)));
+            if let Some(a) = self.anchors[k] {
+                out.push((k, ResidualKind::Drift(1), rel.dot(&c.e1) - a[0]));
+                out.push((k, ResidualKind::Drift(2), rel.dot(&c.e2) - a[1]));
+            }
+        }
+    }
+
+    /// The largest residual at `q` (see [`Chain::residuals`]).
+    pub fn worst(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &mut [f64],
+        prepare: &dyn Fn(&mut [f64]),
+    ) -> Option<Worst> {
+        let mut r = Vec::new();
+        self.residuals(model, data, q, prepare, &mut r);
+        r.iter()
+            .max_by(|a, b| a.2.abs().total_cmp(&b.2.abs()))
+            .map(|&(contact, kind, value)| Worst {
+                contact,
+                kind,
+                value,
+            })
+    }
+
+    /// Say a residual: "contact 'heel' is 2e-3 m from its plane".
+    pub fn describe(&self, w: &Worst) -> String {
+        let name = &self.contacts[w.contact].name;
+        match w.kind {
+            ResidualKind::Distance => {
+                format!("contact '{name}' is {:e} m from its plane", w.value)
+            }
+            ResidualKind::Drift(a) => format!(
+                "contact '{name}' has moved {:e} m along its plane's axis e{a} from where it was planted",
+                w.value
+            ),
+        }
+    }
+
+    /// Solve the chain at one row: Gauss–Newton on all residuals together
+    /// over all unknowns, from the values in `q`, with a central-difference
+    /// Jacobian (step 1e-7) and each step the minimum-norm least-squares
+    /// solution (nalgebra's SVD), so that with fewer residuals than
+    /// unknowns the coordinates move as little as they must from where
+    /// they start (rad and m weighed alike), and with more the system is
+    /// solved when it is consistent (e.g. a planar model's out-of-plane
+    /// drift, zero whatever the coordinates). Steps are limited to 0.2
+    /// (rad or m) so that the solution nearest the start is followed.
+    /// Stops when every residual is below 1e-12 m or no step reduces them;
+    /// an error (naming the row's time `t`, the contact and its residual)
+    /// unless every residual is within [`CHAIN_TOLERANCE`].
+    pub fn solve(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        q: &mut [f64],
+        prepare: &dyn Fn(&mut [f64]),
+        t: f64,
+    ) -> Result<()> {
+        let n = self.unknowns.len();
+        let mut r = Vec::new();
+        let (mut rp, mut rm) = (Vec::new(), Vec::new());
+        let h = 1e-7;
+        let norm = |r: &[(usize, ResidualKind, f64)]| r.iter().map(|x| x.2 * x.2).sum::<f64>();
+        for _ in 0..100 {
+            self.residuals(model, data, q, prepare, &mut r);
+            let m = r.len();
+            if m == 0 || r.iter().all(|x| x.2.abs() < 1e-12) || n == 0 {
+                break;
+            }
+            let mut jac = nalgebra::DMatrix::<f64>::zeros(m, n);
+            for (j, &i) in self.unknowns.iter().enumerate() {
+                let x = q[i];
+                q[i] = x + h;
+                self.residuals(model, data, q, prepare, &mut rp);
+                q[i] = x - h;
+                self.residuals(model, data, q, prepare, &mut rm);
+                q[i] = x;
+                for k in 0..m {
+                    jac[(k, j)] = (rp[k].2 - rm[k].2) / (2.0 * h);
+                }
+            }
+            let rhs = nalgebra::DVector::from_iterator(m, r.iter().map(|x| -x.2));
+            let svd = jac.svd(true, true);
+            let cut = 1e-10 * svd.singular_values.max();
+            let Ok(mut step) = svd.solve(&rhs, cut) else {
+                break;
+            };
+            if !step.iter().all(|s| s.is_finite()) || step.amax() == 0.0 {
+                break;
+            }
+            let big = step.amax();
+            if big > 0.2 {
+                step *= 0.2 / big;
+            }
+            // Keep a step only if it reduces the residuals (halving it up
+            // to 30 times): near a least-squares minimum that does not
+            // close, this ends the iteration instead of cycling.
+            let before = norm(&r);
+            let start: Vec<f64> = self.unknowns.iter().map(|&i| q[i]).collect();
+            let mut accepted = false;
+            for _ in 0..30 {
+                for (j, &i) in self.unknowns.iter().enumerate() {
+                    q[i] = start[j] + step[j];
+                }
+                self.residuals(model, data, q, prepare, &mut rp);
+                if norm(&rp) < before {
+                    accepted = true;
+                    break;
+                }
+                step *= 0.5;
+            }
+            if !accepted {
+                for (j, &i) in self.unknowns.iter().enumerate() {
+                    q[i] = start[j];
+                }
+                break;
+            }
+        }
+        match self.worst(model, data, q, prepare) {
+            Some(w) if !(w.value.abs() <= CHAIN_TOLERANCE) => {
+                let names: Vec<&str> = self
+                    .unknowns
+                    .iter()
+                    .map(|&i| model.coordinates[i].name.as_str())
+                    .collect();
+                Err(Error::msg(format!(
+                    "closing contacts: at t = {t}, {} (tolerance {CHAIN_TOLERANCE:e} m); the chain has {} residual(s) (a distance per contact, two in-plane per planted contact) and {} unknown coordinate(s): {}",
+                    self.describe(&w),
+                    self.residual_count(),
+                    n,
+                    if names.is_empty() { "none".to_string() } else { names.join(", ") }
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+}

@@ -266,8 +266,8 @@ fn path_list(tool: &Element, name: &str, dir: &Path) -> Vec<PathBuf> {
 /// Every input file a setup names must exist; the error names the setup,
 /// the element and its line (a missing model used to be reported by its
 /// path alone, without saying which element named it).
-fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
-    match missing_inputs(tool, dir).into_iter().next() {
+fn check_inputs_exist(tool: &Element, dir: &Path, model_only: bool) -> Result<()> {
+    match missing_inputs(tool, dir, model_only).into_iter().next() {
         Some(e) => Err(e),
         None => Ok(()),
     }
@@ -278,7 +278,7 @@ fn check_inputs_exist(tool: &Element, dir: &Path) -> Result<()> {
 pub fn missing_input_files(setup: &Path) -> Result<Vec<Error>> {
     let root = xml::parse_file(setup)?;
     let tool = tool_element(&root)?;
-    Ok(missing_inputs(tool, &setup_dir(setup)))
+    Ok(missing_inputs(tool, &setup_dir(setup), false))
 }
 
 /// The tool element of a setup document (the root, or the first child of
@@ -301,7 +301,10 @@ fn setup_dir(path: &Path) -> PathBuf {
     }
 }
 
-fn missing_inputs(tool: &Element, dir: &Path) -> Vec<Error> {
+/// The files a setup names; with `model_only`, those the model is made of
+/// (model, artifacts, force sets) and not the data it runs on (motion,
+/// states, speeds, external loads).
+fn missing_inputs(tool: &Element, dir: &Path, model_only: bool) -> Vec<Error> {
     let mut out = Vec::new();
     let missing = |el: &Element, p: &str| -> Result<()> {
         let path = resolve(dir, p);
@@ -314,13 +317,14 @@ fn missing_inputs(tool: &Element, dir: &Path) -> Vec<Error> {
             )))
         }
     };
-    for name in [
-        "model_file",
+    let data = [
         "coordinates_file",
         "states_file",
         "speeds_file",
         "external_loads_file",
-    ] {
+    ];
+    let names = std::iter::once("model_file").chain(data.into_iter().filter(|_| !model_only));
+    for name in names {
         if let (Some(el), Some(text)) = (tool.child(name), opt_text(tool, name)) {
             if let Err(e) = missing(el, &text) {
                 out.push(e);
@@ -366,6 +370,13 @@ impl Setup {
         Self::from_document(&xml::parse_file(path)?, path, allow_unknown)
     }
 
+    /// Read a setup for its model (`statopt-tool motion --setup`, which
+    /// writes the setup's motion): the model, artifact and force-set files
+    /// must exist, the motion, states, speeds and external loads need not.
+    pub fn read_for_model(path: &Path) -> Result<Setup> {
+        Self::from_document_checking(&xml::parse_file(path)?, path, false, true)
+    }
+
     /// A setup document given as text, read as if it were the file `path`:
     /// relative paths resolve against `path`'s folder and messages name
     /// `path` (callers that edit a setup in memory, e.g. the Python package).
@@ -380,6 +391,15 @@ impl Setup {
 
     /// The setup of a parsed document (the file `path`; see [`Setup::read_with`]).
     pub fn from_document(root: &Element, path: &Path, allow_unknown: bool) -> Result<Setup> {
+        Self::from_document_checking(root, path, allow_unknown, false)
+    }
+
+    fn from_document_checking(
+        root: &Element,
+        path: &Path,
+        allow_unknown: bool,
+        model_only: bool,
+    ) -> Result<Setup> {
         let tool = tool_element(root)?;
         let dir = setup_dir(path);
         let found = super::known::setup_elements(tool);
@@ -410,7 +430,7 @@ impl Setup {
         let mut unused = found.unused;
         unused.dedup();
         if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {
-            check_inputs_exist(tool, &dir)?;
+            check_inputs_exist(tool, &dir, model_only)?;
         }
         match tool.name.as_str() {
             "InverseDynamicsTool" => {

@@ -10,6 +10,7 @@
 //! their model units, as OpenSim converts only rotational columns
 //! (opensim-semantics.md §1.3).
 
+use crate::contacts::closure::{Chain, CHAIN_TOLERANCE};
 use crate::contacts::Contact;
 use crate::dynamics::Data;
 use crate::error::{Error, Result};
@@ -36,18 +37,167 @@ pub struct MinJerkMotion {
     /// Start and end values in file units (degrees for rotational coordinates).
     pub from: f64,
     pub to: f64,
-    /// Seconds.
+    /// Seconds of the movement from `from` to `to`.
     pub duration: f64,
-    /// Rows per second (the last row is at exactly `duration`).
+    /// Rows per second (each segment's last row is at exactly its end).
     pub rate: f64,
     /// Applied in order, after the driven coordinates.
     pub links: Vec<Link>,
-    /// `(contact, coordinate)`: on every row, set the coordinate so that the
-    /// contact's point lies on its plane (distance 0) by Newton's method,
-    /// starting from the coordinate's `--link` value on every row when it has
-    /// one, else from the previous row's solution (first row: the default), so
-    /// the solution followed is the one nearest that start.
+    /// `(contact, coordinate)`: on every row, the contact's point lies on
+    /// its plane. All contacts of `touch` and `plant` are closed together,
+    /// solving all their coordinates as one system
+    /// (`contacts::closure::Chain`), each coordinate starting from its
+    /// `--link` value on every row when it has one, else from the previous
+    /// row's solution (first row: the default), so the solution followed
+    /// is the one nearest that start. A contact or a coordinate may be
+    /// named more than once.
     pub touch: Vec<(String, String)>,
+    /// `(contact, coordinates)`: the contact is closed as with `touch` and
+    /// its point is also kept where it was on the first row, in the plane
+    /// body's frame (two in-plane residuals); the coordinates, if any, are
+    /// solved too.
+    pub plant: Vec<(String, Vec<String>)>,
+    /// Repetitions (≥ 1; more than one needs `back`).
+    pub repeat: usize,
+    /// Seconds held at `from` before each movement, and at `to` after it.
+    pub hold_start: f64,
+    pub hold_end: f64,
+    /// After the movement (and its hold), move back to `from`.
+    pub back: bool,
+    /// Seconds of the way back; None: `duration`.
+    pub return_duration: Option<f64>,
+    /// Decimals the file will be written with: the values are rounded to
+    /// them, and contacts are checked closed on the rounded values. None:
+    /// values are not rounded.
+    pub precision: Option<usize>,
+}
+
+impl Default for MinJerkMotion {
+    fn default() -> Self {
+        MinJerkMotion {
+            coordinate: String::new(),
+            also: Vec::new(),
+            from: 0.0,
+            to: 0.0,
+            duration: 1.0,
+            rate: 100.0,
+            links: Vec::new(),
+            touch: Vec::new(),
+            plant: Vec::new(),
+            repeat: 1,
+            hold_start: 0.0,
+            hold_end: 0.0,
+            back: false,
+            return_duration: None,
+            precision: None,
+        }
+    }
+}
+
+/// Parse `CONTACT` or `CONTACT=COORDINATE[,COORDINATE...]` for `--plant`.
+pub fn parse_plant(s: &str) -> Result<(String, Vec<String>)> {
+    let (c, qs) = match s.split_once('=') {
+        Some((c, qs)) => (c.trim(), qs.trim()),
+        None => (s.trim(), ""),
+    };
+    let coordinates: Vec<String> = if qs.is_empty() {
+        Vec::new()
+    } else {
+        qs.split(',').map(|q| q.trim().to_string()).collect()
+    };
+    if c.is_empty()
+        || (s.contains('=') && coordinates.is_empty())
+        || coordinates.iter().any(|q| q.is_empty())
+    {
+        return Err(Error::msg(format!(
+            "--plant '{s}': expected CONTACT or CONTACT=COORDINATE[,COORDINATE...]"
+        )));
+    }
+    Ok((c.to_string(), coordinates))
+}
+
+/// The rows' times (s) and the driven value on each (file units): for each
+/// repetition, a hold at `from` (`hold_start`), the minimum-jerk movement
+/// to `to` (`duration`), a hold at `to` (`hold_end`) and, with `back`, the
+/// minimum-jerk movement back to `from` (`return_duration`). Each segment of
+/// D seconds has round(D · rate) intervals (at least one) of equal length;
+/// consecutive segments share their boundary row, so times strictly increase.
+pub fn profile(m: &MinJerkMotion) -> Result<Vec<(f64, f64)>> {
+    let positive = |v: f64, what: &str, unit: &str| -> Result<f64> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(Error::msg(format!(
+                "{what} must be a positive number of {unit}, found {v}"
+            )))
+        }
+    };
+    positive(m.duration, "--duration", "seconds")?;
+    positive(m.rate, "--rate", "rows per second")?;
+    let back = match m.return_duration {
+        Some(r) if !m.back => {
+            return Err(Error::msg(format!(
+                "--return-duration {r} given without --return"
+            )))
+        }
+        Some(r) => positive(r, "--return-duration", "seconds")?,
+        None => m.duration,
+    };
+    for (v, what) in [(m.hold_start, "--hold-start"), (m.hold_end, "--hold-end")] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::msg(format!(
+                "{what} must be zero or a positive number of seconds, found {v}"
+            )));
+        }
+    }
+    if !(m.from.is_finite() && m.to.is_finite()) {
+        return Err(Error::msg("--from and --to must be finite numbers"));
+    }
+    if m.repeat == 0 {
+        return Err(Error::msg("--repeat must be at least 1"));
+    }
+    if m.repeat > 1 && !m.back {
+        return Err(Error::msg(format!(
+            "--repeat {} needs --return: each repetition must end where the next begins",
+            m.repeat
+        )));
+    }
+    let (a, b) = (m.from, m.to);
+    let mut segments: Vec<(f64, f64, f64)> = Vec::new();
+    for _ in 0..m.repeat {
+        if m.hold_start > 0.0 {
+            segments.push((m.hold_start, a, a));
+        }
+        segments.push((m.duration, a, b));
+        if m.hold_end > 0.0 {
+            segments.push((m.hold_end, b, b));
+        }
+        if m.back {
+            segments.push((back, b, a));
+        }
+    }
+    let intervals: Vec<f64> = segments
+        .iter()
+        .map(|s| (s.0 * m.rate).round().max(1.0))
+        .collect();
+    let total: f64 = intervals.iter().sum();
+    if total > 1e7 {
+        return Err(Error::msg(format!(
+            "{total} rows requested; use a lower --rate, --duration or --repeat"
+        )));
+    }
+    let mut rows = Vec::with_capacity(total as usize + 1);
+    rows.push((0.0, a));
+    let mut t0 = 0.0;
+    for (&(d, from, to), &n) in segments.iter().zip(&intervals) {
+        let n = n as usize;
+        for k in 1..=n {
+            let s = k as f64 / n as f64;
+            rows.push((t0 + d * s, from + (to - from) * min_jerk(s)));
+        }
+        t0 += d;
+    }
+    Ok(rows)
 }
 
 /// Parse `CONTACT=COORDINATE` for `--touch`.
@@ -162,37 +312,30 @@ fn find(model: &Model, name: &str, what: &str) -> Result<usize> {
     })
 }
 
+/// The contact element named `cname` among `forces`, compiled.
+fn contact_named(model: &Model, forces: &[Element], cname: &str, option: &str) -> Result<Contact> {
+    let el = forces
+        .iter()
+        .find(|f| f.name_attr() == cname)
+        .ok_or_else(|| {
+            Error::msg(format!(
+                "{option}: no force element named '{cname}' in the model, its artifacts or the force-set files"
+            ))
+        })?;
+    Contact::from_xml(el, model)?
+        .ok_or_else(|| el.error(format!("{option}: '{cname}' is not a contact element")))
+}
+
 /// Generate the motion: a table with one column per model coordinate (tree
 /// order) in file units, and warnings (ranges left, locked coordinates driven).
-/// `forces` are the force elements `--touch` may name (the composed model's
-/// and force-set files').
+/// `forces` are the force elements `--touch` and `--plant` may name (the
+/// composed model's and force-set files').
 pub fn generate(
     model: &Model,
     m: &MinJerkMotion,
     forces: &[Element],
 ) -> Result<(Storage, Vec<String>)> {
-    if !(m.duration.is_finite() && m.duration > 0.0) {
-        return Err(Error::msg(format!(
-            "--duration must be a positive number of seconds, found {}",
-            m.duration
-        )));
-    }
-    if !(m.rate.is_finite() && m.rate > 0.0) {
-        return Err(Error::msg(format!(
-            "--rate must be a positive number of rows per second, found {}",
-            m.rate
-        )));
-    }
-    if !(m.from.is_finite() && m.to.is_finite()) {
-        return Err(Error::msg("--from and --to must be finite numbers"));
-    }
-    let intervals = (m.duration * m.rate).round().max(1.0);
-    if intervals > 1e7 {
-        return Err(Error::msg(format!(
-            "{intervals} rows requested; use a lower --rate or --duration"
-        )));
-    }
-    let n = intervals as usize;
+    let rows = profile(m)?;
     let to_file = |i: usize, v: f64| {
         if model.coordinates[i].motion_type == MotionType::Rotational {
             v.to_degrees()
@@ -235,31 +378,64 @@ pub fn generate(
         explicit[t] = true;
         links.push((t, s, l));
     }
-    let mut touches = Vec::new();
-    for (cname, qname) in &m.touch {
-        let el = forces
-            .iter()
-            .find(|f| f.name_attr() == cname.as_str())
-            .ok_or_else(|| {
-                Error::msg(format!(
-                    "--touch: no force element named '{cname}' in the model, its artifacts or the force-set files"
-                ))
-            })?;
-        let contact = Contact::from_xml(el, model)?
-            .ok_or_else(|| el.error(format!("--touch: '{cname}' is not a contact element")))?;
-        let i = find(model, qname, "--touch coordinate")?;
-        // A --link on the same coordinate gives the starting value.
-        let linked = links.iter().any(|(t, _, _)| *t == i);
-        if (explicit[i] && !linked) || touches.iter().any(|(_, k)| *k == i) {
-            return Err(Error::msg(format!(
-                "--touch: coordinate '{qname}' is already driven or touched"
-            )));
+    let linked = |i: usize| links.iter().any(|(t, _, _)| *t == i);
+    // The chain: every contact named once, every coordinate solved once.
+    let mut chain = Chain {
+        contacts: Vec::new(),
+        anchors: Vec::new(),
+        unknowns: Vec::new(),
+    };
+    let mut planted: Vec<bool> = Vec::new();
+    let named: Vec<(&str, &[String], bool, &str)> = m
+        .touch
+        .iter()
+        .map(|(c, q)| (c.as_str(), std::slice::from_ref(q), false, "--touch"))
+        .chain(
+            m.plant
+                .iter()
+                .map(|(c, qs)| (c.as_str(), qs.as_slice(), true, "--plant")),
+        )
+        .collect();
+    for (cname, qnames, plant, option) in named {
+        let k = match chain.contacts.iter().position(|c| c.name == cname) {
+            Some(k) => k,
+            None => {
+                chain
+                    .contacts
+                    .push(contact_named(model, forces, cname, option)?);
+                chain.anchors.push(None);
+                planted.push(false);
+                chain.contacts.len() - 1
+            }
+        };
+        planted[k] |= plant;
+        for qname in qnames {
+            let i = find(model, qname, &format!("{option} coordinate"))?;
+            if chain.unknowns.contains(&i) {
+                continue;
+            }
+            // A --link on the same coordinate gives the starting value.
+            if explicit[i] && !linked(i) {
+                return Err(Error::msg(format!(
+                    "{option}: coordinate '{qname}' is already driven (--coordinate or --also); a contact can only set a coordinate that is not driven"
+                )));
+            }
+            explicit[i] = true;
+            chain.unknowns.push(i);
         }
-        explicit[i] = true;
-        touches.push((contact, i));
     }
+    if !chain.contacts.is_empty() && chain.unknowns.is_empty() {
+        return Err(Error::msg(
+            "--plant: no coordinate to solve; name one with --plant CONTACT=COORDINATE or --touch CONTACT=COORDINATE",
+        ));
+    }
+    let full_residuals = chain.contacts.len() + 2 * planted.iter().filter(|p| **p).count();
+    let hint = if full_residuals > chain.unknowns.len() {
+        "; free another coordinate (--touch CONTACT=COORDINATE, --plant CONTACT=COORDINATE) or plant fewer contacts".to_string()
+    } else {
+        "; check that the coordinates given with --touch/--plant move these contacts (and start near a solution: --link gives a start)".to_string()
+    };
     let mut data = Data::new(model);
-    let mut touch_start: Vec<Option<f64>> = vec![None; touches.len()];
     let mut warnings = Vec::new();
     for (i, c) in model.coordinates.iter().enumerate() {
         if explicit[i] && c.is_constrained() {
@@ -273,53 +449,120 @@ pub fn generate(
     let defaults: Vec<f64> = (0..nq)
         .map(|i| to_file(i, model.coordinates[i].default_value))
         .collect();
+    let mut header = format!(
+        "statopt-tool motion: {} from {} to {} over {} s (minimum jerk)",
+        m.coordinate, m.from, m.to, m.duration
+    );
+    if m.back {
+        header.push_str(&format!(
+            ", back over {} s",
+            m.return_duration.unwrap_or(m.duration)
+        ));
+    }
+    if m.hold_start > 0.0 || m.hold_end > 0.0 {
+        header.push_str(&format!(
+            ", held {} s before and {} s after",
+            m.hold_start, m.hold_end
+        ));
+    }
+    if m.repeat > 1 {
+        header.push_str(&format!(", {} repetitions", m.repeat));
+    }
     let mut table = Storage {
         name: format!("minimum-jerk motion of {}", m.coordinate),
         labels: model.coordinates.iter().map(|c| c.name.clone()).collect(),
-        time: Vec::with_capacity(n + 1),
-        rows: Vec::with_capacity(n + 1),
+        time: Vec::with_capacity(rows.len()),
+        rows: Vec::with_capacity(rows.len()),
         in_degrees: true,
-        metadata: vec![(
-            "header".into(),
-            format!(
-                "statopt-tool motion: {} from {} to {} over {} s (minimum jerk)",
-                m.coordinate, m.from, m.to, m.duration
-            ),
-        )],
+        metadata: vec![("header".into(), header)],
     };
-    for k in 0..=n {
-        let t = m.duration * k as f64 / n as f64;
+    // The dependent coordinates of one-independent couplers, in file
+    // units (`couple`) and model units (`prepare`, inside the solve).
+    let couple = |row: &mut Vec<f64>| {
+        for c in &model.couplers {
+            if explicit[c.dependent] || c.independent.len() != 1 {
+                continue;
+            }
+            let x = to_model(c.independent[0], row[c.independent[0]]);
+            row[c.dependent] = to_file(c.dependent, c.scale * c.function.value(x));
+        }
+    };
+    let prepare = |q: &mut [f64]| {
+        for c in &model.couplers {
+            if explicit[c.dependent] || c.independent.len() != 1 {
+                continue;
+            }
+            q[c.dependent] = c.scale * c.function.value(q[c.independent[0]]);
+        }
+    };
+    let round = |v: f64| -> f64 {
+        match m.precision {
+            Some(p) => crate::storage::format_c_fixed(v, 0, p)
+                .trim()
+                .parse()
+                .unwrap_or(v),
+            None => v,
+        }
+    };
+    let mut previous: Option<Vec<f64>> = None;
+    let mut q = vec![0.0; nq];
+    for &(t, v) in &rows {
         let mut row = defaults.clone();
-        let v = m.from + (m.to - m.from) * min_jerk(t / m.duration);
         for &d in &driven {
             row[d] = v;
         }
         for &(t_i, s_i, l) in &links {
             row[t_i] = l.scale * row[s_i] + l.offset;
         }
-        let couple = |row: &mut Vec<f64>| {
-            for c in &model.couplers {
-                if explicit[c.dependent] || c.independent.len() != 1 {
-                    continue;
-                }
-                let x = to_model(c.independent[0], row[c.independent[0]]);
-                row[c.dependent] = to_file(c.dependent, c.scale * c.function.value(x));
-            }
-        };
         couple(&mut row);
-        if !touches.is_empty() {
-            let mut q: Vec<f64> = (0..nq).map(|i| to_model(i, row[i])).collect();
-            for (k, (contact, i)) in touches.iter().enumerate() {
-                // Start from the previous row's solution unless a --link
-                // gives the start.
-                if let (Some(x), false) = (touch_start[k], links.iter().any(|(t, _, _)| t == i)) {
-                    q[*i] = x;
+        if !chain.contacts.is_empty() {
+            for i in 0..nq {
+                q[i] = to_model(i, row[i]);
+            }
+            // Start from the previous row's solution unless a --link
+            // gives the start.
+            if let Some(prev) = &previous {
+                for (j, &i) in chain.unknowns.iter().enumerate() {
+                    if !linked(i) {
+                        q[i] = prev[j];
+                    }
                 }
-                crate::contacts::closure::close_contact(model, &mut data, contact, *i, &mut q, t)?;
-                touch_start[k] = Some(q[*i]);
-                row[*i] = to_file(*i, q[*i]);
+            }
+            chain
+                .solve(model, &mut data, &mut q, &prepare, t)
+                .map_err(|e| Error::msg(format!("{e}{hint}")))?;
+            if previous.is_none() {
+                // Plant where the first row put the contacts.
+                data.q.copy_from_slice(&q);
+                crate::dynamics::kinematics::positions(model, &mut data);
+                for k in 0..chain.contacts.len() {
+                    if planted[k] {
+                        chain.anchors[k] = Some(chain.in_plane(&data, k));
+                    }
+                }
+            }
+            previous = Some(chain.unknowns.iter().map(|&i| q[i]).collect());
+            for &i in &chain.unknowns {
+                row[i] = to_file(i, q[i]);
             }
             couple(&mut row);
+        }
+        if m.precision.is_some() {
+            row.iter_mut().for_each(|x| *x = round(*x));
+            if !chain.contacts.is_empty() {
+                for i in 0..nq {
+                    q[i] = to_model(i, row[i]);
+                }
+                if let Some(w) = chain.worst(model, &mut data, &mut q, &prepare) {
+                    if !(w.value.abs() <= CHAIN_TOLERANCE) {
+                        return Err(Error::msg(format!(
+                            "at t = {t}, {} in the values rounded to {} decimals (tolerance {CHAIN_TOLERANCE:e} m); write more decimals (--precision)",
+                            chain.describe(&w),
+                            m.precision.unwrap_or(0)
+                        )));
+                    }
+                }
+            }
         }
         table.time.push(t);
         table.rows.push(row);
