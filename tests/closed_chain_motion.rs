@@ -210,6 +210,26 @@ fn two_touches_are_solved_together() {
         assert_eq!(hip[i], 0.0);
     }
     eprintln!("two touches: largest contact distance on 101 rows {worst:e} m");
+    // A coordinate and a contact may be named more than once: the same
+    // two unknowns and two contacts, the same file.
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "heel=sled_x",
+            "--touch",
+            "toe=sled_x",
+            "--touch",
+            "toe=ankle_angle",
+            "--touch",
+            "heel=ankle_angle",
+            "-o",
+            "again.mot",
+        ],
+    );
+    ok(&out);
+    let again = storage::read(&dir.join("again.mot")).unwrap();
+    assert_eq!(again.rows, t.rows);
 
     // The old way, one contact after the other on the last row, from the
     // defaults: the toe's ankle turn reopens the heel by centimetres.
