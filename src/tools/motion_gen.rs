@@ -3,7 +3,10 @@
 //! 1985: bell-shaped velocity, zero velocity and acceleration at both ends),
 //! every other coordinate at its default value, plus linked coordinates that
 //! follow a linear relation and coupler-dependent coordinates that follow
-//! their constraint. See docs/composition.md.
+//! their constraint; optionally back again and repeated, with holds
+//! ([`profile`]), and with contacts kept closed or planted by coordinates
+//! solved together on every row (`contacts::closure::Chain`). See
+//! docs/composition.md.
 //!
 //! Values are written in OpenSim's motion-file convention: `inDegrees=yes`,
 //! rotational coordinates in degrees, all others (translational, coupled) in
