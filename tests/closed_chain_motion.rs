@@ -334,6 +334,28 @@ fn an_open_row_is_an_error() {
     assert!(err.contains("contact 'heel'"), "{err}");
     assert!(err.contains("free another coordinate"), "{err}");
     assert!(!dir.join("x.mot").exists(), "an open motion was written");
+    // Values rounded to 8 decimals (the old default) leave the heel
+    // 1.7e-9 m off the plate: an error naming the decimals, no file.
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "toe=ankle_angle",
+            "--plant",
+            "heel=sled_x,hip_flexion",
+            "--precision",
+            "8",
+            "-o",
+            "p8.mot",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("rounded to 8 decimals") && err.contains("'heel'"),
+        "{err}"
+    );
+    assert!(!dir.join("p8.mot").exists());
     // A coordinate that does not move the contact.
     let out = motion(
         &dir,
