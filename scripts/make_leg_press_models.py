@@ -41,8 +41,12 @@ DEG = math.pi / 180.0
 # ---------------------------------------------------------------------------------------------
 KNEE_START = 95.0  # deg of knee flexion at the bottom of the press, as in the leg extension study
 KNEE_END = 5.0  # deg, near full extension without locking the knee (machine instructions)
-DURATION = 5.0  # s, minimum jerk, like the leg extension motion (Krueger & Wartzack 2017, 3.2)
-RATE = 20.0  # rows per second: 101 rows
+# Tempo: 2 s down (eccentric) and 2 s up (concentric), the "controlled velocity" of Martin-Fuentes
+# et al. (2020, Int J Environ Res Public Health 17:8698: 2 s eccentric - 2 s concentric), with a
+# 0.5 s pause at the bottom; minimum jerk each way (Flash & Hogan 1985), as the leg extension motion.
+DURATION = 2.0  # s each way
+HOLD_BOTTOM = 0.5  # s
+RATE = 20.0  # rows per second: 91 rows
 # The seat unit reclines the person: pelvis tilted 20 deg posteriorly on a horizontal seat pan and
 # the lumbar spine neutral (lumbar_extension 0), so the trunk and the backrest are reclined 20 deg
 # from the vertical. Machine instructions ask for the lower back flat on the pad and a neutral spine;
@@ -493,19 +497,22 @@ def write_command(slope_hip, c_hip, slope_ankle, c_ankle):
     lines = [
         "#!/bin/sh",
         "# The shipped leg press motion, made by statopt's own motion tool. Written by",
-        "# scripts/make_leg_press_models.py (the link constants follow from the machine's dimensions).",
-        "# Run from the repository root after `cargo build --release`.",
+        "# scripts/make_leg_press_models.py (the --link constants, starting values of the solve, follow",
+        "# from the machine's dimensions). Run from the repository root after `cargo build --release`.",
+        "# One repetition: from near full extension down to the bottom of the press (eccentric), a",
+        f"# {HOLD_BOTTOM:g} s pause, and back up (concentric), {DURATION:g} s each way (minimum jerk).",
+        "# Each foot is planted on the plate: heel and forefoot keep their place on it (--plant),",
+        "# solved together with the sled's slide, the hips (3 each) and the ankles.",
         "set -e",
         "STATOPT=${STATOPT:-target/release/statopt-tool}",
-        "$STATOPT motion \\",
-        "  --model models/leg_extension/human_seated_rajagopal.osim \\",
-        "  --artifact models/leg_press/machine_leg_press.osim \\",
-        "  --force-set models/leg_press/contacts_leg_press.xml \\",
-        f"  --coordinate knee_angle_r --also knee_angle_l --from {KNEE_START:g} --to {KNEE_END:g} --duration {DURATION:g} --rate {RATE:g} \\",
+        "$STATOPT motion --setup setups/leg_press_rajagopal.xml \\",
+        f"  --coordinate knee_angle_r --also knee_angle_l --from {KNEE_END:g} --to {KNEE_START:g} --duration {DURATION:g} \\",
+        f"  --hold-end {HOLD_BOTTOM:g} --return --rate {RATE:g} \\",
     ]
     lines += [f"  --link {l} \\" for l in links]
     lines += [
-        "  --touch heel_r=sled_x --touch forefoot_r=ankle_angle_r --touch forefoot_l=ankle_angle_l \\",
+        "  --plant heel_r=sled_x,hip_flexion_r,hip_adduction_r,hip_rotation_r --plant forefoot_r=ankle_angle_r \\",
+        "  --plant heel_l=hip_flexion_l,hip_adduction_l,hip_rotation_l --plant forefoot_l=ankle_angle_l \\",
         "  -o motions/leg_press_rajagopal.mot",
     ]
     path = os.path.join(OUT, "motion_command.sh")
