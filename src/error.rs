@@ -92,6 +92,17 @@ impl Error {
             Error::Internal(_) => 1,
         }
     }
+    /// Add a note on a line of its own after the message (what may have
+    /// caused it), keeping the location.
+    pub fn with_note(self, note: impl fmt::Display) -> Self {
+        match self {
+            Error::Input { loc, msg } => Error::Input {
+                loc,
+                msg: format!("{msg}\nnote: {note}"),
+            },
+            Error::Internal(m) => Error::Internal(format!("{m}\nnote: {note}")),
+        }
+    }
     /// Prefix the message with context, keeping the location.
     pub fn context(self, ctx: impl fmt::Display) -> Self {
         match self {

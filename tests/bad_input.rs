@@ -87,7 +87,23 @@ fn missing_setup_file() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/setup.xml"));
+    // It says that the missing file is the setup (it said "cannot read or
+    // write file", which file of the run not said).
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("/nonexistent/setup.xml: no such setup file"),
+        "{err}"
+    );
+    for args in [&["--check"][..], &["predict-grf"][..]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+            .args(args)
+            .arg("/nonexistent/setup.xml")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("no such setup file"), "{args:?}: {err}");
+    }
 }
 
 #[test]
@@ -187,4 +203,164 @@ fn motion_lacking_a_coordinate_warns_and_uses_default() {
     let (code, err, _) = run("missing_coord", MODEL, &motion, "0 1");
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("q2") && err.contains("default"), "{err}");
+}
+
+// ---------------------------------------------------------------------
+// What a newcomer meets (issue 38): `--check` checks what the run will do,
+// root causes first; `--allow-unknown` says what it read on past.
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tool(args: &[&std::ffi::OsStr]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!err.contains("panicked"), "the tool panicked:\n{err}");
+    (out.status.code().unwrap_or(-1), err)
+}
+
+/// The leg extension setup of cam 1 with `<contact_weight>` misspelt
+/// `<contact_wieght>`, written to `dir` (its paths made absolute, its
+/// results folder in `dir`).
+fn misspelt_setup(dir: &std::path::Path) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("setups/leg_extension_cam1.xml")).unwrap();
+    assert!(text.contains("<contact_weight>1 500 1000</contact_weight>"));
+    let text = text
+        .replace("contact_weight>", "contact_wieght>")
+        .replace(
+            "../output/leg_extension_cam1",
+            &dir.join("results").display().to_string(),
+        )
+        .replace("../", &format!("{}/", repo().display()));
+    let path = dir.join("typo.xml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn check_honours_the_results_dir_of_the_command_line() {
+    let dir = common::out_dir("bad_input_check_o_file");
+    let file = dir.join("a_file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let setup = repo().join("setups/leg_extension_cam1.xml");
+    // -o FILE and -o FILE/sub: the run would fail, so the check does, naming -o.
+    for o in [file.clone(), file.join("sub")] {
+        let (code, err) = tool(&[
+            "--check".as_ref(),
+            setup.as_os_str(),
+            "-o".as_ref(),
+            o.as_os_str(),
+        ]);
+        assert_eq!(code, 2, "--check -o {}: {err}", o.display());
+        assert!(
+            err.contains(&format!("-o {}: the results folder", o.display()))
+                && err.contains("1 problem(s)"),
+            "{err}"
+        );
+    }
+    // A study's -o FILE: one problem, not one more per setup under it.
+    let study = repo().join("setups/leg_extension_study.xml");
+    let (code, err) = tool(&[
+        "--check".as_ref(),
+        study.as_os_str(),
+        "-o".as_ref(),
+        file.as_os_str(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(&format!(
+            "-o {}: the results folder is a file",
+            file.display()
+        )) && err.contains("1 problem(s)"),
+        "{err}"
+    );
+    // The same setup with a folder that can be made: no problem.
+    let (code, err) = tool(&[
+        "--check".as_ref(),
+        setup.as_os_str(),
+        "-o".as_ref(),
+        dir.join("new/folder").as_os_str(),
+        "--reduce".as_ref(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn a_misspelt_element_is_the_first_problem_and_its_consequences_are_not_listed() {
+    let dir = common::out_dir("bad_input_misspelt_check");
+    let setup = misspelt_setup(&dir);
+    let (code, err) = tool(&["--check".as_ref(), setup.as_os_str()]);
+    assert_eq!(code, 2, "{err}");
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert!(
+        errors.first().is_some_and(
+            |e| e.contains("contact_wieght") && e.contains("did you mean contact_weight?")
+        ),
+        "{err}"
+    );
+    // Not the 18 figure references that a single w0 would leave wrong.
+    assert!(errors.len() <= 3, "{} problems:\n{err}", errors.len());
+    assert!(!err.contains("names w0 ="), "{err}");
+}
+
+#[test]
+fn allow_unknown_says_what_it_read_on_past() {
+    let dir = common::out_dir("bad_input_misspelt_allow");
+    let setup = misspelt_setup(&dir);
+    // The check: a warning naming the element.
+    let (_, err) = tool(&[
+        "--check".as_ref(),
+        setup.as_os_str(),
+        "--allow-unknown".as_ref(),
+    ]);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("warning:") && l.contains("contact_wieght")),
+        "{err}"
+    );
+    // The references to w0 tables the run would not write: one problem.
+    assert_eq!(err.matches("error:").count(), 1, "{err}");
+    // The run: it stops before the first frame (the figures name tables a
+    // single w0 does not write) and says what it read on past.
+    let (code, err) = tool(&[setup.as_os_str(), "--allow-unknown".as_ref()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("single w0") && err.contains("contact_wieght"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("results").exists()
+            || std::fs::read_dir(dir.join("results"))
+                .unwrap()
+                .next()
+                .is_none(),
+        "the run wrote tables before failing"
+    );
+    // Without figures the run succeeds, and warns.
+    let text = std::fs::read_to_string(&setup).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let first = lines.iter().position(|l| l.contains("<Figure")).unwrap();
+    let last = lines.iter().rposition(|l| l.contains("<Metric")).unwrap();
+    let plain = dir.join("plain.xml");
+    std::fs::write(
+        &plain,
+        [&lines[..first], &lines[last + 1..]].concat().join("\n"),
+    )
+    .unwrap();
+    let (code, err) = tool(&[
+        plain.as_os_str(),
+        "--allow-unknown".as_ref(),
+        "-o".as_ref(),
+        dir.join("plain").as_os_str(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("warning:") && l.contains("contact_wieght")),
+        "{err}"
+    );
 }

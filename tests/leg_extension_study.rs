@@ -7,6 +7,8 @@
 //! with the Rajagopal knee, and the study document draws its figures and
 //! metrics.
 
+mod common;
+
 use std::path::PathBuf;
 
 use statopt::parse::setup::Setup;
@@ -164,6 +166,60 @@ fn study_document_draws_figures_and_metrics() {
             .parse()
             .unwrap()
     };
+    // The README's "What the study found" table is these metrics, rounded
+    // as it shows them, and its last column cam 2's change against cam 1.
+    for (row, metric) in [
+        ("peak tibiofemoral compression (N)", "peak_tf_compression_N"),
+        (
+            "tibiofemoral compression at 90° flexion (N)",
+            "tf_compression_at_90deg_N",
+        ),
+        (
+            "peak patellofemoral compression (N)",
+            "peak_pf_compression_N",
+        ),
+        ("peak PCL-type shear, deep flexion (N)", "peak_pcl_shear_N"),
+        (
+            "most ACL-type shear, near full extension (N)",
+            "peak_acl_shear_N",
+        ),
+        (
+            "quadriceps work over one extension (J)",
+            "quadriceps_work_J",
+        ),
+    ] {
+        let cell = |column: &str| {
+            common::readme_cell(row, column)
+                .unwrap_or_else(|| panic!("README: no cell '{row}' / '{column}'"))
+        };
+        let decimals = |c: &str| {
+            c.trim_end_matches(" %")
+                .split('.')
+                .nth(1)
+                .map_or(0, str::len)
+        };
+        let v: Vec<f64> = ["cam1", "cam2"]
+            .iter()
+            .map(|cam| get(&format!("rajagopal_{cam}_{metric}")))
+            .collect();
+        for (column, v) in [("cam 1 (circular)", v[0]), ("cam 2 (elliptical)", v[1])] {
+            let said = cell(column);
+            assert_eq!(
+                said,
+                format!("{v:.*}", decimals(&said)),
+                "README '{row}', {column}: the study's metric is {v}"
+            );
+        }
+        let said = cell("cam 2 against cam 1");
+        if !said.is_empty() {
+            let change = 100.0 * (v[1] / v[0] - 1.0);
+            assert_eq!(
+                said,
+                format!("{change:.*} %", decimals(&said)),
+                "README '{row}': cam 2 against cam 1 is {change} %"
+            );
+        }
+    }
     // The paper's qualitative findings, for both humans: cam 2 lowers the
     // peak (PCL-type) shear and the quadriceps work.
     for m in ["rajagopal", "gait2392"] {

@@ -76,12 +76,16 @@ fn static_optimization_matches_opensim_on_every_validation_case() {
         if rms > 0.002 {
             failures.push(format!("{case}: activation RMS {rms:.2e} > 0.002"));
         }
-        // The README's validation table says what this test measures.
-        let said = common::readme_cell("SO activations, max \\|diff\\| / RMS", case);
+        // docs/validation.md's table says what this test measures.
+        let said = common::doc_cell(
+            "docs/validation.md",
+            "SO activations, max \\|diff\\| / RMS",
+            case,
+        );
         let measured = format!("{:.1e} / {:.1e}", worst.0, rms);
         if said.as_deref() != Some(measured.as_str()) {
             failures.push(format!(
-                "{case}: README's validation table says SO activations {said:?}, this run measures {measured}"
+                "{case}: docs/validation.md's table says SO activations {said:?}, this run measures {measured}"
             ));
         }
         // Forces (actuator columns and the rest the reporter writes).

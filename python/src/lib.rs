@@ -27,8 +27,39 @@ create_exception!(
     "The input is wrong: a setup, model, table or option. The message names the file, line and element, as the CLI's does (exit status 2); the attributes file, line, element and reason hold them apart."
 );
 
+/// A message of the engine in Python's words: the CLI's options it names
+/// become the arguments of `statopt.run()` / `statopt.check()`
+/// (`--allow-unknown` is `allow_unknown=True`, `-o DIR` is
+/// `results_dir='DIR'`, ...).
+fn python_words(text: &str) -> String {
+    let mut t = text.to_string();
+    // `-o DIR: the results folder ...` (create_results_dir's CLI form).
+    if let Some(rest) = t.strip_prefix("-o ") {
+        if let Some(k) = rest.find(": the results folder") {
+            t = format!("results_dir='{}'{}", &rest[..k], &rest[k..]);
+        }
+    }
+    for (cli, py) in [
+        ("statopt-tool --check", "statopt.check()"),
+        ("--allow-unknown", "allow_unknown=True"),
+        (
+            "run the same command again with --resume",
+            "call it again with resume=True and the same results_dir",
+        ),
+        ("--resume", "resume=True"),
+        ("--reduce", "reduce=True"),
+    ] {
+        t = t.replace(cli, py);
+    }
+    t
+}
+
+fn python_words_all(v: &[String]) -> Vec<String> {
+    v.iter().map(|s| python_words(s)).collect()
+}
+
 fn to_py(py: Python<'_>, e: statopt::Error) -> PyErr {
-    let text = e.to_string();
+    let text = python_words(&e.to_string());
     match e {
         statopt::Error::Input { loc, msg } => {
             let err = InputError::new_err(text);
@@ -37,7 +68,7 @@ fn to_py(py: Python<'_>, e: statopt::Error) -> PyErr {
             let _ = v.setattr("file", file);
             let _ = v.setattr("line", loc.line);
             let _ = v.setattr("element", loc.element.clone());
-            let _ = v.setattr("reason", msg);
+            let _ = v.setattr("reason", python_words(&msg));
             err
         }
         statopt::Error::Internal(_) => StatoptError::new_err(text),
@@ -58,7 +89,7 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     d.set_item("root_moment_peak", s.root_moment_peak.clone())?;
     d.set_item("root_body_weight", s.root_body_weight)?;
     d.set_item("loop_seconds", s.loop_seconds)?;
-    d.set_item("warnings", s.warnings.clone())?;
+    d.set_item("warnings", python_words_all(&s.warnings))?;
     let contacts = PyList::empty(py);
     for f in &s.contacts {
         let c = PyDict::new(py);
@@ -69,16 +100,16 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
         c.set_item("value", f.value)?;
         c.set_item("time", f.time)?;
         c.set_item("reserve_body", f.reserve_body.clone())?;
-        c.set_item("message", f.message.clone())?;
+        c.set_item("message", python_words(&f.message))?;
         contacts.append(c)?;
     }
     d.set_item("contacts", contacts)?;
-    d.set_item("notes", s.notes.clone())?;
+    d.set_item("notes", python_words_all(&s.notes))?;
     d.set_item("files", paths(&s.files))?;
     d.set_item("results_dirs", paths(&s.results_dirs))?;
-    d.set_item("report", s.report())?;
+    d.set_item("report", python_words_all(&s.report()))?;
     d.set_item("failure_line", s.failure_line())?;
-    d.set_item("stopped", s.stopped_line())?;
+    d.set_item("stopped", s.stopped_line().map(|l| python_words(&l)))?;
     Ok(d)
 }
 
@@ -541,19 +572,34 @@ fn write_table(
         .map_err(|e| to_py(py, e))
 }
 
-/// `statopt-tool --check SETUP`: read and compile everything the setup names
-/// without running; returns (errors, warnings, files checked).
+/// `statopt-tool --check SETUP [-o DIR] [--reduce] [--allow-unknown]`:
+/// read and compile everything the setup names without running, as the
+/// run with those options would; returns (errors, warnings, notes, files
+/// checked), in Python's words.
 #[pyfunction]
-#[pyo3(signature = (setup, allow_unknown=false))]
+#[pyo3(signature = (setup, results_dir=None, reduce=false, allow_unknown=false))]
+#[allow(clippy::type_complexity)]
 fn check(
     py: Python<'_>,
     setup: PathBuf,
+    results_dir: Option<PathBuf>,
+    reduce: bool,
     allow_unknown: bool,
-) -> (Vec<String>, Vec<String>, Vec<String>) {
-    let r = py.allow_threads(|| tools::check::run(&setup, allow_unknown));
+) -> (Vec<String>, Vec<String>, Vec<String>, Vec<String>) {
+    let opts = RunOptions {
+        results_dir,
+        reduce,
+        allow_unknown,
+        ..Default::default()
+    };
+    let r = py.allow_threads(|| tools::check::run_with(&setup, &opts));
     (
-        r.errors.iter().map(|e| e.to_string()).collect(),
-        r.warnings,
+        r.errors
+            .iter()
+            .map(|e| python_words(&e.to_string()))
+            .collect(),
+        python_words_all(&r.warnings),
+        python_words_all(&r.notes),
         r.checked,
     )
 }

@@ -339,6 +339,18 @@ def predict_grf(
     return res
 
 
+def _in_memory(line: str, scratch: str, tables: bool) -> str:
+    """A report line of a run without ``results_dir``: "N files written to
+    <temporary folder>" says where the tables went instead (the folder is
+    removed)."""
+    if scratch not in line:
+        return line
+    head = line.split(" written to ")[0]
+    where = ("read into the result's tables (results_dir=None: nothing kept on disk)"
+             if tables else "not kept (results_dir=None, tables=False)")
+    return f"{head} {where}"
+
+
 def _execute(native, setup, results_dir, progress, tables, overrides, options) -> Result:
     setup = Path(setup)
     inputs = None
@@ -358,9 +370,11 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
                 cb.close()
         if results_dir is None:
             # Messages name tables by file; here they are res.tables' keys.
+            # The temporary folder is removed: the report names no folder.
             here = str(out) + os.sep
             for k in ("warnings", "report"):
                 summary[k] = [w.replace(here, "") for w in summary[k]]
+            summary["report"] = [_in_memory(line, str(out), tables) for line in summary["report"]]
             if summary["failure_line"]:
                 summary["failure_line"] = summary["failure_line"].replace(here, "")
         seen = set()
@@ -387,10 +401,25 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
             shutil.rmtree(out, ignore_errors=True)
 
 
-def check(setup: Union[str, "os.PathLike[str]"], *, allow_unknown: bool = False) -> Dict[str, List[str]]:
+def check(
+    setup: Union[str, "os.PathLike[str]"],
+    results_dir: Union[str, "os.PathLike[str]", None] = None,
+    *,
+    reduce: bool = False,
+    allow_unknown: bool = False,
+) -> Dict[str, List[str]]:
     """``statopt-tool --check SETUP``: read and compile everything the setup
-    (or study) names without running. Returns ``{"errors": [...],
-    "warnings": [...], "checked": [...]}``; with ``allow_unknown``
-    (``--allow-unknown``) unknown elements are warnings, not errors."""
-    errors, warns, checked = _native.check(os.fspath(setup), allow_unknown=allow_unknown)
-    return {"errors": errors, "warnings": warns, "checked": checked}
+    (or study) names without running, as :func:`run` with the same
+    ``results_dir``, ``reduce`` and ``allow_unknown`` would (a
+    ``results_dir`` that is a file, or cannot be created, is an error).
+    Returns ``{"errors": [...], "warnings": [...], "notes": [...],
+    "checked": [...]}``: errors the root causes first (an unknown element
+    before what follows from it), notes what was not checked and why; with
+    ``allow_unknown=True`` unknown elements are warnings, not errors."""
+    errors, warns, notes, checked = _native.check(
+        os.fspath(setup),
+        results_dir=None if results_dir is None else os.fspath(results_dir),
+        reduce=reduce,
+        allow_unknown=allow_unknown,
+    )
+    return {"errors": errors, "warnings": warns, "notes": notes, "checked": checked}

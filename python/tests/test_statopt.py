@@ -434,7 +434,52 @@ def test_allow_unknown(repo, tmp_path):
     assert not any("contact_wieght" in e for e in lenient["errors"]), lenient
     assert any("contact_wieght" in w for w in lenient["warnings"]), lenient
     res = statopt.run(bad, progress=False, tables=False, allow_unknown=True, time_range=(0.0, 0.05))
-    assert any("contact_wieght" in w and "--allow-unknown" in w for w in res.summary["warnings"])
+    # In Python's words: the option is allow_unknown=True, not --allow-unknown.
+    assert any("contact_wieght" in w and "allow_unknown=True" in w for w in res.summary["warnings"])
+    assert not any("--allow-unknown" in w for w in res.summary["warnings"])
+
+
+def test_messages_in_python_words(repo, tmp_path):
+    # An unknown element: the InputError names allow_unknown=True (it named
+    # the CLI's --allow-unknown), in its message and its reason.
+    bad = tmp_path / "misspelled.xml"
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    text = text.replace("../models", str(repo / "models")).replace("../motions", str(repo / "motions"))
+    bad.write_text(text.replace("<contact_weight>", "<contact_wieght>1</contact_wieght><contact_weight>", 1))
+    with pytest.raises(statopt.InputError) as e:
+        statopt.run(bad, progress=False, tables=False)
+    assert "allow_unknown=True" in str(e.value) and "--allow-unknown" not in str(e.value), str(e.value)
+    assert "allow_unknown=True" in e.value.reason
+    # A missing setup says it is the setup.
+    with pytest.raises(statopt.InputError, match="nowhere.xml: no such setup file"):
+        statopt.run(tmp_path / "nowhere.xml", progress=False)
+    # check() takes the run's results_dir: a file there is an error naming it.
+    afile = tmp_path / "a_file"
+    afile.write_text("not a folder")
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    r = statopt.check(setup, results_dir=afile)
+    assert r["errors"] == [f"results_dir='{afile}': the results folder is a file, not a folder"], r
+    r = statopt.check(setup, results_dir=afile / "sub", reduce=True)
+    assert len(r["errors"]) == 1 and "results_dir=" in r["errors"][0] and "-o " not in r["errors"][0], r
+    assert statopt.check(setup, results_dir=tmp_path / "new")["errors"] == []
+    # The misspelt contact_weight itself: one error, the root cause, and a
+    # note on what was not checked because of it.
+    typo = tmp_path / "typo.xml"
+    typo.write_text(text.replace("contact_weight>", "contact_wieght>"))
+    r = statopt.check(typo)
+    assert len(r["errors"]) == 1 and "contact_wieght" in r["errors"][0], r
+    assert r["notes"] and "not checked" in r["notes"][0], r
+
+
+def test_summary_names_only_what_exists(repo):
+    # Without results_dir the tables go to a temporary folder that is
+    # removed: the report names no folder (it named the deleted one).
+    res = statopt.run(repo / "setups" / "leg_extension_cam1.xml", progress=False,
+                      contact_weight=1, time_range=(0.0, 0.05))
+    last = res.summary["report"][-1]
+    assert "statopt-results-" not in " ".join(res.summary["report"]), res.summary["report"]
+    assert "read into the result's tables" in last, last
+    assert len(res.activations) > 0
 
 # -- predict-grf (reads ../shared in place; skipped without it) ---------------
 

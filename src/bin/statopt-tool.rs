@@ -637,13 +637,23 @@ fn main() -> ExitCode {
             let Some(setup) = cli.run.setup.as_ref() else {
                 return fail(statopt::Error::msg("no setup file given"));
             };
-            let report = tools::check::run(setup, cli.run.allow_unknown);
+            // What the run would do: the same overrides.
+            let opts = RunOptions {
+                results_dir: cli.run.results_dir.clone(),
+                reduce: cli.run.reduce,
+                allow_unknown: cli.run.allow_unknown,
+                ..Default::default()
+            };
+            let report = tools::check::run_with(setup, &opts);
             let mut said = std::collections::HashSet::new();
             for w in report.warnings.iter().filter(|w| said.insert(w.as_str())) {
                 eprintln!("warning: {w}");
             }
             for e in &report.errors {
                 eprintln!("error: {e}");
+            }
+            for n in &report.notes {
+                eprintln!("note: {n}");
             }
             eprintln!(
                 "check: {} problem(s), {} warning(s) in {}",

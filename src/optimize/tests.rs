@@ -702,8 +702,8 @@ fn degenerate_problems_do_not_panic() {
 }
 
 /// The friction model a StaticOptimization uses without `<friction_cone>`
-/// is `FrictionModel::default()`, and both are the exact cone the README
-/// promises (the type's default used to be the pyramid).
+/// is `FrictionModel::default()`, and both are the exact cone
+/// docs/speed_accuracy.md promises (the type's default used to be the pyramid).
 #[test]
 fn friction_default_is_the_cone_everywhere() {
     use crate::optimize::friction::FrictionModel;
@@ -722,10 +722,10 @@ fn friction_default_is_the_cone_everywhere() {
     let so =
         crate::tools::static_optimization::StaticOptimizationSetup::from_xml(&el, common).unwrap();
     assert_eq!(so.friction, FrictionModel::Cone);
-    let readme = include_str!("../../README.md");
+    let doc = include_str!("../../docs/speed_accuracy.md");
     assert!(
-        readme.contains("**Exact friction cone.**"),
-        "README states the cone default"
+        doc.contains("**Exact friction cone.**"),
+        "docs/speed_accuracy.md states the cone default"
     );
 }
 

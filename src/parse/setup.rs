@@ -229,20 +229,36 @@ pub fn results_dir_problem(dir: &Path) -> Option<String> {
 /// Create the results folder `dir` (the error names the setup's
 /// `<results_directory>`, at `loc`, or the command line's `-o`).
 pub fn create_results_dir(dir: &Path, loc: &crate::error::Location, from_cli: bool) -> Result<()> {
-    let say = |what: String| {
-        if from_cli {
-            Error::msg(format!("-o {}: the results folder {what}", dir.display()))
-        } else {
-            Error::input(
-                loc.clone(),
-                format!("<results_directory> names {}, which {what}", dir.display()),
-            )
-        }
-    };
     if let Some(p) = results_dir_problem(dir) {
-        return Err(say(p));
+        return Err(results_dir_error(dir, loc, from_cli, &p));
     }
-    std::fs::create_dir_all(dir).map_err(|e| say(format!("cannot be created: {e}")))
+    std::fs::create_dir_all(dir)
+        .map_err(|e| results_dir_error(dir, loc, from_cli, &format!("cannot be created: {e}")))
+}
+
+/// The error for a results folder `dir` a run cannot write to (`problem`,
+/// e.g. from [`results_dir_problem`]): it names the setup's
+/// `<results_directory>` (at `loc`) or the command line's `-o`.
+pub fn results_dir_error(
+    dir: &Path,
+    loc: &crate::error::Location,
+    from_cli: bool,
+    problem: &str,
+) -> Error {
+    if from_cli {
+        Error::msg(format!(
+            "-o {}: the results folder {problem}",
+            dir.display()
+        ))
+    } else {
+        Error::input(
+            loc.clone(),
+            format!(
+                "<results_directory> names {}, which {problem}",
+                dir.display()
+            ),
+        )
+    }
 }
 
 /// Resolve a path from a setup relative to the setup's folder.
@@ -251,7 +267,33 @@ pub fn resolve(setup_dir: &Path, p: &str) -> PathBuf {
     if p.is_absolute() {
         p.to_path_buf()
     } else {
-        setup_dir.join(p)
+        tidy(&setup_dir.join(p))
+    }
+}
+
+/// `setups/../output` as `output`, the way a user reads it in a message:
+/// a `..` is folded into the component before it only where that is a
+/// folder (not a symbolic link, after which `..` leads elsewhere), so the
+/// path names the same file; a leading `./` is dropped.
+pub fn tidy(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_)))
+                    && out.symlink_metadata().is_ok_and(|m| m.is_dir()) =>
+            {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    if out.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        out
     }
 }
 
@@ -279,7 +321,7 @@ fn check_inputs_exist(tool: &Element, dir: &Path, model_only: bool) -> Result<()
 /// Every input file a setup document names that is not there, one error
 /// each (for `--check`, which reports all problems at once).
 pub fn missing_input_files(setup: &Path) -> Result<Vec<Error>> {
-    let root = xml::parse_file(setup)?;
+    let root = read_document(setup)?;
     let tool = tool_element(&root)?;
     Ok(missing_inputs(tool, &setup_dir(setup), false))
 }
@@ -352,11 +394,50 @@ fn opt_text(el: &Element, name: &str) -> Option<String> {
         .map(str::to_string)
 }
 
+/// Parse a setup or study document, the file the user named: a file that
+/// is not there, or cannot be read, is said to be the setup (a bare "cannot
+/// read or write file" did not say which file of a run it was).
+pub fn read_document(path: &Path) -> Result<Element> {
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(Error::input(
+                crate::error::Location::file(path),
+                "no such setup file",
+            ))
+        }
+        Ok(m) if m.is_dir() => {
+            return Err(Error::input(
+                crate::error::Location::file(path),
+                "is a folder, not a setup file",
+            ))
+        }
+        _ => {}
+    }
+    xml::parse_file(path).map_err(|e| match e {
+        Error::Input { loc, msg } if msg.starts_with("cannot read or write file") => Error::Input {
+            loc,
+            msg: format!(
+                "cannot read the setup file: {}",
+                msg.trim_start_matches("cannot read or write file: ")
+            ),
+        },
+        e => e,
+    })
+}
+
+/// The warning for an unknown element read on past (`--allow-unknown`):
+/// the error's message without its advice to use that option.
+pub fn read_on_warning(e: &Error) -> String {
+    let text = e.to_string();
+    let cut = text.find(" (statopt refuses").unwrap_or(text.len());
+    format!("{} (read on: --allow-unknown)", &text[..cut])
+}
+
 /// Every element of a setup document neither OpenSim 4.6 nor statopt
 /// knows, one error each (for `--check`, which reports all problems at
 /// once; see `parse::known::setup_elements`).
 pub fn unknown_elements(setup: &Path) -> Result<Vec<Error>> {
-    let root = xml::parse_file(setup)?;
+    let root = read_document(setup)?;
     Ok(super::known::setup_elements(tool_element(&root)?).unknown)
 }
 
@@ -370,7 +451,7 @@ impl Setup {
     /// Read a setup file; with `allow_unknown` (`--allow-unknown`) an
     /// unknown element is a warning instead of an error.
     pub fn read_with(path: &Path, allow_unknown: bool) -> Result<Setup> {
-        Self::from_document(&xml::parse_file(path)?, path, allow_unknown)
+        Self::from_document(&read_document(path)?, path, allow_unknown)
     }
 
     /// Read a setup for its model (`statopt-tool motion --setup`, which
@@ -390,6 +471,15 @@ impl Setup {
     /// [`Setup::parse`], unknown elements allowed or not (see [`Setup::read_with`]).
     pub fn parse_with(text: &str, path: &Path, allow_unknown: bool) -> Result<Setup> {
         Self::from_document(&xml::parse_str(text, path)?, path, allow_unknown)
+    }
+
+    /// Non-fatal remarks of reading it: unknown elements read on with
+    /// `allow_unknown`.
+    pub fn warnings(&self) -> &[String] {
+        match self {
+            Setup::Analyze(a) => &a.warnings,
+            Setup::InverseDynamics(i) => &i.warnings,
+        }
     }
 
     /// The setup of a parsed document (the file `path`; see [`Setup::read_with`]).
@@ -425,11 +515,7 @@ impl Setup {
                 return Err(e);
             }
         }
-        let warnings: Vec<String> = found
-            .unknown
-            .iter()
-            .map(|e| format!("{e} (read on: --allow-unknown)"))
-            .collect();
+        let warnings: Vec<String> = found.unknown.iter().map(read_on_warning).collect();
         let mut unused = found.unused;
         unused.dedup();
         if matches!(tool.name.as_str(), "InverseDynamicsTool" | "AnalyzeTool") {

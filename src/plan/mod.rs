@@ -31,7 +31,7 @@ impl Plan {
     /// (`--allow-unknown`) an element neither OpenSim 4.6 nor statopt knows
     /// is a warning instead of an error.
     pub fn read(path: &Path, allow_unknown: bool) -> crate::Result<Plan> {
-        let root = crate::xml::parse_file(path)?;
+        let root = crate::parse::setup::read_document(path)?;
         if study::is_study_document(&root) {
             Ok(Plan::Study(Box::new(StudyPlan::from_document(
                 StudyDocument::from_root(&root, path)?,
@@ -47,7 +47,28 @@ impl Plan {
     }
 }
 
+impl Plan {
+    /// The unknown elements read on past (`allow_unknown`), as warnings:
+    /// the document's, and for a study its setups' and force sweeps'.
+    pub fn unknown_elements_read_on(&self) -> Vec<String> {
+        match self {
+            Plan::Tool(s) => s.warnings().to_vec(),
+            Plan::Study(s) => {
+                let mut w = s.warnings.clone();
+                for r in &s.runs {
+                    for x in r.setup.warnings() {
+                        if !w.contains(x) {
+                            w.push(x.clone());
+                        }
+                    }
+                }
+                w
+            }
+        }
+    }
+}
+
 /// Whether the file is a study document (false when it cannot be read).
 pub fn is_study(path: &Path) -> bool {
-    crate::xml::parse_file(path).is_ok_and(|r| study::is_study_document(&r))
+    crate::parse::setup::read_document(path).is_ok_and(|r| study::is_study_document(&r))
 }

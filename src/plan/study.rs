@@ -97,7 +97,7 @@ impl StudyDocument {
 
     /// Read a study document file.
     pub fn read(path: &Path) -> Result<Self> {
-        Self::from_root(&crate::xml::parse_file(path)?, path)
+        Self::from_root(&crate::parse::setup::read_document(path)?, path)
     }
 }
 
@@ -139,7 +139,7 @@ impl StudyPlan {
             if !allow_unknown {
                 return Err(first);
             }
-            warnings.push(format!("{first} (read on: --allow-unknown)"));
+            warnings.push(crate::parse::setup::read_on_warning(&first));
         }
         if doc.setup_files.is_empty() && doc.sweeps.is_empty() {
             return Err(doc

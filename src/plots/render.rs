@@ -345,6 +345,58 @@ impl Entry<'_> {
 /// Draw one line chart filling `area`: the plot, and its legend in a column
 /// right of it, outside the data.
 pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart) -> Result<()> {
+    chart_in(area, c, None, None)
+}
+
+/// The legend column's width of chart `c` drawn in `area` (0 without a
+/// legend).
+fn legend_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart) -> u32 {
+    let m = metrics(area);
+    let font = TextStyle::from((FONT, m.legend).into_font());
+    let pad = legend_pad(&m);
+    let (w, _) = area.dim_in_pixel();
+    let labels: Vec<&str> = std::iter::once(c.fill_label.as_str())
+        .filter(|l| c.fill_between.is_some() && !l.is_empty())
+        .chain(
+            c.series
+                .iter()
+                .map(|s| s.label.as_str())
+                .filter(|l| !l.is_empty()),
+        )
+        .collect();
+    if labels.is_empty() {
+        return 0;
+    }
+    let text_w = labels
+        .iter()
+        .map(|l| area.estimate_text_size(l, &font).map_or(0, |s| s.0))
+        .max()
+        .unwrap_or(0);
+    (text_w + LEGEND_ICON + 3 * pad + m.margin).min(w * 9 / 20)
+}
+
+/// The x range of a chart's data (None without finite points).
+fn x_extent(c: &Chart) -> Option<(f64, f64)> {
+    let xs = c
+        .series
+        .iter()
+        .flat_map(|s| s.x.iter())
+        .filter(|x| x.is_finite());
+    xs.fold(None, |r, &x| match r {
+        None => Some((x, x)),
+        Some((a, b)) => Some((f64::min(a, x), f64::max(b, x))),
+    })
+}
+
+/// [`chart`] with the legend column `legend` pixels wide and the x axis
+/// spanning `x_span` (panels of one figure share both, so that their plots
+/// have one width and their time axes line up), else its own.
+fn chart_in<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    c: &Chart,
+    legend: Option<u32>,
+    x_span: Option<(f64, f64)>,
+) -> Result<()> {
     area.fill(&WHITE).map_err(plot_err)?;
     let m = metrics(area);
 
@@ -357,19 +409,8 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
             entries.push(Entry::Line(&s.label, s.style, s.band.is_some()));
         }
     }
-    let font = TextStyle::from((FONT, m.legend).into_font());
-    let pad = legend_pad(&m);
     let (w, _) = area.dim_in_pixel();
-    let legend_w = if entries.is_empty() {
-        0
-    } else {
-        let text_w = entries
-            .iter()
-            .map(|e| area.estimate_text_size(e.label(), &font).map_or(0, |s| s.0))
-            .max()
-            .unwrap_or(0);
-        (text_w + LEGEND_ICON + 3 * pad + m.margin).min(w * 9 / 20)
-    };
+    let legend_w = legend.unwrap_or_else(|| legend_width(area, c));
     // The title spans the whole figure (the legend column included),
     // shrunk to fit its width.
     let body = if c.title.is_empty() {
@@ -414,6 +455,9 @@ pub(super) fn chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart
                 ys.extend(finite);
             }
         }
+    }
+    if let Some((a, b)) = x_span {
+        xs.extend([a, b]);
     }
     let (x0, x1) = axis_range(&xs, false, 0.0);
     let (y0, y1) = axis_range(&ys, false, 0.05);
@@ -583,10 +627,45 @@ pub(super) fn panels<DB: DrawingBackend>(
 ) -> Result<()> {
     area.fill(&WHITE).map_err(plot_err)?;
     let cells = area.split_evenly((layout.rows, layout.cols));
-    for (c, cell) in charts.iter().zip(cells.iter()) {
-        chart(cell, c)?;
+    let (legends, spans) = shared_axes(&cells, charts, layout);
+    for (k, (c, cell)) in charts.iter().zip(cells.iter()).enumerate() {
+        chart_in(cell, c, Some(legends[k]), spans[k])?;
     }
     Ok(())
+}
+
+/// Each panel's legend width and x span: the panels of one column share the
+/// widest legend (so their plots have one width and one left and right
+/// edge) and the x range of all their data (stacked panels share their x
+/// axis, as their time axes then line up).
+pub(super) fn shared_axes<DB: DrawingBackend>(
+    cells: &[DrawingArea<DB, Shift>],
+    charts: &[Chart],
+    layout: Layout,
+) -> (Vec<u32>, Vec<Option<(f64, f64)>>) {
+    let n = charts.len().min(cells.len());
+    let own: Vec<u32> = (0..n)
+        .map(|k| legend_width(&cells[k], &charts[k]))
+        .collect();
+    let cols = layout.cols.max(1);
+    let legends = (0..n)
+        .map(|k| {
+            (0..n)
+                .filter(|j| j % cols == k % cols)
+                .map(|j| own[j])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let spans = (0..n)
+        .map(|k| {
+            (0..n)
+                .filter(|j| j % cols == k % cols)
+                .filter_map(|j| x_extent(&charts[j]))
+                .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        })
+        .collect();
+    (legends, spans)
 }
 
 /// Draw a scatter chart filling `area`.

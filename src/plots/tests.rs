@@ -611,3 +611,50 @@ fn a_long_title_is_not_clipped() {
     assert_eq!(edge_dark, 0, "text reaches the figure's edge");
     assert!(Svg::read(&paths[1]).has_text(&c.title));
 }
+
+/// Panels stacked in a column have one plot width, whatever their legends
+/// (issue 38: Figure 10's panels had different plot widths, so their time
+/// axes did not line up), and share their x range.
+#[test]
+fn stacked_panels_line_up() {
+    let d = out_dir("panels_line_up");
+    let panel = |label: &str, t_end: f64| {
+        let mut c = knee_chart();
+        let t: Vec<f64> = (0..=100).map(|i| i as f64 * 0.01 * t_end).collect();
+        // The solid blue line unlabelled: its pixels are the plot's alone.
+        c.series[0] = Series::new(
+            "",
+            t.clone(),
+            t.iter().map(|_| 0.0).collect(),
+            Style::color(0),
+        );
+        c.series[1].label = label.into();
+        c
+    };
+    let charts = [
+        panel("short", 1.0),
+        panel("a much longer legend label than the other panel's", 1.0),
+        panel("short", 0.5),
+    ];
+    let paths = write_panels(&charts, &d.join("col"), Layout::column(3)).unwrap();
+    let (w, h, px) = read_png(&paths[0]);
+    let blue_x = |k: u32| {
+        let rows = (k * h / 3)..((k + 1) * h / 3);
+        let xs: Vec<u32> = px
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| rows.contains(&(*i as u32 / w)) && **p == BLUE)
+            .map(|(i, _)| i as u32 % w)
+            .collect();
+        (*xs.iter().min().unwrap(), *xs.iter().max().unwrap())
+    };
+    let (a, b, c) = (blue_x(0), blue_x(1), blue_x(2));
+    assert!(
+        a.0.abs_diff(b.0) <= 1 && a.1.abs_diff(b.1) <= 1,
+        "{a:?} {b:?}"
+    );
+    // The third panel's data end at half the time: its line ends half way.
+    assert_eq!(a.0.abs_diff(c.0) <= 1, true, "{a:?} {c:?}");
+    let half = (a.0 + a.1) / 2;
+    assert!(c.1.abs_diff(half) <= 3, "{a:?} {c:?}");
+}

@@ -237,6 +237,19 @@ fn run_in(
     model: Option<AnalysisModel>,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
+    // The tables the setup's figures and metrics name, before the first
+    // frame (a figure naming a table the run does not write used to fail
+    // only after every table was written).
+    let out = opts
+        .results_dir
+        .clone()
+        .unwrap_or_else(|| setup.results_directory.clone());
+    if let Some(e) = crate::tools::check::figure_reference_problems(setup, &out)
+        .into_iter()
+        .next()
+    {
+        return Err(e);
+    }
     match opts.threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()

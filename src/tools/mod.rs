@@ -59,11 +59,29 @@ pub struct RunOptions {
 /// study document, an InverseDynamicsTool or an AnalyzeTool setup, read
 /// once into its plan (`plan::Plan`).
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
-    let summary = match crate::plan::Plan::read(setup, opts.allow_unknown)? {
-        crate::plan::Plan::Study(s) => study::run(&s, opts)?,
-        crate::plan::Plan::Tool(s) => run_parsed(*s, opts)?,
-    };
+    let plan = crate::plan::Plan::read(setup, opts.allow_unknown)?;
+    let read_on = plan.unknown_elements_read_on();
+    let summary = match plan {
+        crate::plan::Plan::Study(s) => study::run(&s, opts),
+        crate::plan::Plan::Tool(s) => run_parsed(*s, opts),
+    }
+    .map_err(|e| with_read_on_note(e, &read_on))?;
     synced(summary, opts)
+}
+
+/// A failed run's error, with the unknown elements `--allow-unknown` read
+/// on past named after it: a misspelt element that took its default is the
+/// likeliest cause of what went wrong, and the run's warnings are not
+/// printed when it fails.
+pub fn with_read_on_note(e: crate::Error, read_on: &[String]) -> crate::Error {
+    match read_on {
+        [] => e,
+        [one] => e.with_note(format!("the setup was read with an unknown element: {one}")),
+        [first, rest @ ..] => e.with_note(format!(
+            "the setup was read with {} unknown elements, the first: {first}",
+            rest.len() + 1
+        )),
+    }
 }
 
 /// The summary, once its files are on the disk when `opts.sync` asks.
@@ -112,11 +130,10 @@ pub fn run_setup_text(
     text: &str,
     opts: &RunOptions,
 ) -> crate::Result<RunSummary> {
+    let parsed = crate::parse::setup::Setup::parse_with(text, setup, opts.allow_unknown)?;
+    let read_on = parsed.warnings().to_vec();
     synced(
-        run_parsed(
-            crate::parse::setup::Setup::parse_with(text, setup, opts.allow_unknown)?,
-            opts,
-        )?,
+        run_parsed(parsed, opts).map_err(|e| with_read_on_note(e, &read_on))?,
         opts,
     )
 }

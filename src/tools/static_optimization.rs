@@ -430,7 +430,6 @@ struct RunSpec<'a> {
 /// The tables, log and running statistics of one run.
 struct RunWriters<'a> {
     problem: &'a SoProblem,
-    prefix: String,
     tables: SoTables,
     log_path: std::path::PathBuf,
     /// The log (lent to the thread that writes it while the frames run).
@@ -483,7 +482,6 @@ impl<'a> RunWriters<'a> {
         let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
         Ok(RunWriters {
             problem,
-            prefix: prefix.to_string(),
             tables,
             log_path,
             log: Some(log),
@@ -524,13 +522,8 @@ impl<'a> RunWriters<'a> {
         let warnings = stats.warnings(problem, nframes, &diag_path);
         let root_body_weight = stats.root_body_weight(problem);
         let note = if shared > 1 {
-            format!(
-                "static optimization ({}): {} frames in {:.3} s, shared by the {} weights of the sweep (the physics assembled once per frame)",
-                self.prefix.trim_end_matches('_'),
-                nframes,
-                loop_seconds * shared as f64,
-                shared
-            )
+            // One line for the sweep (the first run's; see sweep_note).
+            String::new()
         } else {
             format!(
                 "static optimization: {} frames in {:.3} s ({:.0} frames/s)",
@@ -781,15 +774,36 @@ fn run_sweep(
     progress.finish_and_clear();
     let shared = runs.len();
     let loop_seconds = start.elapsed().as_secs_f64() / shared as f64;
+    let sweep = (shared > 1).then(|| sweep_note(runs, nframes, loop_seconds * shared as f64));
     let summaries = writers
         .into_iter()
-        .map(|w| {
+        .enumerate()
+        .map(|(i, w)| {
             let mut s = w.finish(nframes, loop_seconds, completed, shared)?;
             s.results_dirs = vec![dir.to_path_buf()];
+            s.notes.retain(|n| !n.is_empty());
+            if i == 0 {
+                s.notes.extend(sweep.clone());
+            }
             Ok(s)
         })
         .collect::<Result<Vec<_>>>()?;
     Ok((summaries, positions))
+}
+
+/// The one line that says how long a w0 sweep took (it used to be said
+/// once per weight, the same time each).
+fn sweep_note(runs: &[RunSpec], nframes: usize, seconds: f64) -> String {
+    let name = names::without_w0(&runs[0].prefix);
+    let weights: Vec<String> = runs.iter().map(|r| names::w0_tag(r.w0)).collect();
+    format!(
+        "static optimization ({}, w0 = {}): {} frames in {:.3} s for the {} weights (the physics assembled once per frame)",
+        name.trim_end_matches('_'),
+        weights.join(", "),
+        nframes,
+        seconds,
+        runs.len()
+    )
 }
 
 /// One frame's results, shared by the table writer and the log thread.

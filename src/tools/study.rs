@@ -292,10 +292,7 @@ fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRu
             (i.results_directory.clone(), i.name.clone(), Vec::new())
         }
     };
-    let out_dir = match moved_to {
-        Some(o) => o.join(own_dir.file_name().unwrap_or(std::ffi::OsStr::new(&name))),
-        None => own_dir.clone(),
-    };
+    let out_dir = moved_results_dir(&own_dir, &name, moved_to);
     PlannedRun {
         file: file.to_path_buf(),
         setup,
@@ -304,6 +301,16 @@ fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRu
         name,
         w0_tags,
         only_file,
+    }
+}
+
+/// Where a study's setup writes: its own results folder, or with the
+/// study's `-o DIR` the folder of that name under DIR (the setup's name
+/// when its folder has none).
+pub fn moved_results_dir(own_dir: &Path, name: &str, moved_to: Option<&Path>) -> PathBuf {
+    match moved_to {
+        Some(o) => o.join(own_dir.file_name().unwrap_or(std::ffi::OsStr::new(name))),
+        None => own_dir.to_path_buf(),
     }
 }
 
@@ -400,7 +407,12 @@ fn check_references(
 /// Everything [`run`] checks before its first run (figure and metric
 /// references against the runs, metric ops).
 pub fn check(plan: &StudyPlan) -> Result<()> {
-    prepare(plan, None).map(|_| ())
+    check_in(plan, None)
+}
+
+/// [`check`] for a run whose outputs go under `moved_to` (the study's `-o`).
+pub fn check_in(plan: &StudyPlan, moved_to: Option<&Path>) -> Result<()> {
+    prepare(plan, moved_to).map(|_| ())
 }
 
 /// Plan the runs, check every reference and metric, and say where figure

@@ -141,10 +141,16 @@ pub fn so_case(
 }
 
 /// The cell of the README's table row starting `| {row} |` in the column
-/// headed `column` (the validation table's cases), or None.
+/// headed `column`, or None.
 pub fn readme_cell(row: &str, column: &str) -> Option<String> {
-    let text = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md"))
-        .ok()?;
+    doc_cell("README.md", row, column)
+}
+
+/// The cell of a table row starting `| {row} |` in the column headed
+/// `column` of the Markdown file `doc` (relative to the repository, e.g.
+/// `docs/validation.md`), or None.
+pub fn doc_cell(doc: &str, row: &str, column: &str) -> Option<String> {
+    let text = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(doc)).ok()?;
     let lines: Vec<&str> = text.lines().collect();
     let cells = |l: &str| -> Vec<String> {
         l.trim()
