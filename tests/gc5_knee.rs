@@ -266,8 +266,9 @@ fn knee_contact_on_ss1_against_the_etibia() {
 /// The compartment capacity is a parameter of the setup: a StaticOptimization's
 /// `<knee_contact_capacity>` (body weights) sets it. A smaller capacity makes
 /// compression dearer: in min f(a) + c·g(L) the optimal g(L) does not grow
-/// with c, so at every frame Σ L² over the compartments (newtons²) does not
-/// grow as the capacity falls. With a capacity far above any load, the
+/// with c, so at every frame g = Σ (L / s)² over the compartments (s: the
+/// compartment's share of the knee's capacity, 0.65 medial and 0.35
+/// lateral by default) does not grow as the capacity falls. With a capacity far above any load, the
 /// method tends to OpenSim's static optimization.
 #[test]
 fn knee_contact_capacity_orders_the_knee_force() {
@@ -302,7 +303,10 @@ fn knee_contact_capacity_orders_the_knee_force() {
             t.column_index("walker_knee_l_total_N").unwrap(),
         );
         (
-            t.rows.iter().map(|r| r[m] * r[m] + r[l] * r[l]).collect(),
+            t.rows
+                .iter()
+                .map(|r| (r[m] / 0.65).powi(2) + (r[l] / 0.35).powi(2))
+                .collect(),
             t.rows.iter().map(|r| r[tot]).fold(0.0, f64::max),
         )
     };
@@ -361,7 +365,7 @@ fn knee_rows_are_the_joint_reaction_at_the_solution() {
         static_optimization_reactions(&problem, t, &r, &mut ws, &specs, &mut o).unwrap();
         for (ki, knee) in problem.knees.iter().enumerate() {
             let l = &r.solution.x[nvar + 2 * ki..nvar + 2 * ki + 2];
-            let (med, lat) = (knee.capacity * l[0], knee.capacity * l[1]);
+            let (med, lat) = (knee.capacity[0] * l[0], knee.capacity[1] * l[1]);
             let (fy, mx) = (o[9 * ki + 1], o[9 * ki + 3]);
             let scale = 1.0 + fy.abs();
             assert!(

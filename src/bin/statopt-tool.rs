@@ -164,8 +164,9 @@ enum Command {
     },
     /// The setup's static optimization with statopt's knee contact method (docs/knee_contact.md):
     /// each knee's medial and lateral compartments as unknown forces of the optimisation, each
-    /// costing (load / capacity)^2 like a muscle, capacity 1.73 body weights (the StaticOptimization's
-    /// <knee_contact_capacity> sets another). Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
+    /// costing (load / capacity)^2 like a muscle; the knee's capacity 3.46 body weights, 65 % of it
+    /// medial (the StaticOptimization's <knee_contact_capacity> (half the knee's) and
+    /// <knee_contact_medial_share> set others). Writes the usual tables, <name>_KneeContact.sto (per knee: flexion, total, medial and
     /// lateral force) and its figure.
     #[command(name = "knee-contact")]
     KneeContact {

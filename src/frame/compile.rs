@@ -205,6 +205,7 @@ impl SoProblem {
             &so.knee_contact,
             so.knee_contact_frontal,
             so.knee_contact_capacity_bw,
+            so.knee_contact_medial_share,
         )
         .map_err(|e| Error::msg(format!("{}: {e}", setup.setup_file.display())))?;
         if !knees.is_empty() && so.constraint_matrix == ConstraintMatrixKind::Perturbation {

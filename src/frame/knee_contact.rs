@@ -21,10 +21,13 @@
 //! units of its capacity C (newtons: [`Knee::capacity`]) and costs `l²` in
 //! the objective, as a muscle's activation does: a muscle costs
 //! `(F/F_max)²`, a compartment `(L/C)²`. C is the largest load a
-//! compartment habitually carries (the StaticOptimization's
+//! compartment habitually carries, as F_max is the largest force a muscle
+//! produces: the knee's habitual peak (twice the StaticOptimization's
 //! `<knee_contact_capacity>` in body weights, default
-//! [`DEFAULT_KNEE_CAPACITY_BW`]), as F_max is the largest force a muscle
-//! produces; it does not depend on the run's contact weight w0, which
+//! 2 × [`DEFAULT_KNEE_CAPACITY_BW`] = 3.46 BW) times the compartment's
+//! habitual share of it (`<knee_contact_medial_share>` medially, default
+//! [`DEFAULT_KNEE_MEDIAL_SHARE`], the rest laterally: instrumented knees carry
+//! most of the load medially in walking). C does not depend on the run's contact weight w0, which
 //! weighs the contacts with the environment (docs/knee_contact.md). Shear
 //! and the other moments stay with the joint (ligaments,
 //! menisci), as in OpenSim's reaction. The reaction the JointReaction
@@ -49,7 +52,7 @@ use crate::paths::geometry;
 /// centres lie 73.5 − (33 + 34.8)/2 ≈ 40 mm apart.
 pub const CONDYLE_SPACING: f64 = 0.040;
 
-pub use crate::parse::analyses::DEFAULT_KNEE_CAPACITY_BW;
+pub use crate::parse::analyses::{DEFAULT_KNEE_CAPACITY_BW, DEFAULT_KNEE_MEDIAL_SHARE};
 
 /// Which knees a StaticOptimization solves with the knee contact method
 /// (read with the setup, `parse::analyses`).
@@ -73,24 +76,37 @@ pub struct Knee {
     /// ingredient study, docs/knee_contact.md) the knee has one axial contact
     /// at its centre: the lateral multiplier is held at zero.
     pub frontal: bool,
-    /// Newtons per unit multiplier: a compartment's load capacity (the
-    /// setup's capacity in body weights × the model's weight; twice that for
-    /// the one axial contact, which carries the whole knee).
-    pub capacity: f64,
+    /// Newtons per unit multiplier, per compartment (medial, lateral): its
+    /// load capacity, the knee's capacity (twice the setup's capacity in
+    /// body weights × the model's weight) times the compartment's share
+    /// (`<knee_contact_medial_share>` medially, the rest laterally). The one
+    /// axial contact, carrying the whole knee, has the knee's capacity in
+    /// both entries (the lateral multiplier is held at zero).
+    pub capacity: [f64; 2],
 }
 
 /// The knees `sel` names, or an error naming what is wrong. `frontal`: two
 /// compartments (the method) or one axial contact per knee; `capacity_bw`:
-/// a compartment's capacity in body weights (the axial contact, carrying
-/// the whole knee, gets twice that).
+/// a compartment's capacity in body weights at an even split, so the
+/// knee's is twice that; `medial_share`: the medial compartment's share of
+/// the knee's capacity (the axial contact carries the whole knee's).
 pub fn select(
     model: &Model,
     sel: &KneeSelection,
     frontal: bool,
     capacity_bw: f64,
+    medial_share: f64,
 ) -> Result<Vec<Knee>> {
     let bw = model.total_mass() * model.gravity.norm();
-    let capacity = if frontal { 1.0 } else { 2.0 } * capacity_bw * bw;
+    let knee_capacity = 2.0 * capacity_bw * bw;
+    let capacity = if frontal {
+        [
+            medial_share * knee_capacity,
+            (1.0 - medial_share) * knee_capacity,
+        ]
+    } else {
+        [knee_capacity; 2]
+    };
     let tibias: Vec<usize> = match sel {
         KneeSelection::Off => return Ok(Vec::new()),
         KneeSelection::All => {
@@ -299,12 +315,12 @@ impl SoProblem {
                 for j in 0..2 {
                     let col = col0 + 2 * kj + j;
                     let same = kj == ki;
-                    a[(ra, col)] = if same { k.capacity } else { 0.0 };
+                    a[(ra, col)] = if same { k.capacity[j] } else { 0.0 };
                     a[(rb, col)] = match (same, k.frontal) {
                         (false, _) => 0.0,
-                        (true, true) => k.z[j] * k.capacity,
+                        (true, true) => k.z[j] * k.capacity[j],
                         // Without the frontal row: l_lat = 0.
-                        (true, false) => (j as f64) * k.capacity,
+                        (true, false) => (j as f64) * k.capacity[j],
                     };
                 }
             }
@@ -335,7 +351,7 @@ mod tests {
             distal: vec![false, true],
             z: [side * h, -side * h],
             frontal: true,
-            capacity: 1272.0,
+            capacity: [1653.0, 890.0],
         }
     }
 

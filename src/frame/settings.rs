@@ -54,4 +54,29 @@ mod tests {
             .to_string();
         assert!(e.contains("knee_contact is empty"), "{e}");
     }
+
+    /// `<knee_contact_medial_share>`: 0.65 unless given; a share outside
+    /// (0, 1) is an error naming the element's line.
+    #[test]
+    fn knee_contact_medial_share_property() {
+        let s = parse("<knee_contact>all</knee_contact>").unwrap();
+        assert_eq!(
+            s.knee_contact_medial_share,
+            crate::parse::analyses::DEFAULT_KNEE_MEDIAL_SHARE
+        );
+        assert_eq!(s.knee_contact_medial_share, 0.65);
+        let s = parse("<knee_contact_medial_share>0.5</knee_contact_medial_share>").unwrap();
+        assert_eq!(s.knee_contact_medial_share, 0.5);
+        for bad in ["0", "1", "-0.2", "1.5"] {
+            let e = parse(&format!(
+                "<knee_contact_medial_share>{bad}</knee_contact_medial_share>"
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains("knee_contact_medial_share") && e.contains("setup.xml"),
+                "{e}"
+            );
+        }
+    }
 }

@@ -98,6 +98,11 @@ pub struct StaticOptimizationSetup {
     /// body weights, the unit of its cost (default
     /// [`DEFAULT_KNEE_CAPACITY_BW`]; `frame::knee_contact`).
     pub knee_contact_capacity_bw: f64,
+    /// statopt `<knee_contact_medial_share>`: the medial compartment's share
+    /// of the knee's capacity (twice `knee_contact_capacity_bw`), the lateral
+    /// taking the rest (default [`DEFAULT_KNEE_MEDIAL_SHARE`];
+    /// `frame::knee_contact`).
+    pub knee_contact_medial_share: f64,
     /// Whether the element gives `<contact_weight>` (else
     /// [`DEFAULT_CONTACT_WEIGHT`] applies).
     pub contact_weights_given: bool,
@@ -179,6 +184,13 @@ fn knee_capacity_problem(v: f64) -> Option<String> {
     ))
 }
 
+/// Why `v` cannot be the medial compartment's share of the knee's capacity, or None.
+fn knee_medial_share_problem(v: f64) -> Option<String> {
+    (!(v > 0.0 && v < 1.0)).then(|| format!(
+        "knee_contact_medial_share is the medial compartment's share of the knee's load capacity and must lie in (0, 1), found {v}"
+    ))
+}
+
 /// Why `v` cannot be Clarabel's tolerance, or None.
 fn solver_tolerance_problem(v: f64) -> Option<String> {
     (!(v > 0.0 && v < 1.0)).then(|| format!("solver_tolerance must lie in (0, 1), found {v}"))
@@ -219,6 +231,15 @@ impl StaticOptimizationSetup {
             return Err(self.element.error(m));
         }
         self.knee_contact_capacity_bw = bw;
+        Ok(())
+    }
+
+    /// The medial compartment's share of the knee's load capacity.
+    pub fn set_knee_contact_medial_share(&mut self, share: f64) -> Result<()> {
+        if let Some(m) = knee_medial_share_problem(share) {
+            return Err(self.element.error(m));
+        }
+        self.knee_contact_medial_share = share;
         Ok(())
     }
 
@@ -318,6 +339,16 @@ impl StaticOptimizationSetup {
                 }
                 _ => DEFAULT_KNEE_CAPACITY_BW,
             },
+            knee_contact_medial_share: match el.child("knee_contact_medial_share") {
+                Some(c) if !c.text().trim().is_empty() => {
+                    let v = c.f64()?;
+                    if let Some(m) = knee_medial_share_problem(v) {
+                        return Err(c.error(m));
+                    }
+                    v
+                }
+                _ => DEFAULT_KNEE_MEDIAL_SHARE,
+            },
             knee_contact_frontal,
             knee_contact,
             reserve_actuators: match el.child("reserve_actuators") {
@@ -341,6 +372,14 @@ impl StaticOptimizationSetup {
 /// 2010, J Biomech 43:2164, five subjects), each compartment taking half
 /// (docs/knee_contact.md says why).
 pub const DEFAULT_KNEE_CAPACITY_BW: f64 = 1.73;
+
+/// The medial compartment's share of the knee's load capacity when a
+/// StaticOptimization gives no `<knee_contact_medial_share>`: instrumented
+/// knees carry about 60–70 % of the tibiofemoral load medially in walking
+/// (docs/knee_contact.md gives the sources), so each compartment's habitual
+/// peak, its capacity, is that share of the knee's; 0.65 is the middle of
+/// the range, not fitted to a trial.
+pub const DEFAULT_KNEE_MEDIAL_SHARE: f64 = 0.65;
 
 /// w0 when a StaticOptimization has no `<contact_weight>`.
 pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;

@@ -47,6 +47,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "solver",
             "knee_contact",
             "knee_contact_capacity",
+            "knee_contact_medial_share",
         ],
     ),
 ];
