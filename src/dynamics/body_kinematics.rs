@@ -190,7 +190,7 @@ fn physical_frame(model: &Model, name: &str) -> Option<(usize, Transform)> {
     model
         .frame(name)
         .or_else(|| model.frame(&format!("/bodyset/{name}")))
-        .map(|f| (f.body, f.transform.clone()))
+        .map(|f| (f.body, f.transform))
 }
 
 /// The point a PointKinematics analysis records, resolved on a model.
