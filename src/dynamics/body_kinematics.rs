@@ -201,7 +201,10 @@ pub struct PointSelection {
     pub station: Vector3<f64>,
     /// `relative_to_body_name`: its body and its pose in that body.
     pub relative_to: Option<(usize, Transform)>,
-    /// The column labels: `<point_name>_X, _Y, _Z`.
+    /// The column labels: OpenSim 4.6's, `state_0, state_1, state_2` (the
+    /// X, Y and Z of the point; OpenSim labels PointKinematics' tables
+    /// before the point is known, and statopt writes what OpenSim writes so
+    /// that its tables load where OpenSim's do).
     pub labels: Vec<String>,
 }
 
@@ -235,10 +238,7 @@ impl PointSelection {
             body,
             station: x.apply(&setup.point),
             relative_to,
-            labels: ["X", "Y", "Z"]
-                .iter()
-                .map(|s| format!("{}_{s}", setup.point_name))
-                .collect(),
+            labels: (0..3).map(|i| format!("state_{i}")).collect(),
         })
     }
 
