@@ -589,3 +589,62 @@ fn close_contacts_with_two_entries_closes_both() {
         assert!((values[2] - table.rows[i][iankle]).abs() < 1e-10);
     }
 }
+
+/// A touched coordinate that drives another through a
+/// CoordinateCouplerConstraint: `drive` (a pedal's pin) sets
+/// ankle_angle = drive, so only through the coupler does `drive` turn the
+/// foot. The coupler is applied inside the solve: both contacts closed on
+/// every row (1e-9 m) with the ankle written as its dependent value, and
+/// drive = −knee (the sole flush).
+#[test]
+fn a_touched_coordinate_moves_its_coupler_dependent() {
+    let dir = case("coupler");
+    let coupled = LEG
+        .replace(
+            "</objects></BodySet>",
+            r#"<Body name="pedal"><mass>0.1</mass><mass_center>0 0 0</mass_center><inertia>0.001 0.001 0.001 0 0 0</inertia></Body>
+</objects></BodySet>"#,
+        )
+        .replace(
+            "</objects></JointSet>",
+            r#"<PinJoint name="pedal_pin"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/pedal</socket_child_frame>
+<coordinates><Coordinate name="drive"><default_value>0.5</default_value><range>-2 2</range></Coordinate></coordinates></PinJoint>
+</objects></JointSet>
+<ConstraintSet><objects><CoordinateCouplerConstraint name="ankle_follows_drive"><coupled_coordinates_function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></coupled_coordinates_function><independent_coordinate_names>drive</independent_coordinate_names><dependent_coordinate_name>ankle_angle</dependent_coordinate_name></CoordinateCouplerConstraint></objects></ConstraintSet>"#,
+        );
+    std::fs::write(dir.join("leg.osim"), coupled).unwrap();
+    let (model, contacts) = model_and_contacts(&dir);
+    assert_eq!(model.couplers.len(), 1);
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "heel=sled_x",
+            "--touch",
+            "toe=drive",
+            "-o",
+            "coupled.mot",
+        ],
+    );
+    ok(&out);
+    let t = storage::read(&dir.join("coupled.mot")).unwrap();
+    let (knee, drive, ankle) = (
+        col(&t, "knee_angle"),
+        col(&t, "drive"),
+        col(&t, "ankle_angle"),
+    );
+    let mut data = Data::new(&model);
+    for i in 0..t.len() {
+        assert!((ankle[i] - drive[i]).abs() < 1e-9, "row {i}");
+        assert!(
+            (drive[i] + knee[i]).abs() < 1e-7,
+            "row {i}: drive {}",
+            drive[i]
+        );
+        let q = q_of(&model, &t, i);
+        for c in &contacts {
+            let d = contact_distance(&model, &mut data, c, &q);
+            assert!(d.abs() < 1e-9, "row {i}: {} is {d} m off", c.name);
+        }
+    }
+}
