@@ -124,13 +124,17 @@ fn col(t: &Storage, label: &str) -> Vec<f64> {
     t.column(t.column_index(label).unwrap())
 }
 
-/// Model-unit coordinates of row `i` of a file (degrees → rad).
+/// Model-unit coordinates of row `i` of a file (degrees → rad; a missing
+/// column: the default value).
 fn q_of(model: &Model, t: &Storage, i: usize) -> Vec<f64> {
     model
         .coordinates
         .iter()
         .map(|c| {
-            let v = t.rows[i][t.column_index(&c.name).unwrap()];
+            let Some(j) = t.column_index(&c.name) else {
+                return c.default_value;
+            };
+            let v = t.rows[i][j];
             if c.motion_type == statopt::model::MotionType::Rotational {
                 v.to_radians()
             } else {
@@ -206,6 +210,26 @@ fn two_touches_are_solved_together() {
         assert_eq!(hip[i], 0.0);
     }
     eprintln!("two touches: largest contact distance on 101 rows {worst:e} m");
+    // A coordinate and a contact may be named more than once: the same
+    // two unknowns and two contacts, the same file.
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "heel=sled_x",
+            "--touch",
+            "toe=sled_x",
+            "--touch",
+            "toe=ankle_angle",
+            "--touch",
+            "heel=ankle_angle",
+            "-o",
+            "again.mot",
+        ],
+    );
+    ok(&out);
+    let again = storage::read(&dir.join("again.mot")).unwrap();
+    assert_eq!(again.rows, t.rows);
 
     // The old way, one contact after the other on the last row, from the
     // defaults: the toe's ankle turn reopens the heel by centimetres.
@@ -310,6 +334,28 @@ fn an_open_row_is_an_error() {
     assert!(err.contains("contact 'heel'"), "{err}");
     assert!(err.contains("free another coordinate"), "{err}");
     assert!(!dir.join("x.mot").exists(), "an open motion was written");
+    // Values rounded to 8 decimals (the old default) leave the heel
+    // 1.7e-9 m off the plate: an error naming the decimals, no file.
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "toe=ankle_angle",
+            "--plant",
+            "heel=sled_x,hip_flexion",
+            "--precision",
+            "8",
+            "-o",
+            "p8.mot",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("rounded to 8 decimals") && err.contains("'heel'"),
+        "{err}"
+    );
+    assert!(!dir.join("p8.mot").exists());
     // A coordinate that does not move the contact.
     let out = motion(
         &dir,
@@ -466,4 +512,139 @@ fn setup_whose_motion_is_not_written_yet() {
         err.contains("model_file") && err.contains("missing.osim"),
         "{err}"
     );
+}
+
+/// The AnalyzeTool's `<close_contacts>` with two entries (the in-memory
+/// closure of a table): closed together, both within 1e-9 m on every row,
+/// where closing them one after another left the heel open.
+#[test]
+fn close_contacts_with_two_entries_closes_both() {
+    let dir = case("close_contacts");
+    let (model, contacts) = model_and_contacts(&dir);
+    let mut table = Storage {
+        name: "knee".into(),
+        labels: vec!["knee_angle".into()],
+        time: (0..=50).map(|k| k as f64 * 0.02).collect(),
+        rows: (0..=50).map(|k| vec![-60.0 + k as f64]).collect(),
+        in_degrees: true,
+        metadata: vec![],
+    };
+    let closures = vec![
+        (
+            contacts[0].clone(),
+            model.coordinate_index("sled_x").unwrap(),
+        ),
+        (
+            contacts[1].clone(),
+            model.coordinate_index("ankle_angle").unwrap(),
+        ),
+    ];
+    let knee_only = table.clone();
+    statopt::contacts::closure::close_contacts(&model, &mut table, &closures).unwrap();
+    let mut data = Data::new(&model);
+    for i in 0..table.len() {
+        let q = q_of(&model, &table, i);
+        for c in &contacts {
+            let d = contact_distance(&model, &mut data, c, &q);
+            assert!(
+                d.abs() < 1e-9,
+                "t = {}: {} is {d} m off",
+                table.time[i],
+                c.name
+            );
+        }
+    }
+    // The same streamed (`StreamClosure`, the state stream's row
+    // transform): values per row knee (deg), sled (m), ankle (deg), the
+    // closed coordinates absent from the file (each row starts from the
+    // row before's solution); equal to the whole-table closure.
+    use statopt::motion::stream::RowTransform;
+    let deg = std::f64::consts::PI / 180.0;
+    let columns: Vec<Option<(usize, f64)>> = model
+        .coordinates
+        .iter()
+        .map(|c| match c.name.as_str() {
+            "knee_angle" => Some((0, deg)),
+            "sled_x" => Some((1, 1.0)),
+            "ankle_angle" => Some((2, deg)),
+            _ => None,
+        })
+        .collect();
+    let mut stream = statopt::contacts::closure::StreamClosure::new(
+        &model,
+        closures,
+        vec![true, true],
+        columns,
+        "test".into(),
+    );
+    stream.begin_window(0);
+    let (isled, iankle) = (
+        table.column_index("sled_x").unwrap(),
+        table.column_index("ankle_angle").unwrap(),
+    );
+    for i in 0..knee_only.len() {
+        let mut values = [knee_only.rows[i][0], 0.8, 0.5 / deg];
+        stream.apply(i, knee_only.time[i], &mut values).unwrap();
+        assert!((values[1] - table.rows[i][isled]).abs() < 1e-12);
+        assert!((values[2] - table.rows[i][iankle]).abs() < 1e-10);
+    }
+}
+
+/// A touched coordinate that drives another through a
+/// CoordinateCouplerConstraint: `drive` (a pedal's pin) sets
+/// ankle_angle = drive, so only through the coupler does `drive` turn the
+/// foot. The coupler is applied inside the solve: both contacts closed on
+/// every row (1e-9 m) with the ankle written as its dependent value, and
+/// drive = −knee (the sole flush).
+#[test]
+fn a_touched_coordinate_moves_its_coupler_dependent() {
+    let dir = case("coupler");
+    let coupled = LEG
+        .replace(
+            "</objects></BodySet>",
+            r#"<Body name="pedal"><mass>0.1</mass><mass_center>0 0 0</mass_center><inertia>0.001 0.001 0.001 0 0 0</inertia></Body>
+</objects></BodySet>"#,
+        )
+        .replace(
+            "</objects></JointSet>",
+            r#"<PinJoint name="pedal_pin"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/pedal</socket_child_frame>
+<coordinates><Coordinate name="drive"><default_value>0.5</default_value><range>-2 2</range></Coordinate></coordinates></PinJoint>
+</objects></JointSet>
+<ConstraintSet><objects><CoordinateCouplerConstraint name="ankle_follows_drive"><coupled_coordinates_function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></coupled_coordinates_function><independent_coordinate_names>drive</independent_coordinate_names><dependent_coordinate_name>ankle_angle</dependent_coordinate_name></CoordinateCouplerConstraint></objects></ConstraintSet>"#,
+        );
+    std::fs::write(dir.join("leg.osim"), coupled).unwrap();
+    let (model, contacts) = model_and_contacts(&dir);
+    assert_eq!(model.couplers.len(), 1);
+    let out = motion(
+        &dir,
+        &[
+            "--touch",
+            "heel=sled_x",
+            "--touch",
+            "toe=drive",
+            "-o",
+            "coupled.mot",
+        ],
+    );
+    ok(&out);
+    let t = storage::read(&dir.join("coupled.mot")).unwrap();
+    let (knee, drive, ankle) = (
+        col(&t, "knee_angle"),
+        col(&t, "drive"),
+        col(&t, "ankle_angle"),
+    );
+    let mut data = Data::new(&model);
+    for i in 0..t.len() {
+        assert!((ankle[i] - drive[i]).abs() < 1e-9, "row {i}");
+        assert!(
+            (drive[i] + knee[i]).abs() < 1e-7,
+            "row {i}: drive {}",
+            drive[i]
+        );
+        let q = q_of(&model, &t, i);
+        for c in &contacts {
+            let d = contact_distance(&model, &mut data, c, &q);
+            assert!(d.abs() < 1e-9, "row {i}: {} is {d} m off", c.name);
+        }
+    }
 }

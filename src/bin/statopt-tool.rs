@@ -182,7 +182,9 @@ enum Command {
         quiet: bool,
     },
     /// Write a .mot in which a coordinate moves from --from to --to along a minimum-jerk
-    /// (bell-shaped velocity) profile; every other coordinate stays at its default value.
+    /// (bell-shaped velocity) profile, optionally back and repeated with holds; every other
+    /// coordinate stays at its default value unless linked, or solved so that contacts stay
+    /// closed (--touch) or planted (--plant), all together, within 1e-9 m on every row.
     Motion {
         /// The model (give --model or --setup).
         #[arg(

@@ -59,8 +59,54 @@ pub fn close_contact(
     )))
 }
 
+/// With several closures, one [`Chain`] over all of them: solved together,
+/// so that closing one contact cannot reopen another (issue 35). A single
+/// closure keeps [`close_contact`]'s Newton iteration.
+fn chain_of(closures: &[(Contact, usize)]) -> Option<Chain> {
+    if closures.len() < 2 {
+        return None;
+    }
+    let mut chain = Chain {
+        contacts: Vec::new(),
+        anchors: Vec::new(),
+        unknowns: Vec::new(),
+    };
+    for (c, i) in closures {
+        if !chain.contacts.iter().any(|k| k.name == c.name) {
+            chain.contacts.push(c.clone());
+            chain.anchors.push(None);
+        }
+        if !chain.unknowns.contains(i) {
+            chain.unknowns.push(*i);
+        }
+    }
+    Some(chain)
+}
+
+/// Close a row's contacts from the values in `q`: the chain when there is
+/// one, else each closure's Newton iteration.
+fn close_row(
+    model: &Model,
+    data: &mut Data,
+    closures: &[(Contact, usize)],
+    chain: Option<&Chain>,
+    q: &mut [f64],
+    t: f64,
+) -> Result<()> {
+    match chain {
+        Some(chain) => chain.solve(model, data, q, &|_: &mut [f64]| {}, t),
+        None => {
+            for (contact, c) in closures {
+                close_contact(model, data, contact, *c, q, t)?;
+            }
+            Ok(())
+        }
+    }
+}
+
 /// Solve, on every row of `table` (in the file's units), each coordinate of
-/// `closures` so that its contact is closed. Columns missing from the table
+/// `closures` so that its contact is closed (several closures together, as
+/// one [`Chain`]). Columns missing from the table
 /// are added (starting from the default value). Newton starts from the table's value.
 pub fn close_contacts(
     model: &Model,
@@ -96,6 +142,7 @@ pub fn close_contacts(
         .collect();
     let mut data = Data::new(model);
     let mut q = vec![0.0; model.nq()];
+    let chain = chain_of(closures);
     for i in 0..table.time.len() {
         for (c, col) in cols.iter().enumerate() {
             q[c] = match col {
@@ -104,11 +151,13 @@ pub fn close_contacts(
             };
         }
         let t = table.time[i];
-        for (k, (contact, c)) in closures.iter().enumerate() {
+        for (k, (_, c)) in closures.iter().enumerate() {
             if continued[k] && i > 0 {
                 q[*c] = table.rows[i - 1][cols[*c].unwrap_or(0)] * scale(*c);
             }
-            close_contact(model, &mut data, contact, *c, &mut q, t)?;
+        }
+        close_row(model, &mut data, closures, chain.as_ref(), &mut q, t)?;
+        for (_, c) in closures {
             let j = cols[*c].unwrap_or(0);
             table.rows[i][j] = q[*c] / scale(*c);
         }
@@ -126,6 +175,8 @@ pub fn close_contacts(
 pub struct StreamClosure<'m> {
     model: &'m Model,
     closures: Vec<(Contact, usize)>,
+    /// Several closures: solved together ([`chain_of`]).
+    chain: Option<Chain>,
     /// Per closure: its coordinate is not in the file.
     continued: Vec<bool>,
     /// Per model coordinate: its column in a row's values and the factor
@@ -153,6 +204,7 @@ impl<'m> StreamClosure<'m> {
     ) -> Self {
         StreamClosure {
             model,
+            chain: chain_of(&closures),
             closures,
             continued,
             columns,
@@ -195,8 +247,8 @@ impl crate::motion::stream::RowTransform for StreamClosure<'_> {
                 )))
             }
         };
-        for (k, (contact, c)) in self.closures.iter().enumerate() {
-            let (j, scale) = self.columns[*c].expect("a closed coordinate has a column");
+        for (k, (_, c)) in self.closures.iter().enumerate() {
+            let (_, scale) = self.columns[*c].expect("a closed coordinate has a column");
             if self.continued[k] && row > 0 {
                 let prev = at
                     .checked_sub(n)
@@ -208,8 +260,18 @@ impl crate::motion::stream::RowTransform for StreamClosure<'_> {
                     })?;
                 self.q[*c] = prev * scale;
             }
-            close_contact(model, &mut self.data, contact, *c, &mut self.q, t)
-                .map_err(|e| e.context(self.context.clone()))?;
+        }
+        close_row(
+            model,
+            &mut self.data,
+            &self.closures,
+            self.chain.as_ref(),
+            &mut self.q,
+            t,
+        )
+        .map_err(|e| e.context(self.context.clone()))?;
+        for (k, (_, c)) in self.closures.iter().enumerate() {
+            let (j, scale) = self.columns[*c].expect("a closed coordinate has a column");
             values[j] = self.q[*c] / scale;
             match self.solved.get_mut(at + k) {
                 Some(v) => *v = values[j],

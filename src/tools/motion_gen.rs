@@ -3,7 +3,10 @@
 //! 1985: bell-shaped velocity, zero velocity and acceleration at both ends),
 //! every other coordinate at its default value, plus linked coordinates that
 //! follow a linear relation and coupler-dependent coordinates that follow
-//! their constraint. See docs/composition.md.
+//! their constraint; optionally back again and repeated, with holds
+//! ([`profile`]), and with contacts kept closed or planted by coordinates
+//! solved together on every row (`contacts::closure::Chain`). See
+//! docs/composition.md.
 //!
 //! Values are written in OpenSim's motion-file convention: `inDegrees=yes`,
 //! rotational coordinates in degrees, all others (translational, coupled) in
@@ -598,6 +601,108 @@ mod tests {
         // Symmetry: x(1-s) = 1 - x(s).
         for s in [0.1, 0.23, 0.4] {
             assert!((min_jerk(1.0 - s) - (1.0 - min_jerk(s))).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn plant_spellings() {
+        assert_eq!(parse_plant("heel").unwrap(), ("heel".into(), vec![]));
+        assert_eq!(
+            parse_plant(" heel = sled_x, hip ").unwrap(),
+            ("heel".into(), vec!["sled_x".into(), "hip".into()])
+        );
+        for bad in ["", "=sled", "heel=", "heel=a,,b", "heel=a,"] {
+            assert!(parse_plant(bad).is_err(), "{bad} accepted");
+        }
+    }
+
+    /// Segments: hold at A, A → B, hold at B, B → A; boundary rows shared,
+    /// times strictly increasing, each segment's rows at its own spacing.
+    #[test]
+    fn repetition_profile() {
+        let one = MinJerkMotion {
+            from: -60.0,
+            to: -10.0,
+            duration: 1.0,
+            rate: 10.0,
+            ..MinJerkMotion::default()
+        };
+        let rows = profile(&one).unwrap();
+        assert_eq!(rows.len(), 11);
+        assert_eq!(rows[0], (0.0, -60.0));
+        assert_eq!(rows[10], (1.0, -10.0));
+        let reps = MinJerkMotion {
+            back: true,
+            return_duration: Some(2.0),
+            hold_start: 0.5,
+            hold_end: 0.3,
+            repeat: 2,
+            ..one.clone()
+        };
+        let rows = profile(&reps).unwrap();
+        // Per repetition 5 + 10 + 3 + 20 intervals.
+        assert_eq!(rows.len(), 2 * 38 + 1);
+        assert!(rows.windows(2).all(|w| w[1].0 > w[0].0));
+        for (i, t, v) in [
+            (5, 0.5, -60.0),
+            (15, 1.5, -10.0),
+            (18, 1.8, -10.0),
+            (38, 3.8, -60.0),
+            (43, 4.3, -60.0),
+            (76, 7.6, -60.0),
+        ] {
+            assert!((rows[i].0 - t).abs() < 1e-12, "row {i}: t {}", rows[i].0);
+            assert!((rows[i].1 - v).abs() < 1e-12, "row {i}: {}", rows[i].1);
+        }
+        // Midway back: the midpoint.
+        assert!((rows[28].1 + 35.0).abs() < 1e-12);
+        for (bad, what) in [
+            (
+                MinJerkMotion {
+                    repeat: 0,
+                    ..one.clone()
+                },
+                "--repeat",
+            ),
+            (
+                MinJerkMotion {
+                    repeat: 2,
+                    ..one.clone()
+                },
+                "--return",
+            ),
+            (
+                MinJerkMotion {
+                    return_duration: Some(1.0),
+                    ..one.clone()
+                },
+                "--return-duration",
+            ),
+            (
+                MinJerkMotion {
+                    hold_end: -1.0,
+                    ..one.clone()
+                },
+                "--hold-end",
+            ),
+            (
+                MinJerkMotion {
+                    hold_start: f64::NAN,
+                    ..one.clone()
+                },
+                "--hold-start",
+            ),
+            (
+                MinJerkMotion {
+                    back: true,
+                    return_duration: Some(0.0),
+                    ..one.clone()
+                },
+                "--return-duration",
+            ),
+        ] {
+            let e = profile(&bad).unwrap_err().to_string();
+            assert!(e.contains(what), "{e}");
         }
     }
 
