@@ -376,3 +376,109 @@ fn an_unsolved_frame_names_its_coordinate_and_the_contacts_at_a_limit() {
     assert!(first.contains("floor normal force at zero"), "{first}");
     assert!(!first.contains("ty ") && !first.contains("tz "), "{first}");
 }
+
+/// `--check` on a copy of a shipped leg extension setup whose backrest
+/// normal is flipped (the torso's mass centre then lies 90 mm behind the
+/// plane): exit 2, naming the contact, the contacts file and the line of its
+/// element. The shipped setups themselves (a grip's hold contact, whose hand
+/// lies behind its plane, included) pass.
+#[test]
+fn check_reports_a_plane_facing_away_from_its_body() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = common::out_dir("contact_truth_check");
+    for sub in ["setups", "models/leg_extension", "motions"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    let copy = |rel: &str| {
+        std::fs::copy(root.join(rel), dir.join(rel)).unwrap();
+    };
+    copy("setups/leg_extension_cam1.xml");
+    copy("models/leg_extension/human_seated.osim");
+    copy("models/leg_extension/machine_cam1.osim");
+    copy("motions/leg_extension.mot");
+    let contacts = std::fs::read_to_string(root.join("models/leg_extension/contacts.xml")).unwrap();
+    let start = contacts
+        .find(r#"<PointOnPlaneContact name="torso_backrest_r">"#)
+        .unwrap();
+    let line = contacts[..start].matches('\n').count() + 1;
+    let normal = start
+        + contacts[start..]
+            .find("<plane_normal>1 0 0</plane_normal>")
+            .unwrap();
+    let flipped = format!(
+        "{}<plane_normal>-1 0 0</plane_normal>{}",
+        &contacts[..normal],
+        &contacts[normal + "<plane_normal>1 0 0</plane_normal>".len()..]
+    );
+    let file = dir.join("models/leg_extension/contacts.xml");
+    std::fs::write(&file, flipped).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join("setups/leg_extension_cam1.xml"))
+        .arg("--check")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    println!("{err}");
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let said: Vec<&str> = err.lines().filter(|l| l.contains("faces away")).collect();
+    assert_eq!(said.len(), 1, "{err}");
+    assert!(
+        said[0].contains(&format!(
+            "contacts.xml, line {line}, <PointOnPlaneContact name=\"torso_backrest_r\">"
+        )) && said[0].contains("contact torso_backrest_r")
+            && said[0].contains("90.0 mm behind the plane"),
+        "{}",
+        said[0]
+    );
+    // The shipped setups: no contact reported.
+    for entry in std::fs::read_dir(root.join("setups")).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "xml") {
+            let report = statopt::tools::check::run(&p, false);
+            let facing: Vec<String> = report
+                .errors
+                .iter()
+                .map(|e| e.to_string())
+                .filter(|e| e.contains("faces away"))
+                .collect();
+            assert!(facing.is_empty(), "{}: {facing:?}", p.display());
+        }
+    }
+}
+
+/// predict-grf's foot contacts (calcaneus and toes points on the floor
+/// found from the motion) face their feet: `--check`'s test names none.
+#[test]
+fn predict_grf_foot_contacts_face_their_feet() {
+    use statopt::tools::predict_grf;
+    let Some(root) = common::validation_dir("predict-grf foot contacts' sides") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("contact_truth_predict_grf");
+    setup.final_time = setup.initial_time + 0.1;
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    predict_grf::run(&setup, &opts).unwrap();
+    let feet = out.join(format!("{}_foot_contacts.xml", setup.name));
+    // The user's setup with the written foot contacts added.
+    setup.force_set_files.push(feet);
+    let am = statopt::forces::analysis_model::load_analysis_model(&setup).unwrap();
+    let so = setup.static_optimization().unwrap().clone();
+    let (problem, _) =
+        statopt::tools::static_optimization::SoProblem::build_from(&setup, &so, am.clone())
+            .unwrap();
+    assert!(
+        problem.contacts.len() >= 4,
+        "{} contacts",
+        problem.contacts.len()
+    );
+    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem, &am.forces);
+    assert!(errors.is_empty(), "{errors:?}");
+}

@@ -220,12 +220,12 @@ impl ContactTally {
                     t.slip_max.0,
                     t.slip_max.1,
                     format!(
-                        "contact {} slid while loaded (more than {LOADED_FORCE} N, kinetic regime) on {} of {n} frames, at up to {:.3} m/s (t={}; its v_trans is {} m/s): its shear there is kinetic friction against the slip, not a static hold",
+                        "contact {} slid while loaded (more than {LOADED_FORCE} N, kinetic regime) on {} of {n} frames, at up to {} m/s (t={}; its v_trans is {} m/s): its shear there is kinetic friction against the slip, not a static hold",
                         c.name,
                         t.slid,
-                        t.slip_max.0,
+                        amount(t.slip_max.0),
                         at(t.slip_max.1),
-                        c.v_trans
+                        amount(c.v_trans)
                     ),
                 ));
             }
@@ -448,8 +448,9 @@ pub fn contacts_at_limits(problem: &SoProblem, contacts: &[f64]) -> Vec<String> 
     out
 }
 
-/// A force in a line: three decimals, or four significant digits below a
-/// millinewton (so that neither 0.000 nor 12 digits is printed).
+/// A force (N) or speed (m/s) in a line: three decimals, or four significant
+/// digits below a thousandth (so that neither 0.000 nor 12 digits is
+/// printed).
 fn amount(v: f64) -> String {
     if v == 0.0 || v.abs() >= 1e-3 {
         format!("{v:.3}")
