@@ -232,6 +232,32 @@ fn summary_names_exactly_the_contacts_the_table_shows_sliding_or_too_deep() {
     assert!(floor.value < 0.2 && floor.frames == 41, "{floor:?}");
     // The block is a root joint: no reserve is blamed.
     assert!(floor.reserve_body.is_none());
+    // A resumed run reads its kept frames back from the tables
+    // (RunStatistics::observe_tables): the same findings, from the same rows.
+    let (_, _, problem) = common::so_case(&out.join("../setup.xml"), None);
+    let mut stats = statopt::writers::run_statistics::RunStatistics::new(&problem);
+    stats
+        .observe_tables(&problem, &out, "sweep_SO_w0_1000_", 41)
+        .unwrap();
+    let again = stats.contact_findings(&problem);
+    let run: Vec<ContactFinding> = s
+        .contacts
+        .iter()
+        .filter(|f| f.run.as_deref() == hi)
+        .map(|f| ContactFinding {
+            run: None,
+            ..f.clone()
+        })
+        .collect();
+    // (Values as the tables hold them: rounded to 14 digits.)
+    assert_eq!(again.len(), run.len());
+    for (a, b) in again.iter().zip(&run) {
+        assert_eq!(
+            (&a.contact, a.kind, a.frames, &a.message),
+            (&b.contact, b.kind, b.frames, &b.message)
+        );
+        assert!((a.value - b.value).abs() <= 1e-12 * (1.0 + b.value.abs()));
+    }
 }
 
 /// A block at rest on the floor, static and on the surface: the summary
