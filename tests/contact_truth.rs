@@ -232,6 +232,32 @@ fn summary_names_exactly_the_contacts_the_table_shows_sliding_or_too_deep() {
     assert!(floor.value < 0.2 && floor.frames == 41, "{floor:?}");
     // The block is a root joint: no reserve is blamed.
     assert!(floor.reserve_body.is_none());
+    // A resumed run reads its kept frames back from the tables
+    // (RunStatistics::observe_tables): the same findings, from the same rows.
+    let (_, _, problem) = common::so_case(&out.join("../setup.xml"), None);
+    let mut stats = statopt::writers::run_statistics::RunStatistics::new(&problem);
+    stats
+        .observe_tables(&problem, &out, "sweep_SO_w0_1000_", 41)
+        .unwrap();
+    let again = stats.contact_findings(&problem);
+    let run: Vec<ContactFinding> = s
+        .contacts
+        .iter()
+        .filter(|f| f.run.as_deref() == hi)
+        .map(|f| ContactFinding {
+            run: None,
+            ..f.clone()
+        })
+        .collect();
+    // (Values as the tables hold them: rounded to 14 digits.)
+    assert_eq!(again.len(), run.len());
+    for (a, b) in again.iter().zip(&run) {
+        assert_eq!(
+            (&a.contact, a.kind, a.frames, &a.message),
+            (&b.contact, b.kind, b.frames, &b.message)
+        );
+        assert!((a.value - b.value).abs() <= 1e-12 * (1.0 + b.value.abs()));
+    }
 }
 
 /// A block at rest on the floor, static and on the surface: the summary
@@ -254,22 +280,29 @@ fn a_static_contact_on_its_surface_is_not_named() {
 /// A leg-press-like scene: a pelvis (planar, tx and ty) on a seat with
 /// friction, pushed back by the legs (a fixed 200 N), and an upright trunk
 /// (its mass centre at the lumbar joint) on a lumbar pin held by a reserve
-/// actuator of 1 N m; a backrest contact 0.4 m above the lumbar joint. A
+/// actuator of 1 N m; a backrest contact 0.4 m above the lumbar joint; an
+/// arm (3 kg) on a shoulder pin held by a reserve, resting on a frictionless
+/// handle (with friction, the handle's horizontal force at the shoulder's
+/// height balances the backrest's lumbar moment without any reserve, and
+/// the backrest carries 12.6 N: no such line then). A
 /// backrest force F would need F · 0.4 N m from the reserve: the optimum
 /// gives the backrest of the order of 200/(1 + 0.4² · 100² · 1000) =
-/// 1.2e-4 N (measured 2.9e-4 N: its friction lifts the trunk a little too)
-/// and the seat's friction the rest, and the summary says why. With a
+/// 1.2e-4 N (measured 9.3e-4 N: the formula counts the backrest's normal
+/// force alone) and the seat's friction the rest, and the summary says why. With a
 /// TorqueActuator (not a reserve) on the lumbar joint it names the contact
 /// without that reason.
 #[test]
 fn a_backrest_on_a_trunk_held_by_reserves_is_named_with_the_reason() {
-    let scene = |lumbar_actuator: &str| {
+    const FRICTIONLESS: &str =
+        "<static_friction>0</static_friction><kinetic_friction>0</kinetic_friction>";
+    let scene = |lumbar_actuator: &str, handle_friction: &str| {
         format!(
             r#"<?xml version="1.0"?>
 <OpenSimDocument Version="40000"><Model name="press"><gravity>0 -{G} 0</gravity>
 <BodySet><objects>
 <Body name="pelvis"><mass>10</mass><mass_center>0 0 0</mass_center><inertia>0.1 0.1 0.1 0 0 0</inertia></Body>
 <Body name="trunk"><mass>30</mass><mass_center>0 0 0</mass_center><inertia>1 1 1 0 0 0</inertia></Body>
+<Body name="arm"><mass>3</mass><mass_center>0.15 0 0</mass_center><inertia>0.01 0.01 0.01 0 0 0</inertia></Body>
 </objects></BodySet>
 <JointSet><objects>
 <CustomJoint name="seat_slide"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/pelvis</socket_child_frame>
@@ -288,10 +321,19 @@ fn a_backrest_on_a_trunk_held_by_reserves_is_named_with_the_reason() {
 <PhysicalOffsetFrame name="pelvis_offset"><socket_parent>/bodyset/pelvis</socket_parent><translation>0 0.1 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
 <PhysicalOffsetFrame name="trunk_offset"><socket_parent>/bodyset/trunk</socket_parent><translation>0 0 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
 </frames></PinJoint>
+<PinJoint name="shoulder_joint"><socket_parent_frame>trunk_top</socket_parent_frame><socket_child_frame>arm_offset</socket_child_frame>
+<coordinates><Coordinate name="shoulder"><range>-1 1</range></Coordinate></coordinates>
+<frames>
+<PhysicalOffsetFrame name="trunk_top"><socket_parent>/bodyset/trunk</socket_parent><translation>0 0.4 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
+<PhysicalOffsetFrame name="arm_offset"><socket_parent>/bodyset/arm</socket_parent><translation>0 0 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>
+</frames></PinJoint>
 </objects></JointSet>
 <ForceSet><objects>
 <PointActuator name="legs"><body>pelvis</body><point>0 0 0</point><direction>-1 0 0</direction><force_is_global>true</force_is_global><optimal_force>200</optimal_force><min_control>1</min_control><max_control>1</max_control></PointActuator>
 {lumbar_actuator}
+<CoordinateActuator name="shoulder_reserve"><coordinate>shoulder</coordinate><optimal_force>1</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></CoordinateActuator>
+<PointOnPlaneContact name="handle"><point_body>arm</point_body><point_location>0.3 0 0</point_location>
+<plane_body>ground</plane_body><plane_origin>0 0.5 0</plane_origin><plane_normal>0 1 0</plane_normal>{handle_friction}<optimal_force>100</optimal_force></PointOnPlaneContact>
 <PointOnPlaneContact name="seat"><point_body>pelvis</point_body><point_location>0 0 0</point_location>
 <plane_body>ground</plane_body><plane_origin>0 0 0</plane_origin><plane_normal>0 1 0</plane_normal><optimal_force>100</optimal_force></PointOnPlaneContact>
 <PointOnPlaneContact name="backrest"><point_body>trunk</point_body><point_location>-0.1 0.4 0</point_location>
@@ -299,19 +341,21 @@ fn a_backrest_on_a_trunk_held_by_reserves_is_named_with_the_reason() {
 </objects></ForceSet></Model></OpenSimDocument>"#
         )
     };
-    let text = motion(&["pelvis_tx", "pelvis_ty", "lumbar"], 21, 1.0, |_| {
-        vec![0.0, 0.0, 0.0]
-    });
+    let text = motion(
+        &["pelvis_tx", "pelvis_ty", "lumbar", "shoulder"],
+        21,
+        1.0,
+        |_| vec![0.0; 4],
+    );
     let reserve = r#"<CoordinateActuator name="lumbar_reserve"><coordinate>lumbar</coordinate><optimal_force>1</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></CoordinateActuator>"#;
-    let (out, s) = run_case("backrest", &scene(reserve), &text, "", 1.0);
+    let (out, s) = run_case("backrest", &scene(reserve, FRICTIONLESS), &text, "", 1.0);
     assert_eq!(s.failed, 0);
     assert_in_warnings(&s);
     let cf = storage::read(&out.join("backrest_SO_ContactForces.sto")).unwrap();
     let truth = table_truth(&cf, "backrest");
     println!("backrest: max force {:.3e} N", truth.force_max);
     // Within reach (w = 1) and pressed by nothing but the optimum's choice:
-    // of the order of 200/(1 + 0.4² · 100² · 1000) = 1.2e-4 N (its friction
-    // can also lift the trunk a little), far below 1 N.
+    // of the order of 200/(1 + 0.4² · 100² · 1000) = 1.2e-4 N, far below 1 N.
     assert!(
         truth.force_max > 0.0 && truth.force_max < 1e-3,
         "backrest carried {} N",
@@ -324,15 +368,45 @@ fn a_backrest_on_a_trunk_held_by_reserves_is_named_with_the_reason() {
         "{}",
         f.message
     );
-    // The seat carried the push: not named.
+    // The seat carried the push, the handle half the arm's weight (14.7 N):
+    // not named; the handle, beyond the shoulder held by a reserve too, is
+    // named as another way to balance the lumbar joint.
     assert!(
-        s.contacts.iter().all(|f| f.contact != "seat"),
+        s.contacts
+            .iter()
+            .all(|f| f.contact != "seat" && f.contact != "handle"),
         "{:?}",
         s.contacts
     );
+    let handle = table_truth(&cf, "handle").force_max;
+    assert!((handle - 0.5 * 3.0 * G).abs() < 1e-3, "handle {handle} N");
+    assert!(
+        f.message.contains("or by the forces of handle"),
+        "{}",
+        f.message
+    );
+    // A handle with friction (μs 0.8) pulls back at the shoulder's height:
+    // that balances the backrest's lumbar moment with no reserve, and the
+    // backrest carries load; nothing is said of it.
+    let (out, s2) = run_case("backrest_grip", &scene(reserve, ""), &text, "", 1.0);
+    let cf = storage::read(&out.join("backrest_grip_SO_ContactForces.sto")).unwrap();
+    let carried = table_truth(&cf, "backrest").force_max;
+    println!("backrest beside a handle with friction: max force {carried:.3} N");
+    assert!(carried > LOADED_FORCE, "{carried} N");
+    assert!(
+        s2.contacts.iter().all(|f| f.contact != "backrest"),
+        "{:?}",
+        s2.contacts
+    );
     // Not a reserve: the contact is named, the reason is not given.
     let torque = r#"<TorqueActuator name="lumbar_torque"><bodyA>trunk</bodyA><bodyB>pelvis</bodyB><axis>0 0 1</axis><torque_is_global>true</torque_is_global><optimal_force>1</optimal_force><min_control>-Inf</min_control><max_control>Inf</max_control></TorqueActuator>"#;
-    let (_, s) = run_case("backrest_torque", &scene(torque), &text, "", 1.0);
+    let (_, s) = run_case(
+        "backrest_torque",
+        &scene(torque, FRICTIONLESS),
+        &text,
+        "",
+        1.0,
+    );
     let f = finding(&s, None, "backrest", FindingKind::CarriedNothing).expect("backrest named");
     assert!(f.reserve_body.is_none(), "{}", f.message);
     assert!(!f.message.contains("reserve"), "{}", f.message);
@@ -375,4 +449,110 @@ fn an_unsolved_frame_names_its_coordinate_and_the_contacts_at_a_limit() {
     );
     assert!(first.contains("floor normal force at zero"), "{first}");
     assert!(!first.contains("ty ") && !first.contains("tz "), "{first}");
+}
+
+/// `--check` on a copy of a shipped leg extension setup whose backrest
+/// normal is flipped (the torso's mass centre then lies 90 mm behind the
+/// plane): exit 2, naming the contact, the contacts file and the line of its
+/// element. The shipped setups themselves (a grip's hold contact, whose hand
+/// lies behind its plane, included) pass.
+#[test]
+fn check_reports_a_plane_facing_away_from_its_body() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = common::out_dir("contact_truth_check");
+    for sub in ["setups", "models/leg_extension", "motions"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    let copy = |rel: &str| {
+        std::fs::copy(root.join(rel), dir.join(rel)).unwrap();
+    };
+    copy("setups/leg_extension_cam1.xml");
+    copy("models/leg_extension/human_seated.osim");
+    copy("models/leg_extension/machine_cam1.osim");
+    copy("motions/leg_extension.mot");
+    let contacts = std::fs::read_to_string(root.join("models/leg_extension/contacts.xml")).unwrap();
+    let start = contacts
+        .find(r#"<PointOnPlaneContact name="torso_backrest_r">"#)
+        .unwrap();
+    let line = contacts[..start].matches('\n').count() + 1;
+    let normal = start
+        + contacts[start..]
+            .find("<plane_normal>1 0 0</plane_normal>")
+            .unwrap();
+    let flipped = format!(
+        "{}<plane_normal>-1 0 0</plane_normal>{}",
+        &contacts[..normal],
+        &contacts[normal + "<plane_normal>1 0 0</plane_normal>".len()..]
+    );
+    let file = dir.join("models/leg_extension/contacts.xml");
+    std::fs::write(&file, flipped).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
+        .arg(dir.join("setups/leg_extension_cam1.xml"))
+        .arg("--check")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    println!("{err}");
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let said: Vec<&str> = err.lines().filter(|l| l.contains("faces away")).collect();
+    assert_eq!(said.len(), 1, "{err}");
+    assert!(
+        said[0].contains(&format!(
+            "contacts.xml, line {line}, <PointOnPlaneContact name=\"torso_backrest_r\">"
+        )) && said[0].contains("contact torso_backrest_r")
+            && said[0].contains("90.0 mm behind the plane"),
+        "{}",
+        said[0]
+    );
+    // The shipped setups: no contact reported.
+    for entry in std::fs::read_dir(root.join("setups")).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "xml") {
+            let report = statopt::tools::check::run(&p, false);
+            let facing: Vec<String> = report
+                .errors
+                .iter()
+                .map(|e| e.to_string())
+                .filter(|e| e.contains("faces away"))
+                .collect();
+            assert!(facing.is_empty(), "{}: {facing:?}", p.display());
+        }
+    }
+}
+
+/// predict-grf's foot contacts (calcaneus and toes points on the floor
+/// found from the motion) face their feet: `--check`'s test names none.
+#[test]
+fn predict_grf_foot_contacts_face_their_feet() {
+    use statopt::tools::predict_grf;
+    let Some(root) = common::validation_dir("predict-grf foot contacts' sides") else {
+        return;
+    };
+    let mut setup = match Setup::read(&root.join("gait10dof18musc_walk/setup_SO.xml")).unwrap() {
+        Setup::Analyze(s) => s,
+        _ => unreachable!(),
+    };
+    let out = common::out_dir("contact_truth_predict_grf");
+    setup.final_time = setup.initial_time + 0.1;
+    let opts = RunOptions {
+        results_dir: Some(out.clone()),
+        verbose: false,
+        ..Default::default()
+    };
+    predict_grf::run(&setup, &opts).unwrap();
+    let feet = out.join(format!("{}_foot_contacts.xml", setup.name));
+    // The user's setup with the written foot contacts added.
+    setup.force_set_files.push(feet);
+    let am = statopt::forces::analysis_model::load_analysis_model(&setup).unwrap();
+    let so = setup.static_optimization().unwrap().clone();
+    let (problem, _) =
+        statopt::tools::static_optimization::SoProblem::build_from(&setup, &so, am.clone())
+            .unwrap();
+    assert!(
+        problem.contacts.len() >= 4,
+        "{} contacts",
+        problem.contacts.len()
+    );
+    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem, &am.forces);
+    assert!(errors.is_empty(), "{errors:?}");
 }

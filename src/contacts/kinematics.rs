@@ -147,6 +147,27 @@ impl Contact {
         }
     }
 
+    /// Which side of the plane the point body lies on, at the positions in
+    /// `data` ([`crate::dynamics::kinematics::positions`]): the signed
+    /// distances (m, positive on the normal's side) of the point p and of
+    /// the point body's mass centre from the plane. A contact pushes its
+    /// point body along +n (λn ≥ 0), away from the plane, so a body whose
+    /// mass centre lies behind the plane would be pulled through it: the
+    /// normal faces away from the body (`--check` says so). None when the
+    /// point body has no mass (ground, a massless frame body).
+    pub fn sides(&self, model: &Model, data: &Data) -> Option<(f64, f64)> {
+        let (a, b) = (self.point_body, self.plane_body);
+        let body = &model.bodies[a];
+        if a == 0 || body.mass <= 0.0 {
+            return None;
+        }
+        let n = data.rotation[b] * self.normal;
+        let o = data.station_position(b, &self.origin);
+        let p = data.station_position(a, &self.point);
+        let com = data.station_position(a, &body.mass_center);
+        Some(((p - o).dot(&n), (com - o).dot(&n)))
+    }
+
     /// The slip-speed factor of the weight (`speed_weight`, statopt): 1 up
     /// to s_full, 0 from s_zero, the C¹ smoothstep 1 − (3x² − 2x³) between
     /// (x = (s − s_full)/(s_zero − s_full)); 1 when the property is absent.

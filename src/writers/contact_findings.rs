@@ -220,12 +220,12 @@ impl ContactTally {
                     t.slip_max.0,
                     t.slip_max.1,
                     format!(
-                        "contact {} slid while loaded (more than {LOADED_FORCE} N, kinetic regime) on {} of {n} frames, at up to {:.3} m/s (t={}; its v_trans is {} m/s): its shear there is kinetic friction against the slip, not a static hold",
+                        "contact {} slid while loaded (more than {LOADED_FORCE} N, kinetic regime) on {} of {n} frames, at up to {} m/s (t={}; its v_trans is {} m/s): its shear there is kinetic friction against the slip, not a static hold",
                         c.name,
                         t.slid,
-                        t.slip_max.0,
+                        amount(t.slip_max.0),
                         at(t.slip_max.1),
-                        c.v_trans
+                        amount(c.v_trans)
                     ),
                 ));
             }
@@ -268,14 +268,22 @@ impl ContactTally {
                 } else if let Some(why) = self.held_by_reserves(problem, ci) {
                     f.reserve_body = Some(why.body.clone());
                     format!(
-                        "{most}, though within reach (w(d) > 0) on {} of them. Its body {} moves on {}, where no muscle acted and only {} can hold it: any force on {} would have to be balanced about {} by {}, which the objective charges (force/optimal force)², and that is why static optimization left it unloaded (docs/contact_model.md, \"A backrest on a trunk held by reserves\")",
+                        "{most}, though within reach (w(d) > 0) on {} of them. Its body {} moves on {}, where no muscle acted and only {} can hold it: any force on {} would have to be balanced about {} by {}{}, which the objective charges (force/optimal force)², and that is why static optimization left it unloaded (docs/contact_model.md, \"A backrest on a trunk held by reserves\")",
                         t.in_reach,
                         why.body,
                         why.coordinates.join(", "),
                         why.reserves,
                         c.name,
                         if why.coordinates.len() > 1 { "them" } else { "it" },
-                        if why.count > 1 { "those reserves" } else { "that reserve" }
+                        if why.count > 1 { "those reserves" } else { "that reserve" },
+                        if why.further.is_empty() {
+                            String::new()
+                        } else {
+                            format!(
+                                " (or by the forces of {}, further out, which reach it through joints only reserves hold as well)",
+                                why.further.join(", ")
+                            )
+                        }
                     )
                 } else {
                     format!(
@@ -293,9 +301,10 @@ impl ContactTally {
     /// coordinates only reserve actuators (CoordinateActuators) hold: no
     /// muscle applied a generalized force there on any frame, no other
     /// actuator acts on the bodies that joint carries, and no other contact
-    /// on those bodies carried anything. None when any of that fails (or
-    /// the joint is a person's root joint, or the plane is on a body the
-    /// joint carries too).
+    /// on those bodies carried anything, but for contacts further out
+    /// beyond another joint held by reserves only (named). None when any of
+    /// that fails (or the joint is a person's root joint, or the plane is on
+    /// a body the joint carries too).
     fn held_by_reserves(&self, problem: &SoProblem, ci: usize) -> Option<ReserveHold> {
         let model = &problem.model;
         let c = &problem.contacts[ci];
@@ -367,14 +376,47 @@ impl ContactTally {
         if reserves.is_empty() {
             return None;
         }
-        // No other contact on these bodies carried anything.
+        // Another loaded contact on these bodies could balance the moment
+        // too: none may sit on the body itself (or on bodies welded to
+        // it); one further out (a hand on a handle) is named, when a joint
+        // between it and this body is held by reserves only as well.
+        let reserve_only = |q: usize| {
+            !model.is_root_coordinate(q)
+                && problem
+                    .rows
+                    .iter()
+                    .position(|&r| r == q)
+                    .is_some_and(|k| !self.muscles_acted[k])
+                && problem.controls.iter().any(|c| {
+                    matches!(c, Control::Actuator(a) if matches!(a.kind,
+                        crate::forces::actuators::ActuatorKind::Coordinate { coordinate } if coordinate == q))
+                })
+        };
+        let mut further = Vec::new();
         for (k, (other, t)) in problem.contacts.iter().zip(&self.tallies).enumerate() {
-            if k != ci
-                && carried(other.point_body) != carried(other.plane_body)
-                && t.force_max.0 > UNLOADED_FORCE
+            if k == ci
+                || carried(other.point_body) == carried(other.plane_body)
+                || t.force_max.0 <= UNLOADED_FORCE
             {
+                continue;
+            }
+            let mut b = if carried(other.point_body) {
+                other.point_body
+            } else {
+                other.plane_body
+            };
+            let mut through_reserves = false;
+            while b != body {
+                let j = &model.joints[b];
+                if j.nq > 0 && (j.q_start..j.q_start + j.nq).all(reserve_only) {
+                    through_reserves = true;
+                }
+                b = j.parent_body;
+            }
+            if !through_reserves {
                 return None;
             }
+            further.push(other.name.clone());
         }
         let names: Vec<String> = coords
             .iter()
@@ -383,6 +425,7 @@ impl ContactTally {
         Some(ReserveHold {
             body: model.bodies[body].name.clone(),
             coordinates: names,
+            further,
             count: reserves.len(),
             reserves: format!(
                 "the reserve actuator{} {}",
@@ -398,6 +441,9 @@ impl ContactTally {
 struct ReserveHold {
     body: String,
     coordinates: Vec<String>,
+    /// Loaded contacts further out on the chain, beyond joints held by
+    /// reserves only, whose forces also reach these coordinates.
+    further: Vec<String>,
     reserves: String,
     count: usize,
 }
@@ -448,8 +494,9 @@ pub fn contacts_at_limits(problem: &SoProblem, contacts: &[f64]) -> Vec<String> 
     out
 }
 
-/// A force in a line: three decimals, or four significant digits below a
-/// millinewton (so that neither 0.000 nor 12 digits is printed).
+/// A force (N) or speed (m/s) in a line: three decimals, or four significant
+/// digits below a thousandth (so that neither 0.000 nor 12 digits is
+/// printed).
 fn amount(v: f64) -> String {
     if v == 0.0 || v.abs() >= 1e-3 {
         format!("{v:.3}")
