@@ -55,7 +55,11 @@ fn plain_and_knee(
         assert_eq!(summary.failed, 0, "every frame solved");
         let act_path = out.join("walk3d_StaticOptimization_activation.sto");
         let act = storage::read(&act_path).unwrap();
-        assert_eq!(act.time.len(), 127, "every 10th frame of 0.5–1.75 s, as OpenSim");
+        assert_eq!(
+            act.time.len(),
+            127,
+            "every 10th frame of 0.5–1.75 s, as OpenSim"
+        );
         emg_compare::compare(
             if knee { "knee" } else { "plain" },
             &act,

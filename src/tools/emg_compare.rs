@@ -469,6 +469,13 @@ pub fn write_figure(comparisons: &[Comparison], delay: f64, stem: &Path) -> Resu
     )
 }
 
+/// `<stem>.csv`, the stem kept whole (`out/share_0.5` → `out/share_0.5.csv`).
+pub fn csv_path(stem: &Path) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(".csv");
+    PathBuf::from(s)
+}
+
 /// Read the EMG and each activation file, compare (labels: `labels`, or
 /// each file's parent folder name), write `<out>.csv`, `<out>.png` and
 /// `<out>.svg`; returns the comparisons and the files written.
@@ -506,7 +513,7 @@ pub fn run(
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
-    let csv_path = out.with_extension("csv");
+    let csv_path = csv_path(out);
     write_csv(&comparisons, &csv_path)?;
     let mut files = vec![csv_path];
     files.extend(write_figure(&comparisons, opts.delay, out)?);
@@ -608,6 +615,16 @@ mod tests {
         assert!((c1.channels[0].r.unwrap() - 1.0).abs() < 1e-6);
         assert!((c1.channels[0].on_off - 1.0).abs() < 1e-12);
         assert_eq!(c1.mean_r(), c1.channels[0].r);
+    }
+
+    /// A stem with a dot keeps it: the table of `share_0.5` is not `share_0.csv`.
+    #[test]
+    fn csv_path_keeps_the_stem() {
+        assert_eq!(
+            csv_path(Path::new("o/share_0.5")),
+            Path::new("o/share_0.5.csv")
+        );
+        assert_eq!(csv_path(Path::new("cmp")), Path::new("cmp.csv"));
     }
 
     /// Bad maps and missing columns are errors naming file, line and column.
