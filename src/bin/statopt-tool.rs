@@ -182,6 +182,48 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// How well static optimization's activations agree with measured EMG (docs/emg_compare.md):
+    /// per channel, Pearson r and on/off agreement of the activation of the muscle(s) it records
+    /// with the EMG envelope at the activation file's frames, and the electromechanical delay
+    /// (0-100 ms) that maximises r. Writes OUT.csv and a figure OUT.png/.svg.
+    #[command(name = "emg-compare")]
+    EmgCompare {
+        /// The EMG envelopes (.sto/.mot; one column per channel).
+        emg: PathBuf,
+        /// Activation tables (<name>_StaticOptimization_activation.sto), one or more.
+        #[arg(required = true)]
+        activations: Vec<PathBuf>,
+        /// Channel to muscle map: lines 'channel: muscle [muscle ...]' (a group is averaged),
+        /// '#' comments. Default: the Rajagopal model's muscles for the ten channels of its
+        /// gait EMG.
+        #[arg(long, value_name = "FILE")]
+        map: Option<PathBuf>,
+        /// The side whose muscles the default map names.
+        #[arg(long, default_value = "r", value_parser = ["r", "l"])]
+        side: String,
+        /// Electromechanical delay: the EMG at t - D is compared with the activation at t.
+        #[arg(
+            long = "delay-ms",
+            value_name = "D",
+            default_value_t = 0.0,
+            allow_hyphen_values = true
+        )]
+        delay_ms: f64,
+        /// A signal is on at and above this fraction of its peak over the compared frames.
+        #[arg(long = "on-fraction", value_name = "F", default_value_t = tools::emg_compare::DEFAULT_ON_FRACTION)]
+        on_fraction: f64,
+        /// A name per activation file for the table and figure (default: its folder's name).
+        #[arg(long = "label", value_name = "NAME")]
+        labels: Vec<String>,
+        /// Output stem: writes STEM.csv, STEM.png and STEM.svg.
+        #[arg(
+            short = 'o',
+            long = "output",
+            value_name = "STEM",
+            default_value = "emg_compare"
+        )]
+        output: PathBuf,
+    },
     /// Write a .mot in which a coordinate moves from --from to --to along a minimum-jerk
     /// (bell-shaped velocity) profile, optionally back and repeated with holds; every other
     /// coordinate stays at its default value unless linked, or solved so that contacts stay
@@ -622,6 +664,65 @@ fn main() -> ExitCode {
                         }
                         None => ExitCode::SUCCESS,
                     }
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Some(Command::EmgCompare {
+            emg,
+            activations,
+            map,
+            side,
+            delay_ms,
+            on_fraction,
+            labels,
+            output,
+        }) => {
+            use tools::emg_compare as ec;
+            let map = match map {
+                Some(f) => match ec::read_map(f) {
+                    Ok(m) => m,
+                    Err(e) => return fail(e),
+                },
+                None => ec::default_map(side.chars().next().unwrap_or('r')),
+            };
+            let opts = ec::Options {
+                delay: 1e-3 * delay_ms,
+                on_fraction: *on_fraction,
+            };
+            match ec::run(emg, activations, labels, &map, opts, output) {
+                Ok((comparisons, files)) => {
+                    let f =
+                        |v: Option<f64>| v.map(|x| format!("{x:6.3}")).unwrap_or("   n/a".into());
+                    for c in &comparisons {
+                        println!(
+                            "{} (EMG delay {delay_ms} ms, on at {:.0} % of peak)",
+                            c.label,
+                            100.0 * on_fraction
+                        );
+                        println!(
+                            "  {:20} {:>6} {:>7} {:>9} {:>6}  muscles",
+                            "channel", "r", "on/off", "best ms", "r best"
+                        );
+                        for ch in &c.channels {
+                            println!(
+                                "  {:20} {} {:7.3} {:>9} {}  {}",
+                                ch.channel,
+                                f(ch.r),
+                                ch.on_off,
+                                ch.best_delay_ms
+                                    .map(|d| format!("{d:.0}"))
+                                    .unwrap_or_default(),
+                                f(ch.best_r),
+                                ch.muscles.join(" ")
+                            );
+                        }
+                        println!("  {:20} {} {:7.3}", "mean", f(c.mean_r()), c.mean_on_off());
+                    }
+                    for file in files {
+                        eprintln!("wrote {}", file.display());
+                    }
+                    ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
             }

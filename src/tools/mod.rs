@@ -4,6 +4,7 @@ pub mod analyze;
 pub mod bench;
 pub mod bench_grid;
 pub mod check;
+pub mod emg_compare;
 pub mod force_sweep;
 pub use crate::frame::interrupt;
 pub mod inverse_dynamics;
