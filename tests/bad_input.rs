@@ -364,3 +364,36 @@ fn allow_unknown_says_what_it_read_on_past() {
         "{err}"
     );
 }
+
+/// Paths in messages read as the user would write them: `setups/../output`
+/// is `output` where `setups` is a folder (issue 38: the study's summary
+/// said "files written to setups/../output/..."), but a `..` after a
+/// symbolic link is kept (it leads elsewhere).
+#[test]
+fn paths_in_setups_are_tidied_where_that_names_the_same_file() {
+    use statopt::parse::setup::{resolve, tidy};
+    let dir = common::out_dir("bad_input_tidy");
+    std::fs::create_dir_all(dir.join("real/setups")).unwrap();
+    std::os::unix::fs::symlink(dir.join("real/setups"), dir.join("link")).unwrap();
+    assert_eq!(
+        resolve(&dir.join("real/setups"), "../output/x"),
+        dir.join("real/output/x")
+    );
+    assert_eq!(
+        resolve(&dir.join("link"), "../output/x"),
+        dir.join("link/../output/x")
+    );
+    // A folder that is not there yet keeps its `..` too.
+    assert_eq!(tidy(&dir.join("nowhere/../x")), dir.join("nowhere/../x"));
+    assert_eq!(tidy(std::path::Path::new("./a")), PathBuf::from("a"));
+    // The shipped study's summary names its folders without `..`.
+    let setup = repo().join("setups/leg_extension_cam1.xml");
+    let s = match statopt::parse::setup::Setup::read(&setup).unwrap() {
+        statopt::parse::setup::Setup::Analyze(a) => a,
+        _ => unreachable!(),
+    };
+    assert_eq!(
+        s.results_directory,
+        repo().join("output/leg_extension_cam1")
+    );
+}

@@ -129,6 +129,20 @@ fn study_document_draws_figures_and_metrics() {
         },
     )
     .unwrap();
+    // A w0 sweep says its time once (it said it once per weight: 21 lines
+    // for the study's seven setups).
+    let sweeps: Vec<&String> = s
+        .notes
+        .iter()
+        .filter(|n| n.starts_with("static optimization ("))
+        .collect();
+    assert_eq!(sweeps.len(), 7, "{sweeps:#?}");
+    assert!(
+        sweeps
+            .iter()
+            .all(|n| n.contains("w0 = 1, 500, 1000") && n.contains("for the 3 weights")),
+        "{sweeps:#?}"
+    );
     // The README says how many files the study writes.
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
     let said = readme
