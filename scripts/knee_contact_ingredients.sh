@@ -2,7 +2,7 @@
 # The ingredient table of docs/knee_contact.md: GC5 trial ss1 (../shared/models/knee_gc5) run as OpenSim's
 # static optimization + JointReaction, with one axial contact per knee, with the knee contact method (two
 # compartments; defaults: the knee's capacity 3.46 BW, 65 % of it medial), with equal compartments (medial
-# share 0.5, the method before issue 39) and shares 0.6 and 0.7, and over the capacity (a compartment's at an
+# share 0.5, the method before issue 39) and shares 0.6 to 0.8, and over the capacity (a compartment's at an
 # even split, BW; the knee's is twice that); each compared with the eTibia by scripts/knee_contact_etibia.py.
 # Usage: cargo build --release --bin statopt-tool && scripts/knee_contact_ingredients.sh [OUT]
 set -e
@@ -23,7 +23,7 @@ variant() { # name extra-StaticOptimization-properties
 variant plain ""
 variant axial "<knee_contact>axial</knee_contact>"
 variant method "<knee_contact>all</knee_contact>"
-SHARES="0.5 0.6 0.7"
+SHARES="0.5 0.6 0.7 0.75 0.8"
 for s in $SHARES; do
   variant "share_$s" "<knee_contact>all</knee_contact><knee_contact_medial_share>$s</knee_contact_medial_share>"
 done
