@@ -553,6 +553,6 @@ fn predict_grf_foot_contacts_face_their_feet() {
         "{} contacts",
         problem.contacts.len()
     );
-    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem, &am.forces);
+    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem);
     assert!(errors.is_empty(), "{errors:?}");
 }

@@ -162,7 +162,7 @@ fn check_analyze(setup: &AnalyzeSetup, report: &mut CheckReport) {
                 match static_optimization::SoProblem::build_from(setup, so, am.clone()) {
                     Ok((problem, w)) => {
                         report.warnings.extend(w);
-                        check_contact_sides(setup, &problem, &am.forces, report);
+                        check_contact_sides(setup, &problem, report);
                     }
                     Err(e) => report.errors.push(e),
                 }
@@ -284,16 +284,13 @@ fn check_figure_references(setup: &AnalyzeSetup, report: &mut CheckReport) {
 /// whose normal points the other way and whose point lies within
 /// [`GRIP_SPAN`] of its own (a hand holding a bar from both sides, as the
 /// leg extension's handle_push and handle_hold do). Each named with the
-/// contact's file and line (its element among `forces`).
+/// contact's file and line.
 fn check_contact_sides(
     setup: &AnalyzeSetup,
     problem: &static_optimization::SoProblem,
-    forces: &[crate::xml::Element],
     report: &mut CheckReport,
 ) {
-    report
-        .errors
-        .extend(contacts_facing_away(setup, problem, forces));
+    report.errors.extend(contacts_facing_away(setup, problem));
 }
 
 /// The errors of [`check_contact_sides`] (`--check`'s, for a compiled
@@ -301,7 +298,6 @@ fn check_contact_sides(
 pub fn contacts_facing_away(
     setup: &AnalyzeSetup,
     problem: &static_optimization::SoProblem,
-    forces: &[crate::xml::Element],
 ) -> Vec<Error> {
     let mut errors = Vec::new();
     if problem.contacts.is_empty() {
@@ -350,16 +346,8 @@ pub fn contacts_facing_away(
         if grip {
             continue;
         }
-        let loc = forces
-            .iter()
-            .find(|f| {
-                crate::contacts::CONTACT_TYPE_NAMES.contains(&f.name.as_str())
-                    && f.name_attr() == c.name
-            })
-            .map(|f| f.loc())
-            .unwrap_or_else(|| crate::error::Location::file(&model.file));
         errors.push(Error::input(
-            loc,
+            c.loc.clone(),
             format!(
                 "contact {}: its plane faces away from its point's body {}: {when} the body's mass centre lies {:.1} mm behind the plane (the point {:.1} mm {}), but a contact pushes its point body along the plane normal, away from the plane, so it would pull the body through the plane and every frame that needs it fails; flip <plane_normal> (or check the plane's body and origin)",
                 c.name,
