@@ -226,6 +226,16 @@ fn summary_names_exactly_the_contacts_the_table_shows_sliding_or_too_deep() {
         "{}",
         wall.message
     );
+    // Said alike at both w0: one line for both (the structured list keeps
+    // one entry per w0).
+    let lines: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("contact wall"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].starts_with("every w0 (0.001, 1000): contact wall carried nothing"));
+    assert!(finding(&s, Some("w0 = 0.001"), "wall", FindingKind::CarriedNothing).is_some());
     let lo = Some("w0 = 0.001");
     assert!(finding(&s, lo, "floor", FindingKind::Slid).is_none());
     let floor = finding(&s, lo, "floor", FindingKind::CarriedNothing).expect("floor at 0.001");
@@ -553,6 +563,6 @@ fn predict_grf_foot_contacts_face_their_feet() {
         "{} contacts",
         problem.contacts.len()
     );
-    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem, &am.forces);
+    let errors = statopt::tools::check::contacts_facing_away(&setup, &problem);
     assert!(errors.is_empty(), "{errors:?}");
 }

@@ -530,3 +530,27 @@ def test_table_names_come_from_the_engine():
     for m in (run_module, setup_module):
         src = open(m.__file__).read()
         assert "_W0_PREFIX" not in src and 're.compile(r"_w0_' not in src, m.__file__
+
+
+def test_summary_names_the_contacts_its_tables_show(repo):
+    """summary["contacts"] names a contact exactly when its ContactForces
+    table shows it sliding or more than 1 mm deep while carrying more than
+    10 N, or carrying at most 1 N on every frame (docs/contact_model.md)."""
+    res = statopt.run(repo / "setups" / "leg_extension_rajagopal_cam1.xml", progress=False)
+    found = {(f["run"], f["contact"], f["kind"]): f for f in res.summary["contacts"]}
+    for f in res.summary["contacts"]:
+        assert any(w.endswith(f["message"]) for w in res.summary["warnings"])
+    for w0 in (1, 500, 1000):
+        cf = res.table("ContactForces", w0=w0)
+        names = sorted({c[:-3] for c in cf.columns if c.endswith("_fx")})
+        for c in names:
+            force = np.sqrt(cf[c + "_fx"] ** 2 + cf[c + "_fy"] ** 2 + cf[c + "_fz"] ** 2)
+            loaded = force > 10
+            slid = int((loaded & (cf[c + "_regime"] > 0)).sum())
+            deep = int((loaded & (cf[c + "_distance"] < -1e-3)).sum())
+            run = f"w0 = {w0}"
+            assert found.get((run, c, "slid"), {"frames": 0})["frames"] == slid
+            assert found.get((run, c, "too_deep"), {"frames": 0})["frames"] == deep
+            assert ((run, c, "carried_nothing") in found) == bool(force.max() <= 1), (run, c)
+    # The grip's hold side carries nothing on this motion (the hand pushes).
+    assert ("w0 = 1000", "handle_hold_r", "carried_nothing") in found

@@ -102,6 +102,9 @@ pub struct Contact {
     /// `plane_normal` and kept in the body's; zero for the paper's rigid plane.
     pub surface_velocity: Vector3<f64>,
     pub applies_force: bool,
+    /// Where the element is: file, line, element (for messages such as
+    /// `--check`'s plane facing away from the point's body).
+    pub loc: crate::error::Location,
 }
 
 /// In-plane axes (e1, e2) for the unit normal `n`: see [`Contact::e1`].
@@ -227,6 +230,7 @@ impl Contact {
             _ => None,
         };
         Ok(Some(Contact {
+            loc: el.loc(),
             name,
             type_name: el.name.clone(),
             point_body: point_frame.body,

@@ -325,11 +325,10 @@ impl Checker {
                         },
                         _ => am.clone(),
                     };
-                    let forces = am.forces.clone();
                     match static_optimization::SoProblem::build_from(setup, so, am) {
                         Ok((problem, w)) => {
                             self.warnings.extend(w);
-                            for e in contacts_facing_away(setup, &problem, &forces) {
+                            for e in contacts_facing_away(setup, &problem) {
                                 self.error(e);
                             }
                         }
@@ -519,7 +518,6 @@ pub fn figure_reference_problems(setup: &AnalyzeSetup, dir: &Path) -> Vec<Error>
 pub fn contacts_facing_away(
     setup: &AnalyzeSetup,
     problem: &static_optimization::SoProblem,
-    forces: &[crate::xml::Element],
 ) -> Vec<Error> {
     let mut errors = Vec::new();
     if problem.contacts.is_empty() {
@@ -568,16 +566,8 @@ pub fn contacts_facing_away(
         if grip {
             continue;
         }
-        let loc = forces
-            .iter()
-            .find(|f| {
-                crate::contacts::CONTACT_TYPE_NAMES.contains(&f.name.as_str())
-                    && f.name_attr() == c.name
-            })
-            .map(|f| f.loc())
-            .unwrap_or_else(|| crate::error::Location::file(&model.file));
         errors.push(Error::input(
-            loc,
+            c.loc.clone(),
             format!(
                 "contact {}: its plane faces away from its point's body {}: {when} the body's mass centre lies {:.1} mm behind the plane (the point {:.1} mm {}), but a contact pushes its point body along the plane normal, away from the plane, so it would pull the body through the plane and every frame that needs it fails; flip <plane_normal> (or check the plane's body and origin)",
                 c.name,

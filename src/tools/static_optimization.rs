@@ -178,6 +178,10 @@ pub fn run(
         wants_positions,
     )?;
     let mut knee_states = positions;
+    // A statement about a contact that every w0 of a sweep makes alike is
+    // said once, for all of them (summary.contacts keeps one per w0).
+    let mut summaries = summaries;
+    let common = common_contact_lines(&mut summaries);
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
         if !stopped {
@@ -224,6 +228,12 @@ pub fn run(
         summary.absorb(s, sweep.then_some(label.as_str()));
         prefixes.push(spec.prefix.clone());
     }
+    let all: Vec<String> = specs.iter().map(|r| r.w0.to_string()).collect();
+    summary.warnings.extend(
+        common
+            .into_iter()
+            .map(|m| format!("every w0 ({}): {m}", all.join(", "))),
+    );
     if summary.stopped.is_some() {
         // The sweep's statistics need every w0: none are written.
         warnings.extend(std::mem::take(&mut summary.warnings));
@@ -335,6 +345,29 @@ pub fn run(
     warnings.extend(summary.warnings);
     summary.warnings = warnings;
     Ok(summary)
+}
+
+/// The contact statements (writers::contact_findings) that every run of a
+/// sweep makes with the same words, taken out of each run's warnings and
+/// returned (none for a single run).
+fn common_contact_lines(summaries: &mut [RunSummary]) -> Vec<String> {
+    if summaries.len() < 2 {
+        return Vec::new();
+    }
+    let common: Vec<String> = summaries[0]
+        .contacts
+        .iter()
+        .map(|f| f.message.clone())
+        .filter(|m| {
+            summaries[1..]
+                .iter()
+                .all(|s| s.contacts.iter().any(|f| &f.message == m))
+        })
+        .collect();
+    for s in summaries.iter_mut() {
+        s.warnings.retain(|w| !common.contains(w));
+    }
+    common
 }
 
 /// The frames' times and positions (`q`) for the knee loads and the knee
