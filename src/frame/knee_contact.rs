@@ -442,8 +442,12 @@ mod tests {
         .collect();
         let right = knee(-1.0);
         let left = knee(1.0);
-        let p = equal_activation_pairs(&labels, &[right.clone()], &EqualActivation::Gastrocnemius)
-            .unwrap();
+        let p = equal_activation_pairs(
+            &labels,
+            std::slice::from_ref(&right),
+            &EqualActivation::Gastrocnemius,
+        )
+        .unwrap();
         assert_eq!(p, vec![[1, 2]]);
         let p = equal_activation_pairs(
             &labels,
@@ -452,11 +456,13 @@ mod tests {
         )
         .unwrap();
         assert_eq!(p, vec![[3, 4], [1, 2]]);
-        assert!(
-            equal_activation_pairs(&labels, &[right.clone()], &EqualActivation::Off)
-                .unwrap()
-                .is_empty()
-        );
+        assert!(equal_activation_pairs(
+            &labels,
+            std::slice::from_ref(&right),
+            &EqualActivation::Off
+        )
+        .unwrap()
+        .is_empty());
         assert!(
             equal_activation_pairs(&labels, &[], &EqualActivation::Gastrocnemius)
                 .unwrap()
@@ -464,7 +470,7 @@ mod tests {
         );
         let g =
             EqualActivation::from_text("vasmed_r vaslat_r; gasmed_r gaslat_r soleus_r").unwrap();
-        let p = equal_activation_pairs(&labels, &[right.clone()], &g).unwrap();
+        let p = equal_activation_pairs(&labels, std::slice::from_ref(&right), &g).unwrap();
         assert_eq!(p, vec![[5, 6], [1, 2], [2, 0]]);
         let g = EqualActivation::from_text("vasmed_r vasint_r").unwrap();
         let e = equal_activation_pairs(&labels, &[right], &g)
