@@ -84,15 +84,16 @@ fn r_of(c: &Comparison, channel: &str) -> f64 {
 
 /// Issue 39's bars that the method meets: mean r ≥ plain's − 0.02 and
 /// vastus medialis r ≥ 0.4. Measured (docs/knee_contact.md): plain mean
-/// 0.536, gastrocnemius 0.683, vastus medialis 0.538; the method 0.518,
-/// 0.439, 0.588. Before the compartments' capacities followed the medial
-/// share (equal capacities, 50/50), the method gave mean 0.424 and vastus
-/// medialis −0.113: this test failed.
+/// 0.536, gastrocnemius 0.683, vastus medialis 0.538; the method 0.537,
+/// 0.558, 0.588. Before the compartments' capacities followed the medial
+/// share and the gastrocnemius heads shared one activation (equal
+/// capacities, free heads), the method gave mean 0.424, gastrocnemius
+/// 0.097 and vastus medialis −0.113: this test failed.
 ///
-/// The gastrocnemius bar (r ≥ 0.6) is not met (0.439);
+/// The gastrocnemius bar (r ≥ 0.6) is not met (0.558);
 /// [`gastrocnemius_agrees_with_emg_under_the_knee_method`] holds it and is
 /// ignored until a method meets it. Here the gastrocnemius is held at its
-/// measured level (≥ 0.40) so that it does not fall back unnoticed.
+/// measured level (≥ 0.54) so that it does not fall back unnoticed.
 #[test]
 fn knee_method_shares_muscle_work_as_believably_as_plain_so() {
     let Some((setup, emg)) = dirs("knee_method_shares_muscle_work_as_believably_as_plain_so")
@@ -126,15 +127,15 @@ fn knee_method_shares_muscle_work_as_believably_as_plain_so() {
     let vm = r_of(&knee, "vastus_medius");
     assert!(vm >= 0.4, "vastus medialis r {vm:.3}");
     let gas = r_of(&knee, "gastrocnemius");
-    assert!(gas >= 0.40, "gastrocnemius r {gas:.3} (measured 0.439)");
+    assert!(gas >= 0.54, "gastrocnemius r {gas:.3} (measured 0.558)");
 }
 
 /// Issue 39's gastrocnemius bar: r ≥ 0.6 under the knee contact method. Not
-/// met (0.439; plain static optimization 0.683): every knee cost that lowers
+/// met (0.558; plain static optimization 0.683): every knee cost that lowers
 /// the late-stance knee force enough for the eTibia bar removes the
 /// gastrocnemius there (docs/knee_contact.md, "What was tried").
 #[test]
-#[ignore = "issue 39: not met by the knee contact method (r 0.439), see docs/knee_contact.md"]
+#[ignore = "issue 39: not met by the knee contact method (r 0.558), see docs/knee_contact.md"]
 fn gastrocnemius_agrees_with_emg_under_the_knee_method() {
     let Some((setup, emg)) = dirs("gastrocnemius_agrees_with_emg_under_the_knee_method") else {
         return;

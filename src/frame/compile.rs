@@ -214,6 +214,17 @@ impl SoProblem {
                 setup.setup_file.display()
             )));
         }
+        let ties = crate::frame::knee_contact::equal_activation_pairs(
+            &labels,
+            &knees,
+            &so.knee_contact_equal_activation,
+        )
+        .map_err(
+            |e| match so.element.child("knee_contact_equal_activation") {
+                Some(c) => c.error(e.to_string()),
+                None => Error::msg(format!("{}: {e}", setup.setup_file.display())),
+            },
+        )?;
         if so.activation_exponent != 2.0 {
             warnings.push(format!(
                 "activation_exponent {} is solved with power cones",
@@ -235,6 +246,7 @@ impl SoProblem {
                 settings: so.clone(),
                 force_labels,
                 contacts,
+                ties,
                 knees,
             },
             warnings,

@@ -170,6 +170,62 @@ pub fn select(
         .collect()
 }
 
+pub use crate::parse::analyses::EqualActivation;
+
+/// The gastrocnemius heads' names (medial, lateral) in the models statopt
+/// meets: Rajagopal et al. 2016 and gait2392/gait10dof18musc.
+const GASTROCNEMIUS_HEADS: [(&str, &str); 2] = [("gasmed", "gaslat"), ("med_gas", "lat_gas")];
+
+/// Pairs of controls (indices into `labels`, the controls' names) held at
+/// one activation under the knee contact method, one equation each:
+/// per knee of `knees`, the two heads of its gastrocnemius (`<name>_l` or
+/// `_r` on the knee's side; a model without them gets none), or the named
+/// groups; none without knees. A named muscle that is not a control is an
+/// error naming it.
+pub fn equal_activation_pairs(
+    labels: &[String],
+    knees: &[Knee],
+    sel: &EqualActivation,
+) -> Result<Vec<[usize; 2]>> {
+    if knees.is_empty() {
+        return Ok(Vec::new());
+    }
+    let find = |n: &str| labels.iter().position(|l| l == n);
+    let mut pairs = Vec::new();
+    match sel {
+        EqualActivation::Off => {}
+        EqualActivation::Gastrocnemius => {
+            for k in knees {
+                let side = if k.z[0] > 0.0 { "_l" } else { "_r" };
+                for (m, l) in GASTROCNEMIUS_HEADS {
+                    if let (Some(i), Some(j)) =
+                        (find(&format!("{m}{side}")), find(&format!("{l}{side}")))
+                    {
+                        pairs.push([i, j]);
+                        break;
+                    }
+                }
+            }
+        }
+        EqualActivation::Groups(groups) => {
+            for g in groups {
+                let idx: Vec<usize> = g
+                    .iter()
+                    .map(|n| {
+                        find(n).ok_or_else(|| {
+                            Error::msg(format!(
+                                "knee_contact_equal_activation: '{n}' is not a muscle or actuator of the model's force set"
+                            ))
+                        })
+                    })
+                    .collect::<Result<_>>()?;
+                pairs.extend(idx.windows(2).map(|w| [w[0], w[1]]));
+            }
+        }
+    }
+    Ok(pairs)
+}
+
 /// Per-thread buffers of the knee rows.
 #[derive(Debug, Clone, Default)]
 pub struct KneeScratch {
@@ -371,5 +427,61 @@ mod tests {
             let expected_med = 500.0 + if side * mx > 0.0 { shift } else { -shift };
             assert!((med - expected_med).abs() < 1e-9, "{side} {mx}: {med}");
         }
+    }
+
+    /// The gastrocnemius heads of each knee's side are tied by default;
+    /// `none` ties nothing; named groups tie each to the next; an unknown
+    /// name is an error naming it; without knees nothing is tied.
+    #[test]
+    fn equal_activation_pairs_by_side_and_name() {
+        let labels: Vec<String> = [
+            "soleus_r", "gasmed_r", "gaslat_r", "gasmed_l", "gaslat_l", "vasmed_r", "vaslat_r",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let right = knee(-1.0);
+        let left = knee(1.0);
+        let p = equal_activation_pairs(
+            &labels,
+            std::slice::from_ref(&right),
+            &EqualActivation::Gastrocnemius,
+        )
+        .unwrap();
+        assert_eq!(p, vec![[1, 2]]);
+        let p = equal_activation_pairs(
+            &labels,
+            &[left, right.clone()],
+            &EqualActivation::Gastrocnemius,
+        )
+        .unwrap();
+        assert_eq!(p, vec![[3, 4], [1, 2]]);
+        assert!(equal_activation_pairs(
+            &labels,
+            std::slice::from_ref(&right),
+            &EqualActivation::Off
+        )
+        .unwrap()
+        .is_empty());
+        assert!(
+            equal_activation_pairs(&labels, &[], &EqualActivation::Gastrocnemius)
+                .unwrap()
+                .is_empty()
+        );
+        let g =
+            EqualActivation::from_text("vasmed_r vaslat_r; gasmed_r gaslat_r soleus_r").unwrap();
+        let p = equal_activation_pairs(&labels, std::slice::from_ref(&right), &g).unwrap();
+        assert_eq!(p, vec![[5, 6], [1, 2], [2, 0]]);
+        let g = EqualActivation::from_text("vasmed_r vasint_r").unwrap();
+        let e = equal_activation_pairs(&labels, &[right], &g)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("vasint_r"), "{e}");
+        assert!(EqualActivation::from_text("vasmed_r").is_err());
+        assert!(EqualActivation::from_text(" ; ").is_err());
+        assert_eq!(
+            EqualActivation::from_text("None").unwrap(),
+            EqualActivation::Off
+        );
     }
 }

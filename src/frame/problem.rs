@@ -66,6 +66,10 @@ pub struct SoProblem {
     /// for plain static optimization): two multipliers each follow the
     /// contacts', two rows each follow the coordinates' (`frame::knee_contact`).
     pub knees: Vec<crate::frame::knee_contact::Knee>,
+    /// Pairs of controls held at equal activation, one row `x_i − x_j = 0`
+    /// each after the knee rows: the heads of one muscle under the knee
+    /// contact method (`frame::knee_contact::equal_activation_pairs`).
+    pub ties: Vec<[usize; 2]>,
 }
 
 /// The ForceSet part of a force-file row (labels or values): each control's
@@ -343,7 +347,8 @@ impl SoProblem {
         let nc = self.contacts.len();
         // The knee contact method's rows and variables follow (two each per knee).
         let nk = self.knees.len();
-        let nrt = nr + 2 * nk;
+        let nt = self.ties.len();
+        let nrt = nr + 2 * nk + nt;
         let a = &mut problem.a;
         // Every column is written below, whole: no need to clear them.
         if a.shape() != (nrt, nv + 3 * nc + 2 * nk) {
@@ -471,6 +476,18 @@ impl SoProblem {
                 nv + 3 * nc,
                 knee,
             );
+        }
+        // Heads of one muscle at one activation: rows x_i − x_j = 0, written
+        // whole (A is not cleared between frames).
+        let ncol = problem.a.ncols();
+        for (ti, [i, j]) in self.ties.iter().enumerate() {
+            let r = nr + 2 * nk + ti;
+            for c in 0..ncol {
+                problem.a[(r, c)] = 0.0;
+            }
+            problem.a[(r, *i)] = 1.0;
+            problem.a[(r, *j)] = -1.0;
+            problem.b[r] = 0.0;
         }
         problem.exponent = self.settings.activation_exponent;
         problem.friction = self.settings.friction;

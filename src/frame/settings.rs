@@ -2,8 +2,8 @@
 //! once in the parse stage (`parse::analyses`), re-exported here.
 
 pub use crate::parse::analyses::{
-    ConstraintMatrix, KneeSelection, StaticOptimizationSetup, CONTACT_WEIGHT_RANGE,
-    DEFAULT_CONTACT_WEIGHT, DEFAULT_TOLERANCE,
+    ConstraintMatrix, EqualActivation, KneeSelection, StaticOptimizationSetup,
+    CONTACT_WEIGHT_RANGE, DEFAULT_CONTACT_WEIGHT, DEFAULT_TOLERANCE,
 };
 
 #[cfg(test)]

@@ -103,6 +103,9 @@ pub struct StaticOptimizationSetup {
     /// taking the rest (default [`DEFAULT_KNEE_MEDIAL_SHARE`];
     /// `frame::knee_contact`).
     pub knee_contact_medial_share: f64,
+    /// statopt `<knee_contact_equal_activation>`: muscles held at one
+    /// activation under the knee contact method (`frame::knee_contact`).
+    pub knee_contact_equal_activation: EqualActivation,
     /// Whether the element gives `<contact_weight>` (else
     /// [`DEFAULT_CONTACT_WEIGHT`] applies).
     pub contact_weights_given: bool,
@@ -184,6 +187,49 @@ fn knee_capacity_problem(v: f64) -> Option<String> {
     ))
 }
 
+/// Which muscles the knee contact method holds at one activation
+/// (`<knee_contact_equal_activation>`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum EqualActivation {
+    /// The two heads of each knee's gastrocnemius (the default; the word
+    /// `gastrocnemius`): one muscle, one nerve, one tendon, split by the
+    /// model for its paths only.
+    #[default]
+    Gastrocnemius,
+    /// None (the word `none`).
+    Off,
+    /// Named groups: muscles separated by spaces, groups by `;`.
+    Groups(Vec<Vec<String>>),
+}
+
+impl EqualActivation {
+    /// The property's text read, or why not.
+    pub fn from_text(text: &str) -> std::result::Result<Self, String> {
+        let t = text.trim();
+        if t.eq_ignore_ascii_case("gastrocnemius") {
+            return Ok(EqualActivation::Gastrocnemius);
+        }
+        if t.eq_ignore_ascii_case("none") || t.eq_ignore_ascii_case("false") {
+            return Ok(EqualActivation::Off);
+        }
+        let groups: Vec<Vec<String>> = t
+            .split(';')
+            .map(|g| g.split_whitespace().map(String::from).collect::<Vec<_>>())
+            .filter(|g| !g.is_empty())
+            .collect();
+        if groups.is_empty() {
+            return Err("knee_contact_equal_activation is empty: give 'gastrocnemius' (the default), 'none', or groups of muscle names separated by ';'".into());
+        }
+        if let Some(g) = groups.iter().find(|g| g.len() < 2) {
+            return Err(format!(
+                "knee_contact_equal_activation: a group needs at least two muscles, found '{}'",
+                g.join(" ")
+            ));
+        }
+        Ok(EqualActivation::Groups(groups))
+    }
+}
+
 /// Why `v` cannot be the medial compartment's share of the knee's capacity, or None.
 fn knee_medial_share_problem(v: f64) -> Option<String> {
     (!(v > 0.0 && v < 1.0)).then(|| format!(
@@ -232,6 +278,11 @@ impl StaticOptimizationSetup {
         }
         self.knee_contact_capacity_bw = bw;
         Ok(())
+    }
+
+    /// The muscles the knee contact method holds at one activation.
+    pub fn set_knee_contact_equal_activation(&mut self, e: EqualActivation) {
+        self.knee_contact_equal_activation = e;
     }
 
     /// The medial compartment's share of the knee's load capacity.
@@ -338,6 +389,10 @@ impl StaticOptimizationSetup {
                     v
                 }
                 _ => DEFAULT_KNEE_CAPACITY_BW,
+            },
+            knee_contact_equal_activation: match el.child("knee_contact_equal_activation") {
+                Some(c) => EqualActivation::from_text(c.text()).map_err(|m| c.error(m))?,
+                None => EqualActivation::Gastrocnemius,
             },
             knee_contact_medial_share: match el.child("knee_contact_medial_share") {
                 Some(c) if !c.text().trim().is_empty() => {

@@ -48,6 +48,7 @@ pub const STATOPT_PROPERTIES: &[(&str, &[&str])] = &[
             "knee_contact",
             "knee_contact_capacity",
             "knee_contact_medial_share",
+            "knee_contact_equal_activation",
         ],
     ),
 ];

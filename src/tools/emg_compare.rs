@@ -272,8 +272,11 @@ pub fn compare(
             opts.on_fraction
         )));
     }
-    if !(opts.delay.is_finite()) {
-        return Err(Error::msg("the delay must be a finite number"));
+    if !(opts.delay.is_finite() && opts.delay >= 0.0) {
+        return Err(Error::msg(format!(
+            "the electromechanical delay must be a number of milliseconds >= 0 (EMG precedes the force it causes), found {} ms",
+            1e3 * opts.delay
+        )));
     }
     if act.time.len() < 2 {
         return Err(Error::input(
@@ -672,6 +675,22 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("emg.sto") && e.contains("gastrocnemius"), "{e}");
+        let neg = Options {
+            delay: -0.01,
+            ..Default::default()
+        };
+        let e = compare(
+            "x",
+            &act,
+            Path::new("act.sto"),
+            &emg,
+            Path::new("emg.sto"),
+            &map,
+            neg,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(">= 0"), "{e}");
         // Activations beyond the EMG's time range.
         let map = parse_map("soleus: soleus_r\n", p).unwrap();
         let opts = Options {
