@@ -14,6 +14,7 @@
 //!   the pad on the shin).
 pub mod closure;
 pub mod element;
+pub mod events;
 pub mod feet;
 pub mod floor;
 pub mod kinematics;
