@@ -995,3 +995,60 @@ fn a_foot_strike_is_found_at_its_contact_time() {
     assert_eq!(f.offs.len(), 1, "{f:?}");
     assert!((f.offs[0] - 1.0).abs() <= 0.01, "foot-off {}", f.offs[0]);
 }
+
+/// Split-belt plates with a step across the seam (issue 36): the right
+/// foot stands at z = +0.1 m, the left at z = −0.1 m, each plate assigned
+/// to its foot. Frames 0-19: the right plate holds the right foot (correct).
+/// Frames 30-44: the right foot steps onto the left belt: the left plate
+/// holds its load, its centre of pressure under the right foot. Frames
+/// 50-59: the left foot on its own plate. Only the step across is found,
+/// whole; a plate with a noisy centre of pressure on a few frames of a
+/// correct step is not.
+#[test]
+fn a_step_across_the_belts_seam_is_found_on_synthetic_plates() {
+    use nalgebra::Vector3;
+    use statopt::contacts::plates::{misplaced_steps, MisplacedStep, PlateSample};
+    let n = 60;
+    let foot = |x: f64, z: f64| -> Vec<Vector3<f64>> {
+        (0..6)
+            .map(|k| Vector3::new(x + 0.04 * k as f64, 0.0, z))
+            .collect()
+    };
+    let mut plates = Vec::new();
+    let mut feet = Vec::new();
+    for i in 0..n {
+        let right = foot(0.0, 0.1);
+        let left = foot(0.5, -0.1);
+        let load = |on: bool, cop: Vector3<f64>| PlateSample {
+            foot: 0,
+            force: Vector3::new(0.0, if on { 700.0 } else { 0.0 }, 0.0),
+            cop,
+        };
+        let mut r = load(i < 20, Vector3::new(0.1, 0.0, 0.1));
+        // A noisy centre of pressure on three frames of the correct step.
+        if (5..8).contains(&i) {
+            r.cop = Vector3::new(0.6, 0.0, -0.1);
+        }
+        let mut l = load(
+            (30..45).contains(&i) || (50..60).contains(&i),
+            if i < 45 {
+                Vector3::new(0.1, 0.0, 0.1)
+            } else {
+                Vector3::new(0.6, 0.0, -0.1)
+            },
+        );
+        l.foot = 1;
+        plates.push(vec![r, l]);
+        feet.push([right, left]);
+    }
+    let steps = misplaced_steps(&plates, &feet);
+    assert_eq!(
+        steps,
+        vec![MisplacedStep {
+            plate: 1,
+            foot: 1,
+            first: 30,
+            last: 44
+        }]
+    );
+}

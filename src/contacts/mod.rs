@@ -18,6 +18,7 @@ pub mod events;
 pub mod feet;
 pub mod floor;
 pub mod kinematics;
+pub mod plates;
 #[cfg(test)]
 mod tests;
 

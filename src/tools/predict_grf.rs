@@ -705,7 +705,46 @@ pub fn run_with(
         let setup_dir = setup.dir();
         let loads = ExternalLoads::load(&mf, setup_dir, &model)?;
         let measured = measured_foot_loads(&loads, &model, &states, &prediction.predicted.time)?;
-        prediction.metrics = compare(&prediction.predicted, &measured, body_weight);
+        // Steps on the wrong plate (a step across a split belt's seam) are
+        // found and left out of the scores.
+        let (samples, feet) = plate_samples(
+            &loads,
+            &model,
+            &states,
+            &prediction.predicted.time,
+            &prediction.contacts.points,
+        )?;
+        let misplaced = crate::contacts::plates::misplaced_steps(&samples, &feet);
+        let mut kept = vec![true; prediction.predicted.time.len()];
+        for m in &misplaced {
+            kept[m.first..=m.last].iter_mut().for_each(|k| *k = false);
+        }
+        if !misplaced.is_empty() {
+            let t = &prediction.predicted.time;
+            let steps: Vec<String> = misplaced
+                .iter()
+                .map(|m| {
+                    format!(
+                        "the plate of foot {} ({}) from t = {:.3} to {:.3} s",
+                        if m.foot == 0 { 'r' } else { 'l' },
+                        loads.forces[m.plate].name,
+                        t[m.first],
+                        t[m.last]
+                    )
+                })
+                .collect();
+            prediction.summary.warnings.push(format!(
+                "measured plates: {} step(s) where a plate's centre of pressure lies under the other foot, so that it holds that foot's load or part of it (a step across the belts' seam): {}; the comparison leaves out those {} frames",
+                misplaced.len(),
+                steps.join("; "),
+                kept.iter().filter(|k| !**k).count()
+            ));
+        }
+        prediction.metrics = compare(
+            &keep_frames(&prediction.predicted, &kept),
+            &keep_frames(&measured, &kept),
+            body_weight,
+        );
         prediction.stance = ['r', 'l']
             .into_iter()
             .enumerate()
@@ -938,6 +977,84 @@ pub fn measured_foot_loads(
         }
     }
     Ok(out)
+}
+
+/// Per frame of `times`: every plate of `loads` (the foot of its body,
+/// force and centre of pressure, ground) and the ground positions of each
+/// foot's contact `points`, for [`crate::contacts::plates::misplaced_steps`].
+#[allow(clippy::type_complexity)]
+fn plate_samples(
+    loads: &ExternalLoads,
+    model: &crate::model::Model,
+    states: &crate::motion::states::States,
+    times: &[f64],
+    points: &[crate::contacts::feet::FootPoint],
+) -> Result<(
+    Vec<Vec<crate::contacts::plates::PlateSample>>,
+    Vec<[Vec<Vector3<f64>>; 2]>,
+)> {
+    let mut data = Data::new(model);
+    let (mut plates, mut feet) = (
+        Vec::with_capacity(times.len()),
+        Vec::with_capacity(times.len()),
+    );
+    for &t in times {
+        let i = states
+            .time
+            .iter()
+            .position(|&s| (s - t).abs() < 1e-9)
+            .unwrap_or_else(|| crate::motion::coordinates::find_index(&states.time, t));
+        data.q.copy_from_slice(&states.q[i]);
+        data.u.copy_from_slice(&states.u[i]);
+        kinematics::full(model, &mut data);
+        let mut row = Vec::with_capacity(loads.forces.len());
+        for ef in &loads.forces {
+            let name = &model.bodies[ef.applied_to_body].name;
+            let (force, cop, _) = ef.evaluate(t, &data)?;
+            row.push(crate::contacts::plates::PlateSample {
+                foot: usize::from(name.ends_with("_l")),
+                force,
+                cop,
+            });
+        }
+        plates.push(row);
+        let mut f: [Vec<Vector3<f64>>; 2] = [Vec::new(), Vec::new()];
+        for p in points {
+            f[usize::from(p.side == 'l')].push(data.station_position(p.body, &p.local));
+        }
+        feet.push(f);
+    }
+    Ok((plates, feet))
+}
+
+/// `loads` at the frames where `kept` is true.
+fn keep_frames(loads: &FootLoads, kept: &[bool]) -> FootLoads {
+    let pick = |v: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+        v.iter()
+            .zip(kept)
+            .filter(|(_, k)| **k)
+            .map(|(x, _)| *x)
+            .collect()
+    };
+    FootLoads {
+        time: loads
+            .time
+            .iter()
+            .zip(kept)
+            .filter(|(_, k)| **k)
+            .map(|(t, _)| *t)
+            .collect(),
+        force: [pick(&loads.force[0]), pick(&loads.force[1])],
+        cop: [pick(&loads.cop[0]), pick(&loads.cop[1])],
+        free_moment: [0, 1].map(|s| {
+            loads.free_moment[s]
+                .iter()
+                .zip(kept)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        }),
+    }
 }
 
 /// Plates (foot 0 right / 1 left, force, centre of pressure; ground) summed
