@@ -105,8 +105,8 @@ pub fn trailing_share(tau: f64, t_ds: f64) -> f64 {
 /// trailing foot's first foot-off after the strike (within 0.3 s), or lasts
 /// [`DEFAULT_DOUBLE_SUPPORT`]. Factor 1 outside.
 pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
-    let mut out = [Vec::new(), Vec::new()];
-    for s in 0..2 {
+    let mut out: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
+    for (s, knots) in out.iter_mut().enumerate() {
         let o = 1 - s;
         let f = &events.feet[s];
         for (k, &ts) in f.strikes.iter().enumerate() {
@@ -121,12 +121,12 @@ pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
                 .map(|x| x - ts)
                 .unwrap_or(DEFAULT_DOUBLE_SUPPORT);
             let n = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
-            out[s].push((ts - 1e-6, 1.0));
+            knots.push((ts - 1e-6, 1.0));
             for i in 0..=n {
                 let tau = t_ds * i as f64 / n as f64;
-                out[s].push((ts + tau, landing_factor(trailing_share(tau, t_ds))));
+                knots.push((ts + tau, landing_factor(trailing_share(tau, t_ds))));
             }
-            out[s].push((ts + t_ds + 1e-6, 1.0));
+            knots.push((ts + t_ds + 1e-6, 1.0));
         }
     }
     for k in out.iter_mut() {

@@ -60,7 +60,7 @@ pub fn misplaced_steps(
     for k in 0..np {
         let mut i = 0;
         while i < n {
-            if plates[i].get(k).map_or(true, |p| !(p.force.y > LOADED)) {
+            if !plates[i].get(k).is_some_and(|p| p.force.y > LOADED) {
                 i += 1;
                 continue;
             }

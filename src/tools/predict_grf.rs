@@ -790,7 +790,7 @@ fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64,
         )
     };
     format!(
-        "gait events of foot {side} on the unfiltered kinematics (Zeni et al. 2008, strikes refined by O'Connor et al. 2007): strikes at {} s, foot-offs at {} s; {off}",
+        "gait events of foot {side} on the unfiltered kinematics (walking events: Zeni et al. 2008, strikes refined by O'Connor et al. 2007; a strike only where the foot reaches the floor, so in running, where Zeni's heel extremum falls in late swing, none may be found): strikes at {} s, foot-offs at {} s; {off}",
         times(&f.strikes),
         times(&f.offs)
     )
