@@ -879,3 +879,46 @@ fn off_intervals_switch_a_contact_off_in_time() {
         assert!(e.contains("off_") && e.contains("line"), "{bad}: {e}");
     }
 }
+
+/// `time_weight` (statopt, issue 36): the factor is linear between the
+/// knots and holds the end knots' values outside; 1 without knots; knots
+/// out of order or a factor outside [0, 1] are refused with the line.
+#[test]
+fn time_weight_scales_a_contact_between_its_knots() {
+    let m = test_model();
+    let props = "<point_body>ground</point_body><point_location>0.5 -0.6 0.1</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>";
+    assert_eq!(contact(&m, props).time_factor(0.3), 1.0);
+    let c = contact(
+        &m,
+        &format!("{props}<time_weight>0.4 1 0.5 0 0.6 0.5 0.7 1</time_weight>"),
+    );
+    for (t, want) in [
+        (0.0, 1.0),
+        (0.45, 0.5),
+        (0.5, 0.0),
+        (0.55, 0.25),
+        (0.65, 0.75),
+        (0.9, 1.0),
+    ] {
+        assert!(
+            (c.time_factor(t) - want).abs() < 1e-9,
+            "t = {t}: {}",
+            c.time_factor(t)
+        );
+    }
+    for bad in [
+        "<time_weight>0.5 1 0.4 0</time_weight>",
+        "<time_weight>0.5 1.5</time_weight>",
+        "<time_weight>0.5</time_weight>",
+    ] {
+        let e = contact_err(
+            &m,
+            &format!("<PointOnPlaneContact name=\"c\">{props}{bad}</PointOnPlaneContact>"),
+        );
+        assert!(
+            e.contains("time_weight") && e.contains("line"),
+            "{bad}: {e}"
+        );
+    }
+}
