@@ -78,9 +78,13 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
         rho_ap >= 0.90 && rmse_ap <= 5.0,
         "anteroposterior {rho_ap} {rmse_ap}"
     );
-    // The root residuals carry little: the feet carry the body.
+    // The root residuals carry little: the feet carry the body. Since issue
+    // 36 the landing foot carries little before its strike found on the
+    // kinematics, which on this trial's kinematics is 13-23 ms after the
+    // plates' onset: the pelvis takes up to 5.5 % BW on one or two frames
+    // before each strike (2 % before).
     let (f, _) = p.summary.root_force_peak.clone().unwrap();
-    assert!(f < 0.05 * p.body_weight, "root residual {f} N");
+    assert!(f < 0.07 * p.body_weight, "root residual {f} N");
 }
 
 #[test]
@@ -105,9 +109,12 @@ fn moco_walk3d_overground_walk_against_force_plates() {
         "mediolateral {rho_ml} {rmse_ml}"
     );
     // The setup's own pelvis residuals (optimal force 100) were replaced by
-    // weak ones (optimal force 1): they carry less than 3 % body weight.
+    // weak ones (optimal force 1): they carry less than 7 % body weight
+    // (3 % before issue 36: the strikes found on this trial's kinematics,
+    // a Moco solution, come 31-32 ms after the plates' onsets, and the
+    // pelvis takes up to 5 % BW on the two or three frames before each).
     let (f, _) = p.summary.root_force_peak.clone().unwrap();
-    assert!(f < 0.03 * p.body_weight, "root residual {f} N");
+    assert!(f < 0.07 * p.body_weight, "root residual {f} N");
     assert!(p
         .summary
         .files
@@ -712,14 +719,38 @@ fn one_step_torque_driven_walking() {
     let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
     println!("one step 2014001 C4_05: vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW; rejected: {:?}", p.rejected);
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
-    // The issue's bar (vertical 0.95 / 10 % BW) is NOT met on this trial
-    // (0.931 / 12.2 %: the landing heel loads two frames early; see
-    // docs/grf_prediction.md). Guarded here against getting worse: with
-    // the gate of 0.3 / 1.2 m/s used before, rho was 0.912.
+    // The issue's bar (vertical 0.95 / 10 % BW) is not met on this trial:
+    // 0.951 / 10.3 % BW with issue 36's step-to-step transition (0.931 /
+    // 12.2 % before it, the landing heel loading two frames early and the
+    // load passing to it too fast; see docs/grf_prediction.md). Guarded
+    // here against getting worse.
     assert!(
-        rho_v >= 0.925 && rmse_v <= 12.5,
+        rho_v >= 0.945 && rmse_v <= 10.8,
         "vertical {rho_v} {rmse_v}"
     );
+    // The left foot lands once, taking over from the right (issue 36): its
+    // strike found on the raw kinematics within a frame (10 ms) of the
+    // plates' onset (20 N), and before it carries at most 1 % of body
+    // weight (its contacts then cost what the root residual costs).
+    let m = p.measured.as_ref().expect("measured loads");
+    let onset = (1..m.time.len())
+        .find(|&i| m.force[1][i].y > 20.0 && m.force[1][i - 1].y <= 20.0)
+        .map(|i| m.time[i])
+        .expect("the left plate loads in the trial");
+    let left = &p.events.feet[1];
+    assert_eq!(left.strikes.len(), 1, "{left:?}");
+    assert_eq!(left.transitions, vec![true], "{left:?}");
+    assert!(
+        (left.strikes[0] - onset).abs() <= 0.0101,
+        "strike {} against the plates' onset {onset}",
+        left.strikes[0]
+    );
+    for (i, &t) in p.predicted.time.iter().enumerate() {
+        if t < left.strikes[0] - 1e-9 {
+            let fy = p.predicted.force[1][i].y;
+            assert!(fy < 0.01 * p.body_weight, "left foot loaded {fy} N at {t}");
+        }
+    }
     // Walking at about 1.4 m/s: the walking slip gate, hardly scaled.
     let v = p.contacts.gait_speed;
     assert!(v > 1.2 && v < 1.6, "gait speed {v}");
@@ -884,4 +915,140 @@ fn an_ik_file_at_1200_hz_reads_unchanged() {
     let (va, vb) = (mean(&a.metrics, 'y'), mean(&b.metrics, 'y'));
     println!("vertical rho / RMSE: 120 Hz {va:?}, 1200 Hz {vb:?}");
     assert!((va.0 - vb.0).abs() < 0.01 && (va.1 - vb.1).abs() < 1.0);
+}
+
+/// A foot strike on a synthetic gait with a known contact time (issue 36):
+/// the pelvis moves at 1.3 m/s; the heel swings ahead, slows in terminal
+/// swing (so it is farthest ahead of the pelvis 40 ms before it lands, as
+/// real heels are) and stands still from t_c = 0.503 s; the foot centre
+/// descends ever faster until the heel lands and the forefoot then slaps
+/// down to foot flat. Zeni's extremum comes first, O'Connor's fastest
+/// descent of the foot centre finds the contact within one sample (10 ms),
+/// and the toe's rearmost point relative to the pelvis gives the foot-off.
+#[test]
+fn a_foot_strike_is_found_at_its_contact_time() {
+    use nalgebra::Vector3;
+    use statopt::contacts::events;
+    let tc = 0.503;
+    let time: Vec<f64> = (0..121).map(|i| i as f64 * 0.01).collect();
+    let v = 1.3;
+    let pelvis: Vec<Vector3<f64>> = time
+        .iter()
+        .map(|&t| Vector3::new(v * t, 0.95, 0.0))
+        .collect();
+    // Heel along x: ahead of the pelvis, its speed falling linearly from
+    // 2v to 0 over the last 0.2 s of swing; still from tc on.
+    let heel_x = |t: f64| {
+        let x_c = v * tc + 0.3;
+        if t >= tc {
+            x_c
+        } else if t >= tc - 0.2 {
+            let s = tc - t; // speed 2v s / 0.2: integrate back from x_c
+            x_c - v * s * s / 0.2
+        } else {
+            x_c - v * 0.2 - 2.0 * v * (tc - 0.2 - t)
+        }
+    };
+    // Foot centre height: falls with speed growing until tc, then slows to
+    // foot flat at tc + 0.06 s.
+    let centre_y = |t: f64| {
+        if t <= tc - 0.15 {
+            0.08
+        } else if t <= tc {
+            let s = t - (tc - 0.15);
+            0.08 - 0.4 * s * s / 0.3 * 0.5
+        } else if t <= tc + 0.06 {
+            let y_c = 0.08 - 0.4 * 0.15 * 0.15 / 0.3 * 0.5;
+            let s = t - tc;
+            y_c - 0.2 * (s - s * s / 0.12)
+        } else {
+            0.08 - 0.4 * 0.15 * 0.15 / 0.3 * 0.5 - 0.2 * 0.03
+        }
+    };
+    let heel: Vec<Vector3<f64>> = time
+        .iter()
+        .map(|&t| Vector3::new(heel_x(t), centre_y(t), 0.1))
+        .collect();
+    let centre: Vec<Vector3<f64>> = time
+        .iter()
+        .map(|&t| Vector3::new(heel_x(t) + 0.1, centre_y(t), 0.1))
+        .collect();
+    // The toe comes off at 1.0 s: behind the pelvis by most there.
+    let toe: Vec<Vector3<f64>> = time
+        .iter()
+        .map(|&t| Vector3::new(v * t - 0.4 + 0.5 * (t - 1.0).powi(2), 0.0, 0.1))
+        .collect();
+    let h = Vector3::x();
+    let f = events::zeni_events(&time, &heel, &toe, &pelvis, &h);
+    assert_eq!(f.strikes.len(), 1, "{f:?}");
+    let zeni = f.strikes[0];
+    assert!(
+        zeni < tc - 0.02,
+        "Zeni's strike {zeni} is not before contact"
+    );
+    let vy = events::vertical_velocity(&time, &centre);
+    let strike = events::fastest_descent(&time, &vy, zeni);
+    assert!(
+        (strike - tc).abs() <= 0.01,
+        "strike at {strike}, contact at {tc}"
+    );
+    assert_eq!(f.offs.len(), 1, "{f:?}");
+    assert!((f.offs[0] - 1.0).abs() <= 0.01, "foot-off {}", f.offs[0]);
+}
+
+/// Split-belt plates with a step across the seam (issue 36): the right
+/// foot stands at z = +0.1 m, the left at z = −0.1 m, each plate assigned
+/// to its foot. Frames 0-19: the right plate holds the right foot (correct).
+/// Frames 30-44: the right foot steps onto the left belt: the left plate
+/// holds its load, its centre of pressure under the right foot. Frames
+/// 50-59: the left foot on its own plate. Only the step across is found,
+/// whole; a plate with a noisy centre of pressure on a few frames of a
+/// correct step is not.
+#[test]
+fn a_step_across_the_belts_seam_is_found_on_synthetic_plates() {
+    use nalgebra::Vector3;
+    use statopt::contacts::plates::{misplaced_steps, MisplacedStep, PlateSample};
+    let n = 60;
+    let foot = |x: f64, z: f64| -> Vec<Vector3<f64>> {
+        (0..6)
+            .map(|k| Vector3::new(x + 0.04 * k as f64, 0.0, z))
+            .collect()
+    };
+    let mut plates = Vec::new();
+    let mut feet = Vec::new();
+    for i in 0..n {
+        let right = foot(0.0, 0.1);
+        let left = foot(0.5, -0.1);
+        let load = |on: bool, cop: Vector3<f64>| PlateSample {
+            foot: 0,
+            force: Vector3::new(0.0, if on { 700.0 } else { 0.0 }, 0.0),
+            cop,
+        };
+        let mut r = load(i < 20, Vector3::new(0.1, 0.0, 0.1));
+        // A noisy centre of pressure on three frames of the correct step.
+        if (5..8).contains(&i) {
+            r.cop = Vector3::new(0.6, 0.0, -0.1);
+        }
+        let mut l = load(
+            (30..45).contains(&i) || (50..60).contains(&i),
+            if i < 45 {
+                Vector3::new(0.1, 0.0, 0.1)
+            } else {
+                Vector3::new(0.6, 0.0, -0.1)
+            },
+        );
+        l.foot = 1;
+        plates.push(vec![r, l]);
+        feet.push([right, left]);
+    }
+    let steps = misplaced_steps(&plates, &feet);
+    assert_eq!(
+        steps,
+        vec![MisplacedStep {
+            plate: 1,
+            foot: 1,
+            first: 30,
+            last: 44
+        }]
+    );
 }

@@ -24,6 +24,9 @@
 //! | `regime_blend` | 0 | statopt: slip-speed width (m/s) of a smooth static/kinetic transition centred on v_trans (0: the paper's hard switch; at most 2 v_trans); see [`super::kinematics`] |
 //! | `plane_velocity` | `0 0 0` | statopt: velocity (m/s, plane body frame) of the plane's surface relative to its body, e.g. a treadmill belt `-1.2 0 0`; slip is taken against the moving surface. 0: the paper's rigid plane |
 //! | `speed_weight` | off | statopt: two slip speeds `s_full s_zero` (m/s): the contact weakens with the slip speed of its point over the plane, full strength up to `s_full`, none from `s_zero` (a C¹ smoothstep between), multiplying w(d); AnyBody's ground-reaction prediction uses about `0.12 0.8`. Off (absent) by default, so the paper's model is unchanged |
+//! | `off_intervals` | none | statopt: pairs of times `t0 t1 ...` (s, ascending, t0 < t1): the contact carries nothing for t0 <= t < t1 (its weight is multiplied by `off_weight`); predict-grf writes a landing foot's swing before its kinematic foot strike (docs/grf_prediction.md, "The step-to-step transition"). Absent: always on |
+//! | `off_weight` | 0 | statopt: the factor on the contact's weight within `off_intervals`, in [0, 1) (0: off) |
+//! | `time_weight` | none | statopt: knots `t0 f0 t1 f1 ...` (times ascending, factors in [0, 1]): the contact's weight is multiplied by f, linear between the knots and the end knots' values before and after them; predict-grf writes the smooth transition of double support (docs/grf_prediction.md) |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
 //! The bodies may also be given as OpenSim-4 style sockets
@@ -101,6 +104,15 @@ pub struct Contact {
     /// to its body (a treadmill belt), given in the plane's frame like
     /// `plane_normal` and kept in the body's; zero for the paper's rigid plane.
     pub surface_velocity: Vector3<f64>,
+    /// `off_intervals` (statopt): times [t0, t1) over which the contact
+    /// carries nothing; empty: always on.
+    pub off_intervals: Vec<(f64, f64)>,
+    /// `off_weight` (statopt): the factor on the weight within the off
+    /// intervals, in [0, 1).
+    pub off_weight: f64,
+    /// `time_weight` (statopt): knots (t, factor) of a piecewise-linear
+    /// factor on the weight; empty: 1.
+    pub time_weight: Vec<(f64, f64)>,
     pub applies_force: bool,
     /// Where the element is: file, line, element (for messages such as
     /// `--check`'s plane facing away from the point's body).
@@ -229,6 +241,49 @@ impl Contact {
             }
             _ => None,
         };
+        let off_intervals = match el.child("off_intervals") {
+            Some(w) if !w.text().trim().is_empty() => {
+                let v = w.numbers()?;
+                let ok = v.len() % 2 == 0
+                    && v.chunks(2).all(|p| p[0] < p[1])
+                    && v.windows(2).all(|p| p[0] <= p[1]);
+                if !ok {
+                    return Err(w.error(format!(
+                        "{} '{name}': <off_intervals> takes pairs of times in s, t0 t1 with t0 < t1, in ascending order (the contact carries nothing for t0 <= t < t1), found '{}'",
+                        el.name,
+                        w.text().trim()
+                    )));
+                }
+                v.chunks(2).map(|p| (p[0], p[1])).collect()
+            }
+            _ => Vec::new(),
+        };
+        let off_weight = number(el, "off_weight", 0.0)?;
+        if !(0.0..1.0).contains(&off_weight) {
+            return Err(at(el, "off_weight").error(format!(
+                "{} '{name}': <off_weight> is the factor on the contact's weight within <off_intervals> and must lie in [0, 1), found {off_weight}",
+                el.name
+            )));
+        }
+        let time_weight = match el.child("time_weight") {
+            Some(w) if !w.text().trim().is_empty() => {
+                let v = w.numbers()?;
+                let ok = v.len() % 2 == 0
+                    && v.chunks(2).all(|p| (0.0..=1.0).contains(&p[1]))
+                    && v.chunks(2)
+                        .zip(v.chunks(2).skip(1))
+                        .all(|(a, b)| a[0] < b[0]);
+                if !ok {
+                    return Err(w.error(format!(
+                        "{} '{name}': <time_weight> takes knots t f (s, factor in [0, 1]) with the times ascending, found '{}'",
+                        el.name,
+                        w.text().trim()
+                    )));
+                }
+                v.chunks(2).map(|p| (p[0], p[1])).collect()
+            }
+            _ => Vec::new(),
+        };
         Ok(Some(Contact {
             loc: el.loc(),
             name,
@@ -249,6 +304,9 @@ impl Contact {
             regime_blend,
             speed_weight,
             surface_velocity,
+            off_intervals,
+            off_weight,
+            time_weight,
             applies_force: applies_force(el)?,
         }))
     }

@@ -136,6 +136,17 @@ pub struct FootContactSet {
     /// As used: `speed_weight` scaled to `gait_speed`
     /// ([`FootContactParameters::for_gait_speed`]).
     pub parameters: FootContactParameters,
+    /// Per foot (right, left): the times [t0, t1) over which its contacts
+    /// carry nothing (`off_intervals`): the swing before a foot strike that
+    /// takes over from the other foot ([`super::events`]); empty unless set.
+    pub off_intervals: [Vec<(f64, f64)>; 2],
+    /// The factor on a contact's weight within its off intervals
+    /// (`off_weight`): 0 unless set.
+    pub off_weight: f64,
+    /// Per foot: knots (t, factor) of the factor on its contacts' weights
+    /// (`time_weight`; the smooth transition of double support,
+    /// [`super::events::transition_weights`]); empty unless set.
+    pub time_weight: [Vec<(f64, f64)>; 2],
 }
 
 /// The foot points of `model` (see the module doc). A model without
@@ -408,6 +419,9 @@ pub fn build(
         decision,
         gait_speed,
         parameters,
+        off_intervals: [Vec::new(), Vec::new()],
+        off_weight: 0.0,
+        time_weight: [Vec::new(), Vec::new()],
     })
 }
 
@@ -538,7 +552,7 @@ impl FootContactSet {
         );
         for pt in &self.points {
             s.push_str(&format!(
-                "\t\t\t<PointOnPlaneContact name=\"{}\">\n\t\t\t\t<point_body>{}</point_body>\n\t\t\t\t<point_location>{} {} {}</point_location>\n\t\t\t\t<plane_body>ground</plane_body>\n\t\t\t\t<plane_origin>{} {} {}</plane_origin>\n\t\t\t\t<plane_normal>{} 1 {}</plane_normal>\n\t\t\t\t<plane_velocity>{} {} {}</plane_velocity>\n\t\t\t\t<static_friction>{}</static_friction>\n\t\t\t\t<kinetic_friction>{}</kinetic_friction>\n\t\t\t\t<contact_tolerance>{}</contact_tolerance>\n\t\t\t\t<contact_transition_zone>{}</contact_transition_zone>\n\t\t\t\t<v_trans>{}</v_trans>\n\t\t\t\t<speed_weight>{} {}</speed_weight>\n\t\t\t\t<optimal_force>{}</optimal_force>\n\t\t\t</PointOnPlaneContact>\n",
+                "\t\t\t<PointOnPlaneContact name=\"{}\">\n\t\t\t\t<point_body>{}</point_body>\n\t\t\t\t<point_location>{} {} {}</point_location>\n\t\t\t\t<plane_body>ground</plane_body>\n\t\t\t\t<plane_origin>{} {} {}</plane_origin>\n\t\t\t\t<plane_normal>{} 1 {}</plane_normal>\n\t\t\t\t<plane_velocity>{} {} {}</plane_velocity>\n\t\t\t\t<static_friction>{}</static_friction>\n\t\t\t\t<kinetic_friction>{}</kinetic_friction>\n\t\t\t\t<contact_tolerance>{}</contact_tolerance>\n\t\t\t\t<contact_transition_zone>{}</contact_transition_zone>\n\t\t\t\t<v_trans>{}</v_trans>\n\t\t\t\t<speed_weight>{} {}</speed_weight>\n\t\t\t\t<optimal_force>{}</optimal_force>\n{}\t\t\t</PointOnPlaneContact>\n",
                 pt.name,
                 pt.body_name,
                 pt.local.x,
@@ -559,12 +573,38 @@ impl FootContactSet {
                 p.v_trans,
                 p.speed_weight.0,
                 p.speed_weight.1,
-                p.optimal_force
+                p.optimal_force,
+                off_intervals_xml(
+                    &self.off_intervals[if pt.side == 'r' { 0 } else { 1 }],
+                    self.off_weight,
+                    &self.time_weight[if pt.side == 'r' { 0 } else { 1 }]
+                )
             ));
         }
         s.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
         s
     }
+}
+
+/// The `<off_intervals>` line of a contact (empty when there are none).
+fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64, knots: &[(f64, f64)]) -> String {
+    let knots = if knots.is_empty() {
+        String::new()
+    } else {
+        let k: Vec<String> = knots.iter().map(|&(t, f)| format!("{t} {f}")).collect();
+        format!("\t\t\t\t<time_weight>{}</time_weight>\n", k.join(" "))
+    };
+    if intervals.is_empty() {
+        return knots;
+    }
+    let times: Vec<String> = intervals
+        .iter()
+        .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
+        .collect();
+    format!(
+        "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n{knots}",
+        times.join(" ")
+    )
 }
 
 #[cfg(test)]

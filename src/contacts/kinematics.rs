@@ -168,6 +168,27 @@ impl Contact {
         Some(((p - o).dot(&n), (com - o).dot(&n)))
     }
 
+    /// Whether the contact is off at time `t` (`off_intervals`).
+    pub fn is_off_at(&self, t: f64) -> bool {
+        self.off_intervals.iter().any(|&(a, b)| t >= a && t < b)
+    }
+
+    /// The factor of `time_weight` at time `t`: linear between its knots,
+    /// the first (last) knot's value before (after) them; 1 without knots.
+    pub fn time_factor(&self, t: f64) -> f64 {
+        let k = &self.time_weight;
+        match k.len() {
+            0 => 1.0,
+            _ if t <= k[0].0 => k[0].1,
+            n if t >= k[n - 1].0 => k[n - 1].1,
+            _ => {
+                let i = k.partition_point(|p| p.0 <= t);
+                let (a, b) = (k[i - 1], k[i]);
+                a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
+            }
+        }
+    }
+
     /// The slip-speed factor of the weight (`speed_weight`, statopt): 1 up
     /// to s_full, 0 from s_zero, the C¹ smoothstep 1 − (3x² − 2x³) between
     /// (x = (s − s_full)/(s_zero − s_full)); 1 when the property is absent.

@@ -14,9 +14,11 @@
 //!   the pad on the shin).
 pub mod closure;
 pub mod element;
+pub mod events;
 pub mod feet;
 pub mod floor;
 pub mod kinematics;
+pub mod plates;
 #[cfg(test)]
 mod tests;
 

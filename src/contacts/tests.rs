@@ -835,3 +835,90 @@ fn plane_velocity_makes_slip_relative_to_a_moving_surface() {
     let e = contact_err(&m, &format!("<PointOnPlaneContact name=\"c\">{props}<plane_velocity>0 1 0</plane_velocity></PointOnPlaneContact>"));
     assert!(e.contains("plane_velocity") && e.contains("line"), "{e}");
 }
+
+/// `off_intervals` / `off_weight` (statopt, issue 36): the contact is off
+/// (or weakened by `off_weight`) for t0 <= t < t1 of each pair and on
+/// outside; bad values are refused naming the element and its line.
+#[test]
+fn off_intervals_switch_a_contact_off_in_time() {
+    let m = test_model();
+    let props = "<point_body>ground</point_body><point_location>0.5 -0.6 0.1</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>";
+    let plain = contact(&m, props);
+    assert!(plain.off_intervals.is_empty() && plain.off_weight == 0.0);
+    assert!(!plain.is_off_at(0.0));
+    let c = contact(
+        &m,
+        &format!(
+            "{props}<off_intervals>0.1 0.3 0.5 0.55</off_intervals><off_weight>0.01</off_weight>"
+        ),
+    );
+    assert_eq!(c.off_intervals, vec![(0.1, 0.3), (0.5, 0.55)]);
+    assert_eq!(c.off_weight, 0.01);
+    for (t, off) in [
+        (0.0, false),
+        (0.1, true),
+        (0.2999, true),
+        (0.3, false),
+        (0.52, true),
+        (0.55, false),
+    ] {
+        assert_eq!(c.is_off_at(t), off, "t = {t}");
+    }
+    for bad in [
+        "<off_intervals>0.3 0.1</off_intervals>",
+        "<off_intervals>0.1 0.3 0.5</off_intervals>",
+        "<off_intervals>0.5 0.6 0.1 0.2</off_intervals>",
+        "<off_weight>1</off_weight>",
+        "<off_weight>-0.1</off_weight>",
+    ] {
+        let e = contact_err(
+            &m,
+            &format!("<PointOnPlaneContact name=\"c\">{props}{bad}</PointOnPlaneContact>"),
+        );
+        assert!(e.contains("off_") && e.contains("line"), "{bad}: {e}");
+    }
+}
+
+/// `time_weight` (statopt, issue 36): the factor is linear between the
+/// knots and holds the end knots' values outside; 1 without knots; knots
+/// out of order or a factor outside [0, 1] are refused with the line.
+#[test]
+fn time_weight_scales_a_contact_between_its_knots() {
+    let m = test_model();
+    let props = "<point_body>ground</point_body><point_location>0.5 -0.6 0.1</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>";
+    assert_eq!(contact(&m, props).time_factor(0.3), 1.0);
+    let c = contact(
+        &m,
+        &format!("{props}<time_weight>0.4 1 0.5 0 0.6 0.5 0.7 1</time_weight>"),
+    );
+    for (t, want) in [
+        (0.0, 1.0),
+        (0.45, 0.5),
+        (0.5, 0.0),
+        (0.55, 0.25),
+        (0.65, 0.75),
+        (0.9, 1.0),
+    ] {
+        assert!(
+            (c.time_factor(t) - want).abs() < 1e-9,
+            "t = {t}: {}",
+            c.time_factor(t)
+        );
+    }
+    for bad in [
+        "<time_weight>0.5 1 0.4 0</time_weight>",
+        "<time_weight>0.5 1.5</time_weight>",
+        "<time_weight>0.5</time_weight>",
+    ] {
+        let e = contact_err(
+            &m,
+            &format!("<PointOnPlaneContact name=\"c\">{props}{bad}</PointOnPlaneContact>"),
+        );
+        assert!(
+            e.contains("time_weight") && e.contains("line"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -421,7 +421,11 @@ impl SoProblem {
             col.resize(nq, 0.0);
         }
         for (ci, c) in self.contacts.iter().enumerate() {
-            let st = c.state(model, data);
+            let mut st = c.state(model, data);
+            if c.is_off_at(t) {
+                st.weight *= c.off_weight;
+            }
+            st.weight *= c.time_factor(t);
             let v0 = nv + 3 * ci;
             cols.iter_mut()
                 .for_each(|col| col.iter_mut().for_each(|x| *x = 0.0));

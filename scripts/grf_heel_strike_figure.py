@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Draw the heel-strike split of a one-step trial before and after issue 36's
+step-to-step transition (docs/figures/grf_prediction/heel_strike_<trial>.png).
+
+    python3 scripts/grf_heel_strike_figure.py --before DIR --after DIR \
+        --trial 2014004_C4_02 --plates ../shared/.../2014004_C4_02_grf.mot \
+        --right ground_force_1 --left ground_force_2 --out PNG
+
+DIR: a predict-grf results folder of the trial (scripts/grf_dev_table.py's
+--out, the "before" one run with the release build of the commit before
+issue 36). Plots per foot the vertical force of the prediction before and
+after, and the plates', around the landing, with the strike found on the
+raw kinematics (read from the run's contacts file, `off_intervals`).
+Needs matplotlib.
+"""
+
+import argparse
+import os
+import re
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read_sto(path):
+    lines = open(path).read().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.strip() == "endheader")
+    cols = [c.strip() for c in lines[i + 1].split("\t")]
+    rows = [[float(x) for x in line.split()] for line in lines[i + 2:] if line.strip()]
+    return {c: [r[j] for r in rows] for j, c in enumerate(cols)}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--before", required=True)
+    ap.add_argument("--after", required=True)
+    ap.add_argument("--trial", required=True)
+    ap.add_argument("--plates", required=True)
+    ap.add_argument("--right", default="ground_force_1")
+    ap.add_argument("--left", default="ground_force_2")
+    ap.add_argument("--out", required=True)
+    a = ap.parse_args()
+    b = read_sto(os.path.join(a.before, f"{a.trial}_predicted_grf.sto"))
+    n = read_sto(os.path.join(a.after, f"{a.trial}_predicted_grf.sto"))
+    m = read_sto(a.plates)
+    contacts = open(os.path.join(a.after, f"{a.trial}_foot_contacts.xml")).read()
+    strikes = sorted({float(x.split()[1]) for x in re.findall(r"<off_intervals>([^<]*)</off_intervals>", contacts)})
+    t0, t1 = n["time"][0], n["time"][-1]
+    lo = max(t0, (strikes[0] - 0.12) if strikes else t0)
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    for side, col, plate in [("r", "tab:red", a.right), ("l", "tab:blue", a.left)]:
+        mt = [(t, f) for t, f in zip(m["time"], m[f"{plate}_vy"]) if lo <= t <= t1]
+        ax.plot([x[0] for x in mt], [x[1] for x in mt], color=col, lw=1.2, ls="--", label=f"{side}: plates")
+        ax.plot(b["time"], b[f"{side}_force_vy"], color=col, lw=1.0, alpha=0.45, marker=".", label=f"{side}: before")
+        ax.plot(n["time"], n[f"{side}_force_vy"], color=col, lw=1.8, marker="o", ms=3, label=f"{side}: after")
+    for s in strikes:
+        ax.axvline(s, color="k", lw=0.8, ls=":")
+        ax.text(s, ax.get_ylim()[1] * 0.97, " strike (raw kinematics)", fontsize=8, va="top")
+    ax.set_xlim(lo, t1)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("vertical force (N)")
+    ax.set_title(f"{a.trial}: heel strike, before and after the step-to-step transition")
+    ax.legend(fontsize=7, ncol=3, loc="center left")
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=110)
+    print(a.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,497 @@
+//! Gait events found on the raw (unfiltered) kinematics, and the
+//! step-to-step transition they set for the foot contacts (issue 36;
+//! docs/grf_prediction.md, "The step-to-step transition").
+//!
+//! **Why the raw kinematics.** The coordinates the static optimization
+//! runs on are low-passed by a zero-phase (acausal) filter: it spreads the
+//! collision of the landing heel back in time, so the force the filtered
+//! motion requires rises before the heel lands, and a per-frame effort
+//! minimum puts it on the landing foot as soon as the foot is within reach
+//! of the floor, 10-40 ms before the plates see load. The unfiltered
+//! motion is causal: nothing in it moves before the foot lands.
+//!
+//! **Foot strike and foot off** (Zeni, Richards & Higginson 2008, Gait
+//! Posture 27:710, the coordinate-based method): per foot, the foot strikes
+//! where its heel is farthest ahead of the pelvis along the walking
+//! direction (a local maximum of (heel − pelvis)·h), and comes off where
+//! its toe is farthest behind it (a local minimum of (toe − pelvis)·h). The
+//! method has no threshold, works on a treadmill and overground, at every
+//! speed, and was the most accurate kinematic method over 588 subjects
+//! (Zhang et al. 2025, arXiv 2503.00794). An extremum counts when it is the
+//! extremum over [`EVENT_WINDOW`] either side (a foot cannot strike twice
+//! within 0.2 s: the shortest swing of a sprint is longer), and when it is
+//! not at the first or last sample (an extremum at the edge is the trial's,
+//! not the foot's).
+//!
+//! **The transition.** A foot's contacts carry nothing from its foot-off
+//! (or [`SWING_BEFORE_STRIKE`] before its strike, when no foot-off precedes
+//! it in the trial) until its strike ([`off_intervals`]): in swing the foot
+//! is off the floor anyway, and at its end the filter's early force cannot
+//! be put on it. After the strike the effort minimum shares the load.
+
+use nalgebra::Vector3;
+
+use crate::dynamics::{kinematics, Data};
+use crate::model::Model;
+use crate::motion::states::States;
+
+use super::feet::{FootContactSet, FootPoint};
+
+/// Half-width of the window over which an event must be the extremum (s).
+pub const EVENT_WINDOW: f64 = 0.1;
+
+/// Without a foot-off before a strike, the foot's contacts are off for
+/// this long before it (s): shorter than any swing (walking 0.35-0.45 s,
+/// running 0.3-0.4 s; Novacheck 1998, Gait Posture 7:77), longer than the
+/// filter's spread of the collision (10-40 ms at 6 Hz).
+pub const SWING_BEFORE_STRIKE: f64 = 0.2;
+
+/// A foot can carry when one of its points has at least this contact
+/// weight w(d)·(slip gate) on the filtered motion: half strength, where
+/// the contact band and the slip gate are halfway (docs/grf_prediction.md,
+/// steps 4 and 7).
+pub const CARRY_WEIGHT: f64 = 0.5;
+
+/// The events of one foot (times in s, ascending).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FootEvents {
+    pub strikes: Vec<f64>,
+    pub offs: Vec<f64>,
+    /// Per strike: whether the other foot can carry at that instant (one of
+    /// its points within reach of the floor, [`CARRY_WEIGHT`]): a
+    /// step-to-step transition of walking, where the effort minimum could
+    /// load the landing foot before it lands. In running the other foot is
+    /// in swing when one lands, and nothing is changed.
+    pub transitions: Vec<bool>,
+}
+
+/// Per foot (0 right, 1 left).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GaitEvents {
+    pub feet: [FootEvents; 2],
+}
+
+/// Double support (s) when the trailing foot's foot-off is not in the
+/// trial: the initial double support of walking, 0-10 % of a gait cycle of
+/// about 1.1 s (Perry & Burnfield 2010, Gait Analysis, 2nd ed.).
+pub const DEFAULT_DOUBLE_SUPPORT: f64 = 0.11;
+
+/// Spacing of the knots of the transition's weights (s).
+pub const TRANSITION_KNOT_STEP: f64 = 0.005;
+
+/// The trailing foot's share of the vertical force at time tau after the
+/// strike, over a double support of `t_ds` (Ren, Jones & Howard 2008, J
+/// Biomech 41:2750, the smooth transition assumption):
+/// exp(−(2 tau / T_ds)³), 1 at the strike, 0.37 halfway, 3e-4 at the
+/// foot-off.
+pub fn trailing_share(tau: f64, t_ds: f64) -> f64 {
+    if tau <= 0.0 {
+        1.0
+    } else {
+        (-(2.0 * tau / t_ds).powi(3)).exp()
+    }
+}
+
+/// Knots of the factor on each foot's contact weights (`time_weight`)
+/// over the double support after each transition strike: the landing
+/// foot's rises from 0 as the complement of Ren's smooth transition
+/// ([`trailing_share`] s). With the feet's forces in proportion to the
+/// squares of their weights (a contact force f costs f²/w²), a landing foot
+/// weighted min(1, √((1−s)/s)) against a trailing foot at full weight
+/// takes at most the share 1 − s. The trailing foot is left at full
+/// weight: it pushes off through double support as the effort minimum
+/// needs (weakening it as well took its push-off and shear away: AP rho
+/// fell by 0.1 on two development trials). The double support ends at the
+/// trailing foot's first foot-off after the strike (within 0.3 s), or lasts
+/// [`DEFAULT_DOUBLE_SUPPORT`]. Factor 1 outside.
+pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
+    let mut out: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
+    for (s, knots) in out.iter_mut().enumerate() {
+        let o = 1 - s;
+        let f = &events.feet[s];
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if !f.transitions.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            let t_ds = events.feet[o]
+                .offs
+                .iter()
+                .copied()
+                .find(|&x| x > ts && x <= ts + 0.3)
+                .map(|x| x - ts)
+                .unwrap_or(DEFAULT_DOUBLE_SUPPORT);
+            let n = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
+            knots.push((ts - 1e-6, 1.0));
+            for i in 0..=n {
+                let tau = t_ds * i as f64 / n as f64;
+                knots.push((ts + tau, landing_factor(trailing_share(tau, t_ds))));
+            }
+            knots.push((ts + t_ds + 1e-6, 1.0));
+        }
+    }
+    for k in out.iter_mut() {
+        k.sort_by(|a, b| a.0.total_cmp(&b.0));
+        k.dedup_by(|b, a| b.0 <= a.0);
+    }
+    out
+}
+
+/// The landing foot's weight factor for a trailing share `s`:
+/// min(1, √((1−s)/s)), 0 at s = 1.
+pub fn landing_factor(s: f64) -> f64 {
+    if s >= 1.0 {
+        0.0
+    } else if s <= 0.0 {
+        1.0
+    } else {
+        ((1.0 - s) / s).sqrt().min(1.0)
+    }
+}
+
+/// The factor on a contact's weight before its foot's strike
+/// (`off_weight`): such that a newton on the contact costs what a newton on
+/// the root residual costs. A contact's force f = w F0 λ costs λ²/w0, i.e.
+/// f² / (w² F0² w0); a root residual of optimal force S costs (f/S)²; equal
+/// when w = S / (F0 √w0). Clamped to [0, 1).
+pub fn off_weight(optimal_force: f64, w0: f64, root_optimal_force: f64) -> f64 {
+    let w = root_optimal_force / (optimal_force * w0.sqrt());
+    if w.is_finite() {
+        w.clamp(0.0, 0.999)
+    } else {
+        0.0
+    }
+}
+
+/// Indices of the local extrema of `x` (maxima when `max`, else minima)
+/// that are the extremum of `x` over `window` seconds either side (the
+/// window clipped to the series) and not at its first or last sample. Of
+/// equal values the first counts.
+pub fn extrema(time: &[f64], x: &[f64], window: f64, max: bool) -> Vec<usize> {
+    let n = x.len().min(time.len());
+    let better = |a: f64, b: f64| if max { a > b } else { a < b };
+    let mut out = Vec::new();
+    for i in 1..n.saturating_sub(1) {
+        if !x[i].is_finite() {
+            continue;
+        }
+        let mut ok = true;
+        let mut j = i;
+        while j > 0 && time[i] - time[j - 1] <= window + 1e-12 {
+            j -= 1;
+            if !better(x[i], x[j]) {
+                ok = false;
+                break;
+            }
+        }
+        if !ok {
+            continue;
+        }
+        let mut k = i;
+        while k + 1 < n && time[k + 1] - time[i] <= window + 1e-12 {
+            k += 1;
+            // Ties after: this one (the first) counts.
+            if better(x[k], x[i]) {
+                ok = false;
+                break;
+            }
+        }
+        if ok {
+            out.push(i);
+        }
+    }
+    out
+}
+
+/// Zeni's coordinate-based events of one foot: `heel` and `toe` positions
+/// (ground), `pelvis` positions, `heading` the walking direction (unit,
+/// horizontal), at `time`.
+pub fn zeni_events(
+    time: &[f64],
+    heel: &[Vector3<f64>],
+    toe: &[Vector3<f64>],
+    pelvis: &[Vector3<f64>],
+    heading: &Vector3<f64>,
+) -> FootEvents {
+    let heel_ap: Vec<f64> = heel
+        .iter()
+        .zip(pelvis)
+        .map(|(h, p)| (h - p).dot(heading))
+        .collect();
+    let toe_ap: Vec<f64> = toe
+        .iter()
+        .zip(pelvis)
+        .map(|(t, p)| (t - p).dot(heading))
+        .collect();
+    FootEvents {
+        strikes: extrema(time, &heel_ap, EVENT_WINDOW, true)
+            .into_iter()
+            .map(|i| time[i])
+            .collect(),
+        offs: extrema(time, &toe_ap, EVENT_WINDOW, false)
+            .into_iter()
+            .map(|i| time[i])
+            .collect(),
+        transitions: Vec::new(),
+    }
+}
+
+/// The intervals (s) over which a foot's contacts carry nothing: from each
+/// strike's preceding foot-off (the latest one after the previous strike),
+/// or [`SWING_BEFORE_STRIKE`] before the strike when there is none, to the
+/// strike.
+pub fn off_intervals(foot: &FootEvents) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    let mut prev_strike = f64::NEG_INFINITY;
+    for (k, &s) in foot.strikes.iter().enumerate() {
+        if !foot.transitions.get(k).copied().unwrap_or(false) {
+            prev_strike = s;
+            continue;
+        }
+        let off = foot
+            .offs
+            .iter()
+            .copied()
+            .filter(|&o| o < s && o > prev_strike)
+            .fold(f64::NAN, f64::max);
+        let from = if off.is_finite() {
+            off
+        } else {
+            s - SWING_BEFORE_STRIKE
+        };
+        out.push((from, s));
+        prev_strike = s;
+    }
+    out
+}
+
+/// Ground positions of the heel (the midpoint of each foot's heel
+/// points), the toe (its hallux point) and the metatarsal heads' midpoint
+/// of both feet, and the pelvis (the root body's origin; the heels'
+/// midpoint for a model without one), at every row of `states`.
+struct Landmarks {
+    heel: [Vec<Vector3<f64>>; 2],
+    toe: [Vec<Vector3<f64>>; 2],
+    meta: [Vec<Vector3<f64>>; 2],
+    pelvis: Vec<Vector3<f64>>,
+}
+
+fn landmarks(model: &Model, states: &States, points: &[FootPoint]) -> Landmarks {
+    let mut data = Data::new(model);
+    let root = (0..model.nq())
+        .find(|&c| model.is_root_coordinate(c))
+        .map(|c| model.coordinates[c].body);
+    let n = states.time.len();
+    let mut out = Landmarks {
+        heel: [Vec::with_capacity(n), Vec::with_capacity(n)],
+        toe: [Vec::with_capacity(n), Vec::with_capacity(n)],
+        meta: [Vec::with_capacity(n), Vec::with_capacity(n)],
+        pelvis: Vec::with_capacity(n),
+    };
+    let mean_of = |data: &Data, side: char, stem: &str| {
+        let (sum, k) = points
+            .iter()
+            .filter(|p| p.side == side && p.name.contains(stem))
+            .fold((Vector3::zeros(), 0usize), |(s, k), p| {
+                (s + data.station_position(p.body, &p.local), k + 1)
+            });
+        (k > 0).then(|| sum / k as f64)
+    };
+    for i in 0..n {
+        data.q.copy_from_slice(&states.q[i]);
+        data.u.copy_from_slice(&states.u[i]);
+        data.udot.iter_mut().for_each(|x| *x = 0.0);
+        kinematics::full(model, &mut data);
+        for (s, side) in ['r', 'l'].into_iter().enumerate() {
+            let heel = mean_of(&data, side, "heel").unwrap_or_else(Vector3::zeros);
+            out.heel[s].push(heel);
+            out.toe[s].push(mean_of(&data, side, "hallux").unwrap_or(heel));
+            out.meta[s].push(mean_of(&data, side, "meta").unwrap_or(heel));
+        }
+        out.pelvis.push(match root {
+            Some(b) => data.station_position(b, &Vector3::zeros()),
+            None => 0.5 * (out.heel[0][i] + out.heel[1][i]),
+        });
+    }
+    out
+}
+
+/// The events of both feet: found on `raw`, the unfiltered motion (every
+/// row), along the walking direction of `set`; each strike then marked a
+/// transition when the other foot can carry at that instant on `filtered`,
+/// the motion the static optimization runs on (its contact weights with
+/// the contact set's floor, belt and parameters).
+pub fn detect(model: &Model, raw: &States, filtered: &States, set: &FootContactSet) -> GaitEvents {
+    let heading = set.decision.evidence.heading;
+    let l = landmarks(model, raw, &set.points);
+    let mut out = GaitEvents::default();
+    for s in 0..2 {
+        out.feet[s] = zeni_events(&raw.time, &l.heel[s], &l.toe[s], &l.pelvis, &heading);
+        // O'Connor's foot-velocity refinement: the foot centre (heel and
+        // metatarsal heads' midpoint) descends fastest where the heel lands.
+        let centre: Vec<Vector3<f64>> = l.heel[s]
+            .iter()
+            .zip(&l.meta[s])
+            .map(|(h, m)| 0.5 * (h + m))
+            .collect();
+        let vy = vertical_velocity(&raw.time, &centre);
+        out.feet[s].strikes = out.feet[s]
+            .strikes
+            .iter()
+            .map(|&z| fastest_descent(&raw.time, &vy, z))
+            .collect();
+    }
+    for s in 0..2 {
+        let (side, other) = if s == 0 { ('r', 'l') } else { ('l', 'r') };
+        // A strike is where the foot is on the floor: within reach by its
+        // distance (it may still slide); else the extremum was the swing's.
+        let f = &mut out.feet[s];
+        f.strikes
+            .retain(|&t| foot_reaches(model, filtered, set, side, t, false));
+        f.transitions = f
+            .strikes
+            .iter()
+            .map(|&t| foot_reaches(model, filtered, set, other, t, true))
+            .collect();
+    }
+    out
+}
+
+/// Whether a point of foot `side` has a contact weight of at least
+/// [`CARRY_WEIGHT`] at the row of `states` nearest time `t`: w(d), times
+/// its slip gate when `gated` (the weight the contacts would have).
+fn foot_reaches(
+    model: &Model,
+    states: &States,
+    set: &FootContactSet,
+    side: char,
+    t: f64,
+    gated: bool,
+) -> bool {
+    let Some(i) = (0..states.time.len()).min_by(|&a, &b| {
+        (states.time[a] - t)
+            .abs()
+            .total_cmp(&(states.time[b] - t).abs())
+    }) else {
+        return false;
+    };
+    let mut data = Data::new(model);
+    data.q.copy_from_slice(&states.q[i]);
+    data.u.copy_from_slice(&states.u[i]);
+    data.udot.iter_mut().for_each(|x| *x = 0.0);
+    kinematics::full(model, &mut data);
+    let p = &set.parameters;
+    let n = set.floor_normal();
+    set.points.iter().filter(|pt| pt.side == side).any(|pt| {
+        let g = data.station_position(pt.body, &pt.local);
+        let v = data.station_velocity(pt.body, &pt.local) - set.belt_velocity;
+        let d = (g.y - set.floor_height_under(pt, g.x, g.z)) * n.y;
+        let slip = (v - n * v.dot(&n)).norm();
+        let x = ((slip - p.speed_weight.0) / (p.speed_weight.1 - p.speed_weight.0)).clamp(0.0, 1.0);
+        let gate = if gated {
+            1.0 - x * x * (3.0 - 2.0 * x)
+        } else {
+            1.0
+        };
+        super::kinematics::weight(d, p.contact_tolerance, p.transition_zone) * gate >= CARRY_WEIGHT
+    })
+}
+
+/// Vertical velocity of `x` (m/s) by central differences on the samples'
+/// own spacing; NaN at the ends.
+pub fn vertical_velocity(time: &[f64], x: &[Vector3<f64>]) -> Vec<f64> {
+    let n = x.len().min(time.len());
+    (0..n)
+        .map(|i| {
+            if i == 0 || i + 1 >= n {
+                f64::NAN
+            } else {
+                (x[i + 1].y - x[i - 1].y) / (time[i + 1] - time[i - 1])
+            }
+        })
+        .collect()
+}
+
+/// The time of the foot centre's fastest descent (most negative `vy`)
+/// within [`EVENT_WINDOW`] of the pre-detected strike `z` (O'Connor et al.
+/// 2007); `z` itself when the window holds no finite velocity.
+pub fn fastest_descent(time: &[f64], vy: &[f64], z: f64) -> f64 {
+    let mut best = (f64::INFINITY, z);
+    for (&t, &v) in time.iter().zip(vy) {
+        if (t - z).abs() <= EVENT_WINDOW + 1e-9 && v < best.0 {
+            best = (v, t);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A noisy plateau does not make two events; an extremum at the edge is
+    /// none.
+    #[test]
+    fn extrema_need_the_window_and_no_edge() {
+        let time: Vec<f64> = (0..101).map(|i| i as f64 * 0.01).collect();
+        // Rises to a maximum at 0.5 s with a small ripple, and is highest at
+        // the last sample.
+        let x: Vec<f64> = time
+            .iter()
+            .map(|&t| {
+                -(t - 0.5f64).powi(2) + 0.001 * (40.0 * t).sin() + if t > 0.99 { 9.0 } else { 0.0 }
+            })
+            .collect();
+        let m = extrema(&time, &x, 0.1, true);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!((time[m[0]] - 0.5).abs() <= 0.03, "{}", time[m[0]]);
+    }
+
+    /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off; the
+    /// landing foot's factor rises from 0 to 1 (reached where s = 1/2) and
+    /// its knots span the double support to the trailing foot's foot-off.
+    #[test]
+    fn the_landing_foot_rises_through_double_support() {
+        assert_eq!(trailing_share(0.0, 0.12), 1.0);
+        assert!((trailing_share(0.06, 0.12) - (-1.0f64).exp()).abs() < 1e-12);
+        assert!(trailing_share(0.12, 0.12) < 1e-3);
+        assert_eq!(landing_factor(1.0), 0.0);
+        assert!((landing_factor(0.8) - 0.5).abs() < 1e-12);
+        assert_eq!(landing_factor(0.5), 1.0);
+        let mut ev = GaitEvents::default();
+        ev.feet[0] = FootEvents {
+            strikes: vec![0.5],
+            offs: vec![],
+            transitions: vec![true],
+        };
+        ev.feet[1].offs = vec![0.62];
+        let k = transition_weights(&ev);
+        assert!(k[1].is_empty(), "the trailing foot is left alone");
+        let r = &k[0];
+        assert_eq!(r.first().unwrap().1, 1.0);
+        assert_eq!(r.last().unwrap().1, 1.0);
+        assert!((r.last().unwrap().0 - 0.62).abs() < 1e-5);
+        let at = |t: f64| r.iter().find(|p| (p.0 - t).abs() < 1e-9).unwrap().1;
+        assert_eq!(at(0.5), 0.0);
+        assert!(r.windows(2).all(|w| w[0].0 < w[1].0));
+        // Without the trailing foot's foot-off: the default double support.
+        ev.feet[1].offs.clear();
+        let r = &transition_weights(&ev)[0];
+        assert!((r.last().unwrap().0 - 0.5 - DEFAULT_DOUBLE_SUPPORT).abs() < 1e-5);
+    }
+
+    #[test]
+    fn off_intervals_run_from_the_foot_off_or_a_swing_before() {
+        let mut f = FootEvents {
+            strikes: vec![0.3, 1.4, 2.5],
+            offs: vec![0.9, 2.0],
+            transitions: vec![true, true, false],
+        };
+        assert_eq!(
+            off_intervals(&f),
+            vec![(0.3 - SWING_BEFORE_STRIKE, 0.3), (0.9, 1.4)]
+        );
+        // Running: no other foot on the floor at the strikes, nothing off.
+        f.transitions = vec![false; 3];
+        assert!(off_intervals(&f).is_empty());
+    }
+}
