@@ -332,6 +332,12 @@ fn allow_unknown_says_what_it_read_on_past() {
         err.contains("single w0") && err.contains("contact_wieght"),
         "{err}"
     );
+    // The warning is printed as the setup is read, before the run fails.
+    let warned = err
+        .lines()
+        .position(|l| l.starts_with("warning:") && l.contains("contact_wieght"));
+    let failed = err.lines().position(|l| l.starts_with("error:"));
+    assert!(warned.is_some() && warned < failed, "{err}");
     assert!(
         !dir.join("results").exists()
             || std::fs::read_dir(dir.join("results"))

@@ -183,6 +183,8 @@ fn run<'py>(
         // The CLI's rule: an unknown element is an error, a warning with
         // allow_unknown (`--allow-unknown`).
         allow_unknown,
+        // The summary's warnings hold what it read on past.
+        read_on_hook: None,
     };
     let result = py.allow_threads(|| match &text {
         Some(t) => tools::run_setup_text(&setup, t, &opts),

@@ -434,12 +434,23 @@ fn run_setup(a: &RunArgs) -> statopt::Result<tools::RunSummary> {
         sync: a.sync,
         progress: None,
         allow_unknown: a.allow_unknown,
+        read_on_hook: Some(warn_read_on),
     };
     let setup = a
         .setup
         .as_ref()
         .ok_or_else(|| statopt::Error::msg("no setup file given"))?;
     tools::run_setup(setup, &opts)
+}
+
+/// The unknown elements `--allow-unknown` read on past, printed as the
+/// setup is read (a run that fails later has said them), and not again in
+/// the run's summary.
+static READ_ON: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+fn warn_read_on(w: &str) {
+    eprintln!("warning: {w}");
+    READ_ON.lock().unwrap().push(w.to_string());
 }
 
 fn fail(e: statopt::Error) -> ExitCode {
@@ -773,7 +784,9 @@ fn main() -> ExitCode {
             Ok(summary) => {
                 if !cli.run.quiet {
                     // Analyses of one setup share the motion: say each thing once.
-                    let mut said = std::collections::HashSet::new();
+                    let read_on = READ_ON.lock().unwrap().clone();
+                    let mut said: std::collections::HashSet<&str> =
+                        read_on.iter().map(String::as_str).collect();
                     for w in summary.warnings.iter().filter(|w| said.insert(w.as_str())) {
                         eprintln!("warning: {w}");
                     }

@@ -54,6 +54,11 @@ pub struct RunOptions {
     /// statopt knows, with a warning (`--allow-unknown`); without it they
     /// are errors (see `parse::known::setup_elements`).
     pub allow_unknown: bool,
+    /// Told each unknown element `allow_unknown` read on past, as soon as
+    /// the setup is read, before the run (the command line prints them as
+    /// warnings then, so that a run that later fails has said them too).
+    /// They are in the run's summary as well.
+    pub read_on_hook: Option<fn(&str)>,
 }
 
 /// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
@@ -62,6 +67,9 @@ pub struct RunOptions {
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
     let plan = crate::plan::Plan::read(setup, opts.allow_unknown)?;
     let read_on = plan.unknown_elements_read_on();
+    if let Some(hook) = opts.read_on_hook {
+        read_on.iter().for_each(|w| hook(w));
+    }
     let summary = match plan {
         crate::plan::Plan::Study(s) => study::run(&s, opts),
         crate::plan::Plan::Tool(s) => run_parsed(*s, opts),
