@@ -36,6 +36,19 @@ pub struct ForwardBuffers {
     pub free: Vec<usize>,
     pub coupling: DMatrix<f64>,
     pub coupling_vector: Vec<(usize, f64)>,
+    /// What `m`, `ctm`, `m_r` and `factor` were computed for: the model (its
+    /// address), the positions q and C. A call at the same key (a w0 sweep's
+    /// joint reactions: one state, forces that differ) reuses them and only
+    /// solves for y, bit for bit as rebuilding them would.
+    key_model: usize,
+    key_q: Vec<f64>,
+    /// C's nonzeros (row, value), column by column, and where each column
+    /// starts in that list.
+    nonzeros: Vec<(usize, f64)>,
+    column_start: Vec<usize>,
+    key_c: DMatrix<f64>,
+    /// `factor` holds M_r's Cholesky factor for the key.
+    factored: bool,
 }
 
 impl Default for ForwardBuffers {
@@ -51,6 +64,12 @@ impl Default for ForwardBuffers {
             free: Vec::new(),
             coupling: empty(),
             coupling_vector: Vec::new(),
+            key_model: 0,
+            key_q: Vec::new(),
+            nonzeros: Vec::new(),
+            column_start: Vec::new(),
+            key_c: empty(),
+            factored: false,
         }
     }
 }
@@ -119,18 +138,47 @@ pub fn free_accelerations_in(
     buf: &mut ForwardBuffers,
 ) -> bool {
     let (nq, nr) = c.shape();
+    let model_key = model as *const Model as usize;
+    if buf.factored
+        && buf.key_model == model_key
+        && same_bits(&buf.key_q, &data.q)
+        && buf.key_c.shape() == c.shape()
+        && same_bits(buf.key_c.as_slice(), c.as_slice())
+    {
+        // M, M_r and its factor depend on q (and C) alone: solve for y only.
+        minus_ct_tau(c, data, &mut buf.y);
+        let factor = std::mem::replace(&mut buf.factor, DMatrix::zeros(0, 0));
+        let ch = nalgebra::Cholesky::pack_dirty(factor);
+        ch.solve_mut(&mut buf.y);
+        buf.factor = ch.unpack_dirty();
+        return true;
+    }
+    buf.factored = false;
     mass_matrix::mass_matrix_into(model, data, &mut buf.m, &mut buf.mass);
     // The products by C skip its zeros (C holds one coupling vector per
-    // column, mostly a single 1): plain loops, no packing buffers.
+    // column, mostly a single 1): each column's nonzeros listed once, in
+    // ascending row order, so every sum adds the same terms in the same
+    // order as a dense loop that skips zeros.
+    buf.nonzeros.clear();
+    buf.column_start.clear();
+    for r in 0..nr {
+        buf.column_start.push(buf.nonzeros.len());
+        for k in 0..nq {
+            let ckr = c[(k, r)];
+            if ckr != 0.0 {
+                buf.nonzeros.push((k, ckr));
+            }
+        }
+    }
+    buf.column_start.push(buf.nonzeros.len());
+    let (nonzeros, starts) = (&buf.nonzeros, &buf.column_start);
+    let column = |r: usize| &nonzeros[starts[r]..starts[r + 1]];
     shaped(&mut buf.ctm, nr, nq);
     for j in 0..nq {
         for r in 0..nr {
             let mut sum = 0.0;
-            for k in 0..nq {
-                let ckr = c[(k, r)];
-                if ckr != 0.0 {
-                    sum += ckr * buf.m[(k, j)];
-                }
+            for &(k, ckr) in column(r) {
+                sum += ckr * buf.m[(k, j)];
             }
             buf.ctm[(r, j)] = sum;
         }
@@ -139,28 +187,13 @@ pub fn free_accelerations_in(
     for s in 0..nr {
         for r in 0..nr {
             let mut sum = 0.0;
-            for k in 0..nq {
-                let cks = c[(k, s)];
-                if cks != 0.0 {
-                    sum += buf.ctm[(r, k)] * cks;
-                }
+            for &(k, cks) in column(s) {
+                sum += buf.ctm[(r, k)] * cks;
             }
             buf.m_r[(r, s)] = sum;
         }
     }
-    if buf.y.len() != nr {
-        buf.y = DVector::zeros(nr);
-    }
-    for r in 0..nr {
-        let mut sum = 0.0;
-        for k in 0..nq {
-            let ckr = c[(k, r)];
-            if ckr != 0.0 {
-                sum += ckr * data.tau[k];
-            }
-        }
-        buf.y[r] = -sum;
-    }
+    minus_ct_tau(c, data, &mut buf.y);
     shaped(&mut buf.factor, nr, nr);
     buf.factor.copy_from(&buf.m_r);
     let factor = std::mem::replace(&mut buf.factor, DMatrix::zeros(0, 0));
@@ -168,6 +201,12 @@ pub fn free_accelerations_in(
         Some(ch) => {
             ch.solve_mut(&mut buf.y);
             buf.factor = ch.unpack_dirty();
+            buf.key_model = model_key;
+            buf.key_q.clear();
+            buf.key_q.extend_from_slice(&data.q);
+            shaped(&mut buf.key_c, nq, nr);
+            buf.key_c.copy_from(c);
+            buf.factored = true;
             true
         }
         None => match buf.m_r.clone().lu().solve(&buf.y) {
@@ -178,4 +217,30 @@ pub fn free_accelerations_in(
             None => false,
         },
     }
+}
+
+/// y = −Cᵀ τ (τ = `data.tau`), skipping C's zeros.
+fn minus_ct_tau(c: &DMatrix<f64>, data: &Data, y: &mut DVector<f64>) {
+    let (nq, nr) = c.shape();
+    if y.len() != nr {
+        *y = DVector::zeros(nr);
+    }
+    for r in 0..nr {
+        let mut sum = 0.0;
+        for k in 0..nq {
+            let ckr = c[(k, r)];
+            if ckr != 0.0 {
+                sum += ckr * data.tau[k];
+            }
+        }
+        y[r] = -sum;
+    }
+}
+
+/// `a` and `b` hold the same values bit for bit (−0 ≠ 0, a NaN never equal).
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.to_bits() == y.to_bits() && !x.is_nan())
 }

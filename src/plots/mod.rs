@@ -360,6 +360,12 @@ fn write_figure(
     // fdeflate's PNG-tuned fast mode: flat-coloured charts compress about as
     // well as with the default level, in a fraction of the time.
     enc.set_compression(png::Compression::Fast);
+    // One filter for every row, Paeth, instead of trying all five per row
+    // (the adaptive choice): on the leg extension study's 23 figures it
+    // encodes with 43 % fewer instructions (710 M against 1250 M) for files
+    // 3.7 % larger (4.04 MB against 3.89 MB; Up would be 69 % fewer but
+    // twice the size). Lossless either way: the same pixels.
+    enc.set_filter(png::Filter::Paeth);
     let mut writer = enc.write_header().map_err(png_err)?;
     writer.write_image_data(&rgb).map_err(png_err)?;
     writer.finish().map_err(png_err)?;

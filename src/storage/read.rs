@@ -390,10 +390,18 @@ fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
         // (what `empty_cell` trims).
         let mut tabs = 0;
         let mut odd = false;
-        while i < b.len() && is_ws(b[i]) {
-            tabs += (b[i] == b'\t') as usize;
-            odd |= !matches!(b[i], b'\t' | b' ' | b'\r');
-            i += 1;
+        loop {
+            // Spaces (the padding of fixed-width columns) count for nothing.
+            while i < b.len() && b[i] == b' ' {
+                i += 1;
+            }
+            if i < b.len() && is_ws(b[i]) {
+                tabs += (b[i] == b'\t') as usize;
+                odd |= !matches!(b[i], b'\t' | b'\r');
+                i += 1;
+            } else {
+                break;
+            }
         }
         if i == b.len() {
             if odd {
@@ -447,6 +455,10 @@ fn decimal_token(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
     i += (neg || b[i] == b'+') as usize;
     let mut w: u64 = 0;
     let int_start = i;
+    while let Some(v) = eight_digits_at(b, i) {
+        w = w.wrapping_mul(100_000_000).wrapping_add(v);
+        i += 8;
+    }
     while i < b.len() && b[i].is_ascii_digit() {
         w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
         i += 1;
@@ -456,6 +468,10 @@ fn decimal_token(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
     if i < b.len() && b[i] == b'.' {
         i += 1;
         let frac_start = i;
+        while let Some(v) = eight_digits_at(b, i) {
+            w = w.wrapping_mul(100_000_000).wrapping_add(v);
+            i += 8;
+        }
         while i < b.len() && b[i].is_ascii_digit() {
             w = w.wrapping_mul(10).wrapping_add((b[i] - b'0') as u64);
             i += 1;
@@ -469,6 +485,29 @@ fn decimal_token(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
     }
     let v = w as f64 / POW10[e];
     Some((if neg { -v } else { v }, i))
+}
+
+/// The eight bytes of `b` from `i` as a number, when there are eight and
+/// all are ASCII digits (the first the most significant): eight steps of
+/// `w · 10 + digit` at once, so `w · 10⁸ + this` equals them modulo 2⁶⁴.
+#[inline(always)]
+fn eight_digits_at(b: &[u8], i: usize) -> Option<u64> {
+    let bytes: [u8; 8] = b.get(i..i + 8)?.try_into().ok()?;
+    let x = u64::from_le_bytes(bytes);
+    // Each byte 0x30..=0x39: high nibble 3, and adding 6 leaves it 3 (a
+    // byte that carries into the next fails its own test first).
+    const HIGH: u64 = 0xF0F0_F0F0_F0F0_F0F0;
+    if (x & HIGH) | ((x.wrapping_add(0x0606_0606_0606_0606) & HIGH) >> 4) != 0x3333_3333_3333_3333 {
+        return None;
+    }
+    // Digits d0 (lowest byte, the first) .. d7; pairs, then quads, then all.
+    let x = x - 0x3030_3030_3030_3030;
+    let x = x.wrapping_mul(10).wrapping_add(x >> 8);
+    const LOW: u64 = 0x0000_00FF_0000_00FF;
+    let x = ((x & LOW).wrapping_mul(100 + (1_000_000 << 32)))
+        .wrapping_add(((x >> 16) & LOW).wrapping_mul(1 + (10_000 << 32)))
+        >> 32;
+    Some(x)
 }
 
 /// Parse `toks` = time then `labels.len()` values into `row`; returns the time.
@@ -1068,6 +1107,34 @@ mod fast_line_tests {
             }
         }
         assert!(fast > 100_000, "{fast}");
+    }
+
+    /// `eight_digits_at` = the digits' number, and None unless all eight
+    /// bytes are digits.
+    #[test]
+    fn eight_digits_at_reads_eight_digits() {
+        let mut state = 0x1234_5678_9abc_def1u64;
+        for k in 0..100_000u64 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let n = if k < 10 {
+                [
+                    0, 1, 9, 10, 99_999_999, 12_345_678, 10_000_000, 90_000_009, 5, 7,
+                ][k as usize]
+            } else {
+                state % 100_000_000
+            };
+            let text = format!("{n:08}");
+            assert_eq!(eight_digits_at(text.as_bytes(), 0), Some(n), "{text}");
+            // Any one byte not a digit: None.
+            let mut bad = text.clone().into_bytes();
+            bad[(state >> 40) as usize % 8] =
+                [b'/', b':', b'.', b' ', 0xF9, 0x3F, b'a', 0][(state >> 50) as usize % 8];
+            assert_eq!(eight_digits_at(&bad, 0), None, "{bad:?}");
+        }
+        assert_eq!(eight_digits_at(b"1234567", 0), None);
+        assert_eq!(eight_digits_at(b"x12345678", 1), Some(12_345_678));
     }
 
     /// `parse_line_fast` accepts a line only when the general path

@@ -296,11 +296,11 @@ fn mcaplog_round_trip() {
     // Last frame: t − t0 = 0.01 · 149 s.
     assert!((stats.message_end_time as i64 - 1_490_000_000).abs() <= 1);
 
-    // Chunks are zstd and actually compress.
+    // Chunks are uncompressed by default.
     assert!(!summary.chunk_indexes.is_empty());
     for c in &summary.chunk_indexes {
-        assert_eq!(c.compression, "zstd");
-        assert!(c.compressed_size < c.uncompressed_size);
+        assert_eq!(c.compression, "");
+        assert_eq!(c.compressed_size, c.uncompressed_size);
     }
 
     // Time origin metadata.
@@ -401,6 +401,7 @@ fn mcaplog_killed_midway_leaves_complete_chunks() {
     let options = LogOptions {
         chunk_size,
         max_chunk_age: None,
+        ..LogOptions::default()
     };
     let frames = 40; // 280 messages, ~100 kB uncompressed → many chunks
     let (specs, written, log) = write_statopt_log(&path, frames, options);
@@ -481,6 +482,7 @@ fn mcaplog_truncated_anywhere_reads_a_prefix() {
     let options = LogOptions {
         chunk_size: 2 * 1024,
         max_chunk_age: None,
+        ..LogOptions::default()
     };
     let (_specs, written, log) = write_statopt_log(&path, 12, options);
     log.finish().expect("finish");
@@ -749,4 +751,34 @@ fn message_encoder_equals_serialized_values() {
 
 fn next_u64(k: usize) -> u64 {
     (k as u64).wrapping_mul(0x9E3779B97F4A7C15) >> 20
+}
+
+/// With zstd asked for, the chunks are zstd, compress, and read back.
+#[test]
+fn mcaplog_zstd_chunks_compress_and_read_back() {
+    let path = scratch("zstd.mcap");
+    let options = LogOptions {
+        compression: ChunkCompression::Zstd,
+        ..LogOptions::default()
+    };
+    let (_specs, written, log) = write_statopt_log(&path, 60, options);
+    log.finish().expect("finish");
+    let bytes = std::fs::read(&path).expect("read back");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("summary parses")
+        .expect("summary present");
+    assert!(!summary.chunk_indexes.is_empty());
+    for c in &summary.chunk_indexes {
+        assert_eq!(c.compression, "zstd");
+        assert!(c.compressed_size < c.uncompressed_size / 2);
+    }
+    let messages: Vec<_> = mcap::MessageStream::new(&bytes)
+        .expect("stream")
+        .collect::<std::result::Result<_, _>>()
+        .expect("all messages read");
+    assert_eq!(messages.len(), written.len());
+    for (m, (_, _, expected)) in messages.iter().zip(&written) {
+        let got: Value = serde_json::from_slice(&m.data).expect("JSON message");
+        assert_eq!(&got, expected);
+    }
 }
