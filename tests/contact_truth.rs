@@ -566,3 +566,40 @@ fn predict_grf_foot_contacts_face_their_feet() {
     let errors = statopt::tools::check::contacts_facing_away(&setup, &problem);
     assert!(errors.is_empty(), "{errors:?}");
 }
+
+/// A contact that carried nothing at every w0 of a sweep is named once, with
+/// the largest force of any w0 (which bounds every w0's), not once per w0:
+/// the leg extension's handle_hold contacts carried at most 0.000, 0.431 and
+/// 0.975 N at w0 = 1, 500 and 1000, and the sweep said so in six lines.
+#[test]
+fn a_contact_idle_at_every_w0_is_named_once() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = common::out_dir("contact_truth_idle_sweep");
+    let s = statopt::tools::run_setup(
+        &root.join("setups/leg_extension_rajagopal_cam1.xml"),
+        &RunOptions {
+            results_dir: Some(out),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let per_w0: Vec<&ContactFinding> = s
+        .contacts
+        .iter()
+        .filter(|f| f.contact == "handle_hold_r" && f.kind == FindingKind::CarriedNothing)
+        .collect();
+    assert_eq!(per_w0.len(), 3, "{:?}", s.contacts);
+    let most = per_w0.iter().map(|f| f.value).fold(0.0, f64::max);
+    let lines: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("contact handle_hold_r carried nothing"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{:#?}", s.warnings);
+    assert!(
+        lines[0].contains("every w0 (1, 500, 1000)")
+            && lines[0].contains(&format!("at most {most:.3} N")),
+        "{} (largest {most})",
+        lines[0]
+    );
+}

@@ -351,10 +351,11 @@ pub fn run(
 /// sweep makes with the same words, taken out of each run's warnings and
 /// returned (none for a single run).
 fn common_contact_lines(summaries: &mut [RunSummary]) -> Vec<String> {
+    use crate::writers::contact_findings::FindingKind;
     if summaries.len() < 2 {
         return Vec::new();
     }
-    let common: Vec<String> = summaries[0]
+    let mut common: Vec<String> = summaries[0]
         .contacts
         .iter()
         .map(|f| f.message.clone())
@@ -364,9 +365,44 @@ fn common_contact_lines(summaries: &mut [RunSummary]) -> Vec<String> {
                 .all(|s| s.contacts.iter().any(|f| &f.message == m))
         })
         .collect();
+    // A contact that carried nothing at every w0, for the same reason, is
+    // said once too: with the largest force of any w0, which bounds every
+    // w0's (its reach is the motion's, the same at every w0).
+    let mut merged = Vec::new();
+    let mut said: Vec<Vec<String>> = Vec::new();
+    for f in &summaries[0].contacts {
+        if f.kind != FindingKind::CarriedNothing || common.contains(&f.message) {
+            continue;
+        }
+        let alike: Option<Vec<&crate::writers::contact_findings::ContactFinding>> = summaries
+            .iter()
+            .map(|s| {
+                s.contacts.iter().find(|g| {
+                    g.kind == FindingKind::CarriedNothing
+                        && g.contact == f.contact
+                        && g.frames == f.frames
+                        && g.reserve_body == f.reserve_body
+                })
+            })
+            .collect();
+        if let Some(alike) = alike {
+            let most = alike
+                .iter()
+                .max_by(|a, b| a.value.total_cmp(&b.value))
+                .expect("two or more runs");
+            merged.push(most.message.clone());
+            said.push(alike.iter().map(|g| g.message.clone()).collect::<Vec<_>>());
+        }
+    }
+    for texts in said {
+        for (s, text) in summaries.iter_mut().zip(texts) {
+            s.warnings.retain(|w| *w != text);
+        }
+    }
     for s in summaries.iter_mut() {
         s.warnings.retain(|w| !common.contains(w));
     }
+    common.extend(merged);
     common
 }
 
