@@ -225,7 +225,11 @@ def test_progress_callback_and_gil_released(repo):
         ticks += 1
         time.sleep(0.001)
     t.join()
-    assert ticks > 50  # the main thread ran while the engine did
+    # The main thread ran while the engine did: with the GIL held it would
+    # tick once or twice (before and after). Not a time bound: the run takes
+    # some 40 ms now (about 40 ticks of >= 1 ms), and was asserted > 50
+    # when it was slower.
+    assert ticks > 10, ticks
     labels = [c[0] for c in calls]
     # one pass over the frames serves every w0 of the sweep
     assert "leg_extension_cam1_SO" in labels
