@@ -220,7 +220,7 @@ pub fn free_accelerations_in(
 }
 
 /// y = −Cᵀ τ (τ = `data.tau`), skipping C's zeros.
-fn minus_ct_tau(c: &DMatrix<f64>, data: &Data, y: &mut DVector<f64>) {
+pub(crate) fn minus_ct_tau(c: &DMatrix<f64>, data: &Data, y: &mut DVector<f64>) {
     let (nq, nr) = c.shape();
     if y.len() != nr {
         *y = DVector::zeros(nr);

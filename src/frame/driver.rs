@@ -70,6 +70,41 @@ where
     )
 }
 
+/// [`for_each_frame`] for an analysis that writes one row a frame: `work`
+/// gives a frame's time and row, `write` writes them in frame order. Returns
+/// the frames written and, when a signal stopped the run, the exit status it
+/// asks for with the time of the last row written (a run summary's
+/// `stopped`).
+#[allow(clippy::type_complexity)]
+pub fn write_each_frame<W, T>(
+    stream: &mut impl FrameSource,
+    i0: usize,
+    i1: usize,
+    step_interval: usize,
+    init: impl Fn() -> W + Sync + Send,
+    work: impl Fn(&mut W, &StateBlock, usize) -> Result<(f64, T)> + Sync + Send,
+    mut write: impl FnMut(f64, T) -> Result<()>,
+) -> Result<(usize, Option<(u8, Option<f64>)>)>
+where
+    T: Send,
+    W: Send,
+{
+    let mut frames = 0;
+    let mut last_t = None;
+    let completed = for_each_frame(stream, i0, i1, step_interval, init, work, |(t, row)| {
+        write(t, row)?;
+        frames += 1;
+        last_t = Some(t);
+        Ok(())
+    })?;
+    let stopped = if completed {
+        None
+    } else {
+        Some((crate::frame::interrupt::requested().unwrap_or(130), last_t))
+    };
+    Ok((frames, stopped))
+}
+
 /// Frames per warm-start group ([`for_each_frame_grouped`]): the first
 /// frame of a group is solved cold, each other from the previous frame's
 /// answer. Groups are counted by the frame's ordinal among the analysed

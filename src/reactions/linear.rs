@@ -28,7 +28,7 @@
 use nalgebra::DMatrix;
 
 use crate::contacts::{ContactState, Regime};
-use crate::dynamics::{kinematics, rnea, BodyForce};
+use crate::dynamics::{forward, kinematics, rnea, BodyForce};
 use crate::error::Result;
 use crate::frame::problem::{Control, SoProblem};
 use crate::frame::workspace::Workspace;
@@ -166,16 +166,7 @@ fn linear_response(
     kinematics::motion(model, data);
     rnea::inverse_dynamics_after_kinematics(model, data, false);
     let (nq, nr) = c.shape();
-    for r in 0..nr {
-        let mut sum = 0.0;
-        for k in 0..nq {
-            let ckr = c[(k, r)];
-            if ckr != 0.0 {
-                sum += ckr * data.tau[k];
-            }
-        }
-        y[r] = -sum;
-    }
+    forward::minus_ct_tau(c, data, y);
     factor.solve_mut(y);
     for k in 0..nq {
         let mut sum = 0.0;

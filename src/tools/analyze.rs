@@ -276,6 +276,24 @@ fn run_in(
     })
 }
 
+/// The JointReactions of `analyses` that take each frame's
+/// StaticOptimization solution directly: those without a forces_file, when
+/// the setup runs a StaticOptimization (`has_so`).
+pub fn coupled_reactions<'a>(
+    analyses: impl IntoIterator<Item = &'a Analysis>,
+    has_so: bool,
+) -> Vec<joint_reaction::JointReactionSetup> {
+    analyses
+        .into_iter()
+        .filter_map(|a| match a {
+            Analysis::JointReaction(jr) if has_so && jr.forces_file.is_none() => {
+                Some((**jr).clone())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
 fn run_analyses(
     setup: &AnalyzeSetup,
     motion: Option<&TableFile>,
@@ -299,15 +317,7 @@ fn run_analyses(
     let has_so = active
         .iter()
         .any(|a| matches!(a, Analysis::StaticOptimization(_)));
-    let coupled: Vec<joint_reaction::JointReactionSetup> = active
-        .iter()
-        .filter_map(|a| match a {
-            Analysis::JointReaction(jr) if has_so && jr.forces_file.is_none() => {
-                Some((**jr).clone())
-            }
-            _ => None,
-        })
-        .collect();
+    let coupled = coupled_reactions(active.iter().copied(), has_so);
     // The motion, read once for every analysis below.
     let motion = match motion {
         Some(m) => m.clone(),

@@ -293,16 +293,7 @@ impl Checker {
             ));
         }
         let has_so = setup.static_optimization().is_some();
-        let coupled: Vec<joint_reaction::JointReactionSetup> = setup
-            .analyses
-            .iter()
-            .filter_map(|a| match a {
-                Analysis::JointReaction(jr) if has_so && jr.forces_file.is_none() => {
-                    Some((**jr).clone())
-                }
-                _ => None,
-            })
-            .collect();
+        let coupled = analyze::coupled_reactions(&setup.analyses, has_so);
         for a in &setup.analyses {
             match a {
                 Analysis::StaticOptimization(so) if so.common.on => {

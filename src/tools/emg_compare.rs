@@ -646,50 +646,34 @@ mod tests {
         let t: Vec<f64> = (0..10).map(|i| i as f64 * 0.1).collect();
         let emg = table(t.clone(), &["soleus"], vec![t.clone()]);
         let act = table(t.clone(), &["soleus_r"], vec![t.clone()]);
+        // The error of comparing `act.sto` with `emg.sto` through `map`.
+        let err = |map: &[ChannelMap], opts: Options| {
+            compare(
+                "x",
+                &act,
+                Path::new("act.sto"),
+                &emg,
+                Path::new("emg.sto"),
+                map,
+                opts,
+            )
+            .unwrap_err()
+            .to_string()
+        };
         let map = parse_map("soleus: soleus_l\n", p).unwrap();
-        let e = compare(
-            "x",
-            &act,
-            Path::new("act.sto"),
-            &emg,
-            Path::new("emg.sto"),
-            &map,
-            Options::default(),
-        )
-        .unwrap_err()
-        .to_string();
+        let e = err(&map, Options::default());
         assert!(
             e.contains("act.sto") && e.contains("soleus_l") && e.contains("map.txt"),
             "{e}"
         );
         let map = parse_map("gastrocnemius: soleus_r\n", p).unwrap();
-        let e = compare(
-            "x",
-            &act,
-            Path::new("act.sto"),
-            &emg,
-            Path::new("emg.sto"),
-            &map,
-            Options::default(),
-        )
-        .unwrap_err()
-        .to_string();
+        let e = err(&map, Options::default());
         assert!(e.contains("emg.sto") && e.contains("gastrocnemius"), "{e}");
         let neg = Options {
             delay: -0.01,
             ..Default::default()
         };
-        let e = compare(
-            "x",
-            &act,
-            Path::new("act.sto"),
-            &emg,
-            Path::new("emg.sto"),
-            &map,
-            neg,
-        )
-        .unwrap_err()
-        .to_string();
+        let e = err(&map, neg);
         assert!(e.contains(">= 0"), "{e}");
         // Activations beyond the EMG's time range.
         let map = parse_map("soleus: soleus_r\n", p).unwrap();
@@ -697,17 +681,7 @@ mod tests {
             delay: 0.05,
             ..Default::default()
         };
-        let e = compare(
-            "x",
-            &act,
-            Path::new("act.sto"),
-            &emg,
-            Path::new("emg.sto"),
-            &map,
-            opts,
-        )
-        .unwrap_err()
-        .to_string();
+        let e = err(&map, opts);
         assert!(e.contains("emg.sto") && e.contains("covers"), "{e}");
     }
 }

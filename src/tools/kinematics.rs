@@ -9,10 +9,11 @@ use std::borrow::Cow;
 use crate::dynamics::body_kinematics::{body_set, BodySelection, PointSelection};
 use crate::dynamics::{kinematics, Data};
 use crate::error::Result;
+use crate::frame::driver::write_each_frame;
 use crate::parse::kinematics::KinematicsSetup;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::TableFile;
-use crate::tools::analyze::{for_each_frame, open_motion_stream, results_dir};
+use crate::tools::analyze::{open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::kinematics_tables::{KinematicsTables, TableSpec};
@@ -101,11 +102,9 @@ pub fn run(
         (KinematicsSetup::Body(_), Selection::Point(_)) => unreachable!("selected from the setup"),
     };
     let (i0, i1, step) = (stream.first_row, stream.last_row, k.common().step_interval);
-    let mut nframes = 0;
-    let mut last_t = None;
     // The frame driver of every analysis: frames in parallel chunks over
     // per-thread buffers, written in order.
-    let completed = for_each_frame(
+    let (nframes, stopped) = write_each_frame(
         &mut stream,
         i0,
         i1,
@@ -128,18 +127,8 @@ pub fn run(
             }
             Ok((block.time[b], [p, v, a]))
         },
-        |(t, [p, v, a])| {
-            tables.write(t, [&p, &v, &a])?;
-            nframes += 1;
-            last_t = Some(t);
-            Ok(())
-        },
+        |t, [p, v, a]| tables.write(t, [&p, &v, &a]),
     )?;
-    let stopped = if completed {
-        None
-    } else {
-        Some((crate::tools::interrupt::requested().unwrap_or(130), last_t))
-    };
     Ok(RunSummary {
         frames: nframes,
         results_dirs: vec![dir],

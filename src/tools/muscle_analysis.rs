@@ -8,12 +8,13 @@
 
 use crate::dynamics::kinematics;
 use crate::error::Result;
+use crate::frame::driver::write_each_frame;
 use crate::frame::workspace::Workspace;
 use crate::muscles::set::MuscleSet;
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
 use crate::storage::TableFile;
-use crate::tools::analyze::{for_each_frame, open_motion_stream, results_dir};
+use crate::tools::analyze::{open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 
@@ -130,11 +131,9 @@ pub fn run(
         )?);
     }
     let (i0, i1, step) = (stream.first_row, stream.last_row, ma.common.step_interval);
-    let mut nframes = 0;
-    let mut last_t = None;
     // The frame driver of every analysis (analyze::for_each_frame): frames
     // in parallel chunks over per-thread workspaces, written in order.
-    let completed = for_each_frame(
+    let (nframes, stopped) = write_each_frame(
         &mut stream,
         i0,
         i1,
@@ -166,20 +165,13 @@ pub fn run(
             }
             Ok((block.time[b], rows))
         },
-        |(t, rows)| {
+        |t, rows| {
             for (w, row) in writers.iter_mut().zip(&rows) {
                 w.0.write_row(t, row)?;
             }
-            nframes += 1;
-            last_t = Some(t);
             Ok(())
         },
     )?;
-    let stopped = if completed {
-        None
-    } else {
-        Some((crate::tools::interrupt::requested().unwrap_or(130), last_t))
-    };
     let mut files = Vec::new();
     for (w, p) in writers {
         w.finish()?;

@@ -940,6 +940,24 @@ pub fn foot_loads_from_contacts(path: &std::path::Path, set: &FootContactSet) ->
     Ok(out)
 }
 
+/// Pose `data` at time `t`: the row of `states` at `t` (to 1e-9 s), else the
+/// row `find_index` picks, and its full kinematics.
+fn pose_at(
+    model: &crate::model::Model,
+    states: &crate::motion::states::States,
+    t: f64,
+    data: &mut Data,
+) {
+    let i = states
+        .time
+        .iter()
+        .position(|&s| (s - t).abs() < 1e-9)
+        .unwrap_or_else(|| crate::motion::coordinates::find_index(&states.time, t));
+    data.q.copy_from_slice(&states.q[i]);
+    data.u.copy_from_slice(&states.u[i]);
+    kinematics::full(model, data);
+}
+
 /// The measured loads per foot at `times`: each ExternalForce is assigned
 /// to the foot of the body it is applied to (`*_r` or `*_l`).
 pub fn measured_foot_loads(
@@ -954,14 +972,7 @@ pub fn measured_foot_loads(
         ..Default::default()
     };
     for &t in times {
-        let i = states
-            .time
-            .iter()
-            .position(|&s| (s - t).abs() < 1e-9)
-            .unwrap_or_else(|| crate::motion::coordinates::find_index(&states.time, t));
-        data.q.copy_from_slice(&states.q[i]);
-        data.u.copy_from_slice(&states.u[i]);
-        kinematics::full(model, &mut data);
+        pose_at(model, states, t, &mut data);
         let mut plates = Vec::with_capacity(loads.forces.len());
         for ef in &loads.forces {
             let name = &model.bodies[ef.applied_to_body].name;
@@ -999,14 +1010,7 @@ fn plate_samples(
         Vec::with_capacity(times.len()),
     );
     for &t in times {
-        let i = states
-            .time
-            .iter()
-            .position(|&s| (s - t).abs() < 1e-9)
-            .unwrap_or_else(|| crate::motion::coordinates::find_index(&states.time, t));
-        data.q.copy_from_slice(&states.q[i]);
-        data.u.copy_from_slice(&states.u[i]);
-        kinematics::full(model, &mut data);
+        pose_at(model, states, t, &mut data);
         let mut row = Vec::with_capacity(loads.forces.len());
         for ef in &loads.forces {
             let name = &model.bodies[ef.applied_to_body].name;
