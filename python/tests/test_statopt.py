@@ -543,7 +543,17 @@ def test_summary_names_the_contacts_its_tables_show(repo):
     res = statopt.run(repo / "setups" / "leg_extension_rajagopal_cam1.xml", progress=False)
     found = {(f["run"], f["contact"], f["kind"]): f for f in res.summary["contacts"]}
     for f in res.summary["contacts"]:
-        assert any(w.endswith(f["message"]) for w in res.summary["warnings"])
+        # Said as it is, or, for a contact idle at every w0, once for all of
+        # them with the largest force of any w0 (which bounds this one's).
+        assert any(
+            w.endswith(f["message"])
+            or (
+                f["kind"] == "carried_nothing"
+                and w.startswith("every w0 (1, 500, 1000): ")
+                and f"contact {f['contact']} carried nothing: at most " in w
+            )
+            for w in res.summary["warnings"]
+        ), f
     for w0 in (1, 500, 1000):
         cf = res.table("ContactForces", w0=w0)
         names = sorted({c[:-3] for c in cf.columns if c.endswith("_fx")})
