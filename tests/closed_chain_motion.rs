@@ -13,6 +13,7 @@
 //! is the one being written.
 
 mod common;
+use common::col;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -118,10 +119,6 @@ fn ok(out: &std::process::Output) -> String {
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "statopt-tool motion failed: {err}");
     err
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(t.column_index(label).unwrap())
 }
 
 /// Model-unit coordinates of row `i` of a file (degrees → rad; a missing

@@ -12,6 +12,7 @@
 //! forces 100 and 1 in the ratio of their optimal forces (minimum Σa²).
 
 mod common;
+use common::col;
 
 use std::path::{Path, PathBuf};
 
@@ -20,7 +21,7 @@ use statopt::motion::coordinates::{CoordinateSplines, MissingCoordinate};
 use statopt::parse::compose::read_composed;
 use statopt::parse::osim::ModelSpec;
 use statopt::parse::setup::Setup;
-use statopt::storage::{self, Storage};
+use statopt::storage::{self};
 use statopt::tools::motion_gen::{generate, parse_link, MinJerkMotion};
 use statopt::tools::scene::{compose_scene, write_document};
 use statopt::tools::{analyze, inverse_dynamics, RunOptions};
@@ -120,13 +121,6 @@ fn read_analyze(p: &Path) -> statopt::parse::setup::AnalyzeSetup {
         Setup::Analyze(s) => s,
         _ => panic!("not an AnalyzeTool setup"),
     }
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(
-        t.column_index(label)
-            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
-    )
 }
 
 #[test]

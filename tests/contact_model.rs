@@ -3,12 +3,11 @@
 //! (Krüger & Wartzack 2017, Figure 5 and eqs. 1–16) and invariants.
 
 mod common;
+use common::{col, run_setup};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use statopt::parse::setup::Setup;
-use statopt::storage::{self, Storage};
-use statopt::tools::{analyze, RunOptions};
+use statopt::storage::{self};
 
 const G: f64 = 9.80665;
 const MASS: f64 = 10.0;
@@ -101,21 +100,6 @@ fn run_case(name: &str, model: &str, motion_text: &str, so_extra: &str) -> PathB
     .unwrap();
     run_setup(&dir.join("setup.xml"));
     dir.join("out")
-}
-
-fn run_setup(p: &Path) -> statopt::tools::RunSummary {
-    let s = match Setup::read(p).unwrap() {
-        Setup::Analyze(s) => s,
-        _ => unreachable!(),
-    };
-    analyze::run(&s, &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(
-        t.column_index(label)
-            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
-    )
 }
 
 const WEIGHTS: [f64; 10] = [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6];

@@ -8,32 +8,18 @@
 //! about contacts").
 
 mod common;
+use common::{col, run_setup};
 
 use std::path::Path;
 
 use statopt::parse::setup::Setup;
 use statopt::storage::{self, Storage};
-use statopt::tools::{analyze, RunOptions, RunSummary};
+use statopt::tools::{RunOptions, RunSummary};
 use statopt::writers::contact_findings::{
     ContactFinding, FindingKind, LOADED_FORCE, PENETRATION_LIMIT, UNLOADED_FORCE,
 };
 
 const G: f64 = common::G;
-
-fn run_setup(p: &Path) -> RunSummary {
-    let s = match Setup::read(p).unwrap() {
-        Setup::Analyze(s) => s,
-        _ => unreachable!(),
-    };
-    analyze::run(&s, &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(
-        t.column_index(label)
-            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
-    )
-}
 
 /// A motion of the named coordinates, `rows` rows over `span` seconds.
 fn motion(names: &[&str], rows: usize, span: f64, f: impl Fn(f64) -> Vec<f64>) -> String {

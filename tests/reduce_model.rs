@@ -12,6 +12,7 @@
 //! shank tip against a floor 5 m below (never engaged).
 
 mod common;
+use common::col;
 
 use std::path::{Path, PathBuf};
 
@@ -156,13 +157,6 @@ fn run(setup: &Path) -> statopt::Result<statopt::tools::RunSummary> {
 
 fn table(dir: &Path, what: &str) -> Storage {
     storage::read(&dir.join("out").join(format!("case_{what}"))).unwrap()
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(
-        t.column_index(label)
-            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
-    )
 }
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {

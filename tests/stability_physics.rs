@@ -13,6 +13,7 @@
 //! - disengaging, coincident, near-parallel and surplus contacts.
 
 mod common;
+use common::col;
 
 use std::path::{Path, PathBuf};
 
@@ -87,13 +88,6 @@ fn run_case(
 
 fn read(dir: &Path, file: &str) -> Storage {
     storage::read(&dir.join("out").join(file)).unwrap_or_else(|e| panic!("{file}: {e}"))
-}
-
-fn col(t: &Storage, label: &str) -> Vec<f64> {
-    t.column(
-        t.column_index(label)
-            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
-    )
 }
 
 fn all_finite(t: &Storage) -> bool {

@@ -170,3 +170,22 @@ pub fn doc_cell(doc: &str, row: &str, column: &str) -> Option<String> {
     let j = cells(lines[h]).iter().position(|c| c == column)?;
     cells(lines[r]).get(j).cloned()
 }
+
+/// Column `label` of a table (panics naming the labels when it is absent).
+pub fn col(t: &statopt::storage::Storage, label: &str) -> Vec<f64> {
+    t.column(
+        t.column_index(label)
+            .unwrap_or_else(|| panic!("no column {label} in {:?}", t.labels)),
+    )
+}
+
+/// Run an AnalyzeTool setup file with the default options (panics with the
+/// error's message).
+pub fn run_setup(p: &std::path::Path) -> statopt::tools::RunSummary {
+    let s = match statopt::parse::setup::Setup::read(p).unwrap() {
+        statopt::parse::setup::Setup::Analyze(s) => s,
+        _ => unreachable!("not an AnalyzeTool setup: {}", p.display()),
+    };
+    statopt::tools::analyze::run(&s, &statopt::tools::RunOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+}
