@@ -31,6 +31,7 @@ pub mod file_counts;
 pub mod forces;
 pub mod frame;
 pub mod functions;
+pub mod metrics;
 pub mod model;
 pub mod motion;
 pub mod muscles;

@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The pipeline, in order: a stage may import from the stages before it.
-const PIPELINE: [&str; 16] = [
+const PIPELINE: [&str; 17] = [
     "functions",
     "parse",
     "plan",
@@ -24,6 +24,7 @@ const PIPELINE: [&str; 16] = [
     "optimize",
     "frame",
     "reactions",
+    "metrics",
     "writers",
     "tools",
 ];

@@ -9,6 +9,8 @@
 //!   force of each multiplier, and the contact forces for output;
 //! - [`feet`]: foot contact sets built from a model's feet and the motion,
 //!   for ground-reaction prediction;
+//! - [`ground`]: ground reactions per foot from the contacts' forces and
+//!   from measured plates (predict-grf);
 //! - [`closure`]: coordinates solved on every row of a motion so that a
 //!   contact stays closed (`<close_contacts>`: a machine's lever follows
 //!   the pad on the shin).
@@ -17,6 +19,7 @@ pub mod element;
 pub mod events;
 pub mod feet;
 pub mod floor;
+pub mod ground;
 pub mod kinematics;
 pub mod plates;
 #[cfg(test)]

@@ -206,8 +206,9 @@ pub struct RunSummary {
 }
 
 /// Exit status of a run in which some frames could not be solved (the
-/// outputs are complete; those rows hold the solver's best point).
-pub const EXIT_FRAMES_FAILED: u8 = 3;
+/// outputs are complete; those rows hold the solver's best point), or whose
+/// prediction the physics rejects.
+pub use crate::metrics::EXIT_FRAMES_FAILED;
 
 fn keep_max(a: &mut Option<(f64, String)>, b: Option<(f64, String)>) {
     if let Some(b) = b {

@@ -1,0 +1,285 @@
+//! Ground reactions per foot (predict-grf; docs/grf_prediction.md): the
+//! foot contacts' forces summed per foot from the table a static-optimization
+//! run wrote, the measured plates' loads assigned to the feet, and which
+//! frames have no foot within reach of the floor.
+
+use nalgebra::Vector3;
+
+use crate::contacts::feet::FootContactSet;
+use crate::dynamics::{kinematics, Data};
+use crate::error::{Error, Result};
+use crate::forces::external_loads::ExternalLoads;
+use crate::storage;
+
+/// Per frame and foot: force on the foot (N, ground), centre of pressure
+/// on the floor (m) and free moment about the floor normal (N·m).
+#[derive(Debug, Clone, Default)]
+pub struct FootLoads {
+    pub time: Vec<f64>,
+    /// `[side][frame]`, side 0 right, 1 left.
+    pub force: [Vec<Vector3<f64>>; 2],
+    pub cop: [Vec<Vector3<f64>>; 2],
+    pub free_moment: [Vec<f64>; 2],
+}
+
+/// Per row of the contacts' table (`..._ContactForces.sto`): whether every
+/// foot point is farther from its floor plane than the contact band
+/// (d_tol + d_trans), where its weight w(d) is nil: nothing can touch.
+pub fn flight_frames(path: &std::path::Path, set: &FootContactSet) -> Result<Vec<bool>> {
+    let table = storage::read(path)?;
+    let reach = set.parameters.contact_tolerance + set.parameters.transition_zone;
+    let cols: Vec<usize> = set
+        .points
+        .iter()
+        .map(|p| {
+            table
+                .column_index(&format!("{}_distance", p.name))
+                .ok_or_else(|| {
+                    Error::internal(format!("{}: no column {}_distance", path.display(), p.name))
+                })
+        })
+        .collect::<Result<_>>()?;
+    Ok(table
+        .rows
+        .iter()
+        .map(|r| cols.iter().all(|&c| r[c] > reach))
+        .collect())
+}
+
+/// Per-foot loads from the contact forces a static-optimization run wrote
+/// (`..._ContactExternalLoads.mot`: each contact's force on its point body
+/// at the point).
+pub fn foot_loads_from_contacts(path: &std::path::Path, set: &FootContactSet) -> Result<FootLoads> {
+    let table = storage::read(path)?;
+    let col = |name: &str| {
+        table
+            .column_index(name)
+            .ok_or_else(|| Error::internal(format!("{}: no column {name}", path.display())))
+    };
+    let mut out = FootLoads {
+        time: table.time.clone(),
+        ..Default::default()
+    };
+    let mut idx: [Vec<([usize; 6], &crate::contacts::feet::FootPoint)>; 2] =
+        [Vec::new(), Vec::new()];
+    for p in &set.points {
+        let s = usize::from(p.side == 'l');
+        let mut c = [0usize; 6];
+        for (k, suffix) in ["vx", "vy", "vz", "px", "py", "pz"].iter().enumerate() {
+            c[k] = col(&format!("{}_point_force_{suffix}", p.name))?;
+        }
+        idx[s].push((c, p));
+    }
+    for row in &table.rows {
+        for s in 0..2 {
+            let mut f = Vector3::zeros();
+            let mut moment_y = 0.0;
+            let mut weighted = Vector3::zeros();
+            for (c, p) in &idx[s] {
+                let fi = Vector3::new(row[c[0]], row[c[1]], row[c[2]]);
+                // The point's projection on its floor plane (level through
+                // its dwell position, the floor's slope).
+                let (x, z) = (row[c[3]], row[c[5]]);
+                let y = set.floor_height_under(p, x, z);
+                let pi = Vector3::new(x, y, z);
+                f += fi;
+                weighted += pi * fi.y;
+                // Moment about the vertical through the origin of the floor.
+                moment_y += pi.z * fi.x - pi.x * fi.z;
+            }
+            let cop = if f.y.abs() > 1e-9 {
+                weighted / f.y
+            } else {
+                Vector3::new(f64::NAN, set.floor_height, f64::NAN)
+            };
+            // Free moment: the vertical moment left about the COP.
+            let free = if f.y.abs() > 1e-9 {
+                moment_y - (cop.z * f.x - cop.x * f.z)
+            } else {
+                0.0
+            };
+            out.force[s].push(f);
+            out.cop[s].push(cop);
+            out.free_moment[s].push(free);
+        }
+    }
+    Ok(out)
+}
+
+/// Pose `data` at time `t`: the row of `states` at `t` (to 1e-9 s), else the
+/// row `find_index` picks, and its full kinematics.
+pub fn pose_at(
+    model: &crate::model::Model,
+    states: &crate::motion::states::States,
+    t: f64,
+    data: &mut Data,
+) {
+    let i = states
+        .time
+        .iter()
+        .position(|&s| (s - t).abs() < 1e-9)
+        .unwrap_or_else(|| crate::motion::coordinates::find_index(&states.time, t));
+    data.q.copy_from_slice(&states.q[i]);
+    data.u.copy_from_slice(&states.u[i]);
+    kinematics::full(model, data);
+}
+
+/// The measured loads per foot at `times`: each ExternalForce is assigned
+/// to the foot of the body it is applied to (`*_r` or `*_l`).
+pub fn measured_foot_loads(
+    loads: &ExternalLoads,
+    model: &crate::model::Model,
+    states: &crate::motion::states::States,
+    times: &[f64],
+) -> Result<FootLoads> {
+    let mut data = Data::new(model);
+    let mut out = FootLoads {
+        time: times.to_vec(),
+        ..Default::default()
+    };
+    for &t in times {
+        pose_at(model, states, t, &mut data);
+        let mut plates = Vec::with_capacity(loads.forces.len());
+        for ef in &loads.forces {
+            let name = &model.bodies[ef.applied_to_body].name;
+            let s = usize::from(name.ends_with("_l"));
+            let (fe, pe, _) = ef.evaluate(t, &data)?;
+            plates.push((s, fe, pe));
+        }
+        let (f, cop) = per_foot(&plates);
+        for s in 0..2 {
+            out.force[s].push(f[s]);
+            out.cop[s].push(cop[s]);
+            out.free_moment[s].push(0.0);
+        }
+    }
+    Ok(out)
+}
+
+/// Per frame of `times`: every plate of `loads` (the foot of its body,
+/// force and centre of pressure, ground) and the ground positions of each
+/// foot's contact `points`, for [`crate::contacts::plates::misplaced_steps`].
+#[allow(clippy::type_complexity)]
+pub fn plate_samples(
+    loads: &ExternalLoads,
+    model: &crate::model::Model,
+    states: &crate::motion::states::States,
+    times: &[f64],
+    points: &[crate::contacts::feet::FootPoint],
+) -> Result<(
+    Vec<Vec<crate::contacts::plates::PlateSample>>,
+    Vec<[Vec<Vector3<f64>>; 2]>,
+)> {
+    let mut data = Data::new(model);
+    let (mut plates, mut feet) = (
+        Vec::with_capacity(times.len()),
+        Vec::with_capacity(times.len()),
+    );
+    for &t in times {
+        pose_at(model, states, t, &mut data);
+        let mut row = Vec::with_capacity(loads.forces.len());
+        for ef in &loads.forces {
+            let name = &model.bodies[ef.applied_to_body].name;
+            let (force, cop, _) = ef.evaluate(t, &data)?;
+            row.push(crate::contacts::plates::PlateSample {
+                foot: usize::from(name.ends_with("_l")),
+                force,
+                cop,
+            });
+        }
+        plates.push(row);
+        let mut f: [Vec<Vector3<f64>>; 2] = [Vec::new(), Vec::new()];
+        for p in points {
+            f[usize::from(p.side == 'l')].push(data.station_position(p.body, &p.local));
+        }
+        feet.push(f);
+    }
+    Ok((plates, feet))
+}
+
+/// `loads` at the frames where `kept` is true.
+pub fn keep_frames(loads: &FootLoads, kept: &[bool]) -> FootLoads {
+    let pick = |v: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+        v.iter()
+            .zip(kept)
+            .filter(|(_, k)| **k)
+            .map(|(x, _)| *x)
+            .collect()
+    };
+    FootLoads {
+        time: loads
+            .time
+            .iter()
+            .zip(kept)
+            .filter(|(_, k)| **k)
+            .map(|(t, _)| *t)
+            .collect(),
+        force: [pick(&loads.force[0]), pick(&loads.force[1])],
+        cop: [pick(&loads.cop[0]), pick(&loads.cop[1])],
+        free_moment: [0, 1].map(|s| {
+            loads.free_moment[s]
+                .iter()
+                .zip(kept)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        }),
+    }
+}
+
+/// Plates (foot 0 right / 1 left, force, centre of pressure; ground) summed
+/// per foot: the forces added, the centres of pressure weighted by the
+/// plates' vertical forces (NaN without vertical force).
+pub fn per_foot(
+    plates: &[(usize, Vector3<f64>, Vector3<f64>)],
+) -> ([Vector3<f64>; 2], [Vector3<f64>; 2]) {
+    let mut f = [Vector3::zeros(); 2];
+    let mut weighted = [Vector3::zeros(); 2];
+    let mut fy = [0.0; 2];
+    for &(s, fe, pe) in plates {
+        f[s] += fe;
+        if pe.iter().all(|x| x.is_finite()) && fe.y.abs() > 1e-9 {
+            weighted[s] += pe * fe.y;
+            fy[s] += fe.y;
+        }
+    }
+    let cop = [0, 1].map(|s| {
+        if fy[s].abs() > 1e-9 {
+            weighted[s] / fy[s]
+        } else {
+            Vector3::repeat(f64::NAN)
+        }
+    });
+    (f, cop)
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two plates under the right foot, one under the left: the foot's
+    /// force is their sum and its centre of pressure the plates' weighted
+    /// by their vertical forces (it was the last plate's).
+    #[test]
+    fn plates_under_one_foot_are_combined() {
+        let plates = [
+            (
+                0,
+                Vector3::new(10.0, 300.0, 0.0),
+                Vector3::new(0.0, 0.0, 0.1),
+            ),
+            (
+                0,
+                Vector3::new(5.0, 100.0, 0.0),
+                Vector3::new(0.4, 0.0, 0.1),
+            ),
+            (1, Vector3::new(0.0, 0.0, 0.0), Vector3::new(9.0, 0.0, 9.0)),
+        ];
+        let (f, cop) = per_foot(&plates);
+        assert_eq!(f[0], Vector3::new(15.0, 400.0, 0.0));
+        assert!(
+            (cop[0] - Vector3::new(0.1, 0.0, 0.1)).norm() < 1e-12,
+            "{cop:?}"
+        );
+        assert!(cop[1].x.is_nan(), "no load: no centre of pressure");
+    }
+}

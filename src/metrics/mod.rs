@@ -1,0 +1,12 @@
+//! Statistics of a run's results and the rules that accept or reject them,
+//! computed from the results in memory (a stage of its own: tools report
+//! them, writers write them).
+//!
+//! - [`grf`]: predict-grf's agreement with the measured plates and its
+//!   acceptance by the physics (root residual, mean support of the feet).
+pub mod grf;
+
+/// The exit status of a run whose results are not a result: static
+/// optimization left frames unsolved, or the physics rejects a prediction
+/// ([`grf::judge_root_residual`], [`grf::judge_support`]).
+pub const EXIT_FRAMES_FAILED: u8 = 3;
