@@ -39,8 +39,8 @@ fn bench_setup(c: &mut Criterion, name: &str, setup_file: &Path) {
         ("analytic", ConstraintMatrix::Analytic),
         ("perturbation", ConstraintMatrix::Perturbation),
     ] {
-        so.constraint_matrix = m;
-        problem.settings = so.clone();
+        so.set_constraint_matrix(m);
+        problem.options = statopt::frame::SoOptions::compile(&so);
         c.bench_function(&format!("constraint_matrix/{name}/{label}"), |b| {
             b.iter(|| {
                 problem

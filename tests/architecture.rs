@@ -444,3 +444,132 @@ fn the_readme_is_no_diary() {
         );
     }
 }
+
+/// Where a `.field` of the StaticOptimization plan is changed on `line`
+/// other than through its setters: assigned (`so.friction = ...`) or
+/// edited in place (`so.contact_weights.push(...)`, `.take()`, ...).
+fn plan_field_edit(line: &str) -> Option<&'static str> {
+    const FIELDS: [&str; 17] = [
+        "contact_weights",
+        "contact_weights_given",
+        "friction",
+        "solver",
+        "constraint_matrix",
+        "solver_tolerance",
+        "reserve_actuators",
+        "activation_exponent",
+        "convergence_criterion",
+        "max_iterations",
+        "knee_contact",
+        "knee_contact_frontal",
+        "knee_contact_capacity_bw",
+        "knee_contact_medial_share",
+        "knee_contact_equal_activation",
+        "passive_fiber_forces",
+        "use_muscle_physiology",
+    ];
+    for field in FIELDS {
+        let dotted = format!(".{field}");
+        for (i, _) in line.match_indices(&dotted) {
+            if !word_at(line, i + 1, field) {
+                continue;
+            }
+            let rest = line[i + dotted.len()..].trim_start();
+            let assigned = rest.starts_with('=') && !rest.starts_with("==");
+            let edited = [
+                ".push(",
+                ".take(",
+                ".truncate(",
+                ".clear(",
+                ".insert(",
+                ".retain(",
+                ".extend(",
+            ]
+            .iter()
+            .any(|m| rest.starts_with(m));
+            if assigned || edited {
+                return Some(field);
+            }
+        }
+    }
+    None
+}
+
+/// Tools change a run only through the plan's checked setters
+/// (`StaticOptimizationSetup::set_contact_weights`, `set_friction`, ...),
+/// before the problem is compiled: no shipped line of `src/tools/` assigns
+/// or edits a field of the StaticOptimization plan. (predict-grf wrote its
+/// default w0 and took the reserves out by hand, `bench --grid` set the
+/// friction model, solver, matrix and its `--w0` unchecked.)
+#[test]
+fn tools_change_runs_only_through_checked_setters() {
+    assert_eq!(plan_field_edit("so.friction = f;"), Some("friction"));
+    assert_eq!(
+        plan_field_edit("return Ok(so.reserve_actuators.take());"),
+        Some("reserve_actuators")
+    );
+    assert_eq!(
+        plan_field_edit("if so.constraint_matrix == ConstraintMatrix::Perturbation {"),
+        None
+    );
+    assert_eq!(plan_field_edit("so.set_solver(SolverChoice::Auto);"), None);
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src/tools"), &mut files);
+    files.sort();
+    let mut offenders = Vec::new();
+    for f in &files {
+        let code = shipped_code(&std::fs::read_to_string(f).unwrap());
+        for (n, line) in code.lines().enumerate() {
+            let line = line.split("//").next().unwrap_or("");
+            if let Some(field) = plan_field_edit(line) {
+                offenders.push(format!(
+                    "{}:{}: .{field}: {}",
+                    f.display(),
+                    n + 1,
+                    line.trim()
+                ));
+            }
+        }
+    }
+    assert!(files.len() > 10, "{files:?}");
+    assert!(offenders.is_empty(), "{offenders:#?}");
+}
+
+/// The compiled problem keeps numeric options compiled from the plan
+/// (`frame::options::SoOptions`), not a copy of the plan: no field of
+/// `SoProblem` holds a `StaticOptimizationSetup` (it held `settings:
+/// so.clone()`, and each solve wrote 1/w0 from that copy), and the
+/// StaticOptimization plan's defaults are the only ones: one
+/// `DEFAULT_CONTACT_WEIGHT` in the crate (predict-grf's foot contacts have
+/// their own parameter, `contacts::ground::FOOT_CONTACT_WEIGHT`).
+#[test]
+fn the_compiled_problem_keeps_options_not_the_plan() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let problem = std::fs::read_to_string(root.join("src/frame/problem.rs")).unwrap();
+    let code = shipped_code(&problem);
+    let start = code
+        .find("pub struct SoProblem {")
+        .expect("SoProblem in src/frame/problem.rs");
+    let body = &code[start..item_end(code.as_bytes(), start)];
+    assert!(body.contains("pub options: SoOptions"), "{body}");
+    assert!(!body.contains("StaticOptimizationSetup"), "{body}");
+    let compile =
+        shipped_code(&std::fs::read_to_string(root.join("src/frame/compile.rs")).unwrap());
+    assert!(
+        !compile.contains("so.clone()"),
+        "frame/compile.rs copies the plan"
+    );
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    let defining: Vec<String> = files
+        .iter()
+        .filter(|f| {
+            std::fs::read_to_string(f)
+                .unwrap()
+                .contains("const DEFAULT_CONTACT_WEIGHT")
+        })
+        .map(|f| f.display().to_string())
+        .collect();
+    assert_eq!(defining.len(), 1, "{defining:?}");
+}

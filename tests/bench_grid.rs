@@ -299,7 +299,7 @@ fn grid_runs_one_w0_of_a_sweeping_setup() {
     );
     let out = common::out_dir("grid_sweep_out");
     let choices = vec![Choice::so("clarabel", 1, |so| {
-        so.solver = SolverChoice::Clarabel;
+        so.set_solver(SolverChoice::Clarabel);
         Ok(())
     })];
     let opts = GridOptions {
@@ -335,6 +335,31 @@ fn typed_edits_are_checked_as_when_read() {
     so.set_contact_weights(&[1.0, 500.0]).unwrap();
     assert!(so.contact_weights_given);
     assert_eq!(so.contact_weights, [1.0, 500.0]);
+}
+
+/// The grid's own w0 (`--w0`) is checked as the setup's is: a weight
+/// outside the range is an error naming the StaticOptimization element,
+/// before any run (it was written into the plan unchecked).
+#[test]
+fn the_grids_contact_weight_is_checked() {
+    let setup = read_setup(&contact_case("grid_w0_check", ""));
+    let out = common::out_dir("grid_w0_check_out");
+    for bad in [-1.0, 0.0, f64::NAN, 1e13] {
+        let opts = GridOptions {
+            out: out.clone(),
+            repeat: 1,
+            contact_weight: Some(bad),
+            ..Default::default()
+        };
+        let e = bench_grid::run_grid(&setup, &bench_grid::reference_choice(), &[], &opts)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("contact_weight") && e.contains("<StaticOptimization name=\"SO\">"),
+            "{bad}: {e}"
+        );
+    }
 }
 
 #[test]

@@ -89,7 +89,7 @@ fn compare_case(name: &str, setup_file: &Path, friction: Option<FrictionModel>, 
     let mut mf = MuscleFrame::new(&problem.muscles, &problem.model);
     let nv = problem.controls.len();
     for w0 in weights {
-        problem.settings.contact_weights = vec![w0];
+        problem.options.contact_weights = vec![w0];
         for &i in &rows {
             let (fp, scale, _, _) = problem.frame_problem(
                 states.time[i],

@@ -252,6 +252,75 @@ pub fn per_foot(
     });
     (f, cop)
 }
+/// w0 of foot contacts (predict-grf) when the setup's StaticOptimization
+/// gives none. A parameter of its own, not the plan's default w0
+/// (`parse::analyses::DEFAULT_CONTACT_WEIGHT` = 1000, for contacts a user
+/// writes into a model, after Krüger & Wartzack):
+/// with the foot contacts' optimal force of 100 N, a body weight spread over
+/// a dozen points costs about as much as the muscles' activations, so the
+/// contacts' weight w(d) and their sum of squares shape the split between
+/// the feet (with w0 = 1000 contacts are almost free and the optimiser
+/// squeezes the feet against each other in double support; see
+/// docs/grf_prediction.md).
+pub const FOOT_CONTACT_WEIGHT: f64 = 10.0;
+
+/// The strength of the muscles of the models [`FOOT_CONTACT_WEIGHT`]
+/// was chosen on, per coordinate (N·m per unit of control): the size of the
+/// generalized forces their muscles make at full activation,
+/// sqrt(Σ (r_i F_max,i)²), over the lower limb's ten coordinates of the
+/// Rajagopal model (moco_walk3d, OpenSim's moment arms over the trial):
+/// 57 (hip rotation) to 354 N·m (ankle), geometric mean 188, rounded to 200.
+pub const MUSCLE_STRENGTH_REFERENCE: f64 = 200.0;
+
+/// A model whose joints are carried by coordinate actuators only (no
+/// muscles: torque-driven, reserves only): the geometric mean over its
+/// unconstrained coordinates but the root's of the actuators' strength
+/// per coordinate, sqrt(Σ F_opt²) (N·m or N per unit of control; the
+/// setup's reserves included). None when the model has muscles, or no such
+/// actuator.
+///
+/// The objective weighs an actuator's generalized force τ as (τ/S)² and a
+/// contact force f as (f/F0)²/w0: to keep the balance between the feet and
+/// the joints that w0 was chosen with on muscle-driven models, a model
+/// whose actuators are k times weaker gets w0/k² (see
+/// docs/grf_prediction.md).
+pub fn torque_driven_strength(
+    forces: &[crate::xml::Element],
+    model: &crate::model::Model,
+    reserves: Option<f64>,
+) -> Option<f64> {
+    if forces.iter().any(|f| f.name.contains("Muscle")) {
+        return None;
+    }
+    let mut sum2 = vec![0.0; model.nq()];
+    for f in forces.iter().filter(|f| f.name == "CoordinateActuator") {
+        let applies = f
+            .child_text("appliesForce")
+            .map(|t| t.trim() != "false")
+            .unwrap_or(true);
+        let coordinate = f.child_text("coordinate").unwrap_or("").trim();
+        let fo: f64 = f
+            .child_text("optimal_force")
+            .and_then(|t| t.trim().parse().ok())
+            .unwrap_or(1.0);
+        if let (true, Some(c)) = (applies, model.coordinate_index(coordinate)) {
+            sum2[c] += fo * fo;
+        }
+    }
+    let (mut log_sum, mut n) = (0.0, 0usize);
+    for c in 0..model.nq() {
+        if model.coordinates[c].is_constrained() || model.is_root_coordinate(c) {
+            continue;
+        }
+        let s2 = sum2[c] + reserves.map_or(0.0, |r| r * r);
+        if s2 > 0.0 {
+            log_sum += 0.5 * s2.ln();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| (log_sum / n as f64).exp())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

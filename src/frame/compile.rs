@@ -243,7 +243,7 @@ impl SoProblem {
                 passive_after,
                 loads,
                 rows,
-                settings: so.clone(),
+                options: crate::frame::options::SoOptions::compile(so),
                 force_labels,
                 contacts,
                 ties,

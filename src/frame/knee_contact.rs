@@ -290,7 +290,7 @@ impl SoProblem {
         for p in &self.passive {
             p.apply(data, &mut s.applied, &mut s.gen);
         }
-        if self.settings.passive_fiber_forces {
+        if self.options.passive_fiber_forces {
             for m in 0..self.muscles.len() {
                 geometry::add_tension_forces(
                     mf.path_state(m),

@@ -1,6 +1,7 @@
 //! Stage: one frame of static optimization, and the driver that runs frames.
 //!
-//! - [`settings`]: the StaticOptimization element, compiled.
+//! - [`settings`]: the StaticOptimization element as the plan holds it;
+//!   [`options`]: the numbers a run is solved with, compiled from it.
 //! - [`compile`]: [`SoProblem::build`], the run's model and force set sorted
 //!   into controls, passive forces, contacts and external loads, once.
 //! - [`problem`]: [`SoProblem`], compiled once per run, and per frame its
@@ -19,11 +20,13 @@ pub mod compile;
 pub mod driver;
 pub mod interrupt;
 pub mod knee_contact;
+pub mod options;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;
 pub mod workspace;
 
+pub use options::SoOptions;
 pub use problem::{Control, FrameResult, SoProblem};
 pub use settings::StaticOptimizationSetup;
 pub use workspace::Workspace;

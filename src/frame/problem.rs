@@ -23,8 +23,9 @@ use crate::dynamics::{kinematics, rnea, Data};
 use crate::forces::actuators::Actuator;
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
+use crate::frame::options::SoOptions;
 use crate::frame::perturbation::Perturbation;
-use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, DEFAULT_TOLERANCE};
+use crate::frame::settings::{ConstraintMatrix, DEFAULT_TOLERANCE};
 use crate::model::Model;
 use crate::motion::states::assemble;
 use crate::muscles::set::{MuscleFrame, MuscleSet};
@@ -56,7 +57,9 @@ pub struct SoProblem {
     pub loads: Option<ExternalLoads>,
     /// Independent, unconstrained coordinates: the equations' rows.
     pub rows: Vec<usize>,
-    pub settings: StaticOptimizationSetup,
+    /// The numbers the run is solved with, compiled from the plan's
+    /// StaticOptimization (`frame::options`); the plan itself is not kept.
+    pub options: SoOptions,
     /// Labels of the force file: ForceSet record labels in ForceSet order
     /// (see [`force_file_row`]), reserves, then external forces.
     pub force_labels: Vec<String>,
@@ -337,7 +340,7 @@ impl SoProblem {
         self.add_passive_forces(t, data, g, Some(passive_values));
         mf.evaluate(&self.muscles, model, data);
         self.add_passive_fiber_forces(data, mf);
-        let perturb = self.settings.constraint_matrix == ConstraintMatrix::Perturbation;
+        let perturb = self.options.constraint_matrix == ConstraintMatrix::Perturbation;
         if !perturb {
             rnea::inverse_dynamics_after_kinematics(model, data, true);
         }
@@ -381,7 +384,7 @@ impl SoProblem {
             let (f, gen): (f64, &[f64]) = match ctl {
                 Control::Muscle(m) => {
                     let pm = &self.muscles.muscles[*m];
-                    let f = if self.settings.use_muscle_physiology {
+                    let f = if self.options.use_muscle_physiology {
                         mf.max_active_force[*m]
                     } else {
                         pm.muscle.params.max_isometric_force
@@ -493,16 +496,9 @@ impl SoProblem {
             problem.a[(r, *j)] = -1.0;
             problem.b[r] = 0.0;
         }
-        problem.exponent = self.settings.activation_exponent;
-        problem.friction = self.settings.friction;
-        problem.settings = SolveSettings {
-            tolerance: self
-                .settings
-                .solver_tolerance
-                .unwrap_or(self.settings.convergence_criterion.min(DEFAULT_TOLERANCE)),
-            max_iter: self.settings.max_iterations.max(100),
-            solver: self.settings.solver,
-        };
+        problem.exponent = self.options.activation_exponent;
+        problem.friction = self.options.friction;
+        problem.settings = self.options.solve;
         fd.map(|fd| fd.finish(model, data))
     }
 
@@ -531,7 +527,7 @@ impl SoProblem {
     /// Adds the muscles' passive fiber forces (rigid tendon) to
     /// `data.applied_gen` when the setup asks for them.
     pub(crate) fn add_passive_fiber_forces(&self, data: &mut Data, mf: &MuscleFrame) {
-        if self.settings.passive_fiber_forces {
+        if self.options.passive_fiber_forces {
             for (f, fp) in mf.unit_force.iter().zip(&mf.passive_force) {
                 for (a, fk) in data.applied_gen.iter_mut().zip(f) {
                     *a += fp * fk;
@@ -672,11 +668,11 @@ impl SoProblem {
     }
 
     /// The contact weight a single frame problem is assembled with: the
-    /// plan's first (`settings.contact_weights`; a sweep solves each of its
-    /// weights from that one assembly, `solve_frame_weights`). The plan
-    /// carries the weights; the compiled problem keeps no copy of its own.
+    /// run's first (`options.contact_weights`, compiled from the plan; a
+    /// sweep solves each of its weights from that one assembly,
+    /// `solve_frame_weights`).
     pub fn w0(&self) -> f64 {
-        self.settings.contact_weights[0]
+        self.options.contact_weights[0]
     }
 
     /// Solve one frame. `data` and `mf` are per-thread workspaces.
@@ -865,7 +861,7 @@ impl SoProblem {
         out.friction_violation = problem
             .static_contacts
             .iter()
-            .map(|c| self.settings.friction.violation(c, &solution.x))
+            .map(|c| self.options.friction.violation(c, &solution.x))
             .fold(0.0, f64::max);
         self.contact_outputs_into(
             states,

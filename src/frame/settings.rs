@@ -1,9 +1,11 @@
-//! The StaticOptimization element's settings a frame is solved with: read
-//! once in the parse stage (`parse::analyses`), re-exported here.
+//! The StaticOptimization element's settings as the plan holds them: read
+//! once in the parse stage (`parse::analyses`), re-exported here; a run
+//! compiles them into its numeric options (`frame::options::SoOptions`).
 
 pub use crate::parse::analyses::{
     ConstraintMatrix, EqualActivation, KneeSelection, StaticOptimizationSetup,
-    CONTACT_WEIGHT_RANGE, DEFAULT_CONTACT_WEIGHT, DEFAULT_TOLERANCE,
+    CONTACT_WEIGHT_RANGE, DEFAULT_ACTIVATION_EXPONENT, DEFAULT_CONTACT_WEIGHT,
+    DEFAULT_CONVERGENCE_CRITERION, DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE,
 };
 
 #[cfg(test)]

@@ -302,15 +302,60 @@ impl StaticOptimizationSetup {
         self.solver_tolerance = Some(tol);
         Ok(())
     }
+
+    /// The contact weight a run takes when the element gives none
+    /// (`<contact_weight>` left out): a tool's own default for its contacts
+    /// (predict-grf's foot contacts), checked as a given weight is; the
+    /// element still counts as giving none.
+    pub fn set_default_contact_weight(&mut self, w0: f64) -> Result<()> {
+        if let Some(m) = contact_weights_problem(&[w0], &w0.to_string()) {
+            return Err(self.element.error(m));
+        }
+        self.contact_weights = vec![w0];
+        Ok(())
+    }
+
+    /// The static friction constraint's representation (`<friction_cone>`).
+    pub fn set_friction(&mut self, friction: FrictionModel) {
+        self.friction = friction;
+    }
+
+    /// The frame solver (`<solver>`).
+    pub fn set_solver(&mut self, solver: SolverChoice) {
+        self.solver = solver;
+    }
+
+    /// How the equations of motion become the constraint matrix
+    /// (`<constraint_matrix>`).
+    pub fn set_constraint_matrix(&mut self, m: ConstraintMatrix) {
+        self.constraint_matrix = m;
+    }
+
+    /// The reserves' optimal force (`<reserve_actuators>`), or none: a
+    /// positive, finite force.
+    pub fn set_reserve_actuators(&mut self, optimal_force: Option<f64>) -> Result<()> {
+        if let Some(v) = optimal_force {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(self.element.error(format!(
+                    "reserve_actuators is the reserves' optimal force and must be positive, found {v}"
+                )));
+            }
+        }
+        self.reserve_actuators = optimal_force;
+        Ok(())
+    }
 }
 
 impl StaticOptimizationSetup {
     pub fn from_xml(el: &Element, common: AnalysisCommon) -> Result<Self> {
-        let p = el.child_f64_or("activation_exponent", 2.0)?;
+        let p = el.child_f64_or("activation_exponent", DEFAULT_ACTIVATION_EXPONENT)?;
         if !(p >= 1.0 && p.is_finite()) {
             return Err(el.req("activation_exponent")?.error(format!("activation_exponent must be a finite number >= 1 (the problem is convex only then), found {p}")));
         }
-        let max_iter = el.child_f64_or("optimizer_max_iterations", 100.0)?;
+        let max_iter = el.child_f64_or(
+            "optimizer_max_iterations",
+            f64::from(DEFAULT_MAX_ITERATIONS),
+        )?;
         if !(max_iter >= 1.0) {
             return Err(el
                 .req("optimizer_max_iterations")?
@@ -327,7 +372,8 @@ impl StaticOptimizationSetup {
             use_model_force_set: el.child_bool_or("use_model_force_set", true)?,
             activation_exponent: p,
             use_muscle_physiology: el.child_bool_or("use_muscle_physiology", true)?,
-            convergence_criterion: el.child_f64_or("optimizer_convergence_criterion", 1e-4)?,
+            convergence_criterion: el
+                .child_f64_or("optimizer_convergence_criterion", DEFAULT_CONVERGENCE_CRITERION)?,
             max_iterations: max_iter as u32,
             passive_fiber_forces: el.child_bool_or("passive_fiber_forces", false)?,
             contact_weights: match el.child("contact_weight") {
@@ -438,6 +484,16 @@ pub const DEFAULT_KNEE_MEDIAL_SHARE: f64 = 0.65;
 
 /// w0 when a StaticOptimization has no `<contact_weight>`.
 pub const DEFAULT_CONTACT_WEIGHT: f64 = 1000.0;
+
+/// OpenSim's `activation_exponent` when a StaticOptimization gives none.
+pub const DEFAULT_ACTIVATION_EXPONENT: f64 = 2.0;
+
+/// OpenSim's `optimizer_convergence_criterion` when a StaticOptimization
+/// gives none.
+pub const DEFAULT_CONVERGENCE_CRITERION: f64 = 1e-4;
+
+/// OpenSim's `optimizer_max_iterations` when a StaticOptimization gives none.
+pub const DEFAULT_MAX_ITERATIONS: u32 = 100;
 
 /// The w0 statopt accepts: 1/w0 and w0 times a unit multiplier stay within
 /// ten decades of the activations' scale either way.

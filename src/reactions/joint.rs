@@ -274,7 +274,7 @@ pub fn static_optimization_reactions(
             k += 6;
         }
     }
-    if problem.settings.passive_fiber_forces {
+    if problem.options.passive_fiber_forces {
         add_passive_fiber_forces(problem, mf, data);
     }
     reactions(model, data, t, specs, out)

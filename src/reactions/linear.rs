@@ -92,7 +92,7 @@ fn evaluate(
             data.applied[c.plane_body].add(&BodyForce::at_point(f_plane, st.projection_ground));
         }
     }
-    if problem.settings.passive_fiber_forces {
+    if problem.options.passive_fiber_forces {
         add_passive_fiber_forces(problem, mf, data);
     }
     if let Some((k, value)) = mobility {

@@ -143,10 +143,10 @@ pub fn reference_choice() -> Choice {
     Choice::new("reference", 1, |s| {
         s.coordinate_spline = 5;
         let so = so_analysis(s)?;
-        so.friction = FrictionModel::Cone;
-        so.solver = SolverChoice::Auto;
+        so.set_friction(FrictionModel::Cone);
+        so.set_solver(SolverChoice::Auto);
         so.set_solver_tolerance(1e-10)?;
-        so.constraint_matrix = ConstraintMatrix::Analytic;
+        so.set_constraint_matrix(ConstraintMatrix::Analytic);
         Ok(())
     })
 }
@@ -157,7 +157,7 @@ pub fn reference_choice() -> Choice {
 pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> {
     let mut v = vec![Choice::new("default", 1, |_| Ok(()))];
     v.push(Choice::so("perturbation", 1, |so| {
-        so.constraint_matrix = ConstraintMatrix::Perturbation;
+        so.set_constraint_matrix(ConstraintMatrix::Perturbation);
         Ok(())
     }));
     if has_contacts {
@@ -167,7 +167,7 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
             ("cone", FrictionModel::Cone),
         ] {
             v.push(Choice::so(name, 1, move |so| {
-                so.friction = f;
+                so.set_friction(f);
                 Ok(())
             }));
         }
@@ -175,7 +175,7 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
     // Clarabel instead of the dual Newton solver, at several tolerances
     // (the Newton solver always solves to 1e-12 relative).
     v.push(Choice::so("clarabel", 1, |so| {
-        so.solver = SolverChoice::Clarabel;
+        so.set_solver(SolverChoice::Clarabel);
         Ok(())
     }));
     for (name, tol) in [
@@ -187,7 +187,7 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         ("1e-10", 1e-10),
     ] {
         v.push(Choice::so(format!("clarabel tol {name}"), 1, move |so| {
-            so.solver = SolverChoice::Clarabel;
+            so.set_solver(SolverChoice::Clarabel);
             so.set_solver_tolerance(tol)
         }));
     }
@@ -220,8 +220,8 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         "perturbation, clarabel tol 1e-4 (OpenSim-like)",
         1,
         |so| {
-            so.constraint_matrix = ConstraintMatrix::Perturbation;
-            so.solver = SolverChoice::Clarabel;
+            so.set_constraint_matrix(ConstraintMatrix::Perturbation);
+            so.set_solver(SolverChoice::Clarabel);
             so.set_solver_tolerance(1e-4)
         },
     ));
@@ -231,15 +231,15 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         "clarabel tol 1e-4, 2 threads"
     };
     v.push(Choice::so(name, 2, move |so| {
-        so.solver = SolverChoice::Clarabel;
+        so.set_solver(SolverChoice::Clarabel);
         so.set_solver_tolerance(1e-4)?;
         if has_contacts {
-            so.friction = FrictionModel::Pyramid4;
+            so.set_friction(FrictionModel::Pyramid4);
         }
         Ok(())
     }));
     v.push(Choice::so("cubic, clarabel tol 1e-6, 2 threads", 2, |so| {
-        so.solver = SolverChoice::Clarabel;
+        so.set_solver(SolverChoice::Clarabel);
         so.set_solver_tolerance(1e-6)
     }));
     if let Some(c) = v.last_mut() {
@@ -281,11 +281,8 @@ fn bench_setup(setup: &AnalyzeSetup, w0: Option<f64>) -> Result<AnalyzeSetup> {
         }
     }
     let so = so_analysis(&mut s)?;
-    if let Some(w) = w0 {
-        so.contact_weights = vec![w];
-    } else {
-        so.contact_weights.truncate(1);
-    }
+    let w = w0.unwrap_or(so.contact_weights[0]);
+    so.set_contact_weights(&[w])?;
     Ok(s)
 }
 

@@ -24,7 +24,10 @@ use crate::storage::StoWriter;
 use crate::tools::{analyze, RunOptions, RunSummary};
 
 use crate::contacts::ground::{flight_frames, keep_frames, plate_samples};
-pub use crate::contacts::ground::{foot_loads_from_contacts, measured_foot_loads, FootLoads};
+pub use crate::contacts::ground::{
+    foot_loads_from_contacts, measured_foot_loads, torque_driven_strength, FootLoads,
+    FOOT_CONTACT_WEIGHT, MUSCLE_STRENGTH_REFERENCE,
+};
 use crate::metrics::grf::n_flight_of;
 pub use crate::metrics::grf::{
     compare, judge_root_residual, judge_support, pearson, stance_metrics, AxisMetrics,
@@ -44,7 +47,7 @@ pub struct Prediction {
     /// Per foot: centre-of-pressure and event-timing errors over stance.
     pub stance: Vec<StanceMetrics>,
     pub body_weight: f64,
-    /// The w0 the prediction ran with ([`DEFAULT_CONTACT_WEIGHT`] unless
+    /// The w0 the prediction ran with ([`FOOT_CONTACT_WEIGHT`] unless
     /// the setup gives one).
     pub contact_weight: f64,
     /// Per frame: time (s) and the root residual, the size of the summed
@@ -278,10 +281,10 @@ pub fn run_with(
     let am = crate::forces::analysis_model::with_force_sets(composed.clone(), &setup)?;
     let strength = torque_driven_strength(&am.forces, &am.model, reserves);
     let default_weight = match strength {
-        Some(s) => DEFAULT_CONTACT_WEIGHT * (s / MUSCLE_STRENGTH_REFERENCE).powi(2),
-        None => DEFAULT_CONTACT_WEIGHT,
+        Some(s) => FOOT_CONTACT_WEIGHT * (s / MUSCLE_STRENGTH_REFERENCE).powi(2),
+        None => FOOT_CONTACT_WEIGHT,
     };
-    let (contact_weight, given_weight) = use_contact_weight(&mut setup, default_weight);
+    let (contact_weight, given_weight) = use_contact_weight(&mut setup, default_weight)?;
     let model = am.model;
     // The motion is read once: for the feet here and for the run below.
     let motion = analyze::read_motion(&setup)?;
@@ -363,7 +366,7 @@ pub fn run_with(
         (true, _) => format!("contact weight w0 = {contact_weight} (the setup's <contact_weight>)"),
         (false, None) => format!("contact weight w0 = {contact_weight} (muscle-driven model: the default)"),
         (false, Some(s)) => format!(
-            "contact weight w0 = {contact_weight:.3} (torque-driven model: its actuators make {s:.0} N m per unit of control per coordinate, against {MUSCLE_STRENGTH_REFERENCE:.0} N m of the muscle-driven models w0 = {DEFAULT_CONTACT_WEIGHT} was chosen on: w0 = {DEFAULT_CONTACT_WEIGHT} x ({s:.0}/{MUSCLE_STRENGTH_REFERENCE:.0})^2)"
+            "contact weight w0 = {contact_weight:.3} (torque-driven model: its actuators make {s:.0} N m per unit of control per coordinate, against {MUSCLE_STRENGTH_REFERENCE:.0} N m of the muscle-driven models w0 = {FOOT_CONTACT_WEIGHT} was chosen on: w0 = {FOOT_CONTACT_WEIGHT} x ({s:.0}/{MUSCLE_STRENGTH_REFERENCE:.0})^2)"
         ),
     });
     for (s, side) in ['r', 'l'].into_iter().enumerate() {
@@ -539,88 +542,22 @@ fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64,
     )
 }
 
-/// w0 of the prediction when the setup's StaticOptimization gives none:
-/// with the foot contacts' optimal force of 100 N, a body weight spread over
-/// a dozen points costs about as much as the muscles' activations, so the
-/// contacts' weight w(d) and their sum of squares shape the split between
-/// the feet (with w0 = 1000 contacts are almost free and the optimiser
-/// squeezes the feet against each other in double support; see
-/// docs/grf_prediction.md).
-pub const DEFAULT_CONTACT_WEIGHT: f64 = 10.0;
-
-/// The strength of the muscles of the models [`DEFAULT_CONTACT_WEIGHT`]
-/// was chosen on, per coordinate (N·m per unit of control): the size of the
-/// generalized forces their muscles make at full activation,
-/// sqrt(Σ (r_i F_max,i)²), over the lower limb's ten coordinates of the
-/// Rajagopal model (moco_walk3d, OpenSim's moment arms over the trial):
-/// 57 (hip rotation) to 354 N·m (ankle), geometric mean 188, rounded to 200.
-pub const MUSCLE_STRENGTH_REFERENCE: f64 = 200.0;
-
-/// A model whose joints are carried by coordinate actuators only (no
-/// muscles: torque-driven, reserves only): the geometric mean over its
-/// unconstrained coordinates but the root's of the actuators' strength
-/// per coordinate, sqrt(Σ F_opt²) (N·m or N per unit of control; the
-/// setup's reserves included). None when the model has muscles, or no such
-/// actuator.
-///
-/// The objective weighs an actuator's generalized force τ as (τ/S)² and a
-/// contact force f as (f/F0)²/w0: to keep the balance between the feet and
-/// the joints that w0 was chosen with on muscle-driven models, a model
-/// whose actuators are k times weaker gets w0/k² (see
-/// docs/grf_prediction.md).
-fn torque_driven_strength(
-    forces: &[crate::xml::Element],
-    model: &crate::model::Model,
-    reserves: Option<f64>,
-) -> Option<f64> {
-    if forces.iter().any(|f| f.name.contains("Muscle")) {
-        return None;
-    }
-    let mut sum2 = vec![0.0; model.nq()];
-    for f in forces.iter().filter(|f| f.name == "CoordinateActuator") {
-        let applies = f
-            .child_text("appliesForce")
-            .map(|t| t.trim() != "false")
-            .unwrap_or(true);
-        let coordinate = f.child_text("coordinate").unwrap_or("").trim();
-        let fo: f64 = f
-            .child_text("optimal_force")
-            .and_then(|t| t.trim().parse().ok())
-            .unwrap_or(1.0);
-        if let (true, Some(c)) = (applies, model.coordinate_index(coordinate)) {
-            sum2[c] += fo * fo;
-        }
-    }
-    let (mut log_sum, mut n) = (0.0, 0usize);
-    for c in 0..model.nq() {
-        if model.coordinates[c].is_constrained() || model.is_root_coordinate(c) {
-            continue;
-        }
-        let s2 = sum2[c] + reserves.map_or(0.0, |r| r * r);
-        if s2 > 0.0 {
-            log_sum += 0.5 * s2.ln();
-            n += 1;
-        }
-    }
-    (n > 0).then(|| (log_sum / n as f64).exp())
-}
-
 /// The setup's own `<contact_weight>` when its StaticOptimization has one
 /// (then `(w0, true)`); otherwise `default`, written into the setup's
 /// analysis (`(default, false)`).
-fn use_contact_weight(setup: &mut AnalyzeSetup, default: f64) -> (f64, bool) {
+fn use_contact_weight(setup: &mut AnalyzeSetup, default: f64) -> Result<(f64, bool)> {
     for a in setup.analyses.iter_mut() {
         if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
             if so.contact_weights_given {
                 if let Some(first) = so.contact_weights.first() {
-                    return (*first, true);
+                    return Ok((*first, true));
                 }
             }
-            so.contact_weights = vec![default];
-            return (default, false);
+            so.set_default_contact_weight(default)?;
+            return Ok((default, false));
         }
     }
-    (default, false)
+    Ok((default, false))
 }
 
 fn write_foot_loads(
@@ -802,8 +739,9 @@ fn write_external_loads(
 fn take_reserve_actuators(setup: &mut AnalyzeSetup) -> Result<Option<f64>> {
     for a in setup.analyses.iter_mut() {
         if let crate::parse::setup::Analysis::StaticOptimization(so) = a {
-            // Checked (positive, finite) when the setup was read.
-            return Ok(so.reserve_actuators.take());
+            let reserves = so.reserve_actuators;
+            so.set_reserve_actuators(None)?;
+            return Ok(reserves);
         }
     }
     Ok(None)

@@ -475,7 +475,7 @@ pub fn contacts_at_limits(problem: &SoProblem, contacts: &[f64]) -> Vec<String> 
                 shear: [1, 2],
                 mu,
             };
-            let violation = problem.settings.friction.violation(&sc, &[n, s1, s2]);
+            let violation = problem.options.friction.violation(&sc, &[n, s1, s2]);
             (violation >= -1e-6 * (mu * n).max(1e-12)).then(|| {
                 if f.regime > 0.0 {
                     format!(

@@ -49,7 +49,7 @@ impl RunStatistics {
             .iter()
             .enumerate()
             .filter(|(_, l)| {
-                problem.settings.reserve_actuators.is_some() && l.ends_with("_reserve")
+                problem.options.reserve_actuators.is_some() && l.ends_with("_reserve")
             })
             .map(|(i, _)| i)
             .collect();

@@ -118,7 +118,7 @@ impl SoTables {
             let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
             let desc = format!(
                 "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
-                spec.w0, problem.settings.friction
+                spec.w0, problem.options.friction
             );
             let cw = open_table(
                 &cpath,
