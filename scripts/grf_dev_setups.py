@@ -57,22 +57,11 @@ SETUP = """<?xml version="1.0" encoding="UTF-8" ?>
 
 
 def time_range(path):
-    """First and last time of a .mot/.sto (rows after 'endheader')."""
-    first = last = None
-    with open(path) as f:
-        for line in f:
-            if line.strip().lower() == "endheader":
-                break
-        next(f)  # column labels
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            t = float(parts[0])
-            if first is None:
-                first = t
-            last = t
-    return first, last
+    """First and last time of a .mot/.sto (statopt's reader)."""
+    import statopt
+
+    t = statopt.read_table(path).index
+    return (float(t[0]), float(t[-1])) if len(t) else (None, None)
 
 
 def trials(shared):

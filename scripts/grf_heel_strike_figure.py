@@ -25,11 +25,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def read_sto(path):
-    lines = open(path).read().splitlines()
-    i = next(k for k, line in enumerate(lines) if line.strip() == "endheader")
-    cols = [c.strip() for c in lines[i + 1].split("\t")]
-    rows = [[float(x) for x in line.split()] for line in lines[i + 2:] if line.strip()]
-    return {c: [r[j] for r in rows] for j, c in enumerate(cols)}
+    """Every column of a table (time included) as a list, read with statopt's reader."""
+    import statopt
+
+    df = statopt.read_table(path)
+    return {"time": df.index.tolist(), **{c: df[c].tolist() for c in df.columns}}
 
 
 def main():

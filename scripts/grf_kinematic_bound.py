@@ -36,12 +36,11 @@ CUTOFF = None  # --cutoff: another low-pass than the setup's (Hz; -1: none)
 
 
 def read_table(path):
-    lines = open(path).read().splitlines()
-    i = next(k for k, l in enumerate(lines) if l.strip().lower() == "endheader")
-    labels = lines[i + 1].split("\t")
-    labels = [c.strip() for c in labels]
-    rows = [list(map(float, l.split())) for l in lines[i + 2:] if l.strip()]
-    return labels, np.array(rows)
+    """Labels (time first) and rows of a table, read with statopt's reader."""
+    import statopt
+
+    df = statopt.read_table(path)
+    return ["time", *df.columns], np.column_stack([df.index.to_numpy(), df.to_numpy()])
 
 
 def text(root, tag):

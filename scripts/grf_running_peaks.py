@@ -11,11 +11,11 @@ import numpy as np
 
 
 def read(p):
-    L = open(p).read().splitlines()
-    i = [k for k, l in enumerate(L) if l.strip() == "endheader"][0]
-    lab = L[i + 1].split("\t")
-    a = np.array([list(map(float, l.split())) for l in L[i + 2:] if l.strip()])
-    return lab, a
+    """Labels (time first) and rows of a table, read with statopt's reader."""
+    import statopt
+
+    df = statopt.read_table(p)
+    return ["time", *df.columns], np.column_stack([df.index.to_numpy(), df.to_numpy()])
 
 
 def main():

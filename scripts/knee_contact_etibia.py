@@ -13,11 +13,11 @@ BW = 75.0 * 9.80665
 
 
 def read_sto(path):
-    lines = open(path).read().splitlines()
-    end = next(i for i, l in enumerate(lines) if l.strip() == "endheader")
-    labels = lines[end + 1].split("\t")
-    rows = [[float(x) for x in l.split()] for l in lines[end + 2:] if l.strip()]
-    return labels, rows
+    """Labels (time first) and rows of a table, read with statopt's reader."""
+    import statopt
+
+    df = statopt.read_table(path)
+    return ["time", *df.columns], [[t, *row] for t, row in zip(df.index.tolist(), df.to_numpy().tolist())]
 
 
 def interp(t, y, x):

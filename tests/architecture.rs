@@ -572,4 +572,76 @@ fn the_compiled_problem_keeps_options_not_the_plan() {
         .map(|f| f.display().to_string())
         .collect();
     assert_eq!(defining.len(), 1, "{defining:?}");
+/// The format strings of the `format!` calls of a source text, with their
+/// lines: the first string literal (plain or raw) after each `format!(`.
+fn format_strings(source: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut at = 0;
+    while let Some(k) = source[at..].find("format!(") {
+        let start = at + k + "format!(".len();
+        at = start;
+        let rest = source[start..].trim_start();
+        let (body, close) = if let Some(r) = rest.strip_prefix("r#\"") {
+            (r, "\"#")
+        } else if let Some(r) = rest.strip_prefix("r\"") {
+            (r, "\"")
+        } else if let Some(r) = rest.strip_prefix('"') {
+            (r, "\"")
+        } else {
+            continue;
+        };
+        let mut literal = String::new();
+        let mut chars = body.char_indices();
+        while let Some((i, c)) = chars.next() {
+            if body[i..].starts_with(close) {
+                break;
+            }
+            literal.push(c);
+            if c == '\\' && close == "\"" {
+                literal.extend(chars.next().map(|(_, c)| c));
+            }
+        }
+        let line = source[..start].matches('\n').count() + 1;
+        out.push((line, literal));
+    }
+    out
+}
+
+/// Every output file's name is made by `writers::names::file_name` from a
+/// typed key: outside test code, no file but `src/writers/names.rs` builds
+/// a name with `format!` holding `_w0_` or `.sto` (docs/architecture.md).
+#[test]
+fn output_names_are_made_in_one_place() {
+    let found = format_strings("let a = format!(\"{p}_w0_{t}\");\nformat!(r\"x.sto\")");
+    assert_eq!(found, [(1, "{p}_w0_{t}".into()), (2, "x.sto".into())]);
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut offenders = Vec::new();
+    let mut scanned = 0;
+    for file in &files {
+        let rel = file
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let name = file.file_name().unwrap().to_string_lossy();
+        if rel == "writers/names.rs" || name == "tests.rs" || name.ends_with("_tests.rs") {
+            continue;
+        }
+        let code = shipped_code(&std::fs::read_to_string(file).unwrap());
+        for (line, s) in format_strings(&code) {
+            scanned += 1;
+            if s.contains("_w0_") || s.contains(".sto") {
+                offenders.push(format!("src/{rel}:{line}: format!(\"{s}\")"));
+            }
+        }
+    }
+    assert!(scanned > 500, "only {scanned} format! calls scanned");
+    assert!(
+        offenders.is_empty(),
+        "output names built outside writers::names:\n{}",
+        offenders.join("\n")
+    );
 }

@@ -606,18 +606,175 @@ fn check(
     )
 }
 
-/// A table's file stem ending in `_<kind>` split into its run's name and
-/// its w0 tag (`writers::names::split_table_stem`; None: not of `kind`).
-#[pyfunction]
-fn split_table_stem(stem: &str, kind: &str) -> Option<(String, Option<String>)> {
-    statopt::writers::names::split_table_stem(stem, kind)
+/// The setups a document holds, read as the engine reads them: a tool
+/// setup (from `text` when given), or a study's setups.
+fn analyze_setups(
+    setup: &std::path::Path,
+    text: Option<&str>,
+) -> statopt::Result<Vec<statopt::parse::setup::AnalyzeSetup>> {
+    use statopt::parse::setup::Setup;
+    let setups = match text {
+        Some(t) => vec![Setup::parse_with(t, setup, true)?],
+        None => match statopt::plan::Plan::read(setup, true)? {
+            statopt::plan::Plan::Tool(s) => vec![*s],
+            statopt::plan::Plan::Study(st) => st.runs.into_iter().map(|r| r.setup).collect(),
+        },
+    };
+    Ok(setups
+        .into_iter()
+        .filter_map(|s| match s {
+            Setup::Analyze(a) => Some(a),
+            Setup::InverseDynamics(_) => None,
+        })
+        .collect())
 }
 
-/// A file name with its `w0_<tag>_` part taken out
-/// (`writers::names::without_w0`).
+/// A key as Python sees it: `setup`, `analysis` (None: the setup's own),
+/// `w0` (a float, or None), `stat` (`mean`, `min`, `max` or None), `table`
+/// (`activation`, `KneeLoads`, `MomentArm_knee_angle_r`, ...).
+fn key_dict<'py>(
+    py: Python<'py>,
+    key: &statopt::writers::names::OutputKey,
+) -> PyResult<Bound<'py, PyDict>> {
+    use statopt::writers::names::Sweep;
+    let d = PyDict::new(py);
+    d.set_item("setup", &key.run.setup)?;
+    d.set_item("analysis", key.run.analysis.clone())?;
+    let (w0, stat) = match key.run.sweep {
+        Sweep::Single => (None, None),
+        Sweep::Weight(w) => (Some(w), None),
+        Sweep::Stat(s) => (None, Some(s.as_str())),
+    };
+    d.set_item("w0", w0)?;
+    d.set_item("stat", stat)?;
+    d.set_item("table", key.kind.table())?;
+    Ok(d)
+}
+
+/// The key of each of `files` (paths a run of `setup` wrote; `text`: the
+/// setup document it ran, when not the file's) among the outputs the
+/// setup's plan writes (`writers::names::Planned`), or None: how Python
+/// knows a table's kind and w0 without reading its name.
 #[pyfunction]
-fn without_w0(file: &str) -> String {
-    statopt::writers::names::without_w0(file)
+#[pyo3(signature = (setup, files, text=None))]
+fn output_keys<'py>(
+    py: Python<'py>,
+    setup: PathBuf,
+    files: Vec<PathBuf>,
+    text: Option<String>,
+) -> PyResult<Vec<Option<Bound<'py, PyDict>>>> {
+    use statopt::writers::names::Planned;
+    let planned: Vec<Planned> = analyze_setups(&setup, text.as_deref())
+        .map_err(|e| to_py(py, e))?
+        .iter()
+        .map(Planned::of)
+        .collect();
+    files
+        .iter()
+        .map(|f| {
+            let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            match planned.iter().find_map(|p| p.find(name)) {
+                Some(k) => key_dict(py, &k).map(Some),
+                None => Ok(None),
+            }
+        })
+        .collect()
+}
+
+/// `values` (a setup's figure and metric references) pointed at the
+/// tables of a run of one w0: each that names a table of a w0 sweep of the
+/// setup `text` (its weights' or statistics') names the same table of the
+/// single run, its folder kept; others are returned as they are (and
+/// all of them when the setup cannot be read: the run then says why).
+#[pyfunction]
+fn single_w0_references(setup: PathBuf, text: String, values: Vec<String>) -> Vec<String> {
+    use statopt::writers::names::{file_name, Planned, Sweep};
+    let Ok(setups) = analyze_setups(&setup, Some(&text)) else {
+        return values;
+    };
+    let planned: Vec<Planned> = setups.iter().map(Planned::of).collect();
+    values
+        .into_iter()
+        .map(|v| {
+            let path = std::path::Path::new(&v);
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            match planned.iter().find_map(|p| p.find(name)) {
+                Some(k) if k.run.sweep != Sweep::Single => {
+                    let single = k.run.with_sweep(Sweep::Single).key(k.kind.clone());
+                    let folder = &v[..v.len() - name.len()];
+                    format!("{folder}{}", file_name(&single))
+                }
+                _ => v,
+            }
+        })
+        .collect()
+}
+
+/// The name of a run's table: `setup`, `analysis` (None: the setup's
+/// own), `w0` or `stat` (none: a single-w0 run) and `table`, one of
+/// [`output_tables`] (`writers::names::file_name`).
+#[pyfunction]
+#[pyo3(signature = (setup, table, analysis=None, w0=None, stat=None))]
+fn output_name(
+    setup: &str,
+    table: &str,
+    analysis: Option<&str>,
+    w0: Option<f64>,
+    stat: Option<&str>,
+) -> PyResult<String> {
+    use statopt::writers::names::{file_name, OutputKind, RunKey, Stat, Sweep};
+    let sweep = match (w0, stat) {
+        (None, None) => Sweep::Single,
+        (Some(w), None) => Sweep::Weight(w),
+        (None, Some(s)) => {
+            Sweep::Stat(*Stat::ALL.iter().find(|x| x.as_str() == s).ok_or_else(|| {
+                pyo3::exceptions::PyValueError::new_err(format!(
+                    "stat: one of mean, min, max, not '{s}'"
+                ))
+            })?)
+        }
+        (Some(_), Some(_)) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "give w0 or stat, not both",
+            ))
+        }
+    };
+    let kind = OutputKind::SO_TABLES
+        .into_iter()
+        .chain([
+            OutputKind::ReactionLoads,
+            OutputKind::KneeLoads,
+            OutputKind::KneeContact,
+        ])
+        .find(|k| k.table() == table)
+        .ok_or_else(|| {
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "table: one of {}, not '{table}'",
+                output_tables().join(", ")
+            ))
+        })?;
+    let run = RunKey {
+        setup: setup.to_string(),
+        analysis: analysis.map(String::from),
+        sweep,
+    };
+    Ok(file_name(&run.key(kind)))
+}
+
+/// The tables a static-optimization run writes, with its joint reactions'
+/// and the knee contact method's (`writers::names::OutputKind`).
+#[pyfunction]
+fn output_tables() -> Vec<String> {
+    use statopt::writers::names::OutputKind;
+    OutputKind::SO_TABLES
+        .into_iter()
+        .chain([
+            OutputKind::ReactionLoads,
+            OutputKind::KneeLoads,
+            OutputKind::KneeContact,
+        ])
+        .map(|k| k.table())
+        .collect()
 }
 
 #[pymodule]
@@ -635,7 +792,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
-    m.add_function(wrap_pyfunction!(split_table_stem, m)?)?;
-    m.add_function(wrap_pyfunction!(without_w0, m)?)?;
+    m.add_function(wrap_pyfunction!(output_keys, m)?)?;
+    m.add_function(wrap_pyfunction!(single_w0_references, m)?)?;
+    m.add_function(wrap_pyfunction!(output_name, m)?)?;
+    m.add_function(wrap_pyfunction!(output_tables, m)?)?;
     Ok(())
 }

@@ -21,29 +21,22 @@ from ._tables import read_tables
 
 log = logging.getLogger("statopt")
 
-_STATS = ("mean", "min", "max")
-
-
 class FramesFailedWarning(RuntimeWarning):
     """Some frames could not be solved (the CLI's exit status 3); their rows
     hold the solver's best point and the diagnostics table says which."""
 
 
-def _split_key(key: str, kind: str):
-    """(prefix, w0 tag or None) when the table ``key`` is of ``kind`` (its
-    file name ends in ``_<kind>``), else None; the names are the engine's
-    (``statopt::writers::names``, through the binding)."""
-    for suffix in (".sto", ".mot"):
-        if key.endswith(suffix):
-            key = key[: -len(suffix)]
-    return _native.split_table_stem(key, kind)
-
-
-def _w0_value(tag: str) -> Optional[float]:
-    try:
-        return float(tag)
-    except ValueError:
-        return None
+def _key_matches(key: Optional[Dict[str, Any]], kind: str, w0: Optional[float], stat: Optional[str]) -> bool:
+    """Whether a table's key (the engine's, ``statopt::writers::names``,
+    through the binding) is of ``kind`` at ``w0`` or ``stat`` (neither: every
+    run of a sweep, not its statistics)."""
+    if key is None or key["table"] != kind:
+        return False
+    if stat is not None:
+        return key["stat"] == stat
+    if w0 is not None:
+        return key["w0"] is not None and key["w0"] == float(w0)
+    return key["stat"] is None
 
 
 class Result:
@@ -61,12 +54,18 @@ class Result:
     """
 
     def __init__(self, setup: str, summary: Dict[str, Any], table_files: List[Tuple[str, Path]],
-                 metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None):
+                 metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None,
+                 keys: Optional[List[Optional[Dict[str, Any]]]] = None):
         self.setup = setup
         self.summary = summary
         self.metrics = metrics
         self.files = files
         self._table_files = table_files
+        # Per table (by its key in ``tables``): the engine's key of it
+        # (setup, analysis, w0, stat, table), or None.
+        self._keys: Dict[str, Optional[Dict[str, Any]]] = {
+            k: key for (k, _), key in zip(table_files, keys or [None] * len(table_files))
+        }
         self._tables: Optional[Dict[str, pd.DataFrame]] = None
         self._lock = threading.Lock()
         # The temporary results folder lives until the tables are read (or
@@ -115,18 +114,13 @@ class Result:
         """
         found = []
         for key, df in self.tables.items():
-            split = _split_key(key, kind)
-            if split is None:
-                continue
-            prefix, tag = split
-            if stat is not None:
-                if tag == stat:
-                    found.append((key, prefix, tag, df))
-            elif w0 is not None:
-                if tag is not None and _w0_value(tag) == float(w0):
-                    found.append((key, prefix, tag, df))
-            elif tag not in _STATS:
-                found.append((key, prefix, tag, df))
+            k = self._keys.get(key)
+            if _key_matches(k, kind, w0, stat):
+                found.append((key, (k["setup"], k["analysis"]), k["w0"], df))
+            elif k is None and key == kind and w0 is None and stat is None:
+                # A table the engine keys not (an InverseDynamicsTool's, named
+                # by its setup): by its whole name.
+                found.append((key, None, None, df))
         if not found:
             raise KeyError(
                 f"this run wrote no {kind} table"
@@ -136,10 +130,10 @@ class Result:
             )
         if len(found) == 1:
             return found[0][3]
-        prefixes = {f[1] for f in found}
-        if len(prefixes) == 1 and all(f[2] is not None and _w0_value(f[2]) is not None for f in found):
-            found.sort(key=lambda f: _w0_value(f[2]))
-            return pd.concat([f[3] for f in found], keys=[_w0_value(f[2]) for f in found],
+        runs = {f[1] for f in found}
+        if len(runs) == 1 and all(f[2] is not None for f in found):
+            found.sort(key=lambda f: f[2])
+            return pd.concat([f[3] for f in found], keys=[f[2] for f in found],
                              names=["w0", "time"])
         return pd.concat([f[3] for f in found], keys=[f[0] for f in found], names=["table", "time"])
 
@@ -156,9 +150,10 @@ class Result:
     @property
     def predicted_grf(self) -> pd.DataFrame:
         """Predicted ground reactions per foot (:func:`statopt.predict_grf`)."""
-        for key, df in self.tables.items():
-            if key.endswith("_predicted_grf") or key.endswith("_predicted_grf.sto"):
-                return df
+        for (key, path) in self._table_files:
+            k = self._keys.get(key)
+            if k is not None and k["table"] == "predicted_grf" and path.suffix == ".sto":
+                return self.tables[key]
         raise KeyError(f"this run wrote no predicted_grf table; its tables: {', '.join(self.tables)}")
 
     def __repr__(self) -> str:
@@ -393,7 +388,11 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
             summary["results_dirs"] = []
             if table_files:
                 scratch, out = out, None  # the result removes it once read
-        return Result(str(setup), summary, table_files, metrics, files, scratch)
+        # Each table's key, from the plan of what ran (names are the
+        # engine's to make and to know).
+        keys = (_native.output_keys(str(setup), [str(p) for _, p in table_files], text=text)
+                if table_files else [])
+        return Result(str(setup), summary, table_files, metrics, files, scratch, keys)
     finally:
         if inputs is not None:
             shutil.rmtree(inputs, ignore_errors=True)

@@ -144,16 +144,18 @@ class SetupDocument:
         return list(self.tool.iter(tag))
 
 
-def _w0_untag(doc: SetupDocument) -> None:
+def _w0_untag(doc: SetupDocument, before: str) -> None:
     """With one w0 the tables carry no w0 part in their names: point the
-    setup's figures and metrics at those (names made by the engine,
-    ``statopt::writers::names``, through the binding)."""
-    for el in doc.tool.iter():
-        if el.tag in ("Figure", "Metric", "Series", "Band"):
-            for a in ("file", "mean", "min", "max"):
-                v = el.get(a)
-                if v is not None:
-                    el.set(a, _native.without_w0(v))
+    setup's figures and metrics at those. The engine knows the names
+    (``statopt::writers::names``, through the binding): each reference to a
+    table of the sweep the setup ``before`` ran becomes the single run's."""
+    refs = [(el, a) for el in doc.tool.iter() if el.tag in ("Figure", "Metric", "Series", "Band")
+            for a in ("file", "mean", "min", "max") if el.get(a) is not None]
+    if not refs:
+        return
+    new = _native.single_w0_references(str(doc.path), before, [el.get(a) for el, a in refs])
+    for (el, a), v in zip(refs, new):
+        el.set(a, v)
 
 
 def _model_files(doc: SetupDocument) -> List[Tuple[str, ET.Element]]:
@@ -282,10 +284,11 @@ def edit_setup(setup: Path, overrides: Dict[str, Any], workdir: Path) -> str:
         sos = doc.analyses("StaticOptimization")
         if not sos:
             raise _input_error("contact_weight: the setup has no StaticOptimization analysis", str(setup))
+        before = doc.serialize()
         for so in sos:
             _set_child(so, "contact_weight", " ".join(_fmt(x) for x in w))
         if len(w) == 1:
-            _w0_untag(doc)
+            _w0_untag(doc, before)
     if "friction" in overrides:
         v = overrides.pop("friction")
         sos = doc.analyses("StaticOptimization")

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from . import _native
-from ._run import Result, _split_key, run
+from ._run import Result, run
 from ._setup import edit_setup, external_scales, is_study, metric_elements
 
 MetricsSpec = Union[None, Callable[[Result], Mapping[str, Any]], Mapping[str, Callable[[Result], Any]]]
@@ -37,10 +37,10 @@ def summary_metrics(res: Result) -> Dict[str, Any]:
     objectives = []
     peaks: Dict[str, float] = {}
     for key, df in res.tables.items():
-        diag, loads = _split_key(key, "diagnostics"), _split_key(key, "ReactionLoads")
-        if diag is not None and "objective" in df.columns:
+        k = res._keys.get(key) or {"table": None, "stat": None}
+        if k["table"] == "diagnostics" and "objective" in df.columns:
             objectives.append(df["objective"].to_numpy())
-        if loads is not None and loads[1] not in ("mean", "min", "max"):
+        if k["table"] == "ReactionLoads" and k["stat"] is None:
             for c in df.columns:
                 if c.endswith("_fx"):
                     base = c[:-3]

@@ -27,6 +27,7 @@ use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plots::{self, RefLine, Scatter, ScatterPoint};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, RunOptions};
+use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 /// An edit of a setup that makes one method choice.
 pub type Edit = Arc<dyn Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync>;
@@ -332,9 +333,10 @@ fn run_choice(
         frames = summary.frames;
         best = best.min(summary.loop_seconds);
     }
-    let prefix = format!("{}_{}_", s.name, so_name(&s));
-    let activation = storage::read(&dir.join(format!("{prefix}activation.sto")))?;
-    let cpath = dir.join(format!("{prefix}ContactForces.sto"));
+    let run_of = |analysis: &str| RunKey::analysis(&s.name, analysis, Sweep::Single);
+    let run = run_of(&so_name(&s));
+    let activation = storage::read(&dir.join(run.file(OutputKind::Activation)))?;
+    let cpath = dir.join(run.file(OutputKind::ContactForces));
     let contacts = if cpath.exists() {
         Some(storage::read(&cpath)?)
     } else {
@@ -342,7 +344,7 @@ fn run_choice(
     };
     // Activation errors cover the muscles (MusclePower's columns), or every
     // actuator when the model has no muscle.
-    let muscles = storage::read(&dir.join(format!("{prefix}MusclePower.sto")))?.labels;
+    let muscles = storage::read(&dir.join(run.file(OutputKind::MusclePower)))?.labels;
     let activation = if muscles.is_empty() {
         activation
     } else {
@@ -360,14 +362,14 @@ fn run_choice(
             ..activation
         }
     };
-    let diag = storage::read(&dir.join(format!("{prefix}diagnostics.sto")))?;
+    let diag = storage::read(&dir.join(run.file(OutputKind::Diagnostics)))?;
     let failed = match diag.column_index("status") {
         Some(j) => diag.rows.iter().filter(|r| r[j] < 0.0).count(),
         None => 0,
     };
     let mut reaction = None;
     for name in coupled_reactions(&s) {
-        let p = dir.join(format!("{}_{name}_ReactionLoads.sto", s.name));
+        let p = dir.join(run_of(&name).file(OutputKind::ReactionLoads));
         if p.exists() {
             let t = storage::read(&p)?;
             let root = t

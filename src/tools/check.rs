@@ -392,31 +392,19 @@ impl Checker {
 
 /// The problems of the tables a setup's `<Figure>`s and `<Metric>`s name
 /// (relative to its results folder `dir`, drawn after the run): each must
-/// be one this setup writes (named after it; a w0 its static optimization
-/// runs) or exist already. References to w0 tables the setup does not
+/// be one this setup writes (one of the names of its plan's outputs,
+/// `writers::names::Planned`) or exist already. References to w0 tables the setup does not
 /// write are one problem, however many there are (they have one cause).
 /// A run checks these before its first frame (`tools::analyze::run`).
 pub fn figure_reference_problems(setup: &AnalyzeSetup, dir: &Path) -> Vec<Error> {
-    use crate::writers::names;
-    let weights: Vec<String> = setup
-        .static_optimization()
-        .filter(|so| so.contact_weights.len() > 1)
-        .map(|so| {
-            so.contact_weights
-                .iter()
-                .map(|w| names::w0_tag(*w))
-                .collect()
-        })
-        .unwrap_or_default();
-    let tags: Vec<String> = if weights.is_empty() {
-        Vec::new()
-    } else {
-        weights
-            .iter()
-            .cloned()
-            .chain(names::SWEEP_STATS.map(String::from))
-            .collect()
-    };
+    use crate::writers::names::{self, Planned};
+    let planned = Planned::of(setup);
+    let tags = Planned::w0_tags(setup);
+    let weights: Vec<String> = tags
+        .iter()
+        .take(tags.len().saturating_sub(names::SWEEP_STATS.len()))
+        .cloned()
+        .collect();
     let mut errors = Vec::new();
     // (location, attribute, value, tag) of references to w0 tables the
     // setup does not write.
@@ -425,24 +413,26 @@ pub fn figure_reference_problems(setup: &AnalyzeSetup, dir: &Path) -> Vec<Error>
         let (attr, value) = (r.attr, r.value);
         let path = crate::parse::setup::resolve(dir, value);
         let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
-        let ours = file.starts_with(&format!("{}_", setup.name)) && path.parent() == Some(dir);
-        if !ours {
-            if !path.is_file() {
-                errors.push(Error::input(
-                    r.loc.clone(),
-                    format!(
-                    "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results folder, {})",
-                    path.display(),
-                    setup.name,
-                    dir.display()
-                )));
-            }
+        let here = path.parent() == Some(dir);
+        if here && planned.find(file).is_some() {
             continue;
         }
-        if let Some(tag) = names::w0_tag_in(file) {
+        let ours = here && file.starts_with(&setup.name);
+        if let Some(tag) = names::w0_tag_in(file).filter(|_| ours) {
             if !tags.iter().any(|t| t == tag) {
                 wrong_w0.push((r.loc.clone(), attr, value.to_string(), tag.to_string()));
+                continue;
             }
+        }
+        if !path.is_file() {
+            errors.push(Error::input(
+                r.loc.clone(),
+                format!(
+                "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results folder, {})",
+                path.display(),
+                setup.name,
+                dir.display()
+            )));
         }
     }
     let runs = if weights.is_empty() {

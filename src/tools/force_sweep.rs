@@ -39,6 +39,7 @@ use crate::reactions::{column_labels, resolve_reactions, ReactionSpec};
 use crate::tools::analyze::open_state_stream_with;
 use crate::tools::study::metric_value;
 use crate::tools::RunOptions;
+use crate::writers::names::{file_name, OutputKind, RunKey, Sweep};
 use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
 
 pub use crate::plan::force_sweep::CandidateSpec;
@@ -143,21 +144,18 @@ struct Coupled {
     knee_contact: bool,
 }
 
-const SO_KINDS: [(&str, Source); 7] = [
-    ("GeneralizedForcesBySource", Source::GeneralizedForces),
-    ("ContactBodyForces", Source::ContactBodyForces),
-    ("ContactForces", Source::ContactForces),
-    ("MusclePower", Source::MusclePower),
-    ("diagnostics", Source::Diagnostics),
-    ("activation", Source::Activation),
-    ("force", Source::Force),
-];
-
-fn table_stem(file: &str) -> &str {
-    let name = file.rsplit(['/', '\\']).next().unwrap_or(file);
-    name.strip_suffix(".sto")
-        .or_else(|| name.strip_suffix(".mot"))
-        .unwrap_or(name)
+/// The metric source of a static-optimization table.
+fn so_source(kind: &OutputKind) -> Option<Source> {
+    Some(match kind {
+        OutputKind::Activation => Source::Activation,
+        OutputKind::Force => Source::Force,
+        OutputKind::Diagnostics => Source::Diagnostics,
+        OutputKind::ContactForces => Source::ContactForces,
+        OutputKind::ContactBodyForces => Source::ContactBodyForces,
+        OutputKind::GeneralizedForcesBySource => Source::GeneralizedForces,
+        OutputKind::MusclePower => Source::MusclePower,
+        _ => return None,
+    })
 }
 
 fn plan_metric(
@@ -170,40 +168,51 @@ fn plan_metric(
     let err = |msg: String| Error::input(m.loc.clone(), msg);
     let name = m.name.clone();
     let file = m.file.as_str();
-    let stem = table_stem(file);
-    let so_prefix = format!("{}_{so_name}_", setup.name);
-    let mut source = None;
-    if stem.starts_with(&so_prefix) {
-        source = SO_KINDS
-            .iter()
-            .find(|(k, _)| stem.ends_with(&format!("_{k}")))
-            .map(|(_, s)| *s);
+    let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
+    // The tables a run of this setup writes, each with its source: the
+    // metric's file is one of their names (any w0 the setup runs: a
+    // candidate's own tables are read).
+    let weights: Vec<f64> = setup
+        .static_optimization()
+        .map(|so| so.contact_weights.clone())
+        .unwrap_or_default();
+    let mut sweeps = Sweep::all(&weights);
+    if !sweeps.contains(&Sweep::Single) {
+        sweeps.push(Sweep::Single);
     }
-    let kc_stem = format!("{}_KneeContact", setup.name);
-    let kc_tagged = format!("{}_w0_", setup.name);
-    if source.is_none()
-        && (stem == kc_stem || (stem.starts_with(&kc_tagged) && stem.ends_with("_KneeContact")))
-    {
-        source = coupled
-            .iter()
-            .position(|c| c.knee_contact)
-            .map(Source::KneeContact);
-    }
-    if source.is_none() {
+    let mut keys = Vec::new();
+    let mut sources = Vec::new();
+    for &sweep in &sweeps {
+        let so = RunKey::analysis(&setup.name, so_name, sweep);
+        for kind in OutputKind::SO_TABLES {
+            sources.push(so_source(&kind).expect("a static-optimization table"));
+            keys.push(so.key(kind));
+        }
         for (j, c) in coupled.iter().enumerate() {
-            if stem.starts_with(&format!("{}_{}_", setup.name, c.name)) {
-                if stem.ends_with("_ReactionLoads") {
-                    source = Some(Source::Reactions(j));
-                } else if stem.ends_with("_KneeLoads") && c.knee.is_some() {
-                    source = Some(Source::Knee(j));
-                }
+            let jr = RunKey::analysis(&setup.name, &c.name, sweep);
+            keys.push(jr.key(OutputKind::ReactionLoads));
+            sources.push(Source::Reactions(j));
+            if c.knee.is_some() {
+                keys.push(jr.key(OutputKind::KneeLoads));
+                sources.push(Source::Knee(j));
+            }
+            if c.knee_contact {
+                keys.push(RunKey::setup(&setup.name, sweep).key(OutputKind::KneeContact));
+                sources.push(Source::KneeContact(j));
             }
         }
     }
+    let source = keys
+        .iter()
+        .position(|k| file_name(k) == base)
+        .map(|i| sources[i]);
     let Some(source) = source else {
+        let single = |kind| RunKey::analysis(&setup.name, so_name, Sweep::Single).file(kind);
         return Err(err(format!(
-            "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({so_prefix}..._<{}>.sto), of its coupled joint reactions (ReactionLoads, KneeLoads) and of the knee contact method ({kc_stem}.sto)",
-            SO_KINDS.map(|k| k.0).join("|")
+            "file=\"{file}\": a force sweep computes metrics of the tables of this setup's static optimization ({}, ...; {}), of its coupled joint reactions (ReactionLoads, KneeLoads) and of the knee contact method ({}), with the w0 it runs in their names",
+            single(OutputKind::Force),
+            OutputKind::SO_TABLES.map(|k| k.table()).join("|"),
+            RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::KneeContact)
         )));
     };
     let labels: Vec<String> = match source {
@@ -943,7 +952,7 @@ fn run_streamed(
 struct CandidateWriters {
     tables: Vec<crate::writers::so_tables::SoTables>,
     /// Per candidate: its folder and its runs' naming.
-    runs: Vec<(std::path::PathBuf, crate::writers::names::Sweep<'static>)>,
+    runs: Vec<(std::path::PathBuf, crate::writers::names::Sweep)>,
     /// The frames' times and positions (for the knee loads' flexion), as
     /// a run keeps them from its pass.
     time: Vec<f64>,
@@ -958,7 +967,6 @@ impl CandidateWriters {
         specs: &[CandidateTables],
         opts: &RunOptions,
     ) -> Result<CandidateWriters> {
-        use crate::writers::names::{self, Sweep};
         use crate::writers::so_tables::{SoTables, TablesSpec};
         if specs.len() != cands.len() {
             return Err(Error::input(
@@ -974,29 +982,25 @@ impl CandidateWriters {
         let mut tables = Vec::with_capacity(cands.len());
         let mut runs = Vec::with_capacity(cands.len());
         for (c, spec) in cands.iter().zip(specs) {
-            let run = if spec.w0_tag {
-                Sweep::Weight(c.w0)
-            } else {
-                Sweep::Single
-            };
+            let run = Sweep::of(c.w0, spec.w0_tag);
             std::fs::create_dir_all(&spec.dir).map_err(|e| Error::io(&spec.dir, e))?;
-            let reactions: Vec<(String, &[crate::reactions::ReactionSpec])> = plan
+            let reactions: Vec<(RunKey, &[crate::reactions::ReactionSpec])> = plan
                 .coupled
                 .iter()
                 .map(|cp| {
                     (
-                        names::prefix(&setup.name, &cp.name, run),
+                        RunKey::analysis(&setup.name, &cp.name, run),
                         cp.specs.as_slice(),
                     )
                 })
                 .collect();
-            let prefix = names::prefix(&setup.name, &plan.so_name, run);
+            let so_run = RunKey::analysis(&setup.name, &plan.so_name, run);
             tables.push(SoTables::open(
                 &plan.problem,
                 &TablesSpec {
                     setup_file: &setup.setup_file,
                     dir: &spec.dir,
-                    prefix: &prefix,
+                    run: &so_run,
                     w0: c.w0,
                     reactions: &reactions,
                     precision,
@@ -1033,24 +1037,21 @@ impl CandidateWriters {
         plan: &Plan,
         opts: &RunOptions,
     ) -> Result<Vec<std::path::PathBuf>> {
-        use crate::writers::names;
         let precision = opts.precision.unwrap_or(setup.output_precision);
         let problem = &plan.problem;
         let mut files = Vec::new();
         for (t, (dir, run)) in self.tables.into_iter().zip(&self.runs) {
             files.extend(t.finish()?);
             for c in &plan.coupled {
-                let table = dir.join(format!(
-                    "{}ReactionLoads.sto",
-                    names::prefix(&setup.name, &c.name, *run)
-                ));
+                let jr = RunKey::analysis(&setup.name, &c.name, *run);
+                let table = dir.join(jr.file(OutputKind::ReactionLoads));
                 if c.knee.is_some() {
                     files.push(crate::tools::knee_loads::write(
                         &problem.model,
                         &self.time,
                         &self.q,
                         &table,
-                        &crate::tools::knee_loads::output_path(&table),
+                        &dir.join(jr.file(OutputKind::KneeLoads)),
                         &setup.setup_file,
                         precision,
                     )?);
@@ -1062,7 +1063,7 @@ impl CandidateWriters {
                         &self.time,
                         &self.q,
                         &table,
-                        &dir.join(names::setup_file_name(&setup.name, *run, "KneeContact.sto")),
+                        &dir.join(RunKey::setup(&setup.name, *run).file(OutputKind::KneeContact)),
                         &setup.setup_file,
                         precision,
                     )?);
@@ -1218,6 +1219,7 @@ pub fn run_plan(
 ) -> Result<Vec<std::path::PathBuf>> {
     let (specs, names) = (&sweep.specs, &sweep.names);
     let name = &sweep.name;
+    let own = RunKey::setup(name, Sweep::Single);
     let mut options = SweepOptions::default();
     if sweep.write_tables {
         let n_w0 = names.iter().filter(|n| *n == &names[0]).count();
@@ -1233,14 +1235,14 @@ pub fn run_plan(
         options.tables = names
             .iter()
             .map(|n| CandidateTables {
-                dir: out.join(format!("{name}_force_sweep")).join(n),
+                dir: out.join(own.file(OutputKind::ForceSweepDir(n.clone()))),
                 w0_tag: n_w0 > 1,
             })
             .collect();
     }
     let outcome = run(&sweep.setup, specs, opts, &options)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let path = out.join(format!("{name}_force_sweep.csv"));
+    let path = out.join(own.file(OutputKind::ForceSweep));
     let csv_err = |e: csv::Error| Error::input(Location::file(&path), e.to_string());
     let mut w = csv::Writer::from_path(&path).map_err(csv_err)?;
     let mut header = vec![

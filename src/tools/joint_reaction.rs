@@ -47,6 +47,7 @@ use crate::storage::StoWriter;
 use crate::storage::TableFile;
 use crate::tools::analyze::{for_each_frame, is_frame, open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
+use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 // The JointReaction analysis's parts are the `reactions` stage (the table's
 // description, `writers::tables`); these paths stay for users.
@@ -84,10 +85,10 @@ pub fn run(
         (i0..=i1).filter(|&i| is_frame(i, i0, i1, step)).count()
     };
     let dir = results_dir(setup, opts)?;
-    let path = dir.join(format!(
-        "{}_{}_ReactionLoads.sto",
-        setup.name, jr.common.name
-    ));
+    let path = dir.join(
+        RunKey::analysis(&setup.name, &jr.common.name, Sweep::Single)
+            .file(OutputKind::ReactionLoads),
+    );
     let precision = opts.precision.unwrap_or(setup.output_precision);
     let mut w = StoWriter::create_for_setup(
         &setup.setup_file,

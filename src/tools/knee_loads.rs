@@ -200,15 +200,3 @@ pub fn write(
     w.finish()?;
     Ok(out.to_path_buf())
 }
-
-/// `<prefix>ReactionLoads.sto` → `<prefix>KneeLoads.sto`.
-pub fn output_path(reactions: &Path) -> PathBuf {
-    let name = reactions
-        .file_name()
-        .map(|n| {
-            n.to_string_lossy()
-                .replace("ReactionLoads.sto", "KneeLoads.sto")
-        })
-        .unwrap_or_else(|| "KneeLoads.sto".to_string());
-    reactions.with_file_name(name)
-}

@@ -17,6 +17,7 @@ use crate::storage::TableFile;
 use crate::tools::analyze::{open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
+use crate::writers::names::{MuscleTable, OutputKind, RunKey, Sweep};
 
 fn select<'a>(list: &[String], all: impl Iterator<Item = &'a str>) -> Vec<String> {
     if list.iter().any(|s| s.eq_ignore_ascii_case("all")) {
@@ -87,15 +88,15 @@ pub fn run(
         .map(|&m| set.muscles[m].muscle.name.clone())
         .collect();
     let dir = results_dir(setup, opts)?;
-    let prefix = format!("{}_{}_", setup.name, ma.common.name);
+    let run = RunKey::analysis(&setup.name, &ma.common.name, Sweep::Single);
     let precision = opts.precision.unwrap_or(setup.output_precision);
-    let open = |suffix: &str, name: &str, desc: &str| -> Result<(StoWriter, std::path::PathBuf)> {
-        let p = dir.join(format!("{prefix}{suffix}.sto"));
+    let open = |table: MuscleTable, desc: &str| -> Result<(StoWriter, std::path::PathBuf)> {
+        let p = dir.join(run.file(OutputKind::MuscleAnalysis(table.clone())));
         Ok((
             StoWriter::create_for_setup(
                 &setup.setup_file,
                 &p,
-                name,
+                &table.name(),
                 desc,
                 &labels,
                 precision,
@@ -105,28 +106,24 @@ pub fn run(
         ))
     };
     let mut writers = vec![
-        open("Length", "Length", "Musculotendon (path) length [m].")?,
+        open(MuscleTable::Length, "Musculotendon (path) length [m].")?,
         open(
-            "LengtheningSpeed",
-            "LengtheningSpeed",
+            MuscleTable::LengtheningSpeed,
             "Musculotendon lengthening speed [m/s].",
         )?,
         open(
-            "MaxActiveFiberForceRigidTendon",
-            "MaxActiveFiberForceRigidTendon",
+            MuscleTable::MaxActiveFiberForceRigidTendon,
             "Active fiber force along the tendon at activation 1 with an inextensible tendon [N].",
         )?,
         open(
-            "PassiveFiberForceRigidTendon",
-            "PassiveFiberForceRigidTendon",
+            MuscleTable::PassiveFiberForceRigidTendon,
             "Passive fiber force along the tendon with an inextensible tendon [N].",
         )?,
     ];
     for &c in &coords {
         let n = &model.coordinates[c].name;
         writers.push(open(
-            &format!("MomentArm_{n}"),
-            &format!("MomentArm_{n}"),
+            MuscleTable::MomentArm(n.clone()),
             &format!("Moment arm about coordinate {n} [m] (generalized force per unit tension)."),
         )?);
     }

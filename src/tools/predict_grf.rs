@@ -22,6 +22,7 @@ use crate::forces::external_loads::ExternalLoads;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::StoWriter;
 use crate::tools::{analyze, RunOptions, RunSummary};
+use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 use crate::contacts::ground::{flight_frames, keep_frames, plate_samples};
 pub use crate::contacts::ground::{
@@ -321,7 +322,8 @@ pub fn run_with(
     // The prediction's plan: the user's, its force sets with the root
     // residuals replaced, plus the foot contacts, all in memory (the files
     // written here are the record of what ran, not read back).
-    let contacts_file = dir.join(format!("{}_foot_contacts.xml", setup.name));
+    let own = RunKey::setup(&setup.name, Sweep::Single);
+    let contacts_file = dir.join(own.file(OutputKind::FootContacts));
     let contacts_xml = contacts.force_set_xml();
     std::fs::write(&contacts_file, &contacts_xml).map_err(|e| Error::io(&contacts_file, e))?;
     let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
@@ -343,10 +345,8 @@ pub fn run_with(
         .expect("checked above");
     let so_name = common.name.clone();
     let _ = el;
-    let loads_path = dir.join(format!(
-        "{}_{}_ContactExternalLoads.mot",
-        setup.name, so_name
-    ));
+    let so_run = RunKey::analysis(&setup.name, &so_name, Sweep::Single);
+    let loads_path = dir.join(so_run.file(OutputKind::ContactExternalLoads));
     let predicted = foot_loads_from_contacts(&loads_path, &contacts)?;
     let body_weight = model.bodies.iter().map(|b| b.mass).sum::<f64>() * model.gravity.norm();
     let mut prediction = Prediction {
@@ -377,7 +377,7 @@ pub fn run_with(
         ));
     }
     prediction.root_residual = prediction.summary.root_force_series.clone();
-    let contact_table = dir.join(format!("{}_{}_ContactForces.sto", setup.name, so_name));
+    let contact_table = dir.join(so_run.file(OutputKind::ContactForces));
     let flight = flight_frames(&contact_table, &prediction.contacts)?;
     if flight.len() != prediction.root_residual.len() {
         return Err(Error::internal(format!(
@@ -412,7 +412,7 @@ pub fn run_with(
         n_flight,
         prediction.contacts.parameters.contact_tolerance + prediction.contacts.parameters.transition_zone,
     ));
-    let rr = dir.join(format!("{}_root_residual.sto", setup.name));
+    let rr = dir.join(own.file(OutputKind::RootResidual));
     {
         let mut w = StoWriter::create_for_setup(
             &setup.setup_file,
@@ -429,7 +429,7 @@ pub fn run_with(
         w.finish()?;
     }
     prediction.summary.files.push(rr);
-    let out = dir.join(format!("{}_predicted_grf.sto", setup.name));
+    let out = dir.join(own.file(OutputKind::PredictedGrf));
     write_foot_loads(&prediction.predicted, &out, &setup.setup_file)?;
     prediction.summary.files.push(out);
     // The prediction as an OpenSim ExternalLoads pair: the measured file's
@@ -496,10 +496,10 @@ pub fn run_with(
             .enumerate()
             .map(|(s, side)| stance_metrics(side, &prediction.predicted, &measured, s))
             .collect();
-        let csv = dir.join(format!("{}_grf_comparison.csv", setup.name));
+        let csv = dir.join(own.file(OutputKind::GrfComparison));
         write_metrics(&prediction.metrics, &prediction.stance, &csv)?;
         prediction.summary.files.push(csv);
-        let stem = dir.join(format!("{}_grf_comparison", setup.name));
+        let stem = dir.join(own.file(OutputKind::GrfComparisonFigure));
         prediction.summary.files.extend(draw_comparison(
             &prediction.predicted,
             &measured,
@@ -660,8 +660,9 @@ fn write_external_loads(
     name: &str,
     setup_file: &std::path::Path,
 ) -> Result<(PathBuf, PathBuf)> {
-    let mot = dir.join(format!("{name}_predicted_grf.mot"));
-    let xml = dir.join(format!("{name}_predicted_grf.xml"));
+    let own = RunKey::setup(name, Sweep::Single);
+    let mot = dir.join(own.file(OutputKind::PredictedGrfMot));
+    let xml = dir.join(own.file(OutputKind::PredictedGrfXml));
     let mut labels = Vec::new();
     for f in layout {
         for id in [
@@ -790,10 +791,10 @@ fn weak_root_residuals(
         else {
             continue;
         };
-        let out = dir.join(format!(
-            "{}_force_set_{k}_without_root_residuals.xml",
-            setup.name
-        ));
+        let out = dir.join(
+            RunKey::setup(&setup.name, Sweep::Single)
+                .file(OutputKind::ForceSetWithoutRootResiduals(k)),
+        );
         std::fs::write(&out, crate::tools::scene::to_xml_string(&filtered))
             .map_err(|e| Error::io(&out, e))?;
         written.push(out);
@@ -818,7 +819,7 @@ fn weak_root_residuals(
         }
     }
     xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
-    let out = dir.join(format!("{}_root_residuals.xml", setup.name));
+    let out = dir.join(RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::RootResiduals));
     std::fs::write(&out, &xml).map_err(|e| Error::io(&out, e))?;
     documents.push(crate::forces::force_set_document(&xml, &out)?);
     written.push(out);

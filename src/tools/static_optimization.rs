@@ -44,7 +44,7 @@ pub use crate::frame::settings::{
 pub use crate::writers::run_statistics::ROOT_RESIDUAL_WARNING;
 
 pub use crate::writers::names::w0_tag;
-use crate::writers::names::{self, Sweep};
+use crate::writers::names::{self, OutputKind, RunKey, Sweep};
 
 pub fn run(
     setup: &AnalyzeSetup,
@@ -99,12 +99,9 @@ pub fn run(
         ..Default::default()
     };
     if let Some(r) = &reduction {
-        let path = dir.join(names::file_name(
-            &setup.name,
-            so_name,
-            Sweep::Single,
-            "reduction.txt",
-        ));
+        let path = dir.join(
+            RunKey::analysis(&setup.name, so_name, Sweep::Single).file(OutputKind::Reduction),
+        );
         r.write(&path)?;
         summary.files.push(path);
         warnings.extend(r.summary_lines());
@@ -140,24 +137,18 @@ pub fn run(
             crate::tools::knee_contact::reaction_specs(&problem.model, &problem.knees),
         ));
     }
-    let mut prefixes = Vec::new();
+    let mut runs = Vec::new();
     let mut knee_files = Vec::new();
     let specs: Vec<RunSpec> = weights
         .iter()
         .map(|&w0| {
-            let run = if sweep {
-                Sweep::Weight(w0)
-            } else {
-                Sweep::Single
-            };
-            let prefix = names::prefix(&setup.name, so_name, run);
-            let jr_prefix = |name: &str| names::prefix(&setup.name, name, run);
+            let place = Sweep::of(w0, sweep);
             RunSpec {
                 w0,
-                prefix,
+                run: RunKey::analysis(&setup.name, so_name, place),
                 reactions: jr_specs
                     .iter()
-                    .map(|(n, s)| (jr_prefix(n), s.as_slice()))
+                    .map(|(n, s)| (RunKey::analysis(&setup.name, n, place), s.as_slice()))
                     .collect(),
             }
         })
@@ -174,7 +165,7 @@ pub fn run(
         &dir,
         &specs,
         opts,
-        &format!("{}_{so_name}", setup.name),
+        &RunKey::analysis(&setup.name, so_name, Sweep::Single).label(),
         wants_positions,
     )?;
     let mut knee_states = positions;
@@ -185,16 +176,16 @@ pub fn run(
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
         if !stopped {
-            for (jr_setup, (p, _)) in reactions.iter().zip(&spec.reactions) {
+            for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
                 if jr_setup.knee_loads {
                     let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
-                    let table = dir.join(format!("{p}ReactionLoads.sto"));
+                    let table = dir.join(jr.file(OutputKind::ReactionLoads));
                     knee_files.push(crate::tools::knee_loads::write(
                         &problem.model,
                         &states.0,
                         &states.1,
                         &table,
-                        &crate::tools::knee_loads::output_path(&table),
+                        &dir.join(jr.file(OutputKind::KneeLoads)),
                         &setup.setup_file,
                         opts.precision.unwrap_or(setup.output_precision),
                     )?);
@@ -203,22 +194,14 @@ pub fn run(
         }
         if !stopped && !problem.knees.is_empty() {
             let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
-            let (p, _) = spec.reactions.last().expect("the knee contact reactions");
-            let out = names::setup_file_name(
-                &setup.name,
-                if sweep {
-                    Sweep::Weight(spec.w0)
-                } else {
-                    Sweep::Single
-                },
-                "KneeContact.sto",
-            );
+            let (jr, _) = spec.reactions.last().expect("the knee contact reactions");
+            let out = RunKey::setup(&setup.name, spec.run.sweep).file(OutputKind::KneeContact);
             knee_files.push(crate::tools::knee_contact::write(
                 &problem.model,
                 &problem.knees,
                 &states.0,
                 &states.1,
-                &dir.join(format!("{p}ReactionLoads.sto")),
+                &dir.join(jr.file(OutputKind::ReactionLoads)),
                 &dir.join(out),
                 &setup.setup_file,
                 opts.precision.unwrap_or(setup.output_precision),
@@ -226,7 +209,7 @@ pub fn run(
         }
         let label = format!("w0 = {}", spec.w0);
         summary.absorb(s, sweep.then_some(label.as_str()));
-        prefixes.push(spec.prefix.clone());
+        runs.push(spec.run.clone());
     }
     let all: Vec<String> = specs.iter().map(|r| r.w0.to_string()).collect();
     summary.warnings.extend(
@@ -242,70 +225,44 @@ pub fn run(
     }
     if sweep {
         let precision = opts.precision.unwrap_or(setup.output_precision);
-        for kind in [
-            "activation",
-            "force",
-            "ContactForces",
-            "ContactBodyForces",
-            "GeneralizedForcesBySource",
-            "MusclePower",
-        ] {
+        for kind in OutputKind::SWEEP_TABLES {
             // A sweep of the knee contact method alone has no contact tables.
-            if problem.contacts.is_empty() && kind.starts_with("Contact") {
+            if problem.contacts.is_empty() && kind.needs_contacts() {
                 continue;
             }
-            let files: Vec<std::path::PathBuf> = prefixes
+            let files: Vec<std::path::PathBuf> = runs
                 .iter()
-                .map(|p| dir.join(format!("{p}{kind}.sto")))
+                .map(|r| dir.join(r.file(kind.clone())))
                 .collect();
-            let stat_path = |stat: &str| {
-                dir.join(names::file_name(
-                    &setup.name,
-                    so_name,
-                    Sweep::Stat(stat),
-                    &format!("{kind}.sto"),
-                ))
-            };
+            let stat_path =
+                |stat| dir.join(runs[0].with_sweep(Sweep::Stat(stat)).file(kind.clone()));
             summary.files.extend(write_sweep_statistics(
                 &setup.setup_file,
                 &files,
                 &stat_path,
-                kind,
+                &kind.table(),
                 &weights,
                 precision,
             )?);
         }
         for (jr_setup, (name, _)) in reactions.iter().zip(&jr_specs) {
-            let kinds: &[&str] = if jr_setup.knee_loads {
-                &["ReactionLoads", "KneeLoads"]
+            let kinds: &[OutputKind] = if jr_setup.knee_loads {
+                &[OutputKind::ReactionLoads, OutputKind::KneeLoads]
             } else {
-                &["ReactionLoads"]
+                &[OutputKind::ReactionLoads]
             };
             for kind in kinds {
+                let run = |sweep| RunKey::analysis(&setup.name, name, sweep);
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
-                    .map(|w0| {
-                        dir.join(names::file_name(
-                            &setup.name,
-                            name,
-                            Sweep::Weight(*w0),
-                            &format!("{kind}.sto"),
-                        ))
-                    })
+                    .map(|w0| dir.join(run(Sweep::Weight(*w0)).file(kind.clone())))
                     .collect();
-                let stat_path = |stat: &str| {
-                    dir.join(names::file_name(
-                        &setup.name,
-                        name,
-                        Sweep::Stat(stat),
-                        &format!("{kind}.sto"),
-                    ))
-                };
+                let stat_path = |stat| dir.join(run(Sweep::Stat(stat)).file(kind.clone()));
                 summary.files.extend(write_sweep_statistics(
                     &setup.setup_file,
                     &files,
                     &stat_path,
-                    kind,
+                    &kind.table(),
                     &weights,
                     precision,
                 )?);
@@ -318,25 +275,19 @@ pub fn run(
         let files: Vec<std::path::PathBuf> = weights
             .iter()
             .map(|w0| {
-                dir.join(names::setup_file_name(
-                    &setup.name,
-                    Sweep::Weight(*w0),
-                    "KneeContact.sto",
-                ))
+                dir.join(
+                    RunKey::setup(&setup.name, Sweep::Weight(*w0)).file(OutputKind::KneeContact),
+                )
             })
             .collect();
-        let stat_path = |stat: &str| {
-            dir.join(names::setup_file_name(
-                &setup.name,
-                Sweep::Stat(stat),
-                "KneeContact.sto",
-            ))
+        let stat_path = |stat| {
+            dir.join(RunKey::setup(&setup.name, Sweep::Stat(stat)).file(OutputKind::KneeContact))
         };
         summary.files.extend(write_sweep_statistics(
             &setup.setup_file,
             &files,
             &stat_path,
-            "KneeContact",
+            &OutputKind::KneeContact.table(),
             &weights,
             precision,
         )?);
@@ -488,12 +439,12 @@ pub fn frame_outputs(
     Ok(())
 }
 
-/// One run of a sweep: its contact weight, the prefix of its tables and the
-/// prefixes of its joint-reaction tables.
+/// One run of a sweep: its contact weight, its tables' run and its
+/// joint-reaction tables' runs (`writers::names`).
 struct RunSpec<'a> {
     w0: f64,
-    prefix: String,
-    reactions: Vec<(String, &'a [ReactionSpec])>,
+    run: RunKey,
+    reactions: Vec<(RunKey, &'a [ReactionSpec])>,
 }
 
 /// The tables, log and running statistics of one run.
@@ -517,11 +468,11 @@ impl<'a> RunWriters<'a> {
         log_names: &LogNames,
         opts: &RunOptions,
     ) -> Result<RunWriters<'a>> {
-        let prefix = spec.prefix.as_str();
+        let run = &spec.run;
         let reactions = &spec.reactions;
         let precision = opts.precision.unwrap_or(setup.output_precision);
         let resume = if opts.resume {
-            resume_point(dir, prefix, problem, reactions)?
+            resume_point(dir, run, problem, reactions)?
         } else {
             None
         };
@@ -529,21 +480,21 @@ impl<'a> RunWriters<'a> {
         if let Some(r) = &resume {
             // The frames an earlier run wrote count in this run's summary:
             // read back before the tables are reopened.
-            stats.observe_tables(problem, dir, prefix, r.keep)?;
+            stats.observe_tables(problem, dir, run, r.keep)?;
         }
         let tables = SoTables::open(
             problem,
             &TablesSpec {
                 setup_file: &setup.setup_file,
                 dir,
-                prefix,
+                run,
                 w0: spec.w0,
                 reactions,
                 precision,
                 keep: resume.as_ref().map(|r| r.keep),
             },
         )?;
-        let log_path = dir.join(format!("{prefix}log.mcap"));
+        let log_path = dir.join(run.file(OutputKind::Log));
         let mut log = FrameLog::create(&log_path, log_names)?;
         if let Some(r) = &resume {
             log.replay(&r.messages)?;
@@ -863,11 +814,11 @@ fn run_sweep(
 /// The one line that says how long a w0 sweep took (it used to be said
 /// once per weight, the same time each).
 fn sweep_note(runs: &[RunSpec], nframes: usize, seconds: f64) -> String {
-    let name = names::without_w0(&runs[0].prefix);
+    let name = runs[0].run.label();
     let weights: Vec<String> = runs.iter().map(|r| names::w0_tag(r.w0)).collect();
     format!(
         "static optimization ({}, w0 = {}): {} frames in {:.3} s for the {} weights (the physics assembled once per frame)",
-        name.trim_end_matches('_'),
+        name,
         weights.join(", "),
         nframes,
         seconds,

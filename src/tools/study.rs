@@ -265,27 +265,25 @@ struct PlannedRun<'a> {
     name: String,
     /// w0 tags in file names (`1`, `500`, `mean`, ...); empty without a sweep.
     w0_tags: Vec<String>,
+    /// The outputs the setup's plan writes (`writers::names`).
+    planned: crate::writers::names::Planned,
     /// The one table an InverseDynamicsTool writes (its names are not
     /// prefixed by the setup's name).
     only_file: Option<String>,
 }
 
 fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRun<'a> {
+    use crate::writers::names::Planned;
     let mut only_file = None;
+    let mut planned = Planned::default();
     let (own_dir, name, w0_tags) = match setup {
         Setup::Analyze(a) => {
-            let mut tags = Vec::new();
-            if let Some(so) = a.static_optimization() {
-                if so.contact_weights.len() > 1 {
-                    tags.extend(
-                        so.contact_weights
-                            .iter()
-                            .map(|w| crate::writers::names::w0_tag(*w)),
-                    );
-                    tags.extend(crate::writers::names::SWEEP_STATS.map(String::from));
-                }
-            }
-            (a.results_directory.clone(), a.name.clone(), tags)
+            planned = Planned::of(a);
+            (
+                a.results_directory.clone(),
+                a.name.clone(),
+                Planned::w0_tags(a),
+            )
         }
         Setup::InverseDynamics(i) => {
             only_file = Some(i.output_gen_force_file.clone());
@@ -300,6 +298,7 @@ fn plan<'a>(file: &Path, setup: &'a Setup, moved_to: Option<&Path>) -> PlannedRu
         out_dir,
         name,
         w0_tags,
+        planned,
         only_file,
     }
 }
@@ -369,26 +368,42 @@ fn check_references(
                     run.file.display()
                 )));
             }
-        } else if !file.starts_with(&format!("{}_", run.name)) {
-            return Err(err(format!(
-                "{attr}=\"{value}\": {} is in the results folder of {}, whose tables are named {}_...",
-                file,
-                run.file.display(),
-                run.name
-            )));
-        }
-        if let Some(tag) = crate::writers::names::w0_tag_in(file) {
-            if !run.w0_tags.iter().any(|t| t == tag) {
-                return Err(err(format!(
-                    "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
-                    run.file.display(),
-                    if run.w0_tags.is_empty() {
-                        "a single w0 (its tables carry no w0 in their names)".to_string()
-                    } else {
-                        format!("w0 = {}", run.w0_tags[..run.w0_tags.len() - 3].join(", "))
-                    }
-                )));
+        } else if run.planned.find(file).is_none() {
+            let ours = file.starts_with(&format!("{}_", run.name));
+            if let Some(tag) = crate::writers::names::w0_tag_in(file).filter(|_| ours) {
+                if !run.w0_tags.iter().any(|t| t == tag) {
+                    return Err(err(format!(
+                        "{attr}=\"{value}\": names w0 = {tag}, but {} runs {}",
+                        run.file.display(),
+                        if run.w0_tags.is_empty() {
+                            "a single w0 (its tables carry no w0 in their names)".to_string()
+                        } else {
+                            format!("w0 = {}", run.w0_tags[..run.w0_tags.len() - 3].join(", "))
+                        }
+                    )));
+                }
             }
+            return Err(err(if ours {
+                format!(
+                    "{attr}=\"{value}\": {} writes no table {file} (its tables: {}, ...)",
+                    run.file.display(),
+                    run.planned
+                        .keys
+                        .iter()
+                        .skip(1)
+                        .take(3)
+                        .map(crate::writers::names::file_name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            } else {
+                format!(
+                    "{attr}=\"{value}\": {} is in the results folder of {}, whose tables are named {}_...",
+                    file,
+                    run.file.display(),
+                    run.name
+                )
+            }));
         }
         // Absolute, so that drawing (which resolves against the
         // study's folder) finds it wherever the study was started.
@@ -576,7 +591,10 @@ pub fn draw(
         })
         .collect::<Result<_>>()?;
     if !metrics.is_empty() {
-        let p = out.join(format!("{name}_metrics.csv"));
+        let p = out.join(
+            crate::writers::names::RunKey::setup(name, crate::writers::names::Sweep::Single)
+                .file(crate::writers::names::OutputKind::Metrics),
+        );
         let mut w = csv::Writer::from_path(&p)
             .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
         w.write_record(["metric", "value"])

@@ -1,24 +1,100 @@
-//! The names of a static-optimization run's output files, made in one
-//! place: `<setup>_<analysis>_[w0_<tag>_]<kind>` (`leg_extension_cam1_SO_
-//! w0_500_force.sto`, `..._JR_w0_mean_KneeLoads.sto`). A run of one
-//! contact weight carries no `w0_` part; a sweep's runs carry their weight's
-//! tag ([`w0_tag`]) and its statistics the tags `mean`, `min`, `max`. Read
-//! back by [`split_table_stem`] and [`w0_tag_in`] (a study's figure
-//! references; the Python package, through its binding).
+//! The names of every output file a run writes, made in one place: a typed
+//! key ([`OutputKey`]: which run — setup, analysis, w0 — and which table,
+//! [`OutputKind`]) and one function that makes its file name,
+//! [`file_name`]. A run's tables are `<setup>_<analysis>_[w0_<tag>_]<kind>`
+//! (`leg_extension_cam1_SO_w0_500_force.sto`,
+//! `..._JR_w0_mean_KneeLoads.sto`); a setup's own tables carry no analysis
+//! (`<setup>_[w0_<tag>_]KneeContact.sto`, `<setup>_predicted_grf.sto`). A
+//! run of one contact weight carries no `w0_` part; a sweep's runs carry
+//! their weight's tag ([`w0_tag`]) and its statistics the tags `mean`,
+//! `min`, `max`.
+//!
+//! Nothing parses a name back: a file a user names (a study's figure
+//! references, a force sweep's metrics) is looked up among the names of the
+//! keys a plan writes ([`find`]), and the Python package gets keys, names and
+//! w0 values through its binding.
+
+/// A statistic over a contact-weight sweep's runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Stat {
+    Mean,
+    Min,
+    Max,
+}
+
+impl Stat {
+    /// Every statistic, in the order the tables are written.
+    pub const ALL: [Stat; 3] = [Stat::Mean, Stat::Min, Stat::Max];
+
+    /// Its tag in file names: `mean`, `min`, `max`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Stat::Mean => "mean",
+            Stat::Min => "min",
+            Stat::Max => "max",
+        }
+    }
+}
+
+/// The tags of a sweep's statistics tables.
+pub const SWEEP_STATS: [&str; 3] = ["mean", "min", "max"];
 
 /// Which run of a contact-weight sweep a file belongs to.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Sweep<'a> {
+pub enum Sweep {
     /// The run of a single weight: no `w0_` part.
     Single,
     /// The run of weight w0 in a sweep.
     Weight(f64),
     /// A statistic over the sweep's runs: `mean`, `min` or `max`.
-    Stat(&'a str),
+    Stat(Stat),
 }
 
-/// The tags of a sweep's statistics tables.
-pub const SWEEP_STATS: [&str; 3] = ["mean", "min", "max"];
+impl Sweep {
+    /// The run of weight `w0`: [`Sweep::Weight`] in a sweep of several
+    /// weights, [`Sweep::Single`] otherwise.
+    pub fn of(w0: f64, sweep: bool) -> Sweep {
+        if sweep {
+            Sweep::Weight(w0)
+        } else {
+            Sweep::Single
+        }
+    }
+
+    /// The tag file names carry (`500`, `mean`), None for a single weight.
+    pub fn tag(self) -> Option<String> {
+        match self {
+            Sweep::Single => None,
+            Sweep::Weight(w0) => Some(w0_tag(w0)),
+            Sweep::Stat(s) => Some(s.as_str().to_string()),
+        }
+    }
+
+    /// The sweeps a run of `weights` writes: each weight and the three
+    /// statistics, or the single run.
+    pub fn all(weights: &[f64]) -> Vec<Sweep> {
+        if weights.len() > 1 {
+            let mut v: Vec<Sweep> = weights.iter().map(|w| Sweep::Weight(*w)).collect();
+            v.extend(Stat::ALL.map(Sweep::Stat));
+            v
+        } else {
+            vec![Sweep::Single]
+        }
+    }
+}
+
+impl Eq for Sweep {}
+
+impl std::hash::Hash for Sweep {
+    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
+        std::mem::discriminant(self).hash(h);
+        match self {
+            Sweep::Single => {}
+            Sweep::Weight(w) => w.to_bits().hash(h),
+            Sweep::Stat(s) => s.hash(h),
+        }
+    }
+}
 
 /// A contact weight as file names carry it: `500`, `0.001`, `1e6`.
 pub fn w0_tag(w0: f64) -> String {
@@ -30,31 +106,491 @@ pub fn w0_tag(w0: f64) -> String {
     }
 }
 
-/// The start every file of a run shares: `<setup>_<analysis>_` or
-/// `<setup>_<analysis>_w0_<tag>_`.
-pub fn prefix(setup: &str, analysis: &str, sweep: Sweep) -> String {
-    match sweep {
-        Sweep::Single => format!("{setup}_{analysis}_"),
-        Sweep::Weight(w0) => format!("{setup}_{analysis}_w0_{}_", w0_tag(w0)),
-        Sweep::Stat(s) => format!("{setup}_{analysis}_w0_{s}_"),
+/// Position, velocity or acceleration (the kinematics analyses' tables).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    Pos,
+    Vel,
+    Acc,
+}
+
+impl Quantity {
+    pub const ALL: [Quantity; 3] = [Quantity::Pos, Quantity::Vel, Quantity::Acc];
+
+    fn as_str(self) -> &'static str {
+        match self {
+            Quantity::Pos => "pos",
+            Quantity::Vel => "vel",
+            Quantity::Acc => "acc",
+        }
     }
 }
 
-/// The file name of table `kind` (with its extension, e.g.
-/// `activation.sto`, `log.mcap`) of a run.
-pub fn file_name(setup: &str, analysis: &str, sweep: Sweep, kind: &str) -> String {
-    format!("{}{kind}", prefix(setup, analysis, sweep))
+/// Every kind of output file a run writes (the table, log or document,
+/// without the run's part of the name).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum OutputKind {
+    // A static-optimization run (`<setup>_<analysis>_[w0_<tag>_]...`).
+    Activation,
+    Force,
+    Diagnostics,
+    ContactForces,
+    ContactBodyForces,
+    /// The contact forces as OpenSim external loads: the data (`.mot`) and
+    /// its ExternalLoads document (`.xml`).
+    ContactExternalLoads,
+    ContactExternalLoadsXml,
+    GeneralizedForcesBySource,
+    MusclePower,
+    /// The run's MCAP log.
+    Log,
+    /// `--reduce`'s record of what it dropped.
+    Reduction,
+    // A JointReaction analysis (coupled to a static optimization, or the
+    // knee contact method's reactions, analysis `KneeContact`).
+    ReactionLoads,
+    KneeLoads,
+    // A setup's own outputs (no analysis in the name).
+    /// The knee contact method's compartment table.
+    KneeContact,
+    /// A setup's (or a study's) `<Metric>` values.
+    Metrics,
+    /// predict-grf: the predicted ground reactions (`.sto`), as OpenSim
+    /// external loads (`.mot` and its `.xml`), the root residual, the foot
+    /// contacts and the weak root residuals it adds (force sets), the
+    /// comparison with measured loads (`.csv`).
+    PredictedGrf,
+    PredictedGrfMot,
+    PredictedGrfXml,
+    RootResidual,
+    FootContacts,
+    RootResiduals,
+    GrfComparison,
+    /// The figure comparing them (its stem: the plot writes `.png`, `.svg`).
+    GrfComparisonFigure,
+    /// The k-th force set of the setup without its root actuators.
+    ForceSetWithoutRootResiduals(usize),
+    /// A force sweep's table of candidates (`.csv`) and the folder of a
+    /// candidate's tables (`<setup>_force_sweep/<candidate>`).
+    ForceSweep,
+    ForceSweepDir(String),
+    /// A MuscleAnalysis table.
+    MuscleAnalysis(MuscleTable),
+    /// OpenSim's BodyKinematics: positions in ground, velocities and
+    /// accelerations in ground or in the bodies' frames.
+    BodyKinematics {
+        quantity: Quantity,
+        body_frame: bool,
+    },
+    /// OpenSim's PointKinematics of a point.
+    PointKinematics {
+        point: String,
+        quantity: Quantity,
+    },
 }
 
-/// The file name of table `kind` that belongs to a setup rather than to
-/// one of its analyses: `<setup>_[w0_<tag>_]<kind>` (the knee contact
-/// method's `<setup>_KneeContact.sto`, `<setup>_w0_500_KneeContact.sto`).
-pub fn setup_file_name(setup: &str, sweep: Sweep, kind: &str) -> String {
-    match sweep {
-        Sweep::Single => format!("{setup}_{kind}"),
-        Sweep::Weight(w0) => format!("{setup}_w0_{}_{kind}", w0_tag(w0)),
-        Sweep::Stat(t) => format!("{setup}_w0_{t}_{kind}"),
+impl OutputKind {
+    /// The tables of a static-optimization run that hold one row per
+    /// frame, as a sweep's statistics and a force sweep's metrics read them
+    /// (the contact tables only with contacts).
+    pub const SO_TABLES: [OutputKind; 7] = [
+        OutputKind::Activation,
+        OutputKind::Force,
+        OutputKind::Diagnostics,
+        OutputKind::ContactForces,
+        OutputKind::ContactBodyForces,
+        OutputKind::GeneralizedForcesBySource,
+        OutputKind::MusclePower,
+    ];
+
+    /// The tables a w0 sweep writes its statistics of.
+    pub const SWEEP_TABLES: [OutputKind; 6] = [
+        OutputKind::Activation,
+        OutputKind::Force,
+        OutputKind::ContactForces,
+        OutputKind::ContactBodyForces,
+        OutputKind::GeneralizedForcesBySource,
+        OutputKind::MusclePower,
+    ];
+
+    /// Whether the run writes it only with contacts.
+    pub fn needs_contacts(&self) -> bool {
+        matches!(
+            self,
+            OutputKind::ContactForces
+                | OutputKind::ContactBodyForces
+                | OutputKind::ContactExternalLoads
+                | OutputKind::ContactExternalLoadsXml
+        )
     }
+
+    /// The kind's part of the file name, extension included
+    /// (`activation.sto`, `log.mcap`, `MomentArm_knee_angle_r.sto`).
+    fn suffix(&self) -> String {
+        match self {
+            OutputKind::Log => "log.mcap".into(),
+            OutputKind::Reduction => "reduction.txt".into(),
+            OutputKind::ContactExternalLoads => "ContactExternalLoads.mot".into(),
+            OutputKind::ContactExternalLoadsXml => "ContactExternalLoads.xml".into(),
+            OutputKind::Metrics => "metrics.csv".into(),
+            OutputKind::PredictedGrfMot => "predicted_grf.mot".into(),
+            OutputKind::PredictedGrfXml => "predicted_grf.xml".into(),
+            OutputKind::FootContacts => "foot_contacts.xml".into(),
+            OutputKind::RootResiduals => "root_residuals.xml".into(),
+            OutputKind::GrfComparison => "grf_comparison.csv".into(),
+            OutputKind::GrfComparisonFigure => "grf_comparison".into(),
+            OutputKind::ForceSetWithoutRootResiduals(k) => {
+                format!("force_set_{k}_without_root_residuals.xml")
+            }
+            OutputKind::ForceSweep => "force_sweep.csv".into(),
+            OutputKind::ForceSweepDir(c) => format!("force_sweep/{c}"),
+            k => format!("{}.sto", k.table()),
+        }
+    }
+
+    /// The table's name as results and the Python package call it, its file
+    /// name's end without the extension (`activation`, `KneeLoads`,
+    /// `MomentArm_knee_angle_r`, `BodyKinematics_pos_global`).
+    pub fn table(&self) -> String {
+        match self {
+            OutputKind::Activation => "activation".into(),
+            OutputKind::Force => "force".into(),
+            OutputKind::Diagnostics => "diagnostics".into(),
+            OutputKind::ContactForces => "ContactForces".into(),
+            OutputKind::ContactBodyForces => "ContactBodyForces".into(),
+            OutputKind::ContactExternalLoads | OutputKind::ContactExternalLoadsXml => {
+                "ContactExternalLoads".into()
+            }
+            OutputKind::GeneralizedForcesBySource => "GeneralizedForcesBySource".into(),
+            OutputKind::MusclePower => "MusclePower".into(),
+            OutputKind::Log => "log".into(),
+            OutputKind::Reduction => "reduction".into(),
+            OutputKind::ReactionLoads => "ReactionLoads".into(),
+            OutputKind::KneeLoads => "KneeLoads".into(),
+            OutputKind::KneeContact => "KneeContact".into(),
+            OutputKind::Metrics => "metrics".into(),
+            OutputKind::PredictedGrf
+            | OutputKind::PredictedGrfMot
+            | OutputKind::PredictedGrfXml => "predicted_grf".into(),
+            OutputKind::RootResidual => "root_residual".into(),
+            OutputKind::FootContacts => "foot_contacts".into(),
+            OutputKind::RootResiduals => "root_residuals".into(),
+            OutputKind::GrfComparison | OutputKind::GrfComparisonFigure => "grf_comparison".into(),
+            OutputKind::ForceSetWithoutRootResiduals(k) => {
+                format!("force_set_{k}_without_root_residuals")
+            }
+            OutputKind::ForceSweep | OutputKind::ForceSweepDir(_) => "force_sweep".into(),
+            OutputKind::MuscleAnalysis(t) => t.name(),
+            OutputKind::BodyKinematics {
+                quantity,
+                body_frame,
+            } => {
+                let frame = if *body_frame && *quantity != Quantity::Pos {
+                    "bodyLocal"
+                } else {
+                    "global"
+                };
+                format!("{}_{frame}", quantity.as_str())
+            }
+            OutputKind::PointKinematics { point, quantity } => {
+                format!("{point}_{}", quantity.as_str())
+            }
+        }
+    }
+}
+
+/// A MuscleAnalysis table.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum MuscleTable {
+    Length,
+    LengtheningSpeed,
+    MaxActiveFiberForceRigidTendon,
+    PassiveFiberForceRigidTendon,
+    /// The moment arms about a coordinate.
+    MomentArm(String),
+}
+
+impl MuscleTable {
+    /// The tables every MuscleAnalysis writes, before its moment arms.
+    pub const ALWAYS: [MuscleTable; 4] = [
+        MuscleTable::Length,
+        MuscleTable::LengtheningSpeed,
+        MuscleTable::MaxActiveFiberForceRigidTendon,
+        MuscleTable::PassiveFiberForceRigidTendon,
+    ];
+
+    /// Its name: the file name's end and the table's name in its header
+    /// (OpenSim's).
+    pub fn name(&self) -> String {
+        match self {
+            MuscleTable::Length => "Length".into(),
+            MuscleTable::LengtheningSpeed => "LengtheningSpeed".into(),
+            MuscleTable::MaxActiveFiberForceRigidTendon => "MaxActiveFiberForceRigidTendon".into(),
+            MuscleTable::PassiveFiberForceRigidTendon => "PassiveFiberForceRigidTendon".into(),
+            MuscleTable::MomentArm(c) => format!("MomentArm_{c}"),
+        }
+    }
+}
+
+/// Which run an output belongs to: its setup, its analysis (None: the
+/// setup's own outputs) and its place in a contact-weight sweep.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct RunKey {
+    pub setup: String,
+    pub analysis: Option<String>,
+    pub sweep: Sweep,
+}
+
+impl RunKey {
+    /// The run of analysis `analysis` of setup `setup`.
+    pub fn analysis(setup: &str, analysis: &str, sweep: Sweep) -> RunKey {
+        RunKey {
+            setup: setup.to_string(),
+            analysis: Some(analysis.to_string()),
+            sweep,
+        }
+    }
+
+    /// The outputs of setup `setup` itself.
+    pub fn setup(setup: &str, sweep: Sweep) -> RunKey {
+        RunKey {
+            setup: setup.to_string(),
+            analysis: None,
+            sweep,
+        }
+    }
+
+    /// The same run at another place of the sweep.
+    pub fn with_sweep(&self, sweep: Sweep) -> RunKey {
+        RunKey {
+            sweep,
+            ..self.clone()
+        }
+    }
+
+    /// The key of its output `kind`.
+    pub fn key(&self, kind: OutputKind) -> OutputKey {
+        OutputKey {
+            run: self.clone(),
+            kind,
+        }
+    }
+
+    /// The file name of its output `kind` ([`file_name`]).
+    pub fn file(&self, kind: OutputKind) -> String {
+        file_name(&self.key(kind))
+    }
+
+    /// The run's name in reports: `<setup>_<analysis>`, without w0.
+    pub fn label(&self) -> String {
+        match &self.analysis {
+            Some(a) => format!("{}_{a}", self.setup),
+            None => self.setup.clone(),
+        }
+    }
+}
+
+/// One output file: its run and its kind.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct OutputKey {
+    pub run: RunKey,
+    pub kind: OutputKind,
+}
+
+/// The file name of an output: `<setup>_[<analysis>_][w0_<tag>_]<kind>`,
+/// with its extension. The one function that makes output names.
+pub fn file_name(key: &OutputKey) -> String {
+    let r = &key.run;
+    let mut name = r.setup.clone();
+    name.push('_');
+    if let Some(a) = &r.analysis {
+        name.push_str(a);
+        name.push('_');
+    }
+    if let Some(tag) = r.sweep.tag() {
+        name.push_str("w0_");
+        name.push_str(&tag);
+        name.push('_');
+    }
+    name.push_str(&key.kind.suffix());
+    name
+}
+
+/// The key among `keys` whose file name is `file` (a file name, no
+/// folder): how a name a user wrote is known, by the names the plan makes,
+/// never by taking it apart.
+pub fn find<'a>(file: &str, keys: &'a [OutputKey]) -> Option<&'a OutputKey> {
+    keys.iter().find(|k| file_name(k) == file)
+}
+
+/// The outputs a setup's plan writes, as keys: what a file a user names
+/// (a figure's or a metric's table) is looked up among. Tables the model
+/// decides (the contact tables, written only with contacts) are counted
+/// in; a MuscleAnalysis of `all` coordinates writes a moment-arm table per
+/// coordinate of the model, which the plan does not know: any coordinate's
+/// name is taken for those.
+#[derive(Debug, Clone, Default)]
+pub struct Planned {
+    pub keys: Vec<OutputKey>,
+    /// MuscleAnalysis runs of every coordinate.
+    any_moment_arm: Vec<RunKey>,
+}
+
+impl Planned {
+    /// The outputs of setup `setup`'s analyses that are on.
+    pub fn of(setup: &crate::parse::setup::AnalyzeSetup) -> Planned {
+        use crate::parse::analyses::KneeSelection;
+        use crate::parse::kinematics::KinematicsSetup;
+        use crate::parse::setup::Analysis;
+        let name = setup.name.as_str();
+        let weights: Vec<f64> = setup
+            .static_optimization()
+            .map(|so| so.contact_weights.clone())
+            .unwrap_or_default();
+        // A sweep's runs and statistics; the single run too (a model without
+        // contacts is solved once, without w0 in the names).
+        let mut sweeps = Sweep::all(&weights);
+        if !sweeps.contains(&Sweep::Single) {
+            sweeps.push(Sweep::Single);
+        }
+        let mut p = Planned::default();
+        let own = RunKey::setup(name, Sweep::Single);
+        p.keys.push(own.key(OutputKind::Metrics));
+        for a in setup.analyses.iter().filter(|a| a.common().on) {
+            let analysis = a.common().name.as_str();
+            let run = |sweep| RunKey::analysis(name, analysis, sweep);
+            match a {
+                Analysis::StaticOptimization(so) => {
+                    for &sweep in &sweeps {
+                        let stat = matches!(sweep, Sweep::Stat(_));
+                        let kinds: &[OutputKind] = if stat {
+                            &OutputKind::SWEEP_TABLES
+                        } else {
+                            &OutputKind::SO_TABLES
+                        };
+                        p.keys
+                            .extend(kinds.iter().map(|k| run(sweep).key(k.clone())));
+                        if !stat {
+                            p.keys.extend(
+                                [
+                                    OutputKind::ContactExternalLoads,
+                                    OutputKind::ContactExternalLoadsXml,
+                                    OutputKind::Log,
+                                ]
+                                .map(|k| run(sweep).key(k)),
+                            );
+                        }
+                        if so.knee_contact != KneeSelection::Off {
+                            p.keys
+                                .push(RunKey::setup(name, sweep).key(OutputKind::KneeContact));
+                            if !stat {
+                                p.keys.push(
+                                    RunKey::analysis(name, "KneeContact", sweep)
+                                        .key(OutputKind::ReactionLoads),
+                                );
+                            }
+                        }
+                    }
+                    p.keys.push(run(Sweep::Single).key(OutputKind::Reduction));
+                    p.keys.extend(
+                        [
+                            OutputKind::FootContacts,
+                            OutputKind::RootResiduals,
+                            OutputKind::RootResidual,
+                            OutputKind::PredictedGrf,
+                            OutputKind::PredictedGrfMot,
+                            OutputKind::PredictedGrfXml,
+                            OutputKind::GrfComparison,
+                        ]
+                        .map(|k| own.key(k)),
+                    );
+                }
+                Analysis::JointReaction(jr) => {
+                    let places: &[Sweep] = if jr.forces_file.is_some() {
+                        &[Sweep::Single]
+                    } else {
+                        &sweeps
+                    };
+                    for &sweep in places {
+                        p.keys.push(run(sweep).key(OutputKind::ReactionLoads));
+                        if jr.knee_loads {
+                            p.keys.push(run(sweep).key(OutputKind::KneeLoads));
+                        }
+                    }
+                }
+                Analysis::MuscleAnalysis(ma) => {
+                    let r = run(Sweep::Single);
+                    p.keys
+                        .extend(MuscleTable::ALWAYS.map(|t| r.key(OutputKind::MuscleAnalysis(t))));
+                    let coords = &ma.moment_arm_coordinate_list;
+                    if coords.iter().any(|c| c.eq_ignore_ascii_case("all")) {
+                        p.any_moment_arm.push(r);
+                    } else {
+                        p.keys.extend(coords.iter().map(|c| {
+                            r.key(OutputKind::MuscleAnalysis(MuscleTable::MomentArm(
+                                c.clone(),
+                            )))
+                        }));
+                    }
+                }
+                Analysis::Kinematics(k) => {
+                    let r = run(Sweep::Single);
+                    p.keys.extend(Quantity::ALL.map(|quantity| {
+                        r.key(match &**k {
+                            KinematicsSetup::Body(b) => OutputKind::BodyKinematics {
+                                quantity,
+                                body_frame: b.express_in_body_frame,
+                            },
+                            KinematicsSetup::Point(pk) => OutputKind::PointKinematics {
+                                point: pk.point_name.clone(),
+                                quantity,
+                            },
+                        })
+                    }));
+                }
+                Analysis::Unsupported { .. } => {}
+            }
+        }
+        p
+    }
+
+    /// The key whose file name is `file`, if the plan writes it.
+    pub fn find(&self, file: &str) -> Option<OutputKey> {
+        if let Some(k) = find(file, &self.keys) {
+            return Some(k.clone());
+        }
+        // A moment-arm table of any coordinate: its name made with a
+        // placeholder coordinate, the file's coordinate read in its place.
+        const HOLE: &str = "\u{1}";
+        self.any_moment_arm.iter().find_map(|run| {
+            let kind = |c: String| OutputKind::MuscleAnalysis(MuscleTable::MomentArm(c));
+            let probe = run.file(kind(HOLE.into()));
+            let (head, tail) = probe.split_once(HOLE)?;
+            let coordinate = file.strip_prefix(head)?.strip_suffix(tail)?;
+            (!coordinate.is_empty()).then(|| run.key(kind(coordinate.into())))
+        })
+    }
+
+    /// The w0 tags the plan's names carry (`1`, `500`, `mean`, ...), the
+    /// weights first; empty without a sweep.
+    pub fn w0_tags(setup: &crate::parse::setup::AnalyzeSetup) -> Vec<String> {
+        let weights: Vec<f64> = setup
+            .static_optimization()
+            .map(|so| so.contact_weights.clone())
+            .unwrap_or_default();
+        Sweep::all(&weights)
+            .into_iter()
+            .filter_map(Sweep::tag)
+            .collect()
+    }
+}
+
+/// The w0 tag a file name a user wrote carries (`..._w0_500_force.sto` →
+/// `500`), if any: only to word the error about a name that is none of the
+/// plan's ([`find`] decides which names are).
+pub fn w0_tag_in(file: &str) -> Option<&str> {
+    let k = file.find("_w0_")?;
+    file[k + 4..].split('_').next().filter(|t| !t.is_empty())
 }
 
 /// The three files of OpenSim's BodyKinematics analysis `analysis` of
@@ -62,92 +598,194 @@ pub fn setup_file_name(setup: &str, sweep: Sweep, kind: &str) -> String {
 /// `_acc_global.sto` (`_bodyLocal` for the velocities and accelerations
 /// when they are expressed in the bodies' frames).
 pub fn body_kinematics_files(setup: &str, analysis: &str, body_frame: bool) -> [String; 3] {
-    let frame = if body_frame { "bodyLocal" } else { "global" };
-    [
-        format!("{setup}_{analysis}_pos_global.sto"),
-        format!("{setup}_{analysis}_vel_{frame}.sto"),
-        format!("{setup}_{analysis}_acc_{frame}.sto"),
-    ]
+    let run = RunKey::analysis(setup, analysis, Sweep::Single);
+    Quantity::ALL.map(|quantity| {
+        run.file(OutputKind::BodyKinematics {
+            quantity,
+            body_frame,
+        })
+    })
 }
 
 /// The three files of OpenSim's PointKinematics analysis `analysis` of
 /// setup `setup`: `<setup>_<analysis>_<point>_pos.sto`, `_vel.sto`, `_acc.sto`.
 pub fn point_kinematics_files(setup: &str, analysis: &str, point: &str) -> [String; 3] {
-    ["pos", "vel", "acc"].map(|k| format!("{setup}_{analysis}_{point}_{k}.sto"))
-}
-
-/// A table's file stem (no extension) ending in `_<kind>` split into the
-/// run's name without the w0 part and the w0 tag, if any:
-/// `a_SO_w0_500_force` with kind `force` → (`a_SO`, Some(`500`)),
-/// `a_SO_force` → (`a_SO`, None); None when the stem is not of `kind`.
-pub fn split_table_stem(stem: &str, kind: &str) -> Option<(String, Option<String>)> {
-    let run = stem.strip_suffix(kind)?.strip_suffix('_')?;
-    match run.rfind("_w0_") {
-        Some(k) if !run[k + 4..].is_empty() && !run[k + 4..].contains('_') => {
-            Some((run[..k].to_string(), Some(run[k + 4..].to_string())))
-        }
-        _ => Some((run.to_string(), None)),
-    }
-}
-
-/// The w0 tag a file name carries (`..._w0_500_force.sto` → `500`), if any.
-pub fn w0_tag_in(file: &str) -> Option<&str> {
-    let k = file.find("_w0_")?;
-    file[k + 4..].split('_').next().filter(|t| !t.is_empty())
-}
-
-/// A file name with its w0 part taken out (`x_SO_w0_1_force.sto` →
-/// `x_SO_force.sto`): the name the same run writes with a single weight.
-pub fn without_w0(file: &str) -> String {
-    match (file.find("_w0_"), w0_tag_in(file)) {
-        (Some(k), Some(tag)) => format!("{}{}", &file[..k + 1], &file[k + 5 + tag.len()..]),
-        _ => file.to_string(),
-    }
+    let run = RunKey::analysis(setup, analysis, Sweep::Single);
+    Quantity::ALL.map(|quantity| {
+        run.file(OutputKind::PointKinematics {
+            point: point.to_string(),
+            quantity,
+        })
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Every kind, with the name it had before the kinds were typed (the
+    /// names the shipped setups' outputs carry, byte for byte).
+    fn every_kind() -> Vec<(OutputKind, &'static str)> {
+        use OutputKind::*;
+        vec![
+            (Activation, "activation.sto"),
+            (Force, "force.sto"),
+            (Diagnostics, "diagnostics.sto"),
+            (ContactForces, "ContactForces.sto"),
+            (ContactBodyForces, "ContactBodyForces.sto"),
+            (ContactExternalLoads, "ContactExternalLoads.mot"),
+            (ContactExternalLoadsXml, "ContactExternalLoads.xml"),
+            (GeneralizedForcesBySource, "GeneralizedForcesBySource.sto"),
+            (MusclePower, "MusclePower.sto"),
+            (Log, "log.mcap"),
+            (Reduction, "reduction.txt"),
+            (ReactionLoads, "ReactionLoads.sto"),
+            (KneeLoads, "KneeLoads.sto"),
+            (KneeContact, "KneeContact.sto"),
+            (Metrics, "metrics.csv"),
+            (PredictedGrf, "predicted_grf.sto"),
+            (PredictedGrfMot, "predicted_grf.mot"),
+            (PredictedGrfXml, "predicted_grf.xml"),
+            (RootResidual, "root_residual.sto"),
+            (FootContacts, "foot_contacts.xml"),
+            (RootResiduals, "root_residuals.xml"),
+            (GrfComparison, "grf_comparison.csv"),
+            (GrfComparisonFigure, "grf_comparison"),
+            (
+                ForceSetWithoutRootResiduals(1),
+                "force_set_1_without_root_residuals.xml",
+            ),
+            (ForceSweep, "force_sweep.csv"),
+            (ForceSweepDir("c7".into()), "force_sweep/c7"),
+            (MuscleAnalysis(MuscleTable::Length), "Length.sto"),
+            (
+                MuscleAnalysis(MuscleTable::LengtheningSpeed),
+                "LengtheningSpeed.sto",
+            ),
+            (
+                MuscleAnalysis(MuscleTable::MaxActiveFiberForceRigidTendon),
+                "MaxActiveFiberForceRigidTendon.sto",
+            ),
+            (
+                MuscleAnalysis(MuscleTable::PassiveFiberForceRigidTendon),
+                "PassiveFiberForceRigidTendon.sto",
+            ),
+            (
+                MuscleAnalysis(MuscleTable::MomentArm("knee_angle_r".into())),
+                "MomentArm_knee_angle_r.sto",
+            ),
+            (
+                BodyKinematics {
+                    quantity: Quantity::Pos,
+                    body_frame: true,
+                },
+                "pos_global.sto",
+            ),
+            (
+                BodyKinematics {
+                    quantity: Quantity::Vel,
+                    body_frame: true,
+                },
+                "vel_bodyLocal.sto",
+            ),
+            (
+                BodyKinematics {
+                    quantity: Quantity::Acc,
+                    body_frame: false,
+                },
+                "acc_global.sto",
+            ),
+            (
+                PointKinematics {
+                    point: "pad".into(),
+                    quantity: Quantity::Vel,
+                },
+                "pad_vel.sto",
+            ),
+        ]
+    }
+
     #[test]
-    fn names_round_trip() {
+    fn w0_tags() {
         assert_eq!(w0_tag(500.0), "500");
         assert_eq!(w0_tag(0.001), "0.001");
         assert_eq!(w0_tag(1e6), "1000000");
         assert_eq!(w0_tag(1e9), "1e9");
-        assert_eq!(
-            file_name("cam1", "SO", Sweep::Weight(500.0), "force.sto"),
-            "cam1_SO_w0_500_force.sto"
-        );
-        assert_eq!(
-            file_name("cam1", "SO", Sweep::Single, "log.mcap"),
-            "cam1_SO_log.mcap"
-        );
-        assert_eq!(
-            file_name("cam1", "JR", Sweep::Stat("mean"), "KneeLoads.sto"),
-            "cam1_JR_w0_mean_KneeLoads.sto"
-        );
-        for (sweep, tag) in [
-            (Sweep::Single, None),
-            (Sweep::Weight(0.5), Some("0.5")),
-            (Sweep::Stat("max"), Some("max")),
-        ] {
-            let name = file_name("a_b", "SO", sweep, "MomentArm_knee_angle_r");
-            assert_eq!(
-                split_table_stem(&name, "MomentArm_knee_angle_r"),
-                Some(("a_b_SO".to_string(), tag.map(String::from)))
-            );
-            assert_eq!(w0_tag_in(&name), tag);
+    }
+
+    /// Every kind's name, in every run and sweep, is the name the run
+    /// wrote before the kinds were typed, and is found back as its key
+    /// among all the others' (no two keys share a name).
+    #[test]
+    fn every_output_name_round_trips_and_is_todays() {
+        let sweeps = [
+            (Sweep::Single, ""),
+            (Sweep::Weight(500.0), "w0_500_"),
+            (Sweep::Weight(0.5), "w0_0.5_"),
+            (Sweep::Weight(1e9), "w0_1e9_"),
+            (Sweep::Stat(Stat::Mean), "w0_mean_"),
+            (Sweep::Stat(Stat::Min), "w0_min_"),
+            (Sweep::Stat(Stat::Max), "w0_max_"),
+        ];
+        let mut keys = Vec::new();
+        let mut expected = Vec::new();
+        for (kind, end) in every_kind() {
+            for (sweep, tag) in sweeps {
+                for (analysis, part) in [(Some("SO"), "SO_"), (Some("JR"), "JR_"), (None, "")] {
+                    let run = RunKey {
+                        setup: "cam1".into(),
+                        analysis: analysis.map(String::from),
+                        sweep,
+                    };
+                    keys.push(run.key(kind.clone()));
+                    expected.push(format!("cam1_{part}{tag}{end}"));
+                }
+            }
         }
-        assert_eq!(split_table_stem("a_SO_force", "activation"), None);
+        for (key, name) in keys.iter().zip(&expected) {
+            assert_eq!(&file_name(key), name);
+            assert_eq!(find(name, &keys), Some(key), "{name}");
+        }
+        // Names of today's outputs, literally.
+        let so = RunKey::analysis("leg_extension_cam1", "SO", Sweep::Weight(500.0));
         assert_eq!(
-            without_w0("../o/x_SO_w0_1_force.sto"),
-            "../o/x_SO_force.sto"
+            so.file(OutputKind::Force),
+            "leg_extension_cam1_SO_w0_500_force.sto"
         );
         assert_eq!(
-            without_w0("x_JR_w0_mean_KneeLoads.sto"),
-            "x_JR_KneeLoads.sto"
+            RunKey::analysis("x", "JR", Sweep::Stat(Stat::Mean)).file(OutputKind::KneeLoads),
+            "x_JR_w0_mean_KneeLoads.sto"
         );
-        assert_eq!(without_w0("x_SO_force.sto"), "x_SO_force.sto");
+        assert_eq!(
+            RunKey::setup("x", Sweep::Weight(1.0)).file(OutputKind::KneeContact),
+            "x_w0_1_KneeContact.sto"
+        );
+        assert_eq!(
+            RunKey::analysis("x", "KneeContact", Sweep::Weight(1.0))
+                .file(OutputKind::ReactionLoads),
+            "x_KneeContact_w0_1_ReactionLoads.sto"
+        );
+        assert_eq!(
+            RunKey::setup("subject01", Sweep::Single).file(OutputKind::PredictedGrf),
+            "subject01_predicted_grf.sto"
+        );
+        assert_eq!(
+            body_kinematics_files("s", "BK", false),
+            [
+                "s_BK_pos_global.sto",
+                "s_BK_vel_global.sto",
+                "s_BK_acc_global.sto"
+            ]
+        );
+        assert_eq!(
+            point_kinematics_files("s", "PK", "pad"),
+            ["s_PK_pad_pos.sto", "s_PK_pad_vel.sto", "s_PK_pad_acc.sto"]
+        );
+        assert_eq!(find("cam1_SO_w0_7_force.sto", &keys), None);
+        assert_eq!(
+            SWEEP_STATS,
+            Stat::ALL.map(Stat::as_str),
+            "the statistics' tags"
+        );
     }
 }

@@ -5,6 +5,7 @@
 use crate::error::Result;
 use crate::frame::problem::SoProblem;
 use crate::reactions::ReactionSpec;
+use crate::writers::names::{OutputKind, RunKey};
 
 /// Where a resumed run goes on: the frames that every table of the run and
 /// its MCAP log hold completely are kept.
@@ -17,35 +18,35 @@ pub struct Resume {
     pub messages: Vec<(String, f64, Vec<u8>)>,
 }
 
-/// The [`Resume`] of a run writing with `prefix` into `dir`, or None when it
-/// has nothing to keep (no tables yet, or one of them or the log empty).
+/// The [`Resume`] of run `run` writing into `dir`, or None when it has
+/// nothing to keep (no tables yet, or one of them or the log empty).
 pub fn resume_point(
     dir: &std::path::Path,
-    prefix: &str,
+    run: &RunKey,
     problem: &SoProblem,
-    reactions: &[(String, &[ReactionSpec])],
+    reactions: &[(RunKey, &[ReactionSpec])],
 ) -> Result<Option<Resume>> {
     let mut tables: Vec<std::path::PathBuf> = [
-        "activation.sto",
-        "force.sto",
-        "diagnostics.sto",
-        "GeneralizedForcesBySource.sto",
-        "MusclePower.sto",
+        OutputKind::Activation,
+        OutputKind::Force,
+        OutputKind::Diagnostics,
+        OutputKind::GeneralizedForcesBySource,
+        OutputKind::MusclePower,
     ]
-    .iter()
-    .map(|s| dir.join(format!("{prefix}{s}")))
+    .into_iter()
+    .map(|k| dir.join(run.file(k)))
     .collect();
     if !problem.contacts.is_empty() {
-        for s in [
-            "ContactForces.sto",
-            "ContactBodyForces.sto",
-            "ContactExternalLoads.mot",
+        for k in [
+            OutputKind::ContactForces,
+            OutputKind::ContactBodyForces,
+            OutputKind::ContactExternalLoads,
         ] {
-            tables.push(dir.join(format!("{prefix}{s}")));
+            tables.push(dir.join(run.file(k)));
         }
     }
-    for (p, _) in reactions {
-        tables.push(dir.join(format!("{p}ReactionLoads.sto")));
+    for (jr, _) in reactions {
+        tables.push(dir.join(jr.file(OutputKind::ReactionLoads)));
     }
     let mut keep = usize::MAX;
     for t in &tables {
@@ -56,7 +57,7 @@ pub fn resume_point(
     }
     // The log: messages of whole frames, read as far as its chunks are
     // complete (a killed run's last chunk may be torn).
-    let log_path = dir.join(format!("{prefix}log.mcap"));
+    let log_path = dir.join(run.file(OutputKind::Log));
     let bytes = match std::fs::read(&log_path) {
         Ok(b) => b,
         Err(_) => return Ok(None),

@@ -166,33 +166,33 @@ impl RunStatistics {
         self.last = Some(time);
     }
 
-    /// Take in the first `keep` frames of a run's tables (`dir`, file names
-    /// starting `prefix`) as written: a resumed run's summary then covers
-    /// the whole run, the frames an earlier run wrote included (values as
+    /// Take in the first `keep` frames of the tables of run `run` (in
+    /// `dir`) as written: a resumed run's summary then covers the whole run, the frames an earlier run wrote included (values as
     /// the tables hold them, rounded to their precision).
     pub fn observe_tables(
         &mut self,
         problem: &SoProblem,
         dir: &std::path::Path,
-        prefix: &str,
+        run: &crate::writers::names::RunKey,
         keep: usize,
     ) -> crate::error::Result<()> {
         use crate::error::{Error, Location};
-        let read = |kind: &str| crate::storage::read(&dir.join(format!("{prefix}{kind}.sto")));
-        let act = read("activation")?;
-        let force = read("force")?;
-        let diag = read("diagnostics")?;
-        let src = read("GeneralizedForcesBySource")?;
-        let column = |t: &crate::storage::Storage, label: &str, kind: &str| {
+        use crate::writers::names::OutputKind;
+        let read = |kind: OutputKind| crate::storage::read(&dir.join(run.file(kind)));
+        let act = read(OutputKind::Activation)?;
+        let force = read(OutputKind::Force)?;
+        let diag = read(OutputKind::Diagnostics)?;
+        let src = read(OutputKind::GeneralizedForcesBySource)?;
+        let column = |t: &crate::storage::Storage, label: &str, kind: OutputKind| {
             t.column_index(label).ok_or_else(|| {
                 Error::input(
-                    Location::file(dir.join(format!("{prefix}{kind}.sto"))),
+                    Location::file(dir.join(run.file(kind))),
                     format!("the table to resume lacks its column '{label}'"),
                 )
             })
         };
-        let status = column(&diag, "status", "diagnostics")?;
-        let residual = column(&diag, "equation_residual", "diagnostics")?;
+        let status = column(&diag, "status", OutputKind::Diagnostics)?;
+        let residual = column(&diag, "equation_residual", OutputKind::Diagnostics)?;
         let force_cols: Vec<Option<usize>> = problem
             .labels
             .iter()
@@ -202,11 +202,11 @@ impl RunStatistics {
         let contact = if problem.contacts.is_empty() {
             None
         } else {
-            let table = read("ContactForces")?;
+            let table = read(OutputKind::ContactForces)?;
             let cols = problem
                 .contact_labels()
                 .iter()
-                .map(|l| column(&table, l, "ContactForces"))
+                .map(|l| column(&table, l, OutputKind::ContactForces))
                 .collect::<crate::error::Result<Vec<usize>>>()?;
             Some((table, cols))
         };

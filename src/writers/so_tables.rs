@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::frame::problem::{FrameResult, SoProblem};
 use crate::reactions::{column_labels, ReactionSpec};
 use crate::storage::StoWriter;
+use crate::writers::names::{OutputKind, RunKey};
 use crate::writers::tables::{
     diagnostics_row, DIAGNOSTICS_COLUMNS, DIAGNOSTICS_DESCRIPTION, FORCE_DESCRIPTION,
     JOINT_REACTION_DESCRIPTION,
@@ -27,13 +28,12 @@ pub struct TablesSpec<'a> {
     /// The setup file, named in each table's header.
     pub setup_file: &'a Path,
     pub dir: &'a Path,
-    /// The start of every file name (`<setup>_<analysis>_`, with the
-    /// weight's tag in a w0 sweep).
-    pub prefix: &'a str,
+    /// The run its files belong to (`writers::names`).
+    pub run: &'a RunKey,
     /// The run's contact weight (in the contact table's description).
     pub w0: f64,
-    /// Per joint-reaction table: its file-name prefix and reactions.
-    pub reactions: &'a [(String, &'a [ReactionSpec])],
+    /// Per joint-reaction table: its run and reactions.
+    pub reactions: &'a [(RunKey, &'a [ReactionSpec])],
     pub precision: usize,
     /// Resuming: the rows every table keeps (None: new tables).
     pub keep: Option<usize>,
@@ -60,10 +60,10 @@ impl SoTables {
     /// Creates the tables (or reopens them, resuming) and writes the
     /// contact forces' ExternalLoads document.
     pub fn open(problem: &SoProblem, spec: &TablesSpec) -> Result<SoTables> {
-        let (dir, prefix, precision) = (spec.dir, spec.prefix, spec.precision);
-        let act_path = dir.join(format!("{prefix}activation.sto"));
-        let force_path = dir.join(format!("{prefix}force.sto"));
-        let diag_path = dir.join(format!("{prefix}diagnostics.sto"));
+        let (dir, run, precision) = (spec.dir, spec.run, spec.precision);
+        let act_path = dir.join(run.file(OutputKind::Activation));
+        let force_path = dir.join(run.file(OutputKind::Force));
+        let diag_path = dir.join(run.file(OutputKind::Diagnostics));
         let mut files = vec![act_path.clone(), force_path.clone(), diag_path.clone()];
         // Each table is created, or, when resuming, reopened after its kept
         // rows; rows are written in batches (TABLE_BATCH_ROWS).
@@ -112,10 +112,10 @@ impl SoTables {
         )?;
         let mut contact_w = None;
         if !problem.contacts.is_empty() {
-            let cpath = dir.join(format!("{prefix}ContactForces.sto"));
-            let bpath = dir.join(format!("{prefix}ContactBodyForces.sto"));
-            let lpath = dir.join(format!("{prefix}ContactExternalLoads.mot"));
-            let xpath = dir.join(format!("{prefix}ContactExternalLoads.xml"));
+            let cpath = dir.join(run.file(OutputKind::ContactForces));
+            let bpath = dir.join(run.file(OutputKind::ContactBodyForces));
+            let lpath = dir.join(run.file(OutputKind::ContactExternalLoads));
+            let xpath = dir.join(run.file(OutputKind::ContactExternalLoadsXml));
             let desc = format!(
                 "Contact forces estimated by statopt (Krueger & Wartzack 2017), contact weight w0 = {}, friction {:?}.\nPer contact: force on the point body (N, ground), application point p (m, ground), point-to-plane distance (m), weight w(d), slip speed (m/s), regime (0 static, 1 kinetic; between: kinetic share of a regime_blend), multipliers.\n",
                 spec.w0, problem.options.friction
@@ -153,7 +153,7 @@ impl SoTables {
             files.extend([cpath, bpath, lpath, xpath]);
             contact_w = Some((cw, bw, lw));
         }
-        let src_path = dir.join(format!("{prefix}GeneralizedForcesBySource.sto"));
+        let src_path = dir.join(run.file(OutputKind::GeneralizedForcesBySource));
         let src_w = open_table(
             &src_path,
             "Generalized Forces By Source",
@@ -161,7 +161,7 @@ impl SoTables {
             &problem.by_source_labels(),
             precision,
         )?;
-        let power_path = dir.join(format!("{prefix}MusclePower.sto"));
+        let power_path = dir.join(run.file(OutputKind::MusclePower));
         let power_w = open_table(
             &power_path,
             "Muscle Power",
@@ -171,8 +171,8 @@ impl SoTables {
         )?;
         files.extend([src_path, power_path]);
         let mut jr_w = Vec::new();
-        for (p, specs) in spec.reactions {
-            let path = dir.join(format!("{p}ReactionLoads.sto"));
+        for (jr, specs) in spec.reactions {
+            let path = dir.join(jr.file(OutputKind::ReactionLoads));
             jr_w.push(open_table(
                 &path,
                 "Joint Reaction Loads",

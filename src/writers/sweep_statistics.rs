@@ -8,12 +8,11 @@ use crate::storage::StoWriter;
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
 /// (the paper's uncertainty band, section 3.2). The runs' tables are read
 /// row by row in step, so memory does not grow with the trial's length.
-/// `stat_path` names the table of each statistic (`mean`, `min`, `max`;
-/// `writers::names`).
+/// `stat_path` names the table of each statistic (`writers::names`).
 pub fn write_sweep_statistics(
     setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
-    stat_path: &dyn Fn(&str) -> std::path::PathBuf,
+    stat_path: &dyn Fn(crate::writers::names::Stat) -> std::path::PathBuf,
     kind: &str,
     weights: &[f64],
     precision: usize,
@@ -32,11 +31,13 @@ pub fn write_sweep_statistics(
             )));
         }
     }
-    let stats = crate::writers::names::SWEEP_STATS;
+    use crate::writers::names::Stat;
+    let stats = Stat::ALL;
     let mut out = Vec::new();
     let mut writers = Vec::new();
     for stat in stats {
         let path = stat_path(stat);
+        let stat = stat.as_str();
         let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
         writers.push(StoWriter::create_for_setup(
             setup_file,
@@ -73,9 +74,9 @@ pub fn write_sweep_statistics(
             for (j, v) in row.iter_mut().enumerate() {
                 let vals = rows.iter().map(|r| r[j]);
                 *v = match *stat {
-                    "mean" => vals.sum::<f64>() / rows.len() as f64,
-                    "min" => vals.fold(f64::INFINITY, f64::min),
-                    _ => vals.fold(f64::NEG_INFINITY, f64::max),
+                    Stat::Mean => vals.sum::<f64>() / rows.len() as f64,
+                    Stat::Min => vals.fold(f64::INFINITY, f64::min),
+                    Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
                 };
             }
             w.write_row(t, &row)?;
