@@ -82,6 +82,15 @@ impl TableFile {
         }
     }
 
+    /// The output `path` a run kept in memory (`super::results`), read from
+    /// those bytes.
+    pub(super) fn kept(path: &Path, bytes: Arc<Vec<u8>>) -> TableFile {
+        TableFile {
+            path: path.to_path_buf(),
+            bytes: Some(SharedBytes(bytes)),
+        }
+    }
+
     /// The file's path (what messages name).
     pub fn path(&self) -> &Path {
         &self.path
@@ -112,6 +121,12 @@ pub(super) fn count_open(path: &Path) {
 /// the caller that opened it) since the process started.
 pub fn times_opened(path: &Path) -> usize {
     OPENED.get(path)
+}
+
+/// Every path the table readers opened, with how many times (as spelled by
+/// the callers that opened them), since the process started.
+pub fn opened() -> Vec<(std::path::PathBuf, usize)> {
+    OPENED.all()
 }
 
 /// The whole file, counted as one opening.

@@ -544,16 +544,23 @@ impl<'a> RunWriters<'a> {
             },
         )?;
         let log_path = dir.join(format!("{prefix}log.mcap"));
-        let mut log = FrameLog::create(&log_path, log_names)?;
-        if let Some(r) = &resume {
-            log.replay(&r.messages)?;
-        }
+        // A run kept in memory (storage::results) logs nothing: the log is
+        // a file's.
+        let log = if crate::storage::results::writes_file(&log_path) {
+            let mut log = FrameLog::create(&log_path, log_names)?;
+            if let Some(r) = &resume {
+                log.replay(&r.messages)?;
+            }
+            Some(log)
+        } else {
+            None
+        };
         let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
         Ok(RunWriters {
             problem,
             tables,
             log_path,
-            log: Some(log),
+            log,
             skip_until,
             stats,
         })
@@ -580,9 +587,9 @@ impl<'a> RunWriters<'a> {
         let problem = self.problem;
         let diag_path = self.tables.diag_path.clone();
         let mut files = self.tables.finish()?;
-        files.push(self.log_path);
         if let Some(log) = self.log {
             log.finish()?;
+            files.push(self.log_path);
         }
         let mut stats = self.stats;
         // A stopped run counts the frames its tables hold (a resumed run's
