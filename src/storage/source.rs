@@ -91,6 +91,16 @@ impl TableFile {
         }
     }
 
+    /// The bytes of the file `path` given in memory (e.g. a table a run
+    /// kept, `super::results`): readers parse them as the file's and open
+    /// nothing.
+    pub fn from_bytes(path: &Path, bytes: Vec<u8>) -> TableFile {
+        TableFile {
+            path: path.to_path_buf(),
+            bytes: Some(SharedBytes(Arc::new(bytes))),
+        }
+    }
+
     /// The file's path (what messages name).
     pub fn path(&self) -> &Path {
         &self.path
