@@ -14,6 +14,9 @@
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly.
+//! - [`so_loop`]: a static-optimization pass's frame loop: every frame
+//!   solved (once per contact weight) on the driver's threads and its
+//!   results streamed, in frame order, to sinks on threads of their own.
 pub mod candidates;
 pub mod compile;
 pub mod driver;
@@ -22,6 +25,7 @@ pub mod knee_contact;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;
+pub mod so_loop;
 pub mod workspace;
 
 pub use problem::{Control, FrameResult, SoProblem};
