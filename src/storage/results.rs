@@ -13,12 +13,17 @@
 //! file's, bit for bit) and open no file. `--resume` reads what an earlier
 //! run left on the disk: that is the one reading of earlier output.
 //!
-//! Memory: a capture holds the bytes of every output it covers until it
-//! ends (the size of the results folder); the captures end with the run.
+//! Memory: a capture holds the bytes of the outputs it covers until it ends
+//! (with the run). A capture that writes files keeps at most
+//! [`KEPT_LIMIT`] bytes of tables (as a motion file is held up to
+//! `storage::IN_MEMORY_LIMIT`): a table that would pass it is not kept,
+//! and its consumers read its file, so that memory stays bounded however
+//! long the trial. A capture in memory only keeps everything (there is no
+//! file to fall back on).
 
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use crate::error::{Error, Result};
@@ -26,12 +31,44 @@ use crate::error::{Error, Result};
 /// One output's bytes, shared by its readers.
 pub type Bytes = Arc<Vec<u8>>;
 
+/// The most bytes of tables a capture that writes files keeps: 256 MiB
+/// (the leg extension study writes 54 MB of tables).
+pub const KEPT_LIMIT: u64 = super::IN_MEMORY_LIMIT;
+
+/// What a capture may still keep, in bytes, shared with the writers of
+/// its tables (which take from it as they keep rows, and stop keeping
+/// when it runs out).
+#[derive(Clone)]
+pub struct Budget(Arc<AtomicI64>);
+
+impl Budget {
+    fn new(bytes: u64) -> Budget {
+        Budget(Arc::new(AtomicI64::new(bytes.min(i64::MAX as u64) as i64)))
+    }
+
+    /// Take `n` bytes; false (and nothing taken) when fewer are left.
+    pub(super) fn take(&self, n: usize) -> bool {
+        let n = n as i64;
+        if self.0.fetch_sub(n, Ordering::Relaxed) - n < 0 {
+            self.0.fetch_add(n, Ordering::Relaxed);
+            return false;
+        }
+        true
+    }
+
+    /// Give back `n` bytes taken.
+    pub(super) fn give(&self, n: usize) {
+        self.0.fetch_add(n as i64, Ordering::Relaxed);
+    }
+}
+
 struct Scope {
     id: u64,
     /// The folder the capture covers (None: every path).
     root: Option<PathBuf>,
     /// Whether files are written too.
     files: bool,
+    budget: Budget,
     /// Outputs by normalised path, in the order they were finished.
     outputs: Vec<(PathBuf, Bytes)>,
     index: HashMap<PathBuf, usize>,
@@ -85,13 +122,14 @@ pub struct Capture {
 }
 
 impl Capture {
-    fn start(root: Option<&Path>, files: bool) -> Capture {
+    fn start(root: Option<&Path>, files: bool, limit: u64) -> Capture {
         let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
         let root = root.map(key);
         scopes().push(Scope {
             id,
             root: root.clone(),
             files,
+            budget: Budget::new(limit),
             outputs: Vec::new(),
             index: HashMap::new(),
         });
@@ -99,9 +137,15 @@ impl Capture {
     }
 
     /// Keep every output written under `root` (every output, for None)
-    /// while the capture lasts; files are written as well.
+    /// while the capture lasts (tables up to [`KEPT_LIMIT`] bytes); files
+    /// are written as well.
     pub fn new(root: Option<&Path>) -> Capture {
-        Self::start(root, true)
+        Self::start(root, true, KEPT_LIMIT)
+    }
+
+    /// [`Self::new`] keeping at most `limit` bytes of tables.
+    pub fn with_limit(root: Option<&Path>, limit: u64) -> Capture {
+        Self::start(root, true, limit)
     }
 
     /// Keep the outputs of a run in memory only: a folder name that no
@@ -114,7 +158,7 @@ impl Capture {
             "statopt-in-memory-{}-{n}-not-a-folder",
             std::process::id()
         ));
-        Self::start(Some(&dir), false)
+        Self::start(Some(&dir), false, u64::MAX)
     }
 
     /// The folder the capture covers (None: every path).
@@ -148,8 +192,13 @@ pub fn writes_file(path: &Path) -> bool {
 
 /// Whether an output at `path` is kept in memory (a capture covers it).
 pub fn captured(path: &Path) -> bool {
+    budget(path).is_some()
+}
+
+/// The budget of the capture that covers `path` (None: not kept).
+pub(super) fn budget(path: &Path) -> Option<Budget> {
     let k = key(path);
-    scope_of(&mut scopes(), &k).is_some()
+    scope_of(&mut scopes(), &k).map(|s| s.budget.clone())
 }
 
 /// Keep `bytes` as the output at `path` when a capture covers it (a later
@@ -208,6 +257,31 @@ mod tests {
         assert_eq!(c.outputs().len(), 1);
         drop(c);
         assert!(get(&dir.join("a.txt")).is_none(), "kept past its capture");
+    }
+
+    #[test]
+    fn a_table_past_the_limit_is_not_kept_and_read_from_its_file() {
+        let tmp = crate::test_dir::TempDir::new("results_limit");
+        let dir = tmp.path();
+        let _c = Capture::with_limit(Some(dir), 400);
+        let table = |name: &str, rows: usize| {
+            let p = dir.join(name);
+            let mut w =
+                crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
+                    .unwrap();
+            for k in 0..rows {
+                w.write_row(k as f64, &[0.5]).unwrap();
+            }
+            w.finish().unwrap();
+            p
+        };
+        let small = table("small.sto", 2);
+        let large = table("large.sto", 40);
+        assert!(get(&small).is_some());
+        assert!(get(&large).is_none(), "kept past the limit");
+        assert_eq!(crate::storage::read(&large).unwrap().len(), 40);
+        assert_eq!(crate::storage::times_opened(&large), 1);
+        assert_eq!(crate::storage::times_opened(&small), 0);
     }
 
     #[test]

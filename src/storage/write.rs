@@ -312,6 +312,8 @@ pub struct StoWriter {
     /// (`super::results`): at [`Self::finish`] they become the output the
     /// run's own consumers read instead of the file.
     kept: Option<Vec<u8>>,
+    /// What the capture may still keep (`kept` is dropped when it runs out).
+    budget: Option<super::results::Budget>,
     path: PathBuf,
     n_labels: usize,
     precision: usize,
@@ -401,10 +403,12 @@ impl StoWriter {
         } else {
             None
         };
-        let kept = super::results::captured(path).then(|| head.into_bytes());
+        let budget = super::results::budget(path).filter(|b| b.take(head.len()));
+        let kept = budget.is_some().then(|| head.into_bytes());
         Ok(StoWriter {
             file,
             kept,
+            budget,
             path: path.to_path_buf(),
             n_labels: labels.len(),
             precision,
@@ -496,8 +500,19 @@ impl StoWriter {
         if self.line.is_empty() {
             return Ok(());
         }
-        if let Some(kept) = &mut self.kept {
-            kept.extend_from_slice(&self.line);
+        if let (Some(kept), Some(budget)) = (&mut self.kept, &self.budget) {
+            if budget.take(self.line.len()) {
+                kept.extend_from_slice(&self.line);
+            } else if self.file.is_some() {
+                // Past the capture's limit: the file is the table's.
+                budget.give(kept.len());
+                self.kept = None;
+            } else {
+                return Err(Error::internal(format!(
+                    "{}: a table kept in memory only ran out of its budget",
+                    self.path.display()
+                )));
+            }
         }
         let count = self.n_rows_field();
         let Some(file) = &mut self.file else {
@@ -576,7 +591,8 @@ impl StoWriter {
             .map_err(io)?;
         file.seek(SeekFrom::End(0)).map_err(io)?;
         // The kept rows are this run's output too.
-        let kept = super::results::captured(path).then(|| {
+        let budget = super::results::budget(path).filter(|b| b.take(offset));
+        let kept = budget.is_some().then(|| {
             let mut kept = bytes[..offset].to_vec();
             let at = n_rows_offset as usize;
             kept[at..at + NROWS_WIDTH].copy_from_slice(format!("{keep:<NROWS_WIDTH$}").as_bytes());
@@ -585,6 +601,7 @@ impl StoWriter {
         Ok(StoWriter {
             file: Some(file),
             kept,
+            budget,
             path: path.to_path_buf(),
             n_labels,
             precision,
