@@ -22,6 +22,14 @@ impl PathCounts {
             .or_insert(0) += 1;
     }
 
+    /// Every path counted, with its count.
+    pub fn all(&self) -> Vec<(PathBuf, usize)> {
+        let m = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        m.as_ref()
+            .map(|m| m.iter().map(|(p, n)| (p.clone(), *n)).collect())
+            .unwrap_or_default()
+    }
+
     /// How many reads of `path` were counted since the process started.
     pub fn get(&self, path: &Path) -> usize {
         let m = self.0.lock().unwrap_or_else(|e| e.into_inner());

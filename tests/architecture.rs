@@ -415,7 +415,13 @@ fn tests_take_scratch_folders_that_clean_up() {
     assert!(files
         .iter()
         .any(|f| f.ends_with("fuzz_targets/storage_reader.rs")));
-    let allowed = ["src/test_dir.rs", "src/tools/bench.rs"];
+    // storage/results.rs names a folder there that it never creates (a run
+    // kept in memory).
+    let allowed = [
+        "src/test_dir.rs",
+        "src/tools/bench.rs",
+        "src/storage/results.rs",
+    ];
     let offenders: Vec<String> = files
         .iter()
         .filter(|f| !allowed.iter().any(|a| f.ends_with(a)))

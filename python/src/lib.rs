@@ -154,8 +154,14 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
 /// called as frame loops advance (at most every 0.1 s), and Ctrl-C stops the
 /// run cleanly (the tables keep the frames solved) and raises
 /// KeyboardInterrupt.
+///
+/// With `in_memory` (no `results_dir`) the run writes no file
+/// (`storage::results::Capture::in_memory`): the summary's `files` name
+/// the outputs under a folder that is not created (`in_memory_root`), and
+/// `outputs` holds each output's bytes, (path, bytes) in the order written
+/// (tables as their files would hold them; `parse_tables` reads them).
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false))]
+#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false, in_memory=false))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -169,8 +175,19 @@ fn run<'py>(
     sync: bool,
     progress: Option<PyObject>,
     allow_unknown: bool,
+    in_memory: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
+    if in_memory && results_dir.is_some() {
+        return Err(StatoptError::new_err(
+            "in_memory=True writes no file: give no results_dir",
+        ));
+    }
+    let capture = in_memory.then(storage::results::Capture::in_memory);
+    let results_dir = match &capture {
+        Some(c) => c.root().map(PathBuf::from),
+        None => results_dir,
+    };
     let opts = RunOptions {
         results_dir,
         precision,
@@ -193,10 +210,75 @@ fn run<'py>(
     if let Some(e) = take_pending(&pending) {
         return Err(e);
     }
-    match result {
-        Ok(s) => summary_dict(py, &s),
-        Err(e) => Err(to_py(py, e)),
+    let d = match result {
+        Ok(s) => summary_dict(py, &s)?,
+        Err(e) => return Err(to_py(py, e)),
+    };
+    if let Some(c) = &capture {
+        let root = c.root().map(|r| r.display().to_string());
+        d.set_item("in_memory_root", root)?;
+        let outputs = PyList::empty(py);
+        for (path, bytes) in c.outputs() {
+            outputs.append((path.display().to_string(), PyBytes::new(py, &bytes)))?;
+        }
+        d.set_item("outputs", outputs)?;
     }
+    Ok(d)
+}
+
+/// Tables a run kept in memory (`run(..., in_memory=True)`'s `outputs`),
+/// each (path, bytes), read with the engine's reader as the files would
+/// be read, in parallel: as [`read_tables`] returns them.
+#[pyfunction]
+fn parse_tables<'py>(
+    py: Python<'py>,
+    outputs: Vec<(PathBuf, Vec<u8>)>,
+) -> PyResult<Vec<TableParts<'py>>> {
+    let files: Vec<storage::TableFile> = outputs
+        .into_iter()
+        .map(|(p, b)| storage::TableFile::from_bytes(&p, b))
+        .collect();
+    let read = py.allow_threads(|| in_parallel(files.len(), |i| storage::read_file(&files[i])));
+    read.into_iter().map(|r| table_parts(py, r)).collect()
+}
+
+/// `read(i)` for every i < n, on as many threads as there are cores.
+fn in_parallel<T: Send>(
+    n: usize,
+    read: impl Fn(usize) -> statopt::Result<T> + Sync,
+) -> Vec<statopt::Result<T>> {
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(n)
+        .max(1);
+    let mut out: Vec<Option<statopt::Result<T>>> = Vec::new();
+    out.resize_with(n, || None);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<Mutex<&mut Option<statopt::Result<T>>>> =
+        out.iter_mut().map(Mutex::new).collect();
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if i >= n {
+                    break;
+                }
+                let r = read(i);
+                **slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(r);
+            });
+        }
+    });
+    drop(slots);
+    out.into_iter()
+        .map(|r| r.unwrap_or_else(|| Err(statopt::Error::internal("table not read"))))
+        .collect()
+}
+
+fn table_parts<'py>(py: Python<'py>, r: statopt::Result<Storage>) -> PyResult<TableParts<'py>> {
+    let st = r.map_err(|e| to_py(py, e))?;
+    let time = f64_bytes(py, st.time.iter().copied());
+    let data = f64_bytes(py, st.rows.iter().flatten().copied());
+    Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
 }
 
 /// `statopt-tool predict-grf SETUP`: ground reactions from kinematics alone.
@@ -482,41 +564,8 @@ fn read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<TableParts<'py>> 
 /// of a run, read back); the first error is raised.
 #[pyfunction]
 fn read_tables<'py>(py: Python<'py>, paths: Vec<PathBuf>) -> PyResult<Vec<TableParts<'py>>> {
-    let read: Vec<statopt::Result<Storage>> = py.allow_threads(|| {
-        let workers = std::thread::available_parallelism()
-            .map_or(1, |n| n.get())
-            .min(paths.len())
-            .max(1);
-        let mut out: Vec<Option<statopt::Result<Storage>>> = Vec::new();
-        out.resize_with(paths.len(), || None);
-        let next = std::sync::atomic::AtomicUsize::new(0);
-        let slots: Vec<Mutex<&mut Option<statopt::Result<Storage>>>> =
-            out.iter_mut().map(Mutex::new).collect();
-        std::thread::scope(|s| {
-            for _ in 0..workers {
-                s.spawn(|| loop {
-                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    if i >= paths.len() {
-                        break;
-                    }
-                    let r = storage::read(&paths[i]);
-                    **slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(r);
-                });
-            }
-        });
-        drop(slots);
-        out.into_iter()
-            .map(|r| r.unwrap_or_else(|| Err(statopt::Error::internal("table not read"))))
-            .collect()
-    });
-    read.into_iter()
-        .map(|r| {
-            let st = r.map_err(|e| to_py(py, e))?;
-            let time = f64_bytes(py, st.time.iter().copied());
-            let data = f64_bytes(py, st.rows.iter().flatten().copied());
-            Ok((st.name, st.labels, time, data, st.in_degrees, st.metadata))
-        })
-        .collect()
+    let read = py.allow_threads(|| in_parallel(paths.len(), |i| storage::read(&paths[i])));
+    read.into_iter().map(|r| table_parts(py, r)).collect()
 }
 
 fn f64s(b: &[u8], what: &str) -> PyResult<Vec<f64>> {
@@ -790,6 +839,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Scene>()?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_function(wrap_pyfunction!(read_tables, m)?)?;
+    m.add_function(wrap_pyfunction!(parse_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
     m.add_function(wrap_pyfunction!(output_keys, m)?)?;

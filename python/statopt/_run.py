@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import csv
+import io
 import logging
 import os
 import shutil
 import tempfile
 import threading
+import uuid
 import warnings
 import weakref
 from pathlib import Path
@@ -17,7 +19,7 @@ import pandas as pd
 
 from . import _native
 from ._setup import edit_setup
-from ._tables import read_tables
+from ._tables import _frame, read_tables
 
 log = logging.getLogger("statopt")
 
@@ -50,12 +52,14 @@ class Result:
     the sweep. ``tables`` holds every table by its file's stem, ``summary``
     the run summary (frames, solves, failed, worst_residual, warnings, ...),
     ``metrics`` the setup's ``<Metric>`` values, ``files`` the paths written
-    (empty unless ``results_dir`` was given). Tables are read when first used.
+    (empty unless ``results_dir`` was given). Tables are read when first used
+    (a run without ``results_dir`` hands them over in memory: no file).
     """
 
     def __init__(self, setup: str, summary: Dict[str, Any], table_files: List[Tuple[str, Path]],
                  metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None,
-                 keys: Optional[List[Optional[Dict[str, Any]]]] = None):
+                 keys: Optional[List[Optional[Dict[str, Any]]]] = None,
+                 kept: Optional[Dict[str, bytes]] = None):
         self.setup = setup
         self.summary = summary
         self.metrics = metrics
@@ -66,6 +70,8 @@ class Result:
         self._keys: Dict[str, Optional[Dict[str, Any]]] = {
             k: key for (k, _), key in zip(table_files, keys or [None] * len(table_files))
         }
+        # The tables' bytes of a run kept in memory, by normalised path.
+        self._kept = kept
         self._tables: Optional[Dict[str, pd.DataFrame]] = None
         self._lock = threading.Lock()
         # The temporary results folder lives until the tables are read (or
@@ -79,7 +85,13 @@ class Result:
         with self._lock:
             if self._tables is None:
                 try:
-                    dfs = read_tables([p for _, p in self._table_files]) if self._table_files else []
+                    if self._kept is not None:
+                        parts = _native.parse_tables(
+                            [(str(p), self._kept[os.path.normpath(str(p))]) for _, p in self._table_files])
+                        dfs = [_frame(t) for t in parts]
+                        self._kept = None
+                    else:
+                        dfs = read_tables([p for _, p in self._table_files]) if self._table_files else []
                     self._tables = {k: df for (k, _), df in zip(self._table_files, dfs)}
                 finally:
                     if self._cleanup is not None:
@@ -223,16 +235,22 @@ def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
     return out
 
 
-def _read_metrics(files: List[str]) -> Dict[str, float]:
+def _read_metrics(files: List[str], kept: Optional[Dict[str, bytes]] = None) -> Dict[str, float]:
+    """The metrics of the ``_metrics.csv`` files among ``files`` (from their
+    bytes in ``kept`` for a run kept in memory)."""
     metrics: Dict[str, float] = {}
     csvs = [Path(f) for f in files if f.endswith("_metrics.csv")]
     for p in csvs:
         # One file per setup (a study writes several, and its own): then
         # each metric is named after its file, '<name>.<metric>'.
         prefix = p.name[: -len("_metrics.csv")] + "." if len(csvs) > 1 else ""
-        with open(p, newline="") as fh:
-            for row in csv.DictReader(fh):
-                metrics[prefix + row["metric"]] = float(row["value"])
+        if kept is not None:
+            rows = csv.DictReader(io.StringIO(kept[os.path.normpath(str(p))].decode("utf-8"), newline=""))
+        else:
+            with open(p, newline="") as fh:
+                rows = list(csv.DictReader(fh))
+        for row in rows:
+            metrics[prefix + row["metric"]] = float(row["value"])
     return metrics
 
 
@@ -256,10 +274,15 @@ def run(
     Any setup the CLI runs: an AnalyzeTool (StaticOptimization, JointReaction,
     MuscleAnalysis), an InverseDynamicsTool or a study document. Nothing is
     written unless ``results_dir`` is given (the engine then writes there
-    exactly what ``statopt-tool SETUP -o results_dir`` writes); otherwise the
-    tables go to a temporary folder, read back (with the crate's reader, in
-    parallel) when the result's tables are first used and then removed. With
-    ``results_dir`` the tables are read from its files when first used.
+    exactly what ``statopt-tool SETUP -o results_dir`` writes); otherwise no
+    file is created at all (no temporary folder either): the engine keeps
+    the run's tables in memory, exactly as their files would hold them, and
+    hands them over; they become DataFrames (with the crate's reader, in
+    parallel) when the result's tables are first used. With ``results_dir``
+    the tables are read from its files when first used. (Overrides that need
+    a file of their own, ``model_properties``, a DataFrame ``motion`` and
+    ``external_load_scale``, write it to a temporary folder removed after
+    the run.)
 
     ``progress``: None shows a tqdm bar for frame loops that take longer
     than a second, True always, False never; a callable is called as
@@ -350,19 +373,27 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
     setup = Path(setup)
     inputs = None
     out = Path(results_dir) if results_dir is not None else None
+    # A run without results_dir is kept in memory by the engine: no file.
+    in_memory = results_dir is None and native is _native.run
     try:
         text = None
         if overrides:
-            inputs = Path(tempfile.mkdtemp(prefix="statopt-inputs-"))
+            # Created only when an override needs a file of its own.
+            inputs = Path(tempfile.gettempdir()) / f"statopt-inputs-{os.getpid()}-{uuid.uuid4().hex}"
             text = edit_setup(setup, overrides, inputs)
-        if out is None:
+        if out is None and not in_memory:
             out = Path(tempfile.mkdtemp(prefix="statopt-results-"))
         cb = _progress_callback(progress)
+        where = dict(in_memory=True) if in_memory else dict(results_dir=str(out))
         try:
-            summary = native(str(setup), text=text, results_dir=str(out), progress=cb, **options)
+            summary = native(str(setup), text=text, progress=cb, **where, **options)
         finally:
             if isinstance(cb, _TqdmProgress):
                 cb.close()
+        kept = None
+        if in_memory:
+            out = Path(summary.pop("in_memory_root"))
+            kept = {os.path.normpath(p): b for p, b in summary.pop("outputs")}
         if results_dir is None:
             # Messages name tables by file; here they are res.tables' keys.
             # The temporary folder is removed: the report names no folder.
@@ -379,20 +410,23 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
                 log.warning("%s", w)
         if summary["failure_line"]:
             warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=3)
-        metrics = _read_metrics(summary["files"])
+        metrics = _read_metrics(summary["files"], kept)
         table_files = _table_files(summary["files"]) if tables else []
         files = list(summary["files"]) if results_dir is not None else []
         scratch = None
         if results_dir is None:
             summary["files"] = []
             summary["results_dirs"] = []
-            if table_files:
+            if in_memory:
+                out = None  # never created
+            elif table_files:
                 scratch, out = out, None  # the result removes it once read
         # Each table's key, from the plan of what ran (names are the
         # engine's to make and to know).
         keys = (_native.output_keys(str(setup), [str(p) for _, p in table_files], text=text)
                 if table_files else [])
-        return Result(str(setup), summary, table_files, metrics, files, scratch, keys)
+        return Result(str(setup), summary, table_files, metrics, files, scratch, keys,
+                      kept if tables else None)
     finally:
         if inputs is not None:
             shutil.rmtree(inputs, ignore_errors=True)

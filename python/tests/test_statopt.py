@@ -400,13 +400,48 @@ def test_temporary_folders_removed(repo, tmp_path, monkeypatch):
     setup = repo / "setups" / "leg_extension_cam1.xml"
     res = statopt.run(setup, contact_weight=1, progress=False,
                       model_properties={"pelvis_seat_r/plane_origin": [0, 0.005, 0]})
-    assert len(list(tmp_path.iterdir())) == 1  # the edited inputs are gone, the tables wait
+    assert list(tmp_path.iterdir()) == []  # the edited inputs are gone, the tables in memory
     assert len(res.activations) == 101
-    assert list(tmp_path.iterdir()) == []  # read, then removed
     res = statopt.run(setup, contact_weight=1, progress=False)
     del res
     gc.collect()
-    assert list(tmp_path.iterdir()) == []  # never read: removed with the result
+    assert list(tmp_path.iterdir()) == []
+
+
+def _listing(d: Path):
+    return sorted(str(p.relative_to(d)) for p in d.rglob("*")) if d.exists() else None
+
+
+def test_run_without_results_dir_creates_no_file(repo, tmp_path, monkeypatch):
+    """statopt.run(setup) without results_dir creates no file (issue 37): not
+    in the working directory, the setup's folder, its results folder or the
+    temporary folder (the engine's and Python's, made private here), and
+    returns the DataFrames a run with results_dir reads back from its files."""
+    import tempfile
+
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    monkeypatch.chdir(cwd)
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    watched = [tmp, cwd, setup.parent, repo / "output" / "leg_extension_cam1"]
+    before = [_listing(d) for d in watched]
+    res = statopt.run(setup, progress=False, contact_weight=[1, 500, 1000])
+    assert [_listing(d) for d in watched] == before
+    tables = res.tables
+    assert [_listing(d) for d in watched] == before
+    assert res.files == [] and res.summary["files"] == []
+    ref = statopt.run(setup, results_dir=tmp_path / "out", progress=False)
+    assert set(tables) == set(ref.tables)
+    # the sweep's statistics and the knee loads are among them
+    assert "leg_extension_cam1_JR_w0_mean_KneeLoads" in tables
+    for key, df in tables.items():
+        assert_same(df, ref.tables[key])
+    assert res.metrics == ref.metrics and res.metrics
+    assert res.summary["frames"] == ref.summary["frames"] == 101
 
 
 def test_check(repo, tmp_path):

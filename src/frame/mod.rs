@@ -15,6 +15,9 @@
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly.
+//! - [`so_loop`]: a static-optimization pass's frame loop: every frame
+//!   solved (once per contact weight) on the driver's threads and its
+//!   results streamed, in frame order, to sinks on threads of their own.
 pub mod candidates;
 pub mod compile;
 pub mod driver;
@@ -24,6 +27,7 @@ pub mod options;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;
+pub mod so_loop;
 pub mod workspace;
 
 pub use options::SoOptions;

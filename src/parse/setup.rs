@@ -232,6 +232,10 @@ pub fn create_results_dir(dir: &Path, loc: &crate::error::Location, from_cli: bo
     if let Some(p) = results_dir_problem(dir) {
         return Err(results_dir_error(dir, loc, from_cli, &p));
     }
+    // A run kept in memory creates no folder (storage::results).
+    if !crate::storage::results::writes_file(dir) {
+        return Ok(());
+    }
     std::fs::create_dir_all(dir)
         .map_err(|e| results_dir_error(dir, loc, from_cli, &format!("cannot be created: {e}")))
 }

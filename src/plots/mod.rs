@@ -340,6 +340,10 @@ fn write_figure(
     }
     let png_path = with_suffix(stem, "png");
     let svg_path = with_suffix(stem, "svg");
+    // A run kept in memory (storage::results) draws no figure files.
+    if !crate::storage::results::writes_file(&png_path) {
+        return Ok(Vec::new());
+    }
 
     let mut rgb = vec![0u8; w as usize * h as usize * 3];
     {

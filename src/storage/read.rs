@@ -22,7 +22,13 @@ use std::path::Path;
 /// exactly one value per column, values must be finite numbers and time must
 /// strictly increase. Each violation is an [`Error::Input`] naming the file,
 /// the line and (where there is one) the column.
+///
+/// A table this run wrote (kept by a [`super::results::Capture`]) is read
+/// from the bytes kept in memory: the file is not opened.
 pub fn read(path: &Path) -> Result<Storage> {
+    if let Some(bytes) = super::results::get(path) {
+        return read_text(path, &bytes);
+    }
     let bytes = super::source::read_bytes(path)?;
     read_text(path, &bytes)
 }
@@ -798,8 +804,13 @@ enum RowFormat {
 }
 
 /// Open `path` for [`RowReader::next_row`].
+/// A table this run wrote (kept by a [`super::results::Capture`]) is read
+/// from the bytes kept in memory: the file is not opened.
 pub fn open_rows(path: &Path) -> Result<RowReader> {
-    open_rows_in(&TableFile::on_disk(path))
+    match super::results::get(path) {
+        Some(bytes) => open_rows_in(&TableFile::kept(path, bytes)),
+        None => open_rows_in(&TableFile::on_disk(path)),
+    }
 }
 
 /// [`open_rows`] on a [`TableFile`]: its bytes in memory when it holds

@@ -82,6 +82,25 @@ impl TableFile {
         }
     }
 
+    /// The output `path` a run kept in memory (`super::results`), read from
+    /// those bytes.
+    pub(super) fn kept(path: &Path, bytes: Arc<Vec<u8>>) -> TableFile {
+        TableFile {
+            path: path.to_path_buf(),
+            bytes: Some(SharedBytes(bytes)),
+        }
+    }
+
+    /// The bytes of the file `path` given in memory (e.g. a table a run
+    /// kept, `super::results`): readers parse them as the file's and open
+    /// nothing.
+    pub fn from_bytes(path: &Path, bytes: Vec<u8>) -> TableFile {
+        TableFile {
+            path: path.to_path_buf(),
+            bytes: Some(SharedBytes(Arc::new(bytes))),
+        }
+    }
+
     /// The file's path (what messages name).
     pub fn path(&self) -> &Path {
         &self.path
@@ -112,6 +131,12 @@ pub(super) fn count_open(path: &Path) {
 /// the caller that opened it) since the process started.
 pub fn times_opened(path: &Path) -> usize {
     OPENED.get(path)
+}
+
+/// Every path the table readers opened, with how many times (as spelled by
+/// the callers that opened them), since the process started.
+pub fn opened() -> Vec<(std::path::PathBuf, usize)> {
+    OPENED.all()
 }
 
 /// The whole file, counted as one opening.

@@ -306,7 +306,14 @@ fn write_at(file: &mut File, bytes: &[u8], offset: u64) -> std::io::Result<()> {
 /// batches instead; the file on disk is then a complete, valid storage of
 /// every row up to the last batch.
 pub struct StoWriter {
-    file: File,
+    /// The file (None: a run kept in memory only, `super::results`).
+    file: Option<File>,
+    /// Every byte the file gets, when a capture keeps the run's outputs
+    /// (`super::results`): at [`Self::finish`] they become the output the
+    /// run's own consumers read instead of the file.
+    kept: Option<Vec<u8>>,
+    /// What the capture may still keep (`kept` is dropped when it runs out).
+    budget: Option<super::results::Budget>,
     path: PathBuf,
     n_labels: usize,
     precision: usize,
@@ -388,11 +395,20 @@ impl StoWriter {
             head.push_str(l);
         }
         head.push('\n');
-        let mut file = File::create(path).map_err(|e| Error::io(path, e))?;
-        file.write_all(head.as_bytes())
-            .map_err(|e| Error::io(path, e))?;
+        let file = if super::results::writes_file(path) {
+            let mut file = File::create(path).map_err(|e| Error::io(path, e))?;
+            file.write_all(head.as_bytes())
+                .map_err(|e| Error::io(path, e))?;
+            Some(file)
+        } else {
+            None
+        };
+        let budget = super::results::budget(path).filter(|b| b.take(head.len()));
+        let kept = budget.is_some().then(|| head.into_bytes());
         Ok(StoWriter {
             file,
+            kept,
+            budget,
             path: path.to_path_buf(),
             n_labels: labels.len(),
             precision,
@@ -484,17 +500,40 @@ impl StoWriter {
         if self.line.is_empty() {
             return Ok(());
         }
+        if let (Some(kept), Some(budget)) = (&mut self.kept, &self.budget) {
+            if budget.take(self.line.len()) {
+                kept.extend_from_slice(&self.line);
+            } else if self.file.is_some() {
+                // Past the capture's limit: the file is the table's.
+                budget.give(kept.len());
+                self.kept = None;
+            } else {
+                return Err(Error::internal(format!(
+                    "{}: a table kept in memory only ran out of its budget",
+                    self.path.display()
+                )));
+            }
+        }
+        let count = self.n_rows_field();
+        let Some(file) = &mut self.file else {
+            self.line.clear();
+            return Ok(());
+        };
         let io = |e| Error::io(&self.path, e);
-        let written = self.file.write_all(&self.line);
+        let written = file.write_all(&self.line);
         self.line.clear();
         written.map_err(io)?;
-        // `nRows=` left-aligned in its field, padded with spaces.
+        write_at(file, &count, self.n_rows_offset).map_err(io)
+    }
+
+    /// `nRows=`'s field: the count left-aligned, padded with spaces.
+    fn n_rows_field(&self) -> [u8; NROWS_WIDTH] {
         let mut count = [b' '; NROWS_WIDTH];
         put_digits(
             &mut count[..decimal_len(self.n_rows as u64)],
             self.n_rows as u64,
         );
-        write_at(&mut self.file, &count, self.n_rows_offset).map_err(io)
+        count
     }
 
     /// Reopen a table this writer wrote, keep its first `keep` rows (all of
@@ -507,7 +546,7 @@ impl StoWriter {
         keep: usize,
     ) -> Result<StoWriter> {
         let at = || Location::file(path);
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = super::source::read_bytes(path)?;
         let text = String::from_utf8_lossy(&bytes);
         let n_rows_offset = text
             .find("\nnRows=")
@@ -551,8 +590,18 @@ impl StoWriter {
         file.write_all(format!("{keep:<NROWS_WIDTH$}").as_bytes())
             .map_err(io)?;
         file.seek(SeekFrom::End(0)).map_err(io)?;
+        // The kept rows are this run's output too.
+        let budget = super::results::budget(path).filter(|b| b.take(offset));
+        let kept = budget.is_some().then(|| {
+            let mut kept = bytes[..offset].to_vec();
+            let at = n_rows_offset as usize;
+            kept[at..at + NROWS_WIDTH].copy_from_slice(format!("{keep:<NROWS_WIDTH$}").as_bytes());
+            kept
+        });
         Ok(StoWriter {
-            file,
+            file: Some(file),
+            kept,
+            budget,
             path: path.to_path_buf(),
             n_labels,
             precision,
@@ -574,7 +623,15 @@ impl StoWriter {
     /// nothing), the operating system puts them on the disk when it will.
     pub fn finish(mut self) -> Result<()> {
         self.write_pending()?;
-        self.file.flush().map_err(|e| Error::io(&self.path, e))
+        if let Some(file) = &mut self.file {
+            file.flush().map_err(|e| Error::io(&self.path, e))?;
+        }
+        if let Some(mut kept) = self.kept.take() {
+            let at = self.n_rows_offset as usize;
+            kept[at..at + NROWS_WIDTH].copy_from_slice(&self.n_rows_field());
+            super::results::keep(&self.path, std::sync::Arc::new(kept));
+        }
+        Ok(())
     }
 }
 
@@ -833,11 +890,10 @@ mod fast_format_tests {
 /// Number of complete data rows of a table a [`StoWriter`] wrote (lines
 /// after the label line that end in a newline); 0 when there is no file.
 pub fn complete_rows(path: &Path) -> Result<usize> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
-        Err(e) => return Err(Error::io(path, e)),
-    };
+    if !path.exists() {
+        return Ok(0);
+    }
+    let bytes = super::source::read_bytes(path)?;
     let text = String::from_utf8_lossy(&bytes);
     let Some(end) = text
         .find("\nendheader\n")

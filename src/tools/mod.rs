@@ -65,6 +65,7 @@ pub struct RunOptions {
 /// study document, an InverseDynamicsTool or an AnalyzeTool setup, read
 /// once into its plan (`plan::Plan`).
 pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
+    let _outputs = keep_outputs(opts);
     let plan = crate::plan::Plan::read(setup, opts.allow_unknown)?;
     let read_on = plan.unknown_elements_read_on();
     if let Some(hook) = opts.read_on_hook {
@@ -76,6 +77,18 @@ pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<Ru
     }
     .map_err(|e| with_read_on_note(e, &read_on))?;
     synced(summary, opts)
+}
+
+/// The run's outputs kept in memory while it runs, for its own consumers
+/// (`storage::results`: no run reads back a file it wrote): those under
+/// `-o DIR`, or every output; none when a caller already keeps them (the
+/// Python binding's run in memory).
+fn keep_outputs(opts: &RunOptions) -> Option<crate::storage::results::Capture> {
+    use crate::storage::results::{captured, Capture};
+    match opts.results_dir.as_deref() {
+        Some(dir) if captured(dir) => None,
+        dir => Some(Capture::new(dir)),
+    }
 }
 
 /// A failed run's error, with the unknown elements `--allow-unknown` read
@@ -139,6 +152,7 @@ pub fn run_setup_text(
     text: &str,
     opts: &RunOptions,
 ) -> crate::Result<RunSummary> {
+    let _outputs = keep_outputs(opts);
     let parsed = crate::parse::setup::Setup::parse_with(text, setup, opts.allow_unknown)?;
     let read_on = parsed.warnings().to_vec();
     synced(

@@ -56,7 +56,7 @@ use std::path::Path;
 
 use crate::contacts::Contact;
 use crate::dynamics::{kinematics, Data};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::forces::actuators::{Actuator, ActuatorKind};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
@@ -182,7 +182,7 @@ impl Reduction {
     }
 
     pub fn write(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.report()).map_err(|e| Error::io(path, e))
+        crate::storage::results::write(path, self.report().into_bytes())
     }
 }
 

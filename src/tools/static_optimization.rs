@@ -2,12 +2,13 @@
 //! it compiles the run's problem ([`SoProblem::build`], in
 //! [`crate::frame::compile`]: the model's forces
 //! sorted into controls, passive forces, contacts and reserves), streams the
-//! states, hands each frame to the frame stage
-//! ([`crate::frame::problem`], through [`crate::frame::driver`]) and joint
-//! reactions to [`crate::reactions`], and has the tables
-//! ([`crate::writers::so_tables`]) and the MCAP log
-//! ([`crate::writers::frame_log`]) written on threads of their own, with the
-//! run's statistics ([`crate::writers::run_statistics`]); a w0 sweep solves
+//! states and has the frame stage solve every frame
+//! ([`crate::frame::so_loop`]: the frame loop and its threads, each frame
+//! through [`crate::frame::problem`]), its joint reactions added by
+//! [`crate::reactions`]; the loop streams each frame's results to this
+//! driver's sinks, the tables ([`crate::writers::so_tables`], with the run's
+//! statistics, [`crate::writers::run_statistics`]) and the MCAP log
+//! ([`crate::writers::frame_log`]), each on a thread of its own; a w0 sweep solves
 //! each frame's physics once
 //! (its mean, min and max tables: [`crate::writers::sweep_statistics`]);
 //! a run can resume where an earlier one stopped
@@ -17,7 +18,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::forces::analysis_model::{load_analysis_model, AnalysisModel};
-use crate::frame::driver::for_each_frame_grouped;
+use crate::frame::so_loop::{solve_frames, Frame, Sink};
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::AnalyzeSetup;
 use crate::reactions::{
@@ -392,8 +393,8 @@ fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
 }
 
 /// One run's outputs of a frame: the solution and its joint-reaction rows
-/// (one per coupled JointReaction).
-pub type FrameOutput = (FrameResult, Vec<Vec<f64>>);
+/// (one per coupled JointReaction; `frame::so_loop`).
+pub use crate::frame::so_loop::FrameOutput;
 
 /// The work of one frame of a static optimization run: the frame solved
 /// once per contact weight in `weights` ([`SoProblem::solve_frame_into`],
@@ -495,16 +496,23 @@ impl<'a> RunWriters<'a> {
             },
         )?;
         let log_path = dir.join(run.file(OutputKind::Log));
-        let mut log = FrameLog::create(&log_path, log_names)?;
-        if let Some(r) = &resume {
-            log.replay(&r.messages)?;
-        }
+        // A run kept in memory (storage::results) logs nothing: the log is
+        // a file's.
+        let log = if crate::storage::results::writes_file(&log_path) {
+            let mut log = FrameLog::create(&log_path, log_names)?;
+            if let Some(r) = &resume {
+                log.replay(&r.messages)?;
+            }
+            Some(log)
+        } else {
+            None
+        };
         let skip_until = resume.as_ref().map_or(f64::NEG_INFINITY, |r| r.last_time);
         Ok(RunWriters {
             problem,
             tables,
             log_path,
-            log: Some(log),
+            log,
             skip_until,
             stats,
         })
@@ -531,9 +539,9 @@ impl<'a> RunWriters<'a> {
         let problem = self.problem;
         let diag_path = self.tables.diag_path.clone();
         let mut files = self.tables.finish()?;
-        files.push(self.log_path);
         if let Some(log) = self.log {
             log.finish()?;
+            files.push(self.log_path);
         }
         let mut stats = self.stats;
         // A stopped run counts the frames its tables hold (a resumed run's
@@ -651,144 +659,66 @@ fn run_sweep(
         .fold(f64::INFINITY, f64::min);
     let weights: Vec<f64> = runs.iter().map(|r| r.w0).collect();
     let mut progress = crate::tools::progress::bar(nframes as u64, opts, label);
-    // States block by block; frames in chunks: solved in parallel, written
-    // in order, so the output holds every finished frame and memory stays
-    // bounded by the block.
-    // Tables and the log are formatted and written off the solving threads,
-    // on two threads of their own (on gait2392 each about as much work,
-    // together about as much as the solving; one writer thread doing both
-    // ran on alone for a third of the loop): the table writer owns the
-    // tables, the log thread encodes each frame's messages and owns the
-    // logs. Both take each frame's results in order, while the next chunk
-    // of frames is solved, from one shared buffer.
-    let (tx, rx) = std::sync::mpsc::sync_channel::<Shared>(FRAMES_IN_FLIGHT);
-    let (log_tx, log_rx) = std::sync::mpsc::sync_channel::<Shared>(FRAMES_IN_FLIGHT);
     // Every run has the same joint reactions (only their tables differ).
     let reactions: Vec<&[ReactionSpec]> = runs
         .first()
         .map(|r| r.reactions.iter().map(|(_, s)| *s).collect())
         .unwrap_or_default();
-    // Output buffers both writers have finished with, for the solving
-    // threads to fill again: a frame's results allocate nothing once there
-    // are enough of them (at most the frames in flight).
-    let recycled: std::sync::Mutex<Vec<Shared>> = Default::default();
-    // The last of the two writers to let go of a frame's buffer hands it
-    // back. Under the pool's lock: the first one drops its reference there,
-    // so the second sees the count fall to 1.
-    let release = |results: Shared| {
-        if let Ok(mut pool) = recycled.lock() {
-            if std::sync::Arc::strong_count(&results) == 1 {
-                pool.push(results);
-            } else {
-                drop(results);
-            }
-            drop(pool);
-        }
+    // The frame stage solves the frames (frame::so_loop: in parallel
+    // groups, in frame order) and hands each frame's results to two sinks,
+    // each on a thread of its own (on gait2392 each about as much work,
+    // together about as much as the solving; one thread doing both ran on
+    // alone for a third of the loop): the tables (with the run's
+    // statistics, and the frames' positions for the knee tables) and the
+    // log, which encodes each frame's messages.
+    let solve = |ws: &mut Workspace, f: &Frame, out: &mut Vec<FrameOutput>| {
+        frame_outputs(
+            problem, &weights, &reactions, ws, f.t, f.q, f.u, f.udot, f.warm, out,
+        )
     };
     let mut writers = writers;
     let mut logs: RunLogs = writers
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
-    let (completed, writers) =
-        std::thread::scope(|scope| -> Result<(bool, (Vec<RunWriters>, Positions))> {
-            let log_names = &log_names;
-            let release = &release;
-            let writer = scope.spawn(move || -> Result<(Vec<RunWriters>, Positions)> {
-                let mut positions: Positions = Default::default();
-                for results in rx {
-                    if keep_positions {
-                        if let Some((r, _)) = results.first() {
-                            positions.0.push(r.time);
-                            positions.1.push(r.q.clone());
-                        }
-                    }
-                    for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
-                        w.write(r, rows)?;
-                    }
-                    release(results);
-                }
-                Ok((writers, positions))
-            });
-            let log_writer = scope.spawn(move || -> Result<RunLogs> {
-                for results in log_rx {
-                    write_logs(&mut logs, log_names, problem, &results)?;
-                    release(results);
-                }
-                Ok(logs)
-            });
-            // Frames in fixed groups (frame::driver::GROUP): the first of a
-            // group solved cold, the others warm-started from the frame before.
-            let completed = for_each_frame_grouped(
-                &mut stream,
-                i0,
-                i1,
-                step_interval,
-                || Workspace::new(&problem.model, &problem.muscles),
-                |ws, block, i, pos| {
-                    // Groups every resumed run already holds whole are not
-                    // computed again; a group the resume point falls in is solved
-                    // from its start (for the same warm starts as an
-                    // uninterrupted run), its frames written from that point on.
-                    if block.time[pos.last] <= skip_until {
-                        return Ok(None);
-                    }
-                    // (A pooled buffer is held by nobody else: `release`.)
-                    let mut shared = recycled
-                        .lock()
-                        .ok()
-                        .and_then(|mut pool| pool.pop())
-                        .unwrap_or_default();
-                    let out = std::sync::Arc::get_mut(&mut shared)
-                        .ok_or_else(|| Error::internal("a pooled frame buffer still shared"))?;
-                    frame_outputs(
-                        problem,
-                        &weights,
-                        &reactions,
-                        ws,
-                        block.time[i],
-                        &block.q[i],
-                        &block.u[i],
-                        &block.udot[i],
-                        !pos.first,
-                        out,
-                    )?;
-                    if block.time[i] <= skip_until {
-                        release(shared);
-                        return Ok(None);
-                    }
-                    Ok(Some(shared))
-                },
-                |item| {
-                    let Some(results) = item else {
-                        return Ok(());
-                    };
-                    // The writers format and write in frame order; a closed
-                    // channel means one stopped on an error, reported below.
-                    if log_tx.send(results.clone()).is_err() || tx.send(results).is_err() {
-                        return Err(Error::internal("the table writer stopped"));
-                    }
-                    progress.inc(1);
-                    Ok(())
-                },
-            );
-            drop(tx);
-            drop(log_tx);
-            let written = writer
-                .join()
-                .unwrap_or_else(|_| Err(Error::internal("the table writer panicked")));
-            let logged = log_writer
-                .join()
-                .unwrap_or_else(|_| Err(Error::internal("the log writer panicked")));
-            // The writers' own errors say more than the loop's closed channel.
-            let (mut writers, positions) = written?;
-            // Each log back to its run, finished with its tables.
-            for (w, (log, _)) in writers.iter_mut().zip(logged?) {
-                w.log = Some(log);
+    let mut positions: Positions = Default::default();
+    let mut tables = |results: &[FrameOutput]| -> Result<()> {
+        if keep_positions {
+            if let Some((r, _)) = results.first() {
+                positions.0.push(r.time);
+                positions.1.push(r.q.clone());
             }
-            Ok((completed?, (writers, positions)))
-        })?;
-    let (writers, positions) = writers;
+        }
+        for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
+            w.write(r, rows)?;
+        }
+        Ok(())
+    };
+    // (A run kept in memory has no log: storage::results.)
+    let logging = !logs.is_empty();
+    let mut log = |results: &[FrameOutput]| write_logs(&mut logs, &log_names, problem, results);
+    let mut sinks: Vec<Sink> = vec![&mut tables];
+    if logging {
+        sinks.push(&mut log);
+    }
+    let completed = solve_frames(
+        problem,
+        &mut stream,
+        i0,
+        i1,
+        step_interval,
+        skip_until,
+        &solve,
+        sinks,
+        || progress.inc(1),
+    );
+    drop(tables);
+    drop(log);
+    let completed = completed?;
+    // Each log back to its run, finished with its tables.
+    for (w, (log, _)) in writers.iter_mut().zip(logs) {
+        w.log = Some(log);
+    }
     // Every frame's, unless a resumed run skipped those it held.
     let positions = (keep_positions && skip_until == f64::NEG_INFINITY).then_some(positions);
     progress.finish_and_clear();
@@ -826,9 +756,6 @@ fn sweep_note(runs: &[RunSpec], nframes: usize, seconds: f64) -> String {
     )
 }
 
-/// One frame's results, shared by the table writer and the log thread.
-type Shared = std::sync::Arc<Vec<FrameOutput>>;
-
 /// Each run's log and the time up to which a resumed run already holds
 /// its frames.
 type RunLogs = Vec<(FrameLog, f64)>;
@@ -848,8 +775,3 @@ fn write_logs(
     }
     Ok(())
 }
-
-/// Frames handed to the table writer and not yet written, at most: the
-/// solving threads run ahead of the formatting by this much (memory stays
-/// bounded).
-const FRAMES_IN_FLIGHT: usize = 512;

@@ -570,7 +570,9 @@ pub fn draw(
     moved: &Moved,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    if crate::storage::results::writes_file(out) {
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    }
     // Figures and metrics are independent: drawn and computed in parallel,
     // listed in the study's order.
     use rayon::prelude::*;
@@ -595,15 +597,17 @@ pub fn draw(
             crate::writers::names::RunKey::setup(name, crate::writers::names::Sweep::Single)
                 .file(crate::writers::names::OutputKind::Metrics),
         );
-        let mut w = csv::Writer::from_path(&p)
-            .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
+        let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(["metric", "value"])
             .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
         for (n, v) in &metrics {
             w.write_record([n.as_str(), &format!("{v:.6}")])
                 .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
         }
-        w.flush().map_err(|e| Error::io(&p, e))?;
+        let bytes = w
+            .into_inner()
+            .map_err(|e| Error::input(Location::file(&p), e.to_string()))?;
+        crate::storage::results::write(&p, bytes)?;
         files.push(p);
     }
     Ok(files)

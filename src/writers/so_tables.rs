@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::frame::problem::{FrameResult, SoProblem};
 use crate::reactions::{column_labels, ReactionSpec};
 use crate::storage::StoWriter;
@@ -148,8 +148,10 @@ impl SoTables {
                 .file_name()
                 .map(|f| f.to_string_lossy().to_string())
                 .unwrap_or_default();
-            std::fs::write(&xpath, external_loads_xml(problem, &datafile))
-                .map_err(|e| Error::io(&xpath, e))?;
+            crate::storage::results::write(
+                &xpath,
+                external_loads_xml(problem, &datafile).into_bytes(),
+            )?;
             files.extend([cpath, bpath, lpath, xpath]);
             contact_w = Some((cw, bw, lw));
         }

@@ -1,0 +1,304 @@
+//! A run's results in memory: every output a run writes while a
+//! [`Capture`] covers its path is kept as the exact bytes the file gets
+//! (tables: what [`super::StoWriter`] formatted, rounded to the run's
+//! precision, `nRows=` final), keyed by the file's path. Files are one sink
+//! of them: a capture that writes no files ([`Capture::in_memory`]) keeps the
+//! outputs in memory only and no file is created.
+//!
+//! The run's own consumers (a w0 sweep's statistics, a JointReaction that
+//! takes this run's forces file, the knee tables, a study's figures and
+//! metrics, the Python binding) take the outputs from here:
+//! [`super::read`] and [`super::open_rows`] of a path this run wrote parse
+//! the kept bytes with the file reader's own code (so the values are the
+//! file's, bit for bit) and open no file. `--resume` reads what an earlier
+//! run left on the disk: that is the one reading of earlier output.
+//!
+//! Memory: a capture holds the bytes of the outputs it covers until it ends
+//! (with the run). A capture that writes files keeps at most
+//! [`KEPT_LIMIT`] bytes of tables (as a motion file is held up to
+//! `storage::IN_MEMORY_LIMIT`): a table that would pass it is not kept,
+//! and its consumers read its file, so that memory stays bounded however
+//! long the trial. A capture in memory only keeps everything (there is no
+//! file to fall back on).
+
+use std::collections::HashMap;
+use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Error, Result};
+
+/// One output's bytes, shared by its readers.
+pub type Bytes = Arc<Vec<u8>>;
+
+/// The most bytes of tables a capture that writes files keeps: 256 MiB
+/// (the leg extension study writes 54 MB of tables).
+pub const KEPT_LIMIT: u64 = super::IN_MEMORY_LIMIT;
+
+/// What a capture may still keep, in bytes, shared with the writers of
+/// its tables (which take from it as they keep rows, and stop keeping
+/// when it runs out).
+#[derive(Clone)]
+pub struct Budget(Arc<AtomicI64>);
+
+impl Budget {
+    fn new(bytes: u64) -> Budget {
+        Budget(Arc::new(AtomicI64::new(bytes.min(i64::MAX as u64) as i64)))
+    }
+
+    /// Take `n` bytes; false (and nothing taken) when fewer are left.
+    pub(super) fn take(&self, n: usize) -> bool {
+        let n = n as i64;
+        if self.0.fetch_sub(n, Ordering::Relaxed) - n < 0 {
+            self.0.fetch_add(n, Ordering::Relaxed);
+            return false;
+        }
+        true
+    }
+
+    /// Give back `n` bytes taken.
+    pub(super) fn give(&self, n: usize) {
+        self.0.fetch_add(n as i64, Ordering::Relaxed);
+    }
+}
+
+struct Scope {
+    id: u64,
+    /// The folder the capture covers (None: every path).
+    root: Option<PathBuf>,
+    /// Whether files are written too.
+    files: bool,
+    budget: Budget,
+    /// Outputs by normalised path, in the order they were finished.
+    outputs: Vec<(PathBuf, Bytes)>,
+    index: HashMap<PathBuf, usize>,
+}
+
+static SCOPES: Mutex<Vec<Scope>> = Mutex::new(Vec::new());
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+fn scopes() -> std::sync::MutexGuard<'static, Vec<Scope>> {
+    SCOPES.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `path` made absolute and `.`/`..` resolved by its text (no file system
+/// access): the key of an output however a caller spells its folder.
+fn key(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The scope that covers the (normalised) path `k`: the one whose folder
+/// is the longest start of it, else the newest that covers every path.
+fn scope_of<'a>(scopes: &'a mut [Scope], k: &Path) -> Option<&'a mut Scope> {
+    let mut best: Option<(usize, usize)> = None;
+    for (i, s) in scopes.iter().enumerate() {
+        let depth = match &s.root {
+            Some(r) if k.starts_with(r) => r.components().count() + 1,
+            Some(_) => continue,
+            None => 0,
+        };
+        if best.is_none_or(|(_, d)| depth >= d) {
+            best = Some((i, depth));
+        }
+    }
+    best.map(move |(i, _)| &mut scopes[i])
+}
+
+/// A run's capture of its outputs (ends when dropped).
+pub struct Capture {
+    id: u64,
+    root: Option<PathBuf>,
+}
+
+impl Capture {
+    fn start(root: Option<&Path>, files: bool, limit: u64) -> Capture {
+        let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
+        let root = root.map(key);
+        scopes().push(Scope {
+            id,
+            root: root.clone(),
+            files,
+            budget: Budget::new(limit),
+            outputs: Vec::new(),
+            index: HashMap::new(),
+        });
+        Capture { id, root }
+    }
+
+    /// Keep every output written under `root` (every output, for None)
+    /// while the capture lasts (tables up to [`KEPT_LIMIT`] bytes); files
+    /// are written as well.
+    pub fn new(root: Option<&Path>) -> Capture {
+        Self::start(root, true, KEPT_LIMIT)
+    }
+
+    /// [`Self::new`] keeping at most `limit` bytes of tables.
+    pub fn with_limit(root: Option<&Path>, limit: u64) -> Capture {
+        Self::start(root, true, limit)
+    }
+
+    /// Keep the outputs of a run in memory only: a folder name that no
+    /// file is created in (it is not created either). Outputs under it are
+    /// kept here; a writer that would still open a file there fails (the
+    /// folder does not exist) rather than leave a file behind.
+    pub fn in_memory() -> Capture {
+        let n = NEXT_ID.load(Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!(
+            "statopt-in-memory-{}-{n}-not-a-folder",
+            std::process::id()
+        ));
+        Self::start(Some(&dir), false, u64::MAX)
+    }
+
+    /// The folder the capture covers (None: every path).
+    pub fn root(&self) -> Option<&Path> {
+        self.root.as_deref()
+    }
+
+    /// The outputs kept so far, in the order they were finished: (path,
+    /// bytes). The paths are normalised (absolute).
+    pub fn outputs(&self) -> Vec<(PathBuf, Bytes)> {
+        scopes()
+            .iter()
+            .find(|s| s.id == self.id)
+            .map(|s| s.outputs.clone())
+            .unwrap_or_default()
+    }
+}
+
+impl Drop for Capture {
+    fn drop(&mut self) {
+        scopes().retain(|s| s.id != self.id);
+    }
+}
+
+/// Whether an output at `path` is written to a file (false under a
+/// capture in memory only).
+pub fn writes_file(path: &Path) -> bool {
+    let k = key(path);
+    scope_of(&mut scopes(), &k).is_none_or(|s| s.files)
+}
+
+/// Whether an output at `path` is kept in memory (a capture covers it).
+pub fn captured(path: &Path) -> bool {
+    budget(path).is_some()
+}
+
+/// The budget of the capture that covers `path` (None: not kept).
+pub(super) fn budget(path: &Path) -> Option<Budget> {
+    let k = key(path);
+    scope_of(&mut scopes(), &k).map(|s| s.budget.clone())
+}
+
+/// Keep `bytes` as the output at `path` when a capture covers it (a later
+/// output at the same path replaces it).
+pub fn keep(path: &Path, bytes: Bytes) {
+    let k = key(path);
+    let mut all = scopes();
+    if let Some(s) = scope_of(&mut all, &k) {
+        match s.index.get(&k) {
+            Some(&i) => s.outputs[i].1 = bytes,
+            None => {
+                s.index.insert(k.clone(), s.outputs.len());
+                s.outputs.push((k, bytes));
+            }
+        }
+    }
+}
+
+/// The bytes this run wrote at `path`, when a capture kept them.
+pub fn get(path: &Path) -> Option<Bytes> {
+    let k = key(path);
+    let all = scopes();
+    all.iter()
+        .find_map(|s| s.index.get(&k).map(|&i| s.outputs[i].1.clone()))
+}
+
+/// Write an output that is not a table (an XML document, a CSV, a report,
+/// a figure): kept when a capture covers `path`, and written to the file
+/// unless the capture is in memory only.
+pub fn write(path: &Path, bytes: Vec<u8>) -> Result<()> {
+    let files = writes_file(path);
+    if files {
+        std::fs::write(path, &bytes).map_err(|e| Error::io(path, e))?;
+    }
+    keep(path, Arc::new(bytes));
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_capture_keeps_what_is_written_under_its_folder_only() {
+        let tmp = crate::test_dir::TempDir::new("results_capture");
+        let tmp2 = crate::test_dir::TempDir::new("results_capture_other");
+        let (dir, other) = (tmp.path().to_path_buf(), tmp2.path().to_path_buf());
+        let c = Capture::new(Some(&dir));
+        write(&dir.join("a.txt"), b"one".to_vec()).unwrap();
+        write(&other.join("b.txt"), b"two".to_vec()).unwrap();
+        // Spelt another way, the same file.
+        let again = dir.join("x").join("..").join("a.txt");
+        assert_eq!(get(&again).unwrap().as_slice(), b"one");
+        assert!(get(&other.join("b.txt")).is_none());
+        assert_eq!(std::fs::read(dir.join("a.txt")).unwrap(), b"one");
+        assert_eq!(c.outputs().len(), 1);
+        drop(c);
+        assert!(get(&dir.join("a.txt")).is_none(), "kept past its capture");
+    }
+
+    #[test]
+    fn a_table_past_the_limit_is_not_kept_and_read_from_its_file() {
+        let tmp = crate::test_dir::TempDir::new("results_limit");
+        let dir = tmp.path();
+        let _c = Capture::with_limit(Some(dir), 400);
+        let table = |name: &str, rows: usize| {
+            let p = dir.join(name);
+            let mut w =
+                crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
+                    .unwrap();
+            for k in 0..rows {
+                w.write_row(k as f64, &[0.5]).unwrap();
+            }
+            w.finish().unwrap();
+            p
+        };
+        let small = table("small.sto", 2);
+        let large = table("large.sto", 40);
+        assert!(get(&small).is_some());
+        assert!(get(&large).is_none(), "kept past the limit");
+        assert_eq!(crate::storage::read(&large).unwrap().len(), 40);
+        assert_eq!(crate::storage::times_opened(&large), 1);
+        assert_eq!(crate::storage::times_opened(&small), 0);
+    }
+
+    #[test]
+    fn a_capture_in_memory_writes_no_file() {
+        let c = Capture::in_memory();
+        let root = c.root().unwrap().to_path_buf();
+        let p = root.join("t.sto");
+        assert!(!writes_file(&p));
+        let mut w =
+            crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false).unwrap();
+        w.write_row(0.0, &[1.0 / 3.0]).unwrap();
+        w.write_row(0.5, &[2.0]).unwrap();
+        w.finish().unwrap();
+        assert!(!root.exists(), "{} was created", root.display());
+        let t = crate::storage::read(&p).unwrap();
+        assert_eq!(t.rows, vec![vec![0.33333333], vec![2.0]]);
+        assert_eq!(crate::storage::times_opened(&p), 0);
+        assert_eq!(c.outputs().len(), 1);
+    }
+}

@@ -1,0 +1,88 @@
+//! Results stay in memory; files are one of their outputs (issue 37): a
+//! run reads back no file it wrote. The leg extension study's consumers of
+//! its own tables (the w0 sweep's statistics, the knee loads and knee
+//! contact tables from the ReactionLoads, the figures and metrics) take
+//! them from the run's kept outputs (`storage::results`). Before, the study
+//! opened 266 of its output files for reading.
+
+use std::path::{Component, Path, PathBuf};
+
+use statopt::tools::{run_setup, RunOptions};
+
+/// `p` absolute, `.` and `..` resolved by its text.
+fn normal(p: &Path) -> PathBuf {
+    let abs = std::path::absolute(p).unwrap();
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Every file under `dir`.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(files_under(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+#[test]
+fn the_leg_extension_study_reads_back_no_file_it_wrote() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_study");
+    let _ = std::fs::remove_dir_all(&out);
+    let summary = run_setup(
+        &root.join("setups/leg_extension_study.xml"),
+        &RunOptions {
+            results_dir: Some(out.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let written = files_under(&out);
+    // The study wrote its tables, statistics, knee tables, figures and metrics.
+    let count = |end: &str| {
+        written
+            .iter()
+            .filter(|p| p.to_string_lossy().ends_with(end))
+            .count()
+    };
+    assert!(count("_w0_mean_force.sto") >= 7, "{written:?}");
+    assert!(count("_w0_mean_KneeLoads.sto") >= 4);
+    assert!(count("_KneeContact.sto") >= 2);
+    assert!(count(".png") >= 10);
+    assert!(count("_metrics.csv") >= 1);
+    assert!(summary.files.len() >= written.len() / 2);
+    // Every opening of a table by the readers, under the output folder.
+    let o = normal(&out);
+    let read_back: Vec<(PathBuf, usize)> = statopt::storage::opened()
+        .into_iter()
+        .filter(|(p, _)| normal(p).starts_with(&o))
+        .collect();
+    assert!(
+        read_back.is_empty(),
+        "{} output files opened for reading during the run, e.g. {:?}",
+        read_back.len(),
+        &read_back[..read_back.len().min(5)]
+    );
+    // And the readers still open a file of an earlier run (after the run).
+    let one = written
+        .iter()
+        .find(|p| p.to_string_lossy().ends_with("_w0_mean_force.sto"))
+        .unwrap();
+    statopt::storage::read(one).unwrap();
+    assert_eq!(statopt::storage::times_opened(one), 1);
+}
