@@ -606,3 +606,52 @@ fn table_file_in_memory_reads_as_the_file() {
         read(&missing).unwrap_err().to_string()
     );
 }
+
+/// An output file is replaced by a new one (a new inode: no truncation in
+/// place), but one reached through a symbolic link or holding other hard
+/// links is written in place, so the link's target gets the output.
+#[cfg(unix)]
+#[test]
+fn create_output_replaces_files_and_keeps_links() {
+    use std::io::Write;
+    use std::os::unix::fs::MetadataExt;
+    let dir = crate::test_dir::TempDir::new("storage-create-output");
+    let d = dir.path();
+    let read = |p: &Path| std::fs::read_to_string(p).unwrap();
+
+    let plain = d.join("plain.sto");
+    std::fs::write(&plain, "old contents, longer than the new").unwrap();
+    // A reader of the old file still reads it whole: it was not truncated.
+    let mut old = std::fs::File::open(&plain).unwrap();
+    create_output(&plain).unwrap().write_all(b"new").unwrap();
+    assert_eq!(read(&plain), "new");
+    let mut kept = String::new();
+    std::io::Read::read_to_string(&mut old, &mut kept).unwrap();
+    assert_eq!(kept, "old contents, longer than the new");
+    assert_ne!(
+        std::fs::metadata(&plain).unwrap().ino(),
+        old.metadata().unwrap().ino()
+    );
+
+    let target = d.join("target.sto");
+    let link = d.join("link.sto");
+    std::fs::write(&target, "old target").unwrap();
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    create_output(&link).unwrap().write_all(b"through").unwrap();
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(read(&target), "through");
+
+    let first = d.join("first.sto");
+    let second = d.join("second.sto");
+    std::fs::write(&first, "old linked").unwrap();
+    std::fs::hard_link(&first, &second).unwrap();
+    create_output(&first).unwrap().write_all(b"both").unwrap();
+    assert_eq!(read(&second), "both");
+
+    let fresh = d.join("fresh.sto");
+    create_output(&fresh).unwrap().write_all(b"made").unwrap();
+    assert_eq!(read(&fresh), "made");
+}
