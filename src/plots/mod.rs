@@ -18,8 +18,7 @@ mod render;
 #[cfg(test)]
 mod tests;
 
-use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -351,7 +350,7 @@ fn write_figure(
         draw_png(&root)?;
         root.present().map_err(plot_err)?;
     }
-    let file = File::create(&png_path).map_err(|e| Error::io(&png_path, e))?;
+    let file = crate::storage::create_output(&png_path).map_err(|e| Error::io(&png_path, e))?;
     let png_err = |e: png::EncodingError| {
         Error::input(
             Location::file(&png_path),
@@ -380,6 +379,8 @@ fn write_figure(
         draw_svg(&root)?;
         root.present().map_err(plot_err)?;
     }
-    std::fs::write(&svg_path, svg).map_err(|e| Error::io(&svg_path, e))?;
+    crate::storage::create_output(&svg_path)
+        .and_then(|mut f| f.write_all(svg.as_bytes()))
+        .map_err(|e| Error::io(&svg_path, e))?;
     Ok(vec![png_path, svg_path])
 }

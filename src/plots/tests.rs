@@ -1,5 +1,6 @@
 use super::*;
 use crate::xml::{self, Element};
+use std::fs::File;
 use std::io::BufReader;
 
 /// A fresh output directory per test under this worktree's `target/`.

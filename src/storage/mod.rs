@@ -29,7 +29,9 @@ pub fn fmt_time(t: f64) -> String {
     }
 }
 
-pub use write::{complete_rows, format_c_fixed, write, StoWriter, DEFAULT_PRECISION};
+pub use write::{
+    complete_rows, create_output, format_c_fixed, write, StoWriter, DEFAULT_PRECISION,
+};
 
 /// A table of samples over time, as OpenSim's `Storage`.
 #[derive(Debug, Clone, PartialEq, Default)]

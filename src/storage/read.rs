@@ -326,7 +326,7 @@ fn read_legacy(path: &Path, h: Header, body: &[(usize, &str)], is_mot: bool) -> 
         }
         last_line = no;
         let mut row = Vec::with_capacity(nc);
-        if let Some(t) = parse_line_fast(text, nc, &mut row) {
+        if let Some(t) = parse_line_fast(text.as_bytes(), nc, &mut row) {
             st.time.push(t);
             st.rows.push(row);
             check_time(path, &st, no)?;
@@ -381,10 +381,11 @@ fn is_ws(b: u8) -> bool {
 /// (`row` is left in any state): the caller then takes the general path,
 /// which says what is wrong. Anything unusual (non-ASCII text included: a
 /// token holding it does not parse) is left to the general path.
-fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
-    // Tokens end only at ASCII white space, so every token boundary is a
-    // char boundary.
-    let b = line.as_bytes();
+pub(super) fn parse_line_fast(b: &[u8], nc: usize, row: &mut Vec<f64>) -> Option<f64> {
+    // On bytes, not yet known to be UTF-8: a token that is not a plain
+    // decimal is parsed as a str when its bytes are UTF-8 (then they are
+    // what the line's token would be: tokens end only at ASCII white
+    // space), and a line that is not UTF-8 takes the general path.
     row.clear();
     let mut time = 0.0;
     let mut count = 0;
@@ -428,7 +429,7 @@ fn parse_line_fast(line: &str, nc: usize, row: &mut Vec<f64>) -> Option<f64> {
                 while i < b.len() && !is_ws(b[i]) {
                     i += 1;
                 }
-                let v: f64 = line[start..i].parse().ok()?;
+                let v: f64 = std::str::from_utf8(&b[start..i]).ok()?.parse().ok()?;
                 v
             }
         };
@@ -736,6 +737,9 @@ pub struct RowReader {
     count: usize,
     last_time: f64,
     last_line: usize,
+    /// The data rows a [`TableFile`] parsed ahead ([`super::source`]), and
+    /// the index of the one expected next.
+    parsed: Option<(std::sync::Arc<super::source::ParsedRows>, usize)>,
 }
 
 /// A position between rows, to come back to with [`RowReader::seek`].
@@ -891,9 +895,14 @@ pub fn open_rows_in(file: &TableFile) -> Result<RowReader> {
             count: 0,
             last_time: f64::NEG_INFINITY,
             last_line: label_line,
+            parsed: None,
         });
     }
     let (table, limit) = legacy_table(path, h, label_line, &label_text, is_mot)?;
+    let parsed = file
+        .parsed_rows()
+        .filter(|p| p.columns() == table.labels.len())
+        .map(|p| (p, 0));
     Ok(RowReader {
         path: path.to_path_buf(),
         table,
@@ -904,6 +913,7 @@ pub fn open_rows_in(file: &TableFile) -> Result<RowReader> {
         count: 0,
         last_time: f64::NEG_INFINITY,
         last_line: label_line,
+        parsed,
     })
 }
 
@@ -969,14 +979,36 @@ impl RowReader {
         Ok(())
     }
 
+    /// The data line at the reader's position, when it was parsed ahead:
+    /// its values into `row`, the reader moved past it, its time.
+    fn parsed_ahead(&mut self, row: &mut Vec<f64>) -> Option<f64> {
+        use std::io::Seek;
+        let (rows, next) = self.parsed.as_mut()?;
+        let k = rows.find(self.lines.offset, *next)?;
+        let end = rows.end(k);
+        self.lines.reader.seek(std::io::SeekFrom::Start(end)).ok()?;
+        self.lines.offset = end;
+        *next = k + 1;
+        row.clear();
+        row.extend_from_slice(rows.values(k));
+        Some(rows.time(k))
+    }
+
     /// The next row's values (one per label) into `row`; its time, or None
     /// after the last row.
     pub fn next_row(&mut self, row: &mut Vec<f64>) -> Result<Option<f64>> {
         if self.count >= self.limit {
             return Ok(None); // OpenSim reads exactly nRows rows
         }
+        let ahead = self.parsed_ahead(row);
         let line_no = &mut self.line_no;
         let (t, no) = match &mut self.format {
+            // The line starting here was parsed ahead: the general path's
+            // fast case (below) on the same bytes.
+            _ if ahead.is_some() => {
+                *line_no += 1;
+                (ahead.unwrap_or_default(), *line_no)
+            }
             RowFormat::Table { shape, ended } => {
                 if *ended {
                     return Ok(None);
@@ -1012,7 +1044,7 @@ impl RowReader {
                 if line.trim().is_empty() {
                     continue;
                 }
-                let t = match parse_line_fast(line, self.table.labels.len(), row) {
+                let t = match parse_line_fast(line.as_bytes(), self.table.labels.len(), row) {
                     Some(t) => t,
                     None => {
                         empty_cell(&self.path, &self.table.labels, *line_no, line)?;
@@ -1211,7 +1243,7 @@ mod fast_line_tests {
         }
         for l in &lines {
             let mut row = Vec::new();
-            let fast = parse_line_fast(l, labels.len(), &mut row);
+            let fast = parse_line_fast(l.as_bytes(), labels.len(), &mut row);
             let general = empty_cell(path, &labels, 1, l).and_then(|_| {
                 let toks: Vec<&str> = l.split_whitespace().collect();
                 let mut r = Vec::new();
@@ -1227,7 +1259,10 @@ mod fast_line_tests {
         }
         assert!(accepted >= 2000, "{accepted}");
         for l in &lines[..3] {
-            assert!(parse_line_fast(l, 3, &mut Vec::new()).is_some(), "{l:?}");
+            assert!(
+                parse_line_fast(l.as_bytes(), 3, &mut Vec::new()).is_some(),
+                "{l:?}"
+            );
         }
     }
 }

@@ -606,3 +606,104 @@ fn table_file_in_memory_reads_as_the_file() {
         read(&missing).unwrap_err().to_string()
     );
 }
+
+/// An output file is replaced by a new one (a new inode: no truncation in
+/// place), but one reached through a symbolic link or holding other hard
+/// links is written in place, so the link's target gets the output.
+#[cfg(unix)]
+#[test]
+fn create_output_replaces_files_and_keeps_links() {
+    use std::io::Write;
+    use std::os::unix::fs::MetadataExt;
+    let dir = crate::test_dir::TempDir::new("storage-create-output");
+    let d = dir.path();
+    let read = |p: &Path| std::fs::read_to_string(p).unwrap();
+
+    let plain = d.join("plain.sto");
+    std::fs::write(&plain, "old contents, longer than the new").unwrap();
+    // A reader of the old file still reads it whole: it was not truncated.
+    let mut old = std::fs::File::open(&plain).unwrap();
+    create_output(&plain).unwrap().write_all(b"new").unwrap();
+    assert_eq!(read(&plain), "new");
+    let mut kept = String::new();
+    std::io::Read::read_to_string(&mut old, &mut kept).unwrap();
+    assert_eq!(kept, "old contents, longer than the new");
+    assert_ne!(
+        std::fs::metadata(&plain).unwrap().ino(),
+        old.metadata().unwrap().ino()
+    );
+
+    let target = d.join("target.sto");
+    let link = d.join("link.sto");
+    std::fs::write(&target, "old target").unwrap();
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    create_output(&link).unwrap().write_all(b"through").unwrap();
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(read(&target), "through");
+
+    let first = d.join("first.sto");
+    let second = d.join("second.sto");
+    std::fs::write(&first, "old linked").unwrap();
+    std::fs::hard_link(&first, &second).unwrap();
+    create_output(&first).unwrap().write_all(b"both").unwrap();
+    assert_eq!(read(&second), "both");
+
+    let fresh = d.join("fresh.sto");
+    create_output(&fresh).unwrap().write_all(b"made").unwrap();
+    assert_eq!(read(&fresh), "made");
+}
+
+/// Rows parsed ahead (`TableFile::read` of a small file) are the rows the
+/// reader parses itself, line numbers, errors and positions included: a
+/// blank line, a token off the fast path and a bad row midway, CR line
+/// ends, and seeking back.
+#[test]
+fn rows_parsed_ahead_are_the_readers_rows() {
+    let tmp = crate::test_dir::TempDir::new("statopt-parse-ahead");
+    let path = tmp.path().join("m.sto");
+    let mut text = String::from("m\r\nversion=1\r\nnColumns=3\r\n endheader \r\ntime\ta\tb\r\n");
+    for i in 0..40 {
+        let t = i as f64 * 0.01;
+        match i {
+            12 => text.push_str("\r\n"),
+            20 => text.push_str(&format!("{t}\t1e-3\t-2.5\r\n")),
+            33 => text.push_str(&format!("{t}\t7\r\n")), // a value missing
+            _ => text.push_str(&format!("{t}\t{}\t-{}.0625\r\n", i * 3, i)),
+        }
+    }
+    std::fs::write(&path, &text).unwrap();
+    let file = TableFile::read(&path).unwrap();
+    let ahead = file.parsed_rows().expect("a small file is parsed ahead");
+    // Rows 0..12 precede the blank line, where parsing ahead stops.
+    assert_eq!((ahead.columns(), ahead.find(ahead.end(11), 0)), (2, None));
+    assert!(ahead.find(ahead.end(10), 11) == Some(11));
+    let mut own = open_rows_in(&TableFile::on_disk(&path)).unwrap();
+    let mut fast = open_rows_in(&file).unwrap();
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    let mut marks = Vec::new();
+    loop {
+        marks.push((own.mark(), fast.mark()));
+        let x = own.next_row(&mut a).map_err(|e| e.to_string());
+        let y = fast.next_row(&mut b).map_err(|e| e.to_string());
+        assert_eq!(x, y);
+        let Ok(Some(_)) = x else {
+            assert!(x.unwrap_err().contains("line 39"));
+            break;
+        };
+        assert_eq!(a, b);
+        assert_eq!(own.count(), fast.count());
+    }
+    // Back to row 5, in the rows parsed ahead, and on from there.
+    own.seek(&marks[5].0).unwrap();
+    fast.seek(&marks[5].1).unwrap();
+    for _ in 0..10 {
+        assert_eq!(
+            own.next_row(&mut a).unwrap(),
+            fast.next_row(&mut b).unwrap()
+        );
+        assert_eq!(a, b);
+    }
+}

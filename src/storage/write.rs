@@ -29,6 +29,39 @@ pub fn format_c_fixed(x: f64, width: usize, prec: usize) -> String {
     String::from_utf8(out).expect("ASCII")
 }
 
+/// Create `path` for writing, empty, as `File::create` does, but replace an
+/// existing regular file by a new one (unlink, then create) instead of
+/// truncating it in place.
+///
+/// On ext4, truncating a file to zero and writing it again makes its
+/// `close` start the file's writeback (the `auto_da_alloc` safeguard), and
+/// the next run's truncation then waits for that writeback: rerunning
+/// gait2392's static optimization into the same folder spent most of its
+/// excess wall time there. A new file is written back in the background
+/// like any other. A symbolic link, a file with other hard links or one
+/// the folder does not let us remove is truncated in place as before, so
+/// that what the path leads to is still what gets written; a replaced
+/// file takes the default permissions of a new one.
+pub fn create_output(path: &Path) -> std::io::Result<File> {
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        if meta.file_type().is_file() && single_link(&meta) {
+            // Failing to remove it, truncate it in place (File::create).
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    File::create(path)
+}
+
+#[cfg(unix)]
+fn single_link(meta: &std::fs::Metadata) -> bool {
+    std::os::unix::fs::MetadataExt::nlink(meta) == 1
+}
+
+#[cfg(not(unix))]
+fn single_link(_meta: &std::fs::Metadata) -> bool {
+    false
+}
+
 /// Two-digit pairs "00".."99", for writing decimal digits two at a time.
 const DIGIT_PAIRS: &[u8; 200] = b"\
 0001020304050607080910111213141516171819\
@@ -396,7 +429,7 @@ impl StoWriter {
         }
         head.push('\n');
         let file = if super::results::writes_file(path) {
-            let mut file = File::create(path).map_err(|e| Error::io(path, e))?;
+            let mut file = create_output(path).map_err(|e| Error::io(path, e))?;
             file.write_all(head.as_bytes())
                 .map_err(|e| Error::io(path, e))?;
             Some(file)

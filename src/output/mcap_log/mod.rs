@@ -191,7 +191,7 @@ impl McapLog {
             ));
         }
 
-        let file = File::create(path).map_err(|e| Error::io(path, e))?;
+        let file = crate::storage::create_output(path).map_err(|e| Error::io(path, e))?;
         let write_options = mcap::WriteOptions::new()
             .compression(match options.compression {
                 ChunkCompression::None => None,
