@@ -243,6 +243,7 @@ impl TableFile {
         TableFile {
             path: path.to_path_buf(),
             bytes: Some(SharedBytes(bytes)),
+            ahead: None,
         }
     }
 
@@ -253,6 +254,7 @@ impl TableFile {
         TableFile {
             path: path.to_path_buf(),
             bytes: Some(SharedBytes(Arc::new(bytes))),
+            ahead: None,
         }
     }
 
