@@ -14,7 +14,8 @@
 //! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
-//!   results in frame order; [`interrupt`]: stopping it cleanly.
+//!   results in frame order; [`interrupt`]: stopping it cleanly;
+//!   [`threads`]: the run's worker pool, started in one place.
 pub mod candidates;
 pub mod compile;
 pub mod driver;
@@ -24,6 +25,7 @@ pub mod options;
 pub mod perturbation;
 pub mod problem;
 pub mod settings;
+pub mod threads;
 pub mod workspace;
 
 pub use options::SoOptions;
