@@ -651,3 +651,23 @@ fn output_names_are_made_in_one_place() {
         offenders.join("\n")
     );
 }
+
+/// The run's worker threads are started in one place,
+/// `frame::threads::in_pool` (`--threads N` of a setup, a study or a force
+/// sweep): no other shipped file builds a rayon pool. (analyze.rs,
+/// study.rs and force_sweep.rs each built their own.)
+#[test]
+fn the_thread_pool_is_built_in_one_place() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    files.sort();
+    let builders: Vec<String> = files
+        .iter()
+        .filter(|f| {
+            shipped_code(&std::fs::read_to_string(f).unwrap()).contains("ThreadPoolBuilder")
+        })
+        .map(|f| f.strip_prefix(&root).unwrap().display().to_string())
+        .collect();
+    assert_eq!(builders, ["src/frame/threads.rs"]);
+}

@@ -14,7 +14,8 @@
 //! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
-//!   results in frame order; [`interrupt`]: stopping it cleanly.
+//!   results in frame order; [`interrupt`]: stopping it cleanly;
+//!   [`threads`]: the run's worker pool, started in one place.
 //! - [`so_loop`]: a static-optimization pass's frame loop: every frame
 //!   solved (once per contact weight) on the driver's threads and its
 //!   results streamed, in frame order, to sinks on threads of their own.
@@ -28,6 +29,7 @@ pub mod perturbation;
 pub mod problem;
 pub mod settings;
 pub mod so_loop;
+pub mod threads;
 pub mod workspace;
 
 pub use options::SoOptions;

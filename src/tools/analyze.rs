@@ -250,17 +250,9 @@ fn run_in(
     {
         return Err(e);
     }
-    match opts.threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
-                .build()
-                .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
-            pool.install(|| run_analyses(setup, motion, model, opts))
-        }
-        None => run_analyses(setup, motion, model, opts),
-    }
-    .and_then(|mut summary| {
+    let run =
+        crate::frame::threads::in_pool(opts.threads, || run_analyses(setup, motion, model, opts));
+    run.and_then(|mut summary| {
         if !setup.figures.is_empty() && summary.stopped.is_none() {
             // Figures read the run's tables: their paths are relative to the results directory.
             let out = results_dir(setup, opts)?;

@@ -31,6 +31,7 @@ use crate::frame::candidates::{CandidateScratch, ForceCandidate};
 use crate::frame::driver::{for_each_frame, Prefetched, PreparingLoads};
 use crate::frame::problem::{status_code, Control, FrameResult, SoProblem};
 use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, CONTACT_WEIGHT_RANGE};
+use crate::frame::threads::in_pool;
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plan::figures::{FigureOrMetric, MetricOp, MetricSpec};
@@ -822,18 +823,6 @@ fn read_setup(
             Location::file(setup_file),
             "a force sweep runs an AnalyzeTool setup with a StaticOptimization",
         )),
-    }
-}
-
-/// `f` in a pool of `threads` threads (None: rayon's global pool).
-fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
-    match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build()
-            .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?
-            .install(f),
-        None => f(),
     }
 }
 

@@ -457,20 +457,11 @@ pub fn run(plan: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // setups side by side and, nested in it, each setup's frames and the
     // figures (the setups' own runs then use that pool instead of each
     // starting one of N threads).
-    match opts.threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
-                .build()
-                .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?;
-            let inner = RunOptions {
-                threads: None,
-                ..opts.clone()
-            };
-            pool.install(|| run_study(plan, &inner))
-        }
-        None => run_study(plan, opts),
-    }
+    let inner = RunOptions {
+        threads: None,
+        ..opts.clone()
+    };
+    crate::frame::threads::in_pool(opts.threads, || run_study(plan, &inner))
 }
 
 fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
