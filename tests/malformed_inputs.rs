@@ -1007,6 +1007,36 @@ fn study_figures_are_checked_against_the_runs_before_computing() {
     );
 }
 
+/// A study's figure naming a table its setup does not write (a misspelt
+/// kind, a w0 it runs) is refused before anything is computed: references
+/// are looked up among the names of the setup's planned outputs
+/// (`writers::names::Planned`). It used to pass the check (the name began
+/// with the setup's and carried a w0 it runs) and fail after the runs.
+#[test]
+fn study_figures_name_tables_the_plan_writes() {
+    let f = analyze_study("out/run_SO_w0_1000_activations.sto");
+    let (code, err) = run("study_kind", &f, "study.xml");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("malformed_study_kind");
+    assert_eq!(code, 2, "{err}");
+    for n in [
+        "study.xml",
+        "<Series",
+        "run_SO_w0_1000_activations.sto",
+        "writes no table",
+        "run_SO_w0_1_activation.sto",
+    ] {
+        assert!(err.contains(n), "lacks '{n}': {err}");
+    }
+    assert!(
+        !dir.join("out").exists(),
+        "nothing may be computed before the check"
+    );
+    // The right name passes the check and is drawn.
+    let f = analyze_study("out/run_SO_w0_1000_activation.sto");
+    let (code, err) = run("study_kind_ok", &f, "study.xml");
+    assert_eq!(code, 0, "{err}");
+}
+
 /// A table left over from an earlier run is not drawn: the study stops and
 /// names it. Here the first run wrote ContactForces; the second run has no
 /// contacts, so the old table would have been drawn as if it were current.

@@ -153,7 +153,9 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
 /// GIL is released while the engine runs; `progress(label, done, total)` is
 /// called as frame loops advance (at most every 0.1 s), and Ctrl-C stops the
 /// run cleanly (the tables keep the frames solved) and raises
-/// KeyboardInterrupt.
+/// KeyboardInterrupt. `external_scales`: (ExternalForce name or `*`,
+/// factor) on the external loads' force and torque data
+/// (`AnalyzeSetup::set_external_load_scales`).
 ///
 /// With `in_memory` (no `results_dir`) the run writes no file
 /// (`storage::results::Capture::in_memory`): the summary's `files` name
@@ -161,7 +163,7 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
 /// `outputs` holds each output's bytes, (path, bytes) in the order written
 /// (tables as their files would hold them; `parse_tables` reads them).
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false, in_memory=false))]
+#[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false, in_memory=false, external_scales=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -176,6 +178,7 @@ fn run<'py>(
     progress: Option<PyObject>,
     allow_unknown: bool,
     in_memory: bool,
+    external_scales: Vec<(String, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
     if in_memory && results_dir.is_some() {
@@ -203,9 +206,19 @@ fn run<'py>(
         // The summary's warnings hold what it read on past.
         read_on_hook: None,
     };
-    let result = py.allow_threads(|| match &text {
-        Some(t) => tools::run_setup_text(&setup, t, &opts),
-        None => tools::run_setup(&setup, &opts),
+    let result = py.allow_threads(|| match (&text, external_scales.is_empty()) {
+        (Some(t), true) => tools::run_setup_text(&setup, t, &opts),
+        (None, true) => tools::run_setup(&setup, &opts),
+        (_, false) => {
+            // The loads' data scaled as they are read: a setter of the
+            // plan (`external_load_scale`; no scaled copy of the file).
+            let mut parsed = match &text {
+                Some(t) => statopt::parse::setup::Setup::parse_with(t, &setup, allow_unknown)?,
+                None => statopt::parse::setup::Setup::read_with(&setup, allow_unknown)?,
+            };
+            parsed.set_external_load_scales(&external_scales)?;
+            tools::run_parsed(parsed, &opts)
+        }
     });
     if let Some(e) = take_pending(&pending) {
         return Err(e);

@@ -18,7 +18,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 import pandas as pd
 
 from . import _native
-from ._setup import edit_setup
+from ._setup import edit_setup, external_scales
 from ._tables import _frame, read_tables
 
 log = logging.getLogger("statopt")
@@ -299,7 +299,7 @@ def run(
       rotational columns are in degrees unless ``df.attrs["in_degrees"]`` is
       False), ``external_load_scale`` (a number: every external load's force
       and torque data times it; a dict ``{ExternalForce name: factor}``: those
-      loads'; a scaled copy of the data file is run), and any other setup
+      loads'; the engine scales the data as it reads it), and any other setup
       element by name (``step_interval=2``,
       ``lowpass_cutoff_frequency_for_coordinates=6``, ...). Paths given here
       are relative to the working directory; the setup's own paths still
@@ -375,6 +375,14 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
     out = Path(results_dir) if results_dir is not None else None
     # A run without results_dir is kept in memory by the engine: no file.
     in_memory = results_dir is None and native is _native.run
+    overrides = dict(overrides)
+    if "external_load_scale" in overrides:
+        # Scaled by the engine as it reads the loads (no scaled copy).
+        if native is not _native.run:
+            raise TypeError("external_load_scale: an override of statopt.run() and statopt.sweep(), "
+                            "not of predict_grf (it predicts the loads)")
+        scales = external_scales(overrides.pop("external_load_scale"))
+        options = dict(options, external_scales=list(scales.items()))
     try:
         text = None
         if overrides:

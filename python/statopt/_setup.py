@@ -321,7 +321,8 @@ def edit_setup(setup: Path, overrides: Dict[str, Any], workdir: Path) -> str:
             )
         _set_child(doc.tool, "coordinates_file", path)
     if "external_load_scale" in overrides:
-        _scale_external_loads(doc, overrides.pop("external_load_scale"), workdir)
+        raise TypeError("external_load_scale is applied by the engine (statopt.run passes it on), "
+                        "not by editing the setup")
     props = overrides.pop("model_properties", None)
     for key, value in overrides.items():
         els = [doc.tool.find(key)] if doc.tool.find(key) is not None else list(doc.tool.iter(key))
@@ -352,66 +353,6 @@ def external_scales(value: Any) -> Dict[str, float]:
         f"external_load_scale: a number (every external load) or a dict {{ExternalForce name: factor}}, "
         f"got {value!r}"
     )
-
-
-def _scale_external_loads(doc: SetupDocument, value: Any, workdir: Path) -> None:
-    """The setup's external loads with the force and torque data of the
-    ExternalForces ``value`` names (see :func:`external_scales`) scaled: a
-    scaled copy of the data file and of the ExternalLoads document in
-    ``workdir``, the setup naming the copy."""
-    scales = external_scales(value)
-    el = doc.tool.find("external_loads_file")
-    if el is None or not (el.text or "").strip():
-        raise _input_error("external_load_scale: the setup has no external loads", str(doc.path),
-                           "<external_loads_file>")
-    xml_path = doc.resolve(el.text)
-    loads = _parse(xml_path.read_text(encoding="utf-8"))
-    data_el = next(loads.iter("datafile"), None)
-    if data_el is None or not (data_el.text or "").strip():
-        raise _input_error("external_load_scale: the external loads name no datafile", str(xml_path))
-    # OpenSim looks for the data file beside the setup first, then beside the XML.
-    name = data_el.text.strip()
-    data = Path(name) if Path(name).is_absolute() else doc.dir / name
-    if not data.is_file():
-        data = xml_path.parent / name
-    factor: Dict[str, float] = {}
-    known = []
-    for f in loads.iter("ExternalForce"):
-        fname = f.get("name", "")
-        known.append(fname)
-        s = scales.get("*", 1.0) * scales.get(fname, 1.0)
-        for tag in ("force_identifier", "torque_identifier"):
-            ident = (f.findtext(tag) or "").strip()
-            if ident and ident != "Unassigned":
-                if factor.get(ident, s) != s:
-                    raise ValueError(f"external_load_scale: {xml_path}: columns {ident}* serve loads "
-                                     "scaled differently")
-                factor[ident] = s
-    unknown = [k for k in scales if k != "*" and k not in known]
-    if unknown:
-        raise KeyError(f"external_load_scale: {xml_path} has no ExternalForce {', '.join(unknown)} "
-                       f"(its loads: {', '.join(known)}; '*' scales them all)")
-    lines = data.read_text(encoding="utf-8").splitlines()
-    end = next((i for i, l in enumerate(lines) if l.strip().lower() == "endheader"), None)
-    if end is None or end + 1 >= len(lines):
-        raise _input_error("external_load_scale: no endheader line and column labels", str(data))
-    labels = lines[end + 1].split()
-    col = [next((s for ident, s in factor.items()
-                 if lab.startswith(ident) and len(lab) == len(ident) + 1 and lab[-1] in "xyzXYZ"), 1.0)
-           for lab in labels]
-    out = lines[: end + 2]
-    for line in lines[end + 2:]:
-        v = line.split()
-        if not v:
-            continue
-        out.append("\t".join(x if c == 1.0 else repr(float(x) * c) for x, c in zip(v, col)))
-    workdir.mkdir(parents=True, exist_ok=True)
-    scaled_data = workdir / f"scaled_{data.name}"
-    scaled_data.write_text("\n".join(out) + "\n", encoding="utf-8")
-    data_el.text = str(scaled_data)
-    scaled_xml = workdir / f"scaled_{xml_path.name}"
-    scaled_xml.write_text(ET.tostring(loads, encoding="unicode"), encoding="utf-8")
-    el.text = str(scaled_xml)
 
 
 def metric_elements(setup: Path) -> bool:

@@ -363,8 +363,12 @@ def test_sweep_batches_external_load_scales(repo, tmp_path):
         for k, v in own.metrics.items():
             assert row[k] == pytest.approx(v, abs=6e-7, rel=0), k
     assert df.peak_knee_fy.nunique() == 2
-    with pytest.raises(KeyError, match="no ExternalForce plate9"):
+    # The engine scales the loads as it reads them: no scaled copy of the
+    # data file, and an unknown load is an InputError naming the file.
+    with pytest.raises(statopt.InputError, match="no ExternalForce 'plate9'"):
         statopt.run(setup, external_load_scale={"plate9": 2.0}, time_range=(0.0, 0.05), progress=False)
+    import statopt._setup as setup_module
+    assert "scaled_" not in open(setup_module.__file__).read()
 
 
 # -- studies, Ctrl-C ----------------------------------------------------------
@@ -553,22 +557,36 @@ def test_sweep_own_local_cluster_of_processes(repo):
     assert df.quadriceps_work_J.iloc[0] != df.quadriceps_work_J.iloc[1]
 
 
-def test_table_names_come_from_the_engine():
+def test_table_names_come_from_the_engine(repo):
     """The package names tables through the binding (the engine's
-    writers::names), not with regexes of its own."""
+    writers::names): a table's kind and w0 come from its key, looked up
+    among the names the setup's plan makes, never from its name."""
     from statopt import _native
-    from statopt._run import _split_key
 
-    assert _native.split_table_stem("cam1_SO_w0_500_force", "force") == ("cam1_SO", "500")
-    assert _native.split_table_stem("cam1_SO_force", "force") == ("cam1_SO", None)
-    assert _native.split_table_stem("cam1_SO_force", "activation") is None
-    assert _split_key("cam1_JR_w0_mean_KneeLoads.sto", "KneeLoads") == ("cam1_JR", "mean")
-    assert _native.without_w0("../o/x_SO_w0_1_force.sto") == "../o/x_SO_force.sto"
+    assert _native.output_name("cam1", "force", analysis="SO", w0=500) == "cam1_SO_w0_500_force.sto"
+    assert _native.output_name("cam1", "KneeLoads", analysis="JR", stat="mean") == "cam1_JR_w0_mean_KneeLoads.sto"
+    assert _native.output_name("cam1", "KneeContact") == "cam1_KneeContact.sto"
+    assert "GeneralizedForcesBySource" in _native.output_tables()
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    keys = _native.output_keys(str(setup), ["o/leg_extension_cam1_SO_w0_500_force.sto",
+                                            "leg_extension_cam1_JR_w0_mean_KneeLoads.sto",
+                                            "leg_extension_cam1_SO_w0_7_force.sto"])
+    assert keys[0] == {"setup": "leg_extension_cam1", "analysis": "SO", "w0": 500.0, "stat": None,
+                       "table": "force"}
+    assert keys[1]["stat"] == "mean" and keys[1]["w0"] is None and keys[1]["table"] == "KneeLoads"
+    assert keys[2] is None  # a w0 the setup does not run
+    text = setup.read_text()
+    assert _native.single_w0_references(str(setup), text, ["../o/leg_extension_cam1_SO_w0_1_force.sto",
+                                                           "leg_extension_cam1_JR_w0_mean_KneeLoads.sto",
+                                                           "other.sto"]) == [
+        "../o/leg_extension_cam1_SO_force.sto", "leg_extension_cam1_JR_KneeLoads.sto", "other.sto"]
     import statopt._run as run_module
     import statopt._setup as setup_module
-    for m in (run_module, setup_module):
+    import statopt._sweep as sweep_module
+    for m in (run_module, setup_module, sweep_module):
         src = open(m.__file__).read()
-        assert "_W0_PREFIX" not in src and 're.compile(r"_w0_' not in src, m.__file__
+        for parse in ("_W0_PREFIX", 're.compile(r"_w0_', "split_table_stem", "without_w0", "_split_key"):
+            assert parse not in src, (parse, m.__file__)
 
 
 def test_summary_names_the_contacts_its_tables_show(repo):

@@ -23,7 +23,7 @@ use std::sync::{Arc, RwLock};
 use nalgebra::Vector3;
 
 use crate::dynamics::{BodyForce, Data};
-use crate::error::{Error, Result};
+use crate::error::{Error, Location, Result};
 use crate::functions::{GcvSpline, SplineFitter, TransientBasis};
 use crate::model::Model;
 use crate::storage::{self, RowMark, Storage};
@@ -116,6 +116,8 @@ pub struct ExternalForce {
     pub labels: Vec<String>,
     /// The data file's windows, when it is long.
     windows: Option<Arc<Windows>>,
+    /// The factor on its force and torque data ([`ExternalLoads::scale`]).
+    scale: f64,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -590,11 +592,36 @@ impl ExternalLoadsFiles {
             torque,
             labels,
             windows: None,
+            scale: 1.0,
         })
     }
 }
 
 impl ExternalLoads {
+    /// Scale the force and torque data (not the points) of the loads
+    /// `scales` names: (ExternalForce name or `*` for every one, factor);
+    /// the factors of a load multiply. An unknown name is an error naming
+    /// the loads there are.
+    pub fn scale(&mut self, scales: &[(String, f64)]) -> Result<()> {
+        for (name, f) in scales {
+            if name == "*" {
+                self.forces.iter_mut().for_each(|ef| ef.scale *= f);
+                continue;
+            }
+            let Some(ef) = self.forces.iter_mut().find(|ef| &ef.name == name) else {
+                return Err(Error::input(
+                    Location::file(&self.data_file),
+                    format!(
+                        "external load scale of '{name}': the external loads have no ExternalForce '{name}' (names: {}; '*' scales them all)",
+                        self.forces.iter().map(|ef| ef.name.as_str()).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            };
+            ef.scale *= f;
+        }
+        Ok(())
+    }
+
     /// Read an ExternalLoads XML file and its data file and bind them to `model`.
     /// `setup_dir` is the folder of the setup that named the file (OpenSim
     /// looks for the data file there first, then beside the XML).
@@ -784,16 +811,20 @@ impl ExternalForce {
         window: Option<&Window>,
     ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
         let r_f = data.rotation[self.force_expressed_in];
-        let f_g = self
+        let mut f_g = self
             .force
             .as_ref()
             .map(|s| r_f * s.value(t, cache, window))
             .unwrap_or_else(Vector3::zeros);
-        let t_g = self
+        let mut t_g = self
             .torque
             .as_ref()
             .map(|s| r_f * s.value(t, cache, window))
             .unwrap_or_else(Vector3::zeros);
+        if self.scale != 1.0 {
+            f_g *= self.scale;
+            t_g *= self.scale;
+        }
         let p_g = match &self.point {
             Some(s) => data.station_position(self.point_expressed_in, &s.value(t, cache, window)),
             None => data.position[self.applied_to_body],

@@ -188,7 +188,11 @@ impl SoProblem {
             ));
         }
         let loads = match loads() {
-            Some(files) => Some(files?.bind(&model)?),
+            Some(files) => {
+                let mut l = files?.bind(&model)?;
+                l.scale(&setup.external_load_scales)?;
+                Some(l)
+            }
             None => None,
         };
         let passive_labels: Vec<String> = passive.iter().flat_map(|p| p.record_labels()).collect();

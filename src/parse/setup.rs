@@ -60,6 +60,11 @@ pub struct AnalyzeSetup {
     /// `tools::study`), drawn from the run's tables after the analyses.
     pub figures: Vec<crate::parse::figures::FigureOrMetric>,
     pub analyses: Vec<Analysis>,
+    /// Factors on the force and torque data of the external loads, by
+    /// ExternalForce name (`*`: every one), set by
+    /// [`AnalyzeSetup::set_external_load_scales`] (the Python package's
+    /// `external_load_scale`); empty: the data as read.
+    pub external_load_scales: Vec<(String, f64)>,
     /// Non-fatal remarks (unknown elements read on with `--allow-unknown`,
     /// see `parse::known`).
     pub warnings: Vec<String>,
@@ -109,6 +114,15 @@ impl Analysis {
 }
 
 impl AnalyzeSetup {
+    /// Scale the force and torque data of the external loads `scales`
+    /// names (ExternalForce name or `*`, factor), as a force sweep's
+    /// `<external_scale>` does ([`Setup::set_external_load_scales`]).
+    pub fn set_external_load_scales(&mut self, scales: &[(String, f64)]) -> Result<()> {
+        self.external_load_scales =
+            checked_load_scales(&self.setup_file, self.external_loads_file.is_some(), scales)?;
+        Ok(())
+    }
+
     /// The setup file's folder, which relative paths in it start from.
     pub fn dir(&self) -> &Path {
         self.setup_file.parent().unwrap_or(Path::new("."))
@@ -185,6 +199,9 @@ pub struct InverseDynamicsSetup {
     /// OpenSim properties statopt accepts but does not use (see
     /// [`AnalyzeSetup::unused_properties`]).
     pub unused_properties: Vec<String>,
+    /// Factors on the external loads' force and torque data, by
+    /// ExternalForce name (`*`: all): [`Setup::set_external_load_scales`].
+    pub external_load_scales: Vec<(String, f64)>,
 }
 
 impl InverseDynamicsSetup {
@@ -445,7 +462,48 @@ pub fn unknown_elements(setup: &Path) -> Result<Vec<Error>> {
     Ok(super::known::setup_elements(tool_element(&root)?).unknown)
 }
 
+/// External load scales checked: finite factors, and external loads to
+/// scale; the names are checked against the loads when they are read
+/// (`forces::external_loads::ExternalLoads::scale`).
+fn checked_load_scales(
+    setup_file: &Path,
+    has_loads: bool,
+    scales: &[(String, f64)],
+) -> Result<Vec<(String, f64)>> {
+    let loc = crate::error::Location::file(setup_file);
+    if scales.is_empty() {
+        return Ok(Vec::new());
+    }
+    if !has_loads {
+        return Err(Error::input(
+            loc.with_element("external_loads_file"),
+            "external load scales: the setup has no external loads",
+        ));
+    }
+    if let Some((name, f)) = scales.iter().find(|(_, f)| !f.is_finite()) {
+        return Err(Error::input(
+            loc,
+            format!("external load scale {f} of '{name}' is not a finite number"),
+        ));
+    }
+    Ok(scales.to_vec())
+}
+
 impl Setup {
+    /// Scale the force and torque data of the external loads `scales`
+    /// names (ExternalForce name or `*`, factor) as they are read: the
+    /// Python package's `external_load_scale` (no scaled copy of the data
+    /// file is written).
+    pub fn set_external_load_scales(&mut self, scales: &[(String, f64)]) -> Result<()> {
+        match self {
+            Setup::Analyze(a) => a.set_external_load_scales(scales),
+            Setup::InverseDynamics(i) => {
+                i.external_load_scales =
+                    checked_load_scales(&i.setup_file, i.external_loads_file.is_some(), scales)?;
+                Ok(())
+            }
+        }
+    }
     /// Read a setup file. An element neither OpenSim 4.6 nor statopt knows
     /// is an error (see [`Setup::read_with`]).
     pub fn read(path: &Path) -> Result<Setup> {
@@ -592,6 +650,7 @@ fn read_id(tool: &Element, path: &Path, dir: &Path) -> Result<InverseDynamicsSet
             .unwrap_or_else(|| "inverse_dynamics.sto".into()),
         joints_to_report_body_forces: joints,
         output_body_forces_file: opt_text(tool, "output_body_forces_file"),
+        external_load_scales: Vec::new(),
         warnings: Vec::new(),
         unused_properties: Vec::new(),
     })
@@ -739,6 +798,7 @@ fn read_analyze(tool: &Element, path: &Path, dir: &Path) -> Result<AnalyzeSetup>
         },
         figures: crate::parse::figures::FigureOrMetric::read_children(tool)?,
         analyses,
+        external_load_scales: Vec::new(),
         warnings: Vec::new(),
         unused_properties: Vec::new(),
     })

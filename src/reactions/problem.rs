@@ -157,7 +157,11 @@ impl JointReactionProblem {
         };
         let setup_dir = setup.dir();
         let loads = match &setup.external_loads_file {
-            Some(p) => Some(ExternalLoads::load(p, setup_dir, &model)?),
+            Some(p) => {
+                let mut l = ExternalLoads::load(p, setup_dir, &model)?;
+                l.scale(&setup.external_load_scales)?;
+                Some(l)
+            }
             None => None,
         };
         let (specs, w) = resolve_reactions(&model, jr)?;

@@ -99,7 +99,17 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
     let use_loads = check_forces(&spec, &setup.forces_to_exclude, &mut warnings)?;
     let setup_dir = setup.dir();
     let loads = match (&setup.external_loads_file, use_loads) {
-        (Some(p), true) => Some(ExternalLoads::load(p, setup_dir, &model)?),
+        (Some(p), true) => {
+            let mut l = ExternalLoads::load(p, setup_dir, &model)?;
+            l.scale(&setup.external_load_scales)?;
+            Some(l)
+        }
+        _ if !setup.external_load_scales.is_empty() => {
+            return Err(crate::Error::input(
+                crate::Location::file(&setup.setup_file).with_element("external_loads_file"),
+                "external load scales: the setup applies no external loads",
+            ))
+        }
         _ => None,
     };
     // q, u, u̇ streamed window by window from the (filtered) coordinates'

@@ -161,7 +161,10 @@ pub fn run_setup_text(
     )
 }
 
-fn run_parsed(setup: crate::parse::setup::Setup, opts: &RunOptions) -> crate::Result<RunSummary> {
+pub fn run_parsed(
+    setup: crate::parse::setup::Setup,
+    opts: &RunOptions,
+) -> crate::Result<RunSummary> {
     use crate::parse::setup::Setup;
     match setup {
         Setup::InverseDynamics(s) => inverse_dynamics::run(&s, opts),
