@@ -78,6 +78,33 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
         read_back.len(),
         &read_back[..read_back.len().min(5)]
     );
+    // `--resume` is the one reader of earlier output, and the count sees
+    // it: the finished cam 1 run resumed reads its tables and its logs.
+    let cam1 = out.join("leg_extension_cam1");
+    run_setup(
+        &root.join("setups/leg_extension_cam1.xml"),
+        &RunOptions {
+            results_dir: Some(cam1.clone()),
+            resume: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let c = normal(&cam1);
+    let resumed: Vec<PathBuf> = statopt::storage::opened()
+        .into_iter()
+        .map(|(p, _)| normal(&p))
+        .filter(|p| p.starts_with(&c))
+        .collect();
+    assert!(
+        resumed
+            .iter()
+            .any(|p| p.to_string_lossy().ends_with("_log.mcap"))
+            && resumed
+                .iter()
+                .any(|p| p.to_string_lossy().ends_with("_force.sto")),
+        "{resumed:?}"
+    );
     // And the readers still open a file of an earlier run (after the run).
     let one = written
         .iter()

@@ -34,6 +34,11 @@ pub type Shared = Arc<Vec<FrameOutput>>;
 /// order, on a thread of its own. An error stops the pass.
 pub type Sink<'a> = &'a mut (dyn FnMut(&[FrameOutput]) -> Result<()> + Send);
 
+/// How the pass solves a frame: fills one output per run (weight) for
+/// the frame, on the given workspace.
+pub type Solve<'a> =
+    &'a (dyn Fn(&mut Workspace, &Frame, &mut Vec<FrameOutput>) -> Result<()> + Sync);
+
 /// One frame as the solve gets it: its time and state, and whether the
 /// frame before it in its group was solved on the same workspace (warm
 /// start).
@@ -65,7 +70,7 @@ pub fn solve_frames(
     i1: usize,
     step_interval: usize,
     skip_until: f64,
-    solve: &(dyn Fn(&mut Workspace, &Frame, &mut Vec<FrameOutput>) -> Result<()> + Sync),
+    solve: Solve,
     sinks: Vec<Sink>,
     mut on_frame: impl FnMut(),
 ) -> Result<bool> {

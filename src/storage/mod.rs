@@ -11,7 +11,7 @@ mod source;
 mod write;
 
 pub use read::{open_rows, open_rows_in, read, read_file, RowMark, RowReader};
-pub use source::{opened, times_opened, TableFile, IN_MEMORY_LIMIT};
+pub use source::{opened, read_bytes, times_opened, TableFile, IN_MEMORY_LIMIT};
 /// A frame time as a message says it: rounded to the nanosecond with
 /// trailing zeros dropped, so that a time computed on the motion's grid
 /// (`0.5833328799999886`) reads as the motion's own row time

@@ -153,7 +153,9 @@ impl Capture {
     /// kept here; a writer that would still open a file there fails (the
     /// folder does not exist) rather than leave a file behind.
     pub fn in_memory() -> Capture {
-        let n = NEXT_ID.load(Ordering::Relaxed);
+        // A number no other capture of the process takes (runs in parallel
+        // threads each get a folder of their own).
+        let n = NEXT_ID.fetch_add(1, Ordering::Relaxed);
         let dir = std::env::temp_dir().join(format!(
             "statopt-in-memory-{}-{n}-not-a-folder",
             std::process::id()

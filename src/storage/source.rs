@@ -301,8 +301,9 @@ pub fn opened() -> Vec<(std::path::PathBuf, usize)> {
     OPENED.all()
 }
 
-/// The whole file, counted as one opening.
-pub(super) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+/// The whole file, counted as one opening (any file a run reads back, e.g.
+/// `--resume`'s log, so that [`times_opened`] sees every reading).
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     count_open(path);
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }

@@ -712,8 +712,6 @@ fn run_sweep(
         sinks,
         || progress.inc(1),
     );
-    drop(tables);
-    drop(log);
     let completed = completed?;
     // Each log back to its run, finished with its tables.
     for (w, (log, _)) in writers.iter_mut().zip(logs) {

@@ -58,7 +58,7 @@ pub fn resume_point(
     // The log: messages of whole frames, read as far as its chunks are
     // complete (a killed run's last chunk may be torn).
     let log_path = dir.join(run.file(OutputKind::Log));
-    let bytes = match std::fs::read(&log_path) {
+    let bytes = match crate::storage::read_bytes(&log_path) {
         Ok(b) => b,
         Err(_) => return Ok(None),
     };
