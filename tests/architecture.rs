@@ -768,3 +768,105 @@ fn the_tools_import_one_another_without_a_cycle() {
         );
     }
 }
+
+/// Whether the crate path `path` (`frame::options::SoOptions`,
+/// `tools::analyze::run`, `writers::names`) names something the source
+/// holds: its longest prefix that is a module file, and the next name, if
+/// any, a name of that file's shipped code (an item, a re-export, a
+/// method or field of one).
+fn names_something(src: &Path, path: &str) -> Result<(), String> {
+    let parts: Vec<&str> = path.split("::").collect();
+    let mut file = None;
+    let mut used = 0;
+    for k in (1..=parts.len()).rev() {
+        let dir = parts[..k].join("/");
+        for candidate in [src.join(format!("{dir}.rs")), src.join(&dir).join("mod.rs")] {
+            if candidate.is_file() {
+                file = Some(candidate);
+                used = k;
+                break;
+            }
+        }
+        if file.is_some() {
+            break;
+        }
+    }
+    let Some(file) = file else {
+        return Err(format!("no module file for `{path}`"));
+    };
+    let Some(name) = parts.get(used) else {
+        return Ok(());
+    };
+    let name = name.trim_end_matches("()");
+    let code = shipped_code(&std::fs::read_to_string(&file).unwrap());
+    let found = code
+        .match_indices(name)
+        .any(|(i, _)| word_at(&code, i, name));
+    if found {
+        Ok(())
+    } else {
+        Err(format!("`{path}`: no `{name}` in {}", file.display()))
+    }
+}
+
+/// docs/architecture.md names the code it describes, and every name holds:
+/// each `stage::path` between backticks that starts with a module of the
+/// crate is a module file of `src/` and, when it goes on, a name in that
+/// file's shipped code; every stage of the pipeline is drawn. (The
+/// document said "the compiled problem keeps no copy" while `SoProblem`
+/// held `settings: so.clone()`, and named moved functions.)
+#[test]
+fn the_architecture_doc_names_code_that_exists() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let src = root.join("src");
+    assert!(names_something(&src, "frame::problem::SoProblem").is_ok());
+    assert!(names_something(&src, "frame::problem::NoSuchThing").is_err());
+    assert!(names_something(&src, "nowhere::x").is_err());
+    let doc = std::fs::read_to_string(root.join("docs/architecture.md")).unwrap();
+    let modules: BTreeSet<&str> = PIPELINE.iter().chain(BASE.iter()).copied().collect();
+    let mut wrong = Vec::new();
+    let mut checked = 0;
+    for (k, quoted) in doc.split('`').enumerate() {
+        if k % 2 == 0 {
+            continue;
+        }
+        // `a::b::{c, d}` and `a::b::c(...)`: the path before them.
+        let path: String = quoted
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+            .collect();
+        let path = path.trim_end_matches(':');
+        let Some((first, _)) = path.split_once("::") else {
+            continue;
+        };
+        if !modules.contains(first) {
+            continue;
+        }
+        checked += 1;
+        if let Err(e) = names_something(&src, path) {
+            wrong.push(e);
+        }
+    }
+    for stage in PIPELINE {
+        if !doc.contains(&format!(" {stage}/ ")) && !doc.contains(&format!(" {stage}/,")) {
+            wrong.push(format!("stage {stage}/ is not drawn"));
+        }
+    }
+    // Every test of this file is listed in the document's last section.
+    let tests = std::fs::read_to_string(root.join("tests/architecture.rs")).unwrap();
+    for part in tests.split("#[test]\nfn ").skip(1) {
+        let name: String = part
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if !doc.contains(&format!("`{name}`")) {
+            wrong.push(format!("test {name} is not listed"));
+        }
+    }
+    assert!(checked > 40, "{checked} paths checked");
+    assert!(
+        wrong.is_empty(),
+        "docs/architecture.md:\n{}",
+        wrong.join("\n")
+    );
+}
