@@ -671,3 +671,280 @@ fn the_thread_pool_is_built_in_one_place() {
         .collect();
     assert_eq!(builders, ["src/frame/threads.rs"]);
 }
+
+/// The files of `src/tools/` a tools file imports: each `crate::tools::X`
+/// or `super::X` (and each `X` of a `use crate::tools::{...}` group) of its
+/// shipped code; an `X` that is no file is an item of `mod.rs`, or, when
+/// `mod.rs` re-exports it (`pub use file::X`), of that file. In `mod.rs`,
+/// also each `file::` path, outside its `pub mod` and `pub use` lines (a
+/// module's declaration and its re-exports are the tree, not dependencies).
+fn tools_imports(tools: &Path) -> std::collections::BTreeMap<String, BTreeSet<String>> {
+    let mut files = Vec::new();
+    rust_files(tools, &mut files);
+    let modules: BTreeSet<String> = files
+        .iter()
+        .map(|f| f.file_stem().unwrap().to_string_lossy().to_string())
+        .collect();
+    let root = std::fs::read_to_string(tools.join("mod.rs")).unwrap();
+    // Items mod.rs re-exports from its files: name -> file.
+    let mut reexported = std::collections::BTreeMap::new();
+    let flat = shipped_code(&root).replace('\n', " ");
+    for part in flat.split("pub use ").skip(1) {
+        let stmt = part.split(';').next().unwrap_or("");
+        let Some((module, items)) = stmt.split_once("::") else {
+            continue;
+        };
+        let module = module.trim();
+        if !modules.contains(module) {
+            continue;
+        }
+        for item in items
+            .trim_matches(|c| c == '{' || c == '}' || c == ' ')
+            .split(',')
+        {
+            let item = item.trim();
+            if !item.is_empty() {
+                reexported.insert(item.to_string(), module.to_string());
+            }
+        }
+    }
+    let mut graph = std::collections::BTreeMap::new();
+    for f in &files {
+        let me = f.file_stem().unwrap().to_string_lossy().to_string();
+        let code = shipped_code(&std::fs::read_to_string(f).unwrap());
+        let mut names = BTreeSet::new();
+        for line in code.lines() {
+            let line = line.split("//").next().unwrap_or("");
+            let t = line.trim_start();
+            if me == "mod" && (t.starts_with("pub mod ") || t.starts_with("pub use ")) {
+                continue;
+            }
+            let mut prefixes = vec!["crate::tools::", "super::"];
+            if me == "mod" {
+                prefixes.push("");
+            }
+            for prefix in prefixes {
+                for m in &modules {
+                    let pat = format!("{prefix}{m}::");
+                    if line
+                        .match_indices(&pat)
+                        .any(|(i, _)| word_at(line, i, &pat[..pat.len() - 2]))
+                    {
+                        names.insert(m.clone());
+                    }
+                }
+            }
+        }
+        // `crate::tools::{a, B, c::d}` groups and single items.
+        let flat = code
+            .lines()
+            .map(|l| l.split("//").next().unwrap_or(""))
+            .collect::<Vec<_>>()
+            .join(" ");
+        for part in flat.split("crate::tools::").skip(1) {
+            let group = match part.strip_prefix('{') {
+                Some(g) => g.split('}').next().unwrap_or(""),
+                None => part,
+            };
+            let n = if part.starts_with('{') { usize::MAX } else { 1 };
+            for item in group.split(',').take(n) {
+                let name: String = item
+                    .trim()
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if !name.is_empty() {
+                    names.insert(name);
+                }
+            }
+        }
+        let deps: BTreeSet<String> = names
+            .into_iter()
+            .map(|n| {
+                if modules.contains(&n) {
+                    n
+                } else {
+                    reexported.get(&n).cloned().unwrap_or_else(|| "mod".into())
+                }
+            })
+            .filter(|d| *d != me)
+            .collect();
+        graph.insert(me, deps);
+    }
+    graph
+}
+
+/// A cycle of the graph, if any (depth-first search).
+fn find_cycle(graph: &std::collections::BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
+    fn visit(
+        n: &str,
+        graph: &std::collections::BTreeMap<String, BTreeSet<String>>,
+        state: &mut std::collections::BTreeMap<String, u8>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        match state.get(n) {
+            Some(2) => return None,
+            Some(1) => {
+                let at = path.iter().position(|p| p == n).unwrap();
+                let mut cycle = path[at..].to_vec();
+                cycle.push(n.to_string());
+                return Some(cycle);
+            }
+            _ => {}
+        }
+        state.insert(n.to_string(), 1);
+        path.push(n.to_string());
+        for d in graph.get(n).into_iter().flatten() {
+            if let Some(c) = visit(d, graph, state, path) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        state.insert(n.to_string(), 2);
+        None
+    }
+    let mut state = std::collections::BTreeMap::new();
+    for n in graph.keys() {
+        if let Some(c) = visit(n, graph, &mut state, &mut Vec::new()) {
+            return Some(c);
+        }
+    }
+    None
+}
+
+/// The tools import one another without a cycle: the dispatchers
+/// (`dispatch`: `statopt-tool SETUP.xml`; `analyze`: an AnalyzeTool
+/// setup's analyses; `study`) import the tools they run, and the helpers
+/// the tools share (`inputs`: the motion, states and results folder;
+/// `figures`: figures, metrics and their references; `knee_contact_table`;
+/// `mod.rs`'s RunOptions and RunSummary) import no tool that imports them.
+/// (Eight tool files formed one import circle through `analyze.rs`, both
+/// the dispatcher and the helpers, and through `mod.rs`'s dispatcher.)
+#[test]
+fn the_tools_import_one_another_without_a_cycle() {
+    let mut g = std::collections::BTreeMap::new();
+    for (a, b) in [("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")] {
+        g.entry(a.to_string())
+            .or_insert_with(BTreeSet::new)
+            .insert(b.to_string());
+    }
+    assert_eq!(find_cycle(&g).unwrap(), ["a", "b", "c", "a"]);
+    g.get_mut("c").unwrap().remove("a");
+    assert!(find_cycle(&g).is_none());
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let graph = tools_imports(&root.join("src/tools"));
+    assert!(graph.len() > 15, "{graph:?}");
+    assert!(
+        graph["analyze"].contains("static_optimization"),
+        "{graph:?}"
+    );
+    assert!(graph["static_optimization"].contains("inputs"), "{graph:?}");
+    if let Some(cycle) = find_cycle(&graph) {
+        panic!(
+            "an import cycle among src/tools/: {}\n{graph:#?}",
+            cycle.join(" -> ")
+        );
+    }
+}
+
+/// Whether the crate path `path` (`frame::options::SoOptions`,
+/// `tools::analyze::run`, `writers::names`) names something the source
+/// holds: its longest prefix that is a module file, and the next name, if
+/// any, a name of that file's shipped code (an item, a re-export, a
+/// method or field of one).
+fn names_something(src: &Path, path: &str) -> Result<(), String> {
+    let parts: Vec<&str> = path.split("::").collect();
+    let mut file = None;
+    let mut used = 0;
+    for k in (1..=parts.len()).rev() {
+        let dir = parts[..k].join("/");
+        for candidate in [src.join(format!("{dir}.rs")), src.join(&dir).join("mod.rs")] {
+            if candidate.is_file() {
+                file = Some(candidate);
+                used = k;
+                break;
+            }
+        }
+        if file.is_some() {
+            break;
+        }
+    }
+    let Some(file) = file else {
+        return Err(format!("no module file for `{path}`"));
+    };
+    let Some(name) = parts.get(used) else {
+        return Ok(());
+    };
+    let name = name.trim_end_matches("()");
+    let code = shipped_code(&std::fs::read_to_string(&file).unwrap());
+    let found = code
+        .match_indices(name)
+        .any(|(i, _)| word_at(&code, i, name));
+    if found {
+        Ok(())
+    } else {
+        Err(format!("`{path}`: no `{name}` in {}", file.display()))
+    }
+}
+
+/// docs/architecture.md names the code it describes, and every name holds:
+/// each `stage::path` between backticks that starts with a module of the
+/// crate is a module file of `src/` and, when it goes on, a name in that
+/// file's shipped code; every stage of the pipeline is drawn. (The
+/// document said "the compiled problem keeps no copy" while `SoProblem`
+/// held `settings: so.clone()`, and named moved functions.)
+#[test]
+fn the_architecture_doc_names_code_that_exists() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let src = root.join("src");
+    assert!(names_something(&src, "frame::problem::SoProblem").is_ok());
+    assert!(names_something(&src, "frame::problem::NoSuchThing").is_err());
+    assert!(names_something(&src, "nowhere::x").is_err());
+    let doc = std::fs::read_to_string(root.join("docs/architecture.md")).unwrap();
+    let modules: BTreeSet<&str> = PIPELINE.iter().chain(BASE.iter()).copied().collect();
+    let mut wrong = Vec::new();
+    let mut checked = 0;
+    for (k, quoted) in doc.split('`').enumerate() {
+        if k % 2 == 0 {
+            continue;
+        }
+        // `a::b::{c, d}` and `a::b::c(...)`: the path before them.
+        let path: String = quoted
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+            .collect();
+        let path = path.trim_end_matches(':');
+        let Some((first, _)) = path.split_once("::") else {
+            continue;
+        };
+        if !modules.contains(first) {
+            continue;
+        }
+        checked += 1;
+        if let Err(e) = names_something(&src, path) {
+            wrong.push(e);
+        }
+    }
+    for stage in PIPELINE {
+        if !doc.contains(&format!(" {stage}/ ")) && !doc.contains(&format!(" {stage}/,")) {
+            wrong.push(format!("stage {stage}/ is not drawn"));
+        }
+    }
+    // Every test of this file is listed in the document's last section.
+    let tests = std::fs::read_to_string(root.join("tests/architecture.rs")).unwrap();
+    for part in tests.split("#[test]\nfn ").skip(1) {
+        let name: String = part
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if !doc.contains(&format!("`{name}`")) {
+            wrong.push(format!("test {name} is not listed"));
+        }
+    }
+    assert!(checked > 40, "{checked} paths checked");
+    assert!(
+        wrong.is_empty(),
+        "docs/architecture.md:\n{}",
+        wrong.join("\n")
+    );
+}

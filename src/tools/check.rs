@@ -16,12 +16,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Location};
-use crate::parse::figures::FigureOrMetric;
 use crate::parse::setup::{
     missing_input_files, results_dir_error, results_dir_problem, unknown_elements, Analysis,
     AnalyzeSetup, InverseDynamicsSetup, Setup,
 };
-use crate::tools::{analyze, joint_reaction, loading, static_optimization, study, RunOptions};
+pub use crate::tools::figures::figure_reference_problems;
+use crate::tools::{inputs, joint_reaction, loading, static_optimization, study, RunOptions};
 
 /// What a check found: errors (each would stop a run) and warnings.
 #[derive(Debug, Default)]
@@ -269,7 +269,7 @@ impl Checker {
             }
         };
         self.warnings.extend(am.warnings.iter().cloned());
-        let motion = match analyze::read_motion(setup) {
+        let motion = match inputs::read_motion(setup) {
             Ok(m) => Some(m),
             Err(e) => {
                 self.error(e);
@@ -277,11 +277,11 @@ impl Checker {
             }
         };
         if let Some(motion) = &motion {
-            match analyze::open_motion_stream(setup, motion, &am.model, &[]) {
+            match inputs::open_motion_stream(setup, motion, &am.model, &[]) {
                 Ok(stream) => {
                     self.warnings.extend(stream.motion_warnings(&[]));
                     self.warnings
-                        .extend(analyze::missing_columns_warning(setup, &stream.missing));
+                        .extend(inputs::missing_columns_warning(setup, &stream.missing));
                 }
                 Err(e) => self.error(e),
             }
@@ -293,7 +293,7 @@ impl Checker {
             ));
         }
         let has_so = setup.static_optimization().is_some();
-        let coupled = analyze::coupled_reactions(&setup.analyses, has_so);
+        let coupled = inputs::coupled_reactions(&setup.analyses, has_so);
         for a in &setup.analyses {
             match a {
                 Analysis::StaticOptimization(so) if so.common.on => {
@@ -390,100 +390,6 @@ impl Checker {
     }
 }
 
-/// The problems of the tables a setup's `<Figure>`s and `<Metric>`s name
-/// (relative to its results folder `dir`, drawn after the run): each must
-/// be one this setup writes (one of the names of its plan's outputs,
-/// `writers::names::Planned`) or exist already. References to w0 tables the setup does not
-/// write are one problem, however many there are (they have one cause).
-/// A run checks these before its first frame (`tools::analyze::run`).
-pub fn figure_reference_problems(setup: &AnalyzeSetup, dir: &Path) -> Vec<Error> {
-    use crate::writers::names::{self, Planned};
-    let planned = Planned::of(setup);
-    let tags = Planned::w0_tags(setup);
-    let weights: Vec<String> = tags
-        .iter()
-        .take(tags.len().saturating_sub(names::SWEEP_STATS.len()))
-        .cloned()
-        .collect();
-    let mut errors = Vec::new();
-    // (location, attribute, value, tag) of references to w0 tables the
-    // setup does not write.
-    let mut wrong_w0: Vec<(Location, &str, String, String)> = Vec::new();
-    for r in setup.figures.iter().flat_map(FigureOrMetric::tables) {
-        let (attr, value) = (r.attr, r.value);
-        let path = crate::parse::setup::resolve(dir, value);
-        let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
-        let here = path.parent() == Some(dir);
-        if here && planned.find(file).is_some() {
-            continue;
-        }
-        let ours = here && file.starts_with(&setup.name);
-        if let Some(tag) = names::w0_tag_in(file).filter(|_| ours) {
-            if !tags.iter().any(|t| t == tag) {
-                wrong_w0.push((r.loc.clone(), attr, value.to_string(), tag.to_string()));
-                continue;
-            }
-        }
-        if !path.is_file() {
-            errors.push(Error::input(
-                r.loc.clone(),
-                format!(
-                "{attr}=\"{value}\": {} does not exist and is not a table this setup writes (its tables are named {}_... in its results folder, {})",
-                path.display(),
-                setup.name,
-                dir.display()
-            )));
-        }
-    }
-    let runs = if weights.is_empty() {
-        "a single w0 (its tables carry no w0 in their names)".to_string()
-    } else {
-        format!("w0 = {}", weights.join(", "))
-    };
-    match wrong_w0.len() {
-        0 => {}
-        1 => {
-            let (loc, attr, value, tag) = &wrong_w0[0];
-            errors.insert(
-                0,
-                Error::input(
-                    loc.clone(),
-                    format!("{attr}=\"{value}\": names w0 = {tag}, but the setup runs {runs}"),
-                ),
-            );
-        }
-        n => {
-            let mut named: Vec<&str> = Vec::new();
-            let mut lines: Vec<String> = Vec::new();
-            for (loc, _, _, tag) in &wrong_w0 {
-                if !named.contains(&tag.as_str()) {
-                    named.push(tag);
-                }
-                if let Some(l) = loc.line {
-                    let l = l.to_string();
-                    if !lines.contains(&l) {
-                        lines.push(l);
-                    }
-                }
-            }
-            let (loc, attr, value, _) = &wrong_w0[0];
-            errors.insert(
-                0,
-                Error::input(
-                    loc.clone(),
-                    format!(
-                        "{attr}=\"{value}\" and {} more references (lines {}) name tables of w0 = {}, but the setup runs {runs}",
-                        n - 1,
-                        lines.join(", "),
-                        named.join(", ")
-                    ),
-                ),
-            );
-        }
-    }
-    errors
-}
-
 /// A contact whose plane faces away from its point's body: at the first
 /// frame of the motion (the model's default pose when the motion cannot be
 /// read), the point body's mass centre lies behind the plane (on the side
@@ -506,7 +412,7 @@ pub fn contacts_facing_away(
     }
     let model = &problem.model;
     let mut data = crate::dynamics::Data::new(model);
-    let (q, when) = match analyze::open_state_stream_with(setup, model, &problem.contacts)
+    let (q, when) = match inputs::open_state_stream_with(setup, model, &problem.contacts)
         .and_then(|mut s| s.next_block())
     {
         Ok(Some(block)) if !block.q.is_empty() => (

@@ -37,8 +37,8 @@ use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
 use crate::plan::figures::{FigureOrMetric, MetricOp, MetricSpec};
 use crate::reactions::linear::ReactionBasis;
 use crate::reactions::{column_labels, resolve_reactions, ReactionSpec};
-use crate::tools::analyze::open_state_stream_with;
-use crate::tools::study::metric_value;
+use crate::tools::figures::metric_value;
+use crate::tools::inputs::open_state_stream_with;
 use crate::tools::RunOptions;
 use crate::writers::names::{file_name, OutputKind, RunKey, Sweep};
 use crate::writers::tables::{diagnostics_row, DIAGNOSTICS_COLUMNS};
@@ -229,7 +229,7 @@ fn plan_metric(
             let patella = coupled[j].knee.as_ref().is_some_and(|k| k.1);
             crate::tools::knee_loads::labels(patella)
         }
-        Source::KneeContact(_) => crate::tools::knee_contact::labels(&problem.knees),
+        Source::KneeContact(_) => crate::tools::knee_contact_table::labels(&problem.knees),
     };
     if let Source::Reactions(j) | Source::Knee(j) | Source::KneeContact(j) = source {
         coupled[j].used = true;
@@ -447,9 +447,10 @@ impl Plan {
             // The knee contact method's rows are affine in the candidates'
             // forces (frame::candidates); its table's reactions as a coupled
             // joint reaction's.
-            let specs = crate::tools::knee_contact::reaction_specs(&problem.model, &problem.knees);
+            let specs =
+                crate::tools::knee_contact_table::reaction_specs(&problem.model, &problem.knees);
             coupled.push(Coupled {
-                name: crate::tools::knee_contact::REACTIONS_NAME.to_string(),
+                name: crate::tools::knee_contact_table::REACTIONS_NAME.to_string(),
                 labels: column_labels(&specs),
                 specs,
                 knee: None,
@@ -1046,7 +1047,7 @@ impl CandidateWriters {
                     )?);
                 }
                 if c.knee_contact {
-                    files.push(crate::tools::knee_contact::write(
+                    files.push(crate::tools::knee_contact_table::write(
                         &problem.model,
                         &problem.knees,
                         &self.time,

@@ -41,11 +41,12 @@
 //! ([`crate::reactions::joint`]).
 
 use crate::error::Result;
+use crate::frame::driver::{for_each_frame, is_frame};
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::StoWriter;
 use crate::storage::TableFile;
-use crate::tools::analyze::{for_each_frame, is_frame, open_motion_stream, results_dir};
+use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::names::{OutputKind, RunKey, Sweep};
 
@@ -74,7 +75,7 @@ pub fn run(
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_motion_stream(setup, motion, &problem.model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));
-    warnings.extend(crate::tools::analyze::missing_columns_warning(
+    warnings.extend(crate::tools::inputs::missing_columns_warning(
         setup,
         &stream.missing,
     ));

@@ -13,7 +13,7 @@ use crate::frame::driver::write_each_frame;
 use crate::parse::kinematics::KinematicsSetup;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::TableFile;
-use crate::tools::analyze::{open_motion_stream, results_dir};
+use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::kinematics_tables::{KinematicsTables, TableSpec};
@@ -58,7 +58,7 @@ pub fn run(
     let selection = select(&am, k)?;
     let mut stream = open_motion_stream(setup, motion, model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));
-    warnings.extend(crate::tools::analyze::missing_columns_warning(
+    warnings.extend(crate::tools::inputs::missing_columns_warning(
         setup,
         &stream.missing,
     ));

@@ -4,13 +4,17 @@ pub mod analyze;
 pub mod bench;
 pub mod bench_grid;
 pub mod check;
+pub mod dispatch;
 pub mod emg_compare;
+pub mod figures;
 pub mod force_sweep;
 pub use crate::frame::interrupt;
+pub mod inputs;
 pub mod inverse_dynamics;
 pub mod joint_reaction;
 pub mod kinematics;
 pub mod knee_contact;
+pub mod knee_contact_table;
 pub mod knee_loads;
 pub mod loading;
 pub mod motion_gen;
@@ -23,6 +27,24 @@ pub mod static_optimization;
 pub mod study;
 
 use std::path::PathBuf;
+
+pub use dispatch::{run_parsed, run_setup, run_setup_text};
+
+/// Called with a label (the table prefix of the frame loop, e.g.
+/// `walk_SO_w0_500`), the frames done and the frames of that loop: once with
+/// 0 when a loop starts, at most every 0.1 s while it runs, and once with
+/// done = total when it ends.
+#[derive(Clone)]
+pub struct ProgressHook(pub std::sync::Arc<ProgressFn>);
+
+/// What a [`ProgressHook`] calls: (label, frames done, frames of the loop).
+pub type ProgressFn = dyn Fn(&str, u64, u64) + Send + Sync;
+
+impl std::fmt::Debug for ProgressHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ProgressHook")
+    }
+}
 
 /// Options from the command line that override or extend a setup.
 #[derive(Debug, Clone, Default)]
@@ -49,7 +71,7 @@ pub struct RunOptions {
     /// failed process loses nothing either way.
     pub sync: bool,
     /// Told how frame loops advance (embedding callers; see [`progress`]).
-    pub progress: Option<progress::ProgressHook>,
+    pub progress: Option<ProgressHook>,
     /// Read on past elements of a setup document neither OpenSim nor
     /// statopt knows, with a warning (`--allow-unknown`); without it they
     /// are errors (see `parse::known::setup_elements`).
@@ -59,36 +81,6 @@ pub struct RunOptions {
     /// warnings then, so that a run that later fails has said them too).
     /// They are in the run's summary as well.
     pub read_on_hook: Option<fn(&str)>,
-}
-
-/// Run the tool a setup file describes, as `statopt-tool SETUP.xml` does: a
-/// study document, an InverseDynamicsTool or an AnalyzeTool setup, read
-/// once into its plan (`plan::Plan`).
-pub fn run_setup(setup: &std::path::Path, opts: &RunOptions) -> crate::Result<RunSummary> {
-    let _outputs = keep_outputs(opts);
-    let plan = crate::plan::Plan::read(setup, opts.allow_unknown)?;
-    let read_on = plan.unknown_elements_read_on();
-    if let Some(hook) = opts.read_on_hook {
-        read_on.iter().for_each(|w| hook(w));
-    }
-    let summary = match plan {
-        crate::plan::Plan::Study(s) => study::run(&s, opts),
-        crate::plan::Plan::Tool(s) => run_parsed(*s, opts),
-    }
-    .map_err(|e| with_read_on_note(e, &read_on))?;
-    synced(summary, opts)
-}
-
-/// The run's outputs kept in memory while it runs, for its own consumers
-/// (`storage::results`: no run reads back a file it wrote): those under
-/// `-o DIR`, or every output; none when a caller already keeps them (the
-/// Python binding's run in memory).
-fn keep_outputs(opts: &RunOptions) -> Option<crate::storage::results::Capture> {
-    use crate::storage::results::{captured, Capture};
-    match opts.results_dir.as_deref() {
-        Some(dir) if captured(dir) => None,
-        dir => Some(Capture::new(dir)),
-    }
 }
 
 /// A failed run's error, with the unknown elements `--allow-unknown` read
@@ -143,36 +135,6 @@ pub fn sync_files(files: &[std::path::PathBuf]) -> crate::Result<()> {
         }
         result
     })
-}
-
-/// [`run_setup`] for a tool setup (not a study) given as text, read as if it
-/// were the file `setup` (see `Setup::parse`).
-pub fn run_setup_text(
-    setup: &std::path::Path,
-    text: &str,
-    opts: &RunOptions,
-) -> crate::Result<RunSummary> {
-    let _outputs = keep_outputs(opts);
-    let parsed = crate::parse::setup::Setup::parse_with(text, setup, opts.allow_unknown)?;
-    let read_on = parsed.warnings().to_vec();
-    synced(
-        run_parsed(parsed, opts).map_err(|e| with_read_on_note(e, &read_on))?,
-        opts,
-    )
-}
-
-pub fn run_parsed(
-    setup: crate::parse::setup::Setup,
-    opts: &RunOptions,
-) -> crate::Result<RunSummary> {
-    use crate::parse::setup::Setup;
-    match setup {
-        Setup::InverseDynamics(s) => inverse_dynamics::run(&s, opts),
-        Setup::Analyze(mut s) => {
-            s.reduce_model |= opts.reduce;
-            analyze::run(&s, opts)
-        }
-    }
 }
 
 /// What a run produced.

@@ -14,7 +14,7 @@ use crate::muscles::set::MuscleSet;
 use crate::parse::setup::{AnalyzeSetup, MuscleAnalysisSetup};
 use crate::storage::StoWriter;
 use crate::storage::TableFile;
-use crate::tools::analyze::{open_motion_stream, results_dir};
+use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::loading::{load_analysis_model, AnalysisModel};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::names::{MuscleTable, OutputKind, RunKey, Sweep};
@@ -47,7 +47,7 @@ pub fn run(
     // States streamed block by block (motion::stream): flat memory.
     let mut stream = open_motion_stream(setup, motion, &model, &[])?;
     warnings.extend(stream.motion_warnings(&[]));
-    warnings.extend(crate::tools::analyze::missing_columns_warning(
+    warnings.extend(crate::tools::inputs::missing_columns_warning(
         setup,
         &stream.missing,
     ));

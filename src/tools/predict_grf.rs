@@ -21,7 +21,7 @@ use crate::error::{Error, Location, Result};
 use crate::forces::external_loads::ExternalLoads;
 use crate::parse::setup::AnalyzeSetup;
 use crate::storage::StoWriter;
-use crate::tools::{analyze, RunOptions, RunSummary};
+use crate::tools::{analyze, inputs, RunOptions, RunSummary};
 use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 use crate::contacts::ground::{flight_frames, keep_frames, plate_samples};
@@ -288,8 +288,8 @@ pub fn run_with(
     let (contact_weight, given_weight) = use_contact_weight(&mut setup, default_weight)?;
     let model = am.model;
     // The motion is read once: for the feet here and for the run below.
-    let motion = analyze::read_motion(&setup)?;
-    let states = analyze::load_motion_states(&setup, &motion, &model, &[])?;
+    let motion = inputs::read_motion(&setup)?;
+    let states = inputs::load_motion_states(&setup, &motion, &model, &[])?;
     let contacts = feet::build(
         &model,
         &states,
@@ -302,7 +302,7 @@ pub fn run_with(
     let raw_states = {
         let mut raw = setup.clone();
         raw.lowpass_cutoff = -1.0;
-        analyze::load_motion_states(&raw, &motion, &model, &[])?
+        inputs::load_motion_states(&raw, &motion, &model, &[])?
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
@@ -318,7 +318,7 @@ pub fn run_with(
         contact_weight,
         ROOT_RESIDUAL_OPTIMAL_FORCE,
     );
-    let dir = analyze::results_dir(&setup, opts)?;
+    let dir = inputs::results_dir(&setup, opts)?;
     // The prediction's plan: the user's, its force sets with the root
     // residuals replaced, plus the foot contacts, all in memory (the files
     // written here are the record of what ran, not read back).

@@ -2,7 +2,6 @@
 //! an embedding caller (the Python package) can pass in [`RunOptions`].
 
 use std::io::IsTerminal;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use std::sync::OnceLock;
@@ -14,22 +13,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 static BARS: OnceLock<MultiProgress> = OnceLock::new();
 
 use crate::tools::RunOptions;
-
-/// Called with a label (the table prefix of the frame loop, e.g.
-/// `walk_SO_w0_500`), the frames done and the frames of that loop: once with
-/// 0 when a loop starts, at most every 0.1 s while it runs, and once with
-/// done = total when it ends.
-#[derive(Clone)]
-pub struct ProgressHook(pub Arc<ProgressFn>);
-
-/// What a [`ProgressHook`] calls: (label, frames done, frames of the loop).
-pub type ProgressFn = dyn Fn(&str, u64, u64) + Send + Sync;
-
-impl std::fmt::Debug for ProgressHook {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("ProgressHook")
-    }
-}
+pub use crate::tools::{ProgressFn, ProgressHook};
 
 /// The progress of one frame loop.
 pub struct Progress {

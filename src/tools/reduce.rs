@@ -60,6 +60,7 @@ use crate::error::Result;
 use crate::forces::actuators::{Actuator, ActuatorKind};
 use crate::forces::external_loads::ExternalLoads;
 use crate::forces::passive::PassiveForce;
+use crate::frame::driver::is_frame;
 use crate::model::{compile, Model};
 use crate::motion::states::assemble;
 use crate::muscles::set::MuscleSet;
@@ -67,7 +68,7 @@ use crate::parse::setup::AnalyzeSetup;
 use crate::paths::PointKind;
 use crate::reactions::{resolve_reactions, JointReactionSetup};
 use crate::storage::TableFile;
-use crate::tools::analyze::{is_frame, open_motion_stream};
+use crate::tools::inputs::open_motion_stream;
 use crate::tools::loading::{applies_force, force_kind, AnalysisModel, ForceKind};
 use crate::xml::Element;
 

@@ -25,7 +25,7 @@ use crate::reactions::{
     resolve_reactions, static_optimization_reactions, JointReactionSetup, ReactionSpec,
 };
 use crate::storage::TableFile;
-use crate::tools::analyze::{is_frame, open_motion_stream, results_dir};
+use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
 use crate::writers::resume::resume_point;
@@ -87,7 +87,7 @@ pub fn run(
         .map(|r| r.coordinates_dropped.clone())
         .unwrap_or_default();
     warnings.extend(stream.motion_warnings(&dropped));
-    warnings.extend(crate::tools::analyze::missing_columns_warning(
+    warnings.extend(crate::tools::inputs::missing_columns_warning(
         setup,
         &stream.missing,
     ));
@@ -134,8 +134,8 @@ pub fn run(
     // is made from it.
     if !problem.knees.is_empty() {
         jr_specs.push((
-            crate::tools::knee_contact::REACTIONS_NAME.to_string(),
-            crate::tools::knee_contact::reaction_specs(&problem.model, &problem.knees),
+            crate::tools::knee_contact_table::REACTIONS_NAME.to_string(),
+            crate::tools::knee_contact_table::reaction_specs(&problem.model, &problem.knees),
         ));
     }
     let mut runs = Vec::new();
@@ -197,7 +197,7 @@ pub fn run(
             let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
             let (jr, _) = spec.reactions.last().expect("the knee contact reactions");
             let out = RunKey::setup(&setup.name, spec.run.sweep).file(OutputKind::KneeContact);
-            knee_files.push(crate::tools::knee_contact::write(
+            knee_files.push(crate::tools::knee_contact_table::write(
                 &problem.model,
                 &problem.knees,
                 &states.0,
@@ -369,7 +369,7 @@ fn knee_states_of<'a>(
     problem: &crate::frame::problem::SoProblem,
 ) -> Result<&'a Positions> {
     if cache.is_none() {
-        let states = crate::tools::analyze::load_motion_states(
+        let states = crate::tools::inputs::load_motion_states(
             setup,
             motion,
             &problem.model,
