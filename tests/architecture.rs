@@ -578,6 +578,8 @@ fn the_compiled_problem_keeps_options_not_the_plan() {
         .map(|f| f.display().to_string())
         .collect();
     assert_eq!(defining.len(), 1, "{defining:?}");
+}
+
 /// The format strings of the `format!` calls of a source text, with their
 /// lines: the first string literal (plain or raw) after each `format!(`.
 fn format_strings(source: &str) -> Vec<(usize, String)> {

@@ -18,6 +18,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::forces::analysis_model::{load_analysis_model, AnalysisModel};
+use crate::frame::driver::is_frame;
 use crate::frame::so_loop::{solve_frames, Frame, Sink};
 use crate::frame::workspace::Workspace;
 use crate::parse::setup::AnalyzeSetup;
