@@ -725,17 +725,26 @@ fn output_keys<'py>(
     files: Vec<PathBuf>,
     text: Option<String>,
 ) -> PyResult<Vec<Option<Bound<'py, PyDict>>>> {
-    use statopt::writers::names::Planned;
+    use statopt::writers::names::{file_name, OutputKey, Planned};
     let planned: Vec<Planned> = analyze_setups(&setup, text.as_deref())
         .map_err(|e| to_py(py, e))?
         .iter()
         .map(Planned::of)
         .collect();
+    // Each planned name once (a study plans hundreds of tables).
+    let mut by_name = std::collections::HashMap::<String, &OutputKey>::new();
+    for k in planned.iter().flat_map(|p| &p.keys) {
+        by_name.entry(file_name(k)).or_insert(k);
+    }
     files
         .iter()
         .map(|f| {
             let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            match planned.iter().find_map(|p| p.find(name)) {
+            let found = match by_name.get(name) {
+                Some(k) => Some((*k).clone()),
+                None => planned.iter().find_map(|p| p.find(name)),
+            };
+            match found {
                 Some(k) => key_dict(py, &k).map(Some),
                 None => Ok(None),
             }

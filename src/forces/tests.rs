@@ -1219,3 +1219,60 @@ fn external_loads_windowed_report_bad_data_as_the_whole_file() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Scaled loads (`ExternalLoads::scale`, the Python package's
+/// `external_load_scale`) equal the loads of a data file whose force and
+/// torque columns are scaled (what the package used to write), to
+/// rounding; the point stays; an unknown ExternalForce is an error naming
+/// the loads there are.
+#[test]
+fn external_loads_scaled_equal_a_scaled_data_file() {
+    use crate::forces::external_loads::ExternalLoads;
+    let model = test_model();
+    let tmp = crate::test_dir::TempDir::new("statopt_extload_scale");
+    let dir = tmp.path().to_path_buf();
+    let xpath = long_grf(&dir, 200, None);
+    let mut scaled = ExternalLoads::load(&xpath, &dir, &model).unwrap();
+    scaled.scale(&[("a".into(), 1.5)]).unwrap();
+    // The reference: force 'a's force (f_v*) and torque (t_*) columns
+    // times 1.5 in the file; 'b' reads f_p* (a's point), unscaled.
+    let mut table = crate::storage::read(&dir.join("grf.mot")).unwrap();
+    let cols: Vec<usize> = (0..table.labels.len())
+        .filter(|&j| table.labels[j].starts_with("f_v") || table.labels[j].starts_with("t_"))
+        .collect();
+    assert_eq!(cols.len(), 6);
+    for row in &mut table.rows {
+        cols.iter().for_each(|&j| row[j] *= 1.5);
+    }
+    let ref_dir = dir.join("reference");
+    std::fs::create_dir_all(&ref_dir).unwrap();
+    crate::storage::write(&ref_dir.join("grf.mot"), &table, 20).unwrap();
+    let reference = ExternalLoads::load(&two_forces_xml(&ref_dir), &ref_dir, &model).unwrap();
+    let plain = ExternalLoads::load(&xpath, &dir, &model).unwrap();
+    for t in [table.time[3], 0.05, 0.1234, table.time[150]] {
+        let d = data_at(&model, &[0.3, -0.7, 0.2], &[0.0; 3]);
+        for k in 0..2 {
+            let (f, p, tq) = scaled.forces[k].evaluate(t, &d).unwrap();
+            let (rf, rp, rtq) = reference.forces[k].evaluate(t, &d).unwrap();
+            let (_, pp, _) = plain.forces[k].evaluate(t, &d).unwrap();
+            for (a, b) in [(f, rf), (p, rp), (tq, rtq)] {
+                assert!(
+                    (a - b).norm() <= 1e-9 * (1.0 + b.norm()),
+                    "t {t} load {k}: {a} vs {b}"
+                );
+            }
+            assert_eq!(p, pp, "the point is not scaled");
+        }
+        let (f, _, _) = plain.forces[0].evaluate(t, &d).unwrap();
+        let (sf, _, _) = scaled.forces[0].evaluate(t, &d).unwrap();
+        assert!((sf - 1.5 * f).norm() <= 1e-12 * (1.0 + f.norm()));
+    }
+    let e = scaled
+        .scale(&[("plate9".into(), 2.0)])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no ExternalForce 'plate9'") && e.contains("a, b"),
+        "{e}"
+    );
+}

@@ -26,25 +26,14 @@ pub fn resume_point(
     problem: &SoProblem,
     reactions: &[(RunKey, &[ReactionSpec])],
 ) -> Result<Option<Resume>> {
-    let mut tables: Vec<std::path::PathBuf> = [
-        OutputKind::Activation,
-        OutputKind::Force,
-        OutputKind::Diagnostics,
-        OutputKind::GeneralizedForcesBySource,
-        OutputKind::MusclePower,
-    ]
-    .into_iter()
-    .map(|k| dir.join(run.file(k)))
-    .collect();
-    if !problem.contacts.is_empty() {
-        for k in [
-            OutputKind::ContactForces,
-            OutputKind::ContactBodyForces,
-            OutputKind::ContactExternalLoads,
-        ] {
-            tables.push(dir.join(run.file(k)));
-        }
-    }
+    // Every table of the run (`OutputKind::SO_TABLES`, the contact loads'
+    // data beside), the contact tables only with contacts.
+    let mut tables: Vec<std::path::PathBuf> = OutputKind::SO_TABLES
+        .into_iter()
+        .chain([OutputKind::ContactExternalLoads])
+        .filter(|k| !k.needs_contacts() || !problem.contacts.is_empty())
+        .map(|k| dir.join(run.file(k)))
+        .collect();
     for (jr, _) in reactions {
         tables.push(dir.join(jr.file(OutputKind::ReactionLoads)));
     }
