@@ -76,6 +76,8 @@ pub struct CandidateScratch {
     /// Per external load: its spatial force and body at the frame (for the
     /// reaction bases).
     pub external_forces: Vec<(usize, crate::dynamics::BodyForce)>,
+    /// Whether every entry of the frame's A is finite (checked once).
+    a_finite: bool,
 }
 
 impl SoProblem {
@@ -89,6 +91,7 @@ impl SoProblem {
         scratch: &mut CandidateScratch,
     ) -> crate::error::Result<()> {
         let asm = &ws.assembly;
+        scratch.a_finite = asm.problem.a.iter().all(|v| v.is_finite());
         scratch.b0.clone_from(&asm.problem.b);
         scratch.passive0.clone_from(&asm.passive);
         scratch.external0.clone_from(&asm.external);
@@ -258,7 +261,18 @@ impl SoProblem {
             }
             asm.scale[v] = f;
         }
-        optimize::solve_into(&asm.problem, y0, &mut out.solution);
+        // A was checked with the frame; of its columns only those just
+        // scaled need a look.
+        let a_finite = scratch.a_finite
+            && scratch
+                .saved
+                .iter()
+                .all(|(v, _, _)| asm.problem.a.column(*v).iter().all(|x| x.is_finite()));
+        if a_finite {
+            optimize::solve_into_finite_a(&asm.problem, y0, &mut out.solution);
+        } else {
+            optimize::solve_into(&asm.problem, y0, &mut out.solution);
+        }
         self.frame_result_into(t, asm, None, data, mf, out);
         for (v, col, f0) in scratch.saved.drain(..) {
             asm.problem.a.column_mut(v).copy_from_slice(&col);

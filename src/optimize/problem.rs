@@ -183,6 +183,18 @@ impl FrameProblem {
 
     /// Checks dimensions and values; the error message says what is wrong.
     pub fn validate(&self) -> Result<()> {
+        self.validate_with(true)
+    }
+
+    /// [`validate`](Self::validate) but for the finiteness of A's entries,
+    /// for a caller that knows them finite (`frame::candidates`: a frame's
+    /// A checked once for all its candidates, which change b, the weights
+    /// and a few columns it checks).
+    pub fn validate_but_a_entries(&self) -> Result<()> {
+        self.validate_with(false)
+    }
+
+    fn validate_with(&self, check_a: bool) -> Result<()> {
         let n = self.n_var();
         let m = self.n_eq();
         let bad = |msg: String| Err(Error::msg(format!("optimisation problem: {msg}")));
@@ -209,7 +221,7 @@ impl FrameProblem {
         // vectorises; A is the bulk of a frame's data), the position only
         // when it is not 0.
         let a = self.a.as_slice();
-        if a.iter().map(|v| usize::from(!v.is_finite())).sum::<usize>() > 0 {
+        if check_a && a.iter().map(|v| usize::from(!v.is_finite())).sum::<usize>() > 0 {
             let k = a.iter().position(|v| !v.is_finite()).unwrap_or(0);
             let (i, j) = (k % m, k / m);
             return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
@@ -233,8 +245,8 @@ impl FrameProblem {
                 ));
             }
         }
-        // (Distinct indices checked pairwise: contacts are few, and a
-        // frame's validation allocates nothing.)
+        // (Distinct indices checked pairwise, in plain loops: contacts are
+        // few, and a frame's validation allocates nothing.)
         let indices = |c: &StaticContact| [c.normal, c.shear[0], c.shear[1]];
         for (k, c) in self.static_contacts.iter().enumerate() {
             if !(c.mu.is_finite() && c.mu >= 0.0) {
@@ -243,17 +255,18 @@ impl FrameProblem {
                     c.mu
                 ));
             }
-            for (i, idx) in indices(c).into_iter().enumerate() {
+            let own = indices(c);
+            for (i, &idx) in own.iter().enumerate() {
                 if idx >= n {
                     return bad(format!(
                         "contact {k}: variable index {idx} out of range (n_var = {n})"
                     ));
                 }
-                let before = self.static_contacts[..k].iter().flat_map(indices);
-                if before
-                    .chain(indices(c).into_iter().take(i))
-                    .any(|j| j == idx)
-                {
+                let mut used = own[..i].contains(&idx);
+                for d in &self.static_contacts[..k] {
+                    used |= d.normal == idx || d.shear[0] == idx || d.shear[1] == idx;
+                }
+                if used {
                     return bad(format!(
                         "contact {k}: variable {idx} is already used by a contact"
                     ));

@@ -74,7 +74,19 @@ pub fn solve(p: &FrameProblem) -> FrameSolution {
 /// solves too. `out.y` receives the answer's multipliers (empty when
 /// Clarabel answered without a polish).
 pub fn solve_into(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution) {
-    if p.settings.solver == SolverChoice::Clarabel || p.validate().is_err() {
+    solve_into_checked(p, y0, out, p.validate().is_ok());
+}
+
+/// [`solve_into`] of a problem whose A has only finite entries, which the
+/// caller checked ([`FrameProblem::validate_but_a_entries`]): the same
+/// answer, without scanning A again (a force sweep solves one frame's A for
+/// thousands of candidates).
+pub fn solve_into_finite_a(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution) {
+    solve_into_checked(p, y0, out, p.validate_but_a_entries().is_ok());
+}
+
+fn solve_into_checked(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution, valid: bool) {
+    if p.settings.solver == SolverChoice::Clarabel || !valid {
         *out = solve_clarabel(p);
         return;
     }

@@ -807,3 +807,43 @@ fn clarabel_answers_are_polished_onto_the_friction_cone() {
         }
     }
 }
+
+/// `solve_into_finite_a` answers as `solve_into` does and skips only the
+/// scan of A's entries: every other check still refuses the problem.
+#[test]
+fn solve_into_finite_a_skips_only_a_scan() {
+    let p = incline(1.0, 0.3, FrictionModel::Cone);
+    let (mut a, mut b) = (FrameSolution::default(), FrameSolution::default());
+    solve_into(&p, None, &mut a);
+    solve_into_finite_a(&p, None, &mut b);
+    assert_eq!(a.status, SolveStatus::Solved);
+    assert_eq!((a.x, a.y, a.iterations), (b.x, b.y, b.iterations));
+
+    let mut p = so_problem(30.0);
+    p.a[(0, 1)] = f64::NAN;
+    assert!(p.validate().is_err());
+    assert!(p.validate_but_a_entries().is_ok());
+    p.lower[2] = 2.0;
+    let err = p.validate_but_a_entries().unwrap_err().to_string();
+    assert!(err.contains("above its upper"), "{err}");
+    let mut out = FrameSolution::default();
+    solve_into_finite_a(&p, None, &mut out);
+    assert_eq!(out.status, SolveStatus::InvalidProblem);
+
+    // A contact's variable used twice, by itself or by an earlier contact.
+    let mut p = incline(1.0, 0.3, FrictionModel::Cone);
+    let c = p.static_contacts[0];
+    p.static_contacts[0].shear = [c.normal, c.shear[1]];
+    assert!(p
+        .validate_but_a_entries()
+        .unwrap_err()
+        .to_string()
+        .contains("already used"));
+    let mut p = incline(1.0, 0.3, FrictionModel::Cone);
+    p.static_contacts.push(c);
+    let err = p.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("contact 1") && err.contains("already used"),
+        "{err}"
+    );
+}
