@@ -451,11 +451,22 @@ fn the_readme_is_no_diary() {
     }
 }
 
-/// Where a `.field` of the StaticOptimization plan is changed on `line`
-/// other than through its setters: assigned (`so.friction = ...`) or
+/// Where a `.field` of an AnalyzeTool or StaticOptimization plan is changed
+/// on `line` other than through its setters: assigned (`so.friction = ...`) or
 /// edited in place (`so.contact_weights.push(...)`, `.take()`, ...).
 fn plan_field_edit(line: &str) -> Option<&'static str> {
-    const FIELDS: [&str; 17] = [
+    const FIELDS: [&str; 26] = [
+        // AnalyzeSetup
+        "lowpass_cutoff",
+        "coordinate_spline",
+        "reduce_model",
+        "external_loads_file",
+        "force_set_files",
+        "force_set_documents",
+        "coordinates_file",
+        "initial_time",
+        "final_time",
+        // StaticOptimizationSetup
         "contact_weights",
         "contact_weights_given",
         "friction",
@@ -481,7 +492,10 @@ fn plan_field_edit(line: &str) -> Option<&'static str> {
                 continue;
             }
             let rest = line[i + dotted.len()..].trim_start();
-            let assigned = rest.starts_with('=') && !rest.starts_with("==");
+            let assigned = (rest.starts_with('=') && !rest.starts_with("=="))
+                || ["|=", "&=", "+=", "-=", "*=", "/="]
+                    .iter()
+                    .any(|op| rest.starts_with(op));
             let edited = [
                 ".push(",
                 ".take(",
@@ -502,11 +516,13 @@ fn plan_field_edit(line: &str) -> Option<&'static str> {
 }
 
 /// Tools change a run only through the plan's checked setters
-/// (`StaticOptimizationSetup::set_contact_weights`, `set_friction`, ...),
+/// (`StaticOptimizationSetup::set_contact_weights`, `set_friction`, ...,
+/// `AnalyzeSetup::set_lowpass_cutoff`, `set_coordinate_spline`, ...),
 /// before the problem is compiled: no shipped line of `src/tools/` assigns
-/// or edits a field of the StaticOptimization plan. (predict-grf wrote its
-/// default w0 and took the reserves out by hand, `bench --grid` set the
-/// friction model, solver, matrix and its `--w0` unchecked.)
+/// or edits a field of the AnalyzeTool or StaticOptimization plan.
+/// (predict-grf wrote its default w0, took the reserves out and replaced
+/// the force sets by hand; `bench --grid` set the friction model, solver,
+/// matrix, spline, filter and its `--w0` unchecked.)
 #[test]
 fn tools_change_runs_only_through_checked_setters() {
     assert_eq!(plan_field_edit("so.friction = f;"), Some("friction"));
@@ -519,6 +535,10 @@ fn tools_change_runs_only_through_checked_setters() {
         None
     );
     assert_eq!(plan_field_edit("so.set_solver(SolverChoice::Auto);"), None);
+    assert_eq!(
+        plan_field_edit("s.reduce_model |= opts.reduce;"),
+        Some("reduce_model")
+    );
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
     rust_files(&root.join("src/tools"), &mut files);

@@ -335,6 +335,26 @@ fn typed_edits_are_checked_as_when_read() {
     so.set_contact_weights(&[1.0, 500.0]).unwrap();
     assert!(so.contact_weights_given);
     assert_eq!(so.contact_weights, [1.0, 500.0]);
+    // The AnalyzeTool plan's setters (bench, bench --grid, predict-grf).
+    let mut s = setup.clone();
+    let e = s.set_coordinate_spline(4).unwrap_err().to_string();
+    assert!(
+        e.contains("coordinate_spline") && e.contains("setup.xml"),
+        "{e}"
+    );
+    let e = s.set_lowpass_cutoff(f64::NAN).unwrap_err().to_string();
+    assert!(
+        e.contains("lowpass_cutoff_frequency_for_coordinates"),
+        "{e}"
+    );
+    let e = s
+        .set_motion("m.mot".into(), 1.0, 0.5)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("time range"), "{e}");
+    s.set_coordinate_spline(3).unwrap();
+    s.set_lowpass_cutoff(-1.0).unwrap();
+    assert_eq!((s.coordinate_spline, s.lowpass_cutoff), (3, -1.0));
 }
 
 /// The grid's own w0 (`--w0`) is checked as the setup's is: a weight

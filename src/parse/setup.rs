@@ -113,6 +113,76 @@ impl Analysis {
     }
 }
 
+/// Typed edits of an AnalyzeTool plan (`bench`, `bench --grid`,
+/// predict-grf, `--reduce`), checked as the values read from a setup are
+/// where reading checks them; an error names the setup file.
+impl AnalyzeSetup {
+    fn edit_error(&self, message: String) -> Error {
+        Error::input(crate::error::Location::file(&self.setup_file), message)
+    }
+
+    /// `<lowpass_cutoff_frequency_for_coordinates>` (Hz; negative: no
+    /// filter, as OpenSim's -1): a finite number.
+    pub fn set_lowpass_cutoff(&mut self, hz: f64) -> Result<()> {
+        if !hz.is_finite() {
+            return Err(self.edit_error(format!(
+                "lowpass_cutoff_frequency_for_coordinates must be a finite number (negative: no filter), found {hz}"
+            )));
+        }
+        self.lowpass_cutoff = hz;
+        Ok(())
+    }
+
+    /// `<coordinate_spline>`: 5 (OpenSim's quintic GCV spline) or 3 (cubic).
+    pub fn set_coordinate_spline(&mut self, order: usize) -> Result<()> {
+        if order != 3 && order != 5 {
+            return Err(self.edit_error(format!(
+                "coordinate_spline must be 5 (gcv5, OpenSim's quintic spline) or 3 (cubic), found {order}"
+            )));
+        }
+        self.coordinate_spline = order;
+        Ok(())
+    }
+
+    /// `<reduce_model>`: run static optimization on the model reduced to
+    /// what the motion needs.
+    pub fn set_reduce_model(&mut self, reduce: bool) {
+        self.reduce_model = reduce;
+    }
+
+    /// The external loads file, taken out of the plan: the run applies no
+    /// external loads (predict-grf keeps them as its measured reference).
+    pub fn take_external_loads_file(&mut self) -> Option<PathBuf> {
+        self.external_loads_file.take()
+    }
+
+    /// The run's force sets: these parsed documents (each with the file it
+    /// stands for), instead of the setup's force-set files.
+    pub fn set_force_set_documents(&mut self, documents: Vec<Element>) {
+        self.force_set_files.clear();
+        self.force_set_documents = documents;
+    }
+
+    /// The motion: `coordinates_file` over [`initial`, `final_time`] (s), a
+    /// finite, ordered range.
+    pub fn set_motion(
+        &mut self,
+        coordinates_file: PathBuf,
+        initial: f64,
+        final_time: f64,
+    ) -> Result<()> {
+        if !(initial.is_finite() && final_time.is_finite() && initial <= final_time) {
+            return Err(self.edit_error(format!(
+                "the time range must be finite and ordered, found [{initial}, {final_time}]"
+            )));
+        }
+        self.coordinates_file = Some(coordinates_file);
+        self.initial_time = initial;
+        self.final_time = final_time;
+        Ok(())
+    }
+}
+
 impl AnalyzeSetup {
     /// Scale the force and torque data of the external loads `scales`
     /// names (ExternalForce name or `*`, factor), as a force sweep's

@@ -89,9 +89,7 @@ fn tiled(setup: &AnalyzeSetup, n: usize, dir: &std::path::Path) -> Result<Analyz
     }
     w.finish()?;
     let mut s = setup.clone();
-    s.coordinates_file = Some(path);
-    s.final_time = last;
-    s.initial_time = t.time[0].min(setup.initial_time);
+    s.set_motion(path, t.time[0].min(setup.initial_time), last)?;
     Ok(s)
 }
 
@@ -113,7 +111,7 @@ pub fn run(setup_file: &std::path::Path, opts: &BenchOptions) -> Result<Vec<Benc
         setup
     };
     if let Some(c) = opts.lowpass {
-        setup.lowpass_cutoff = c;
+        setup.set_lowpass_cutoff(c)?;
     }
     let mut rows = Vec::new();
     for &threads in &opts.threads {

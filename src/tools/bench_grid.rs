@@ -142,7 +142,7 @@ fn so_analysis(setup: &mut AnalyzeSetup) -> Result<&mut StaticOptimizationSetup>
 /// OpenSim's quintic spline, the setup's filtering, one thread.
 pub fn reference_choice() -> Choice {
     Choice::new("reference", 1, |s| {
-        s.coordinate_spline = 5;
+        s.set_coordinate_spline(5)?;
         let so = so_analysis(s)?;
         so.set_friction(FrictionModel::Cone);
         so.set_solver(SolverChoice::Auto);
@@ -193,26 +193,19 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         }));
     }
     v.push(Choice::new("cubic spline", 1, |s| {
-        s.coordinate_spline = 3;
-        Ok(())
+        s.set_coordinate_spline(3)
     }));
     if setup.lowpass_cutoff >= 0.0 {
-        v.push(Choice::new("filter off", 1, |s| {
-            s.lowpass_cutoff = -1.0;
-            Ok(())
-        }));
+        v.push(Choice::new("filter off", 1, |s| s.set_lowpass_cutoff(-1.0)));
     } else {
-        v.push(Choice::new("filter 6 Hz", 1, |s| {
-            s.lowpass_cutoff = 6.0;
-            Ok(())
-        }));
+        v.push(Choice::new("filter 6 Hz", 1, |s| s.set_lowpass_cutoff(6.0)));
     }
     v.push(Choice::new("threads 2", 2, |_| Ok(())));
     if !setup.reduce_model {
         // Full versus reduced model (`<reduce_model>`, tools::reduce): the
         // errors cover the kept muscles, contacts and joints only.
         v.push(Choice::new("reduced model", 1, |s| {
-            s.reduce_model = true;
+            s.set_reduce_model(true);
             Ok(())
         }));
     }
@@ -247,8 +240,7 @@ pub fn default_choices(setup: &AnalyzeSetup, has_contacts: bool) -> Vec<Choice> 
         let so = c.edit.clone();
         c.edit = Arc::new(move |s| {
             so(s)?;
-            s.coordinate_spline = 3;
-            Ok(())
+            s.set_coordinate_spline(3)
         });
     }
     v

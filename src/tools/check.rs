@@ -241,7 +241,7 @@ impl Checker {
         }
         match setup {
             Setup::Analyze(mut a) => {
-                a.reduce_model |= self.reduce;
+                a.set_reduce_model(a.reduce_model || self.reduce);
                 self.analyze(&a, &dir, misread);
             }
             Setup::InverseDynamics(i) => self.inverse_dynamics(&i),

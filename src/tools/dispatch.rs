@@ -60,7 +60,7 @@ pub fn run_parsed(setup: crate::parse::setup::Setup, opts: &RunOptions) -> crate
     match setup {
         Setup::InverseDynamics(s) => inverse_dynamics::run(&s, opts),
         Setup::Analyze(mut s) => {
-            s.reduce_model |= opts.reduce;
+            s.set_reduce_model(s.reduce_model || opts.reduce);
             analyze::run(&s, opts)
         }
     }

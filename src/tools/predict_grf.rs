@@ -274,7 +274,7 @@ pub fn run_with(
         ));
     }
     let mut setup = setup.clone();
-    let measured_file = setup.external_loads_file.take();
+    let measured_file = setup.take_external_loads_file();
     let reserves = take_reserve_actuators(&mut setup)?;
     // The model is parsed and compiled once: completed with the user's
     // force sets here, with the prediction's for the run below.
@@ -301,7 +301,7 @@ pub fn run_with(
     // Gait events on the raw (unfiltered) motion: when each foot lands.
     let raw_states = {
         let mut raw = setup.clone();
-        raw.lowpass_cutoff = -1.0;
+        raw.set_lowpass_cutoff(-1.0)?;
         inputs::load_motion_states(&raw, &motion, &model, &[])?
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
@@ -327,8 +327,7 @@ pub fn run_with(
     let contacts_xml = contacts.force_set_xml();
     std::fs::write(&contacts_file, &contacts_xml).map_err(|e| Error::io(&contacts_file, e))?;
     let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
-    setup.force_set_files.clear();
-    setup.force_set_documents = force_sets;
+    setup.set_force_set_documents(force_sets);
     setup
         .force_set_documents
         .push(crate::forces::force_set_document(
