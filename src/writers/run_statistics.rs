@@ -48,9 +48,7 @@ impl RunStatistics {
             .labels
             .iter()
             .enumerate()
-            .filter(|(_, l)| {
-                problem.options.reserve_actuators.is_some() && l.ends_with("_reserve")
-            })
+            .filter(|(_, l)| problem.options.reserve_actuators.is_some() && l.ends_with("_reserve"))
             .map(|(i, _)| i)
             .collect();
         let root_rows: Vec<(usize, bool)> = problem
