@@ -233,7 +233,16 @@ fn summary_names_exactly_the_contacts_the_table_shows_sliding_or_too_deep() {
     let (_, _, problem) = common::so_case(&out.join("../setup.xml"), None);
     let mut stats = statopt::writers::run_statistics::RunStatistics::new(&problem);
     stats
-        .observe_tables(&problem, &out, "sweep_SO_w0_1000_", 41)
+        .observe_tables(
+            &problem,
+            &out,
+            &statopt::writers::names::RunKey::analysis(
+                "sweep",
+                "SO",
+                statopt::writers::names::Sweep::Weight(1000.0),
+            ),
+            41,
+        )
         .unwrap();
     let again = stats.contact_findings(&problem);
     let run: Vec<ContactFinding> = s
