@@ -69,6 +69,9 @@ pub struct FootEvents {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GaitEvents {
     pub feet: [FootEvents; 2],
+    /// The last time of the kinematics the events were found on (s): a
+    /// foot whose foot-off is not found before it is still on the floor.
+    pub end: f64,
 }
 
 /// Double support (s) when the trailing foot's foot-off is not in the
@@ -113,13 +116,7 @@ pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
             if !f.transitions.get(k).copied().unwrap_or(false) {
                 continue;
             }
-            let t_ds = events.feet[o]
-                .offs
-                .iter()
-                .copied()
-                .find(|&x| x > ts && x <= ts + 0.3)
-                .map(|x| x - ts)
-                .unwrap_or(DEFAULT_DOUBLE_SUPPORT);
+            let t_ds = double_support(events, o, ts);
             let n = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
             knots.push((ts - 1e-6, 1.0));
             for i in 0..=n {
@@ -134,6 +131,202 @@ pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
         k.dedup_by(|b, a| b.0 <= a.0);
     }
     out
+}
+
+/// The double support after a strike at `ts` while foot `trailing` stands
+/// (s): to the trailing foot's first foot-off after the strike, within
+/// 0.3 s; without one, [`DEFAULT_DOUBLE_SUPPORT`], or to the end of the
+/// kinematics when that is later (within 0.3 s): a foot-off is an extremum
+/// inside the trial, so a trailing foot with none is still on the floor at
+/// its end.
+pub fn double_support(events: &GaitEvents, trailing: usize, ts: f64) -> f64 {
+    events.feet[trailing]
+        .offs
+        .iter()
+        .copied()
+        .find(|&x| x > ts && x <= ts + 0.3)
+        .map(|x| x - ts)
+        .unwrap_or_else(|| {
+            let rest = events.end - ts;
+            if rest > DEFAULT_DOUBLE_SUPPORT && rest <= 0.3 {
+                rest
+            } else {
+                DEFAULT_DOUBLE_SUPPORT
+            }
+        })
+}
+
+/// A knot of a foot's force target ([`super::targets::Knot`]).
+pub type TargetKnot = super::targets::Knot;
+
+/// How the trailing foot's force is held through double support.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrailingModel {
+    /// Ren's smooth transition of its force along the walking direction
+    /// and the floor normal.
+    Both,
+    /// Ren's smooth transition of its vertical force only.
+    Vertical,
+    /// Ren's vertical force, its force along the leg: the line from its
+    /// forefoot to the body's mass centre.
+    Leg,
+}
+
+/// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
+/// force targets of the **trailing** foot: over the double support T_ds
+/// after each transition strike at t_s of the other foot, its force along
+/// the floor normal n (and, with [`TrailingModel::Both`], the walking
+/// direction h) is F(t_s + τ) = F(t_s) · exp(−(2τ/T_ds)³), F(t_s) =
+/// `required(t_s)` (the force the motion requires of the floor at the
+/// strike, all of it on the trailing foot then: the landing foot has
+/// carried nothing before it). With [`TrailingModel::Leg`] its force is
+/// also held along `lean(t)`, the line from the trailing foot's forefoot
+/// to the body's mass centre (no force across it). The landing foot takes
+/// the rest, R(t) − F(t), through the equations of motion. Knots every
+/// [`TRANSITION_KNOT_STEP`]; the target ends just after the double support.
+/// Per foot (0 right, 1 left), the knots of the feet that trail.
+pub fn trailing_targets(
+    events: &GaitEvents,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
+    model: TrailingModel,
+    mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
+    mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for s in 0..2 {
+        let o = 1 - s;
+        let f = &events.feet[s];
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if !f.transitions.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            let Some(r) = required(ts) else {
+                continue;
+            };
+            let t_ds = double_support(events, o, ts);
+            let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
+            let mut knots = Vec::new();
+            for i in 0..=steps {
+                let tau = t_ds * i as f64 / steps as f64;
+                let sh = trailing_share(tau, t_ds);
+                let mut rows = vec![(n, r.dot(&n) * sh)];
+                match model {
+                    TrailingModel::Both => rows.push((h, r.dot(&h) * sh)),
+                    TrailingModel::Vertical => {}
+                    TrailingModel::Leg => {
+                        // Across the leg: the unit axis in the plane of h
+                        // and n perpendicular to the leg's line.
+                        let Some(l) = lean(ts + tau, o) else {
+                            knots.clear();
+                            break;
+                        };
+                        let (lh, ln) = (l.dot(&h), l.dot(&n));
+                        let across = (h * ln - n * lh).normalize();
+                        rows.push((across, 0.0));
+                    }
+                }
+                knots.push((ts + tau, true, rows));
+            }
+            if let Some(last) = knots.last() {
+                let off = last.2.clone();
+                knots.push((ts + t_ds + 1e-6, false, off));
+            }
+            out[o].extend(knots);
+        }
+    }
+    for k in out.iter_mut() {
+        k.sort_by(|a, b| a.0.total_cmp(&b.0));
+        k.dedup_by(|b, a| b.0 <= a.0);
+    }
+    out
+}
+
+/// The line from foot `side`'s forefoot (the midpoint of its metatarsal
+/// heads' points) to the body's mass centre at the row of `states` nearest
+/// `t` (ground).
+pub fn forefoot_to_com(
+    model: &Model,
+    states: &States,
+    points: &[FootPoint],
+    t: f64,
+    side: usize,
+) -> Option<Vector3<f64>> {
+    let i = (0..states.time.len()).min_by(|&a, &b| {
+        (states.time[a] - t)
+            .abs()
+            .total_cmp(&(states.time[b] - t).abs())
+    })?;
+    let mut data = Data::new(model);
+    data.q.copy_from_slice(&states.q[i]);
+    kinematics::positions(model, &mut data);
+    let c = if side == 0 { 'r' } else { 'l' };
+    let (sum, k) = points
+        .iter()
+        .filter(|p| {
+            p.side == c
+                && p.name.contains(
+                    if std::env::var("STATOPT_GRF_VARIANT")
+                        .unwrap_or_default()
+                        .contains("_toe")
+                    {
+                        "hallux"
+                    } else {
+                        "meta"
+                    },
+                )
+        })
+        .fold((Vector3::zeros(), 0usize), |(s, k), p| {
+            (s + data.station_position(p.body, &p.local), k + 1)
+        });
+    if k == 0 {
+        return None;
+    }
+    let mass: f64 = model.bodies.iter().map(|b| b.mass).sum();
+    let com = model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(b, body)| data.station_position(b, &body.mass_center) * body.mass)
+        .sum::<Vector3<f64>>()
+        / mass;
+    Some(com - sum / k as f64)
+}
+
+/// The force (N, ground) the motion in `states` requires of the floor at
+/// the row nearest `t`: M (a − g), a the whole-body mass centre's
+/// acceleration by the three-point second difference over that row and its
+/// neighbours (None at the first or last row).
+pub fn required_force(model: &Model, states: &States, t: f64) -> Option<Vector3<f64>> {
+    let n = states.time.len();
+    let i = (0..n).min_by(|&a, &b| {
+        (states.time[a] - t)
+            .abs()
+            .total_cmp(&(states.time[b] - t).abs())
+    })?;
+    if i == 0 || i + 1 >= n {
+        return None;
+    }
+    let mut data = Data::new(model);
+    let mass: f64 = model.bodies.iter().map(|b| b.mass).sum();
+    let mut com = |row: usize| {
+        data.q.copy_from_slice(&states.q[row]);
+        kinematics::positions(model, &mut data);
+        model
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(b, body)| data.station_position(b, &body.mass_center) * body.mass)
+            .sum::<Vector3<f64>>()
+            / mass
+    };
+    let (c0, c1, c2) = (com(i - 1), com(i), com(i + 1));
+    let (h1, h2) = (
+        states.time[i] - states.time[i - 1],
+        states.time[i + 1] - states.time[i],
+    );
+    let a = ((c2 - c1) / h2 - (c1 - c0) / h1) * (2.0 / (h1 + h2));
+    Some((a - model.gravity) * mass)
 }
 
 /// The landing foot's weight factor for a trailing share `s`:
@@ -323,7 +516,10 @@ fn landmarks(model: &Model, states: &States, points: &[FootPoint]) -> Landmarks 
 pub fn detect(model: &Model, raw: &States, filtered: &States, set: &FootContactSet) -> GaitEvents {
     let heading = set.decision.evidence.heading;
     let l = landmarks(model, raw, &set.points);
-    let mut out = GaitEvents::default();
+    let mut out = GaitEvents {
+        end: raw.time.last().copied().unwrap_or(0.0),
+        ..GaitEvents::default()
+    };
     for s in 0..2 {
         out.feet[s] = zeni_events(&raw.time, &l.heel[s], &l.toe[s], &l.pelvis, &heading);
         // O'Connor's foot-velocity refinement: the foot centre (heel and

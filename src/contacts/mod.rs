@@ -19,6 +19,7 @@ pub mod feet;
 pub mod floor;
 pub mod kinematics;
 pub mod plates;
+pub mod targets;
 #[cfg(test)]
 mod tests;
 

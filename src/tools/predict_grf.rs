@@ -559,13 +559,61 @@ pub fn run_with(
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
+    let skip_muscle = std::env::var("STATOPT_GRF_VARIANT")
+        .unwrap_or_default()
+        .contains("_tq")
+        && strength.is_none();
     for s in 0..2 {
-        contacts.off_intervals[s] = crate::contacts::events::off_intervals(&gait_events.feet[s]);
+        if !skip_muscle {
+            contacts.off_intervals[s] =
+                crate::contacts::events::off_intervals(&gait_events.feet[s]);
+        }
     }
     // Before its strike a landing foot costs what the root residual costs
     // per newton: a force there is as doubtful as one on the pelvis, and is
     // used only where nothing else can give what the motion requires.
     contacts.time_weight = crate::contacts::events::transition_weights(&gait_events);
+    if skip_muscle {
+        contacts.time_weight = [Vec::new(), Vec::new()];
+    }
+    if !skip_muscle {
+        // Ren's smooth transition for the trailing foot (`contacts::events`).
+        let variant = std::env::var("STATOPT_GRF_VARIANT").unwrap_or_default();
+        if variant.starts_with("ren") {
+            let n = contacts.floor_normal();
+            let h = contacts.decision.evidence.heading;
+            let h = (h - n * h.dot(&n)).normalize();
+            let model_kind = if variant.contains("_v") {
+                crate::contacts::events::TrailingModel::Vertical
+            } else if variant.contains("_leg") {
+                crate::contacts::events::TrailingModel::Leg
+            } else {
+                crate::contacts::events::TrailingModel::Both
+            };
+            let soft = contacts.parameters.optimal_force * contact_weight.sqrt();
+            contacts.target_optimal_force = match model_kind {
+                crate::contacts::events::TrailingModel::Vertical => {
+                    vec![ROOT_RESIDUAL_OPTIMAL_FORCE]
+                }
+                _ if variant.contains("_soft") => vec![ROOT_RESIDUAL_OPTIMAL_FORCE, soft],
+                _ => vec![ROOT_RESIDUAL_OPTIMAL_FORCE; 2],
+            };
+            let points = contacts.points.clone();
+            contacts.force_target = crate::contacts::events::trailing_targets(
+                &gait_events,
+                h,
+                n,
+                model_kind,
+                |t| crate::contacts::events::required_force(&model, &states, t),
+                |t, side| {
+                    crate::contacts::events::forefoot_to_com(&model, &states, &points, t, side)
+                },
+            );
+            if !variant.contains("_w") {
+                contacts.time_weight = [Vec::new(), Vec::new()];
+            }
+        }
+    }
     contacts.off_weight = crate::contacts::events::off_weight(
         contacts.parameters.optimal_force,
         contact_weight,
