@@ -559,66 +559,19 @@ pub fn run_with(
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
-    let skip_muscle = std::env::var("STATOPT_GRF_VARIANT")
-        .unwrap_or_default()
-        .contains("_tq")
-        && strength.is_none();
-    for s in 0..2 {
-        if !skip_muscle {
-            contacts.off_intervals[s] =
-                crate::contacts::events::off_intervals(&gait_events.feet[s]);
-        }
+    // The step-to-step transition of walking, for torque-driven models: a
+    // muscle-driven model's effort minimum shares the load itself
+    // (docs/grf_prediction.md, step 8).
+    if strength.is_some() {
+        crate::contacts::events::apply_transition(
+            &model,
+            &states,
+            &gait_events,
+            &mut contacts,
+            contact_weight,
+            ROOT_RESIDUAL_OPTIMAL_FORCE,
+        );
     }
-    // Before its strike a landing foot costs what the root residual costs
-    // per newton: a force there is as doubtful as one on the pelvis, and is
-    // used only where nothing else can give what the motion requires.
-    contacts.time_weight = crate::contacts::events::transition_weights(&gait_events);
-    if skip_muscle {
-        contacts.time_weight = [Vec::new(), Vec::new()];
-    }
-    if !skip_muscle {
-        // Ren's smooth transition for the trailing foot (`contacts::events`).
-        let variant = std::env::var("STATOPT_GRF_VARIANT").unwrap_or_default();
-        if variant.starts_with("ren") {
-            let n = contacts.floor_normal();
-            let h = contacts.decision.evidence.heading;
-            let h = (h - n * h.dot(&n)).normalize();
-            let model_kind = if variant.contains("_v") {
-                crate::contacts::events::TrailingModel::Vertical
-            } else if variant.contains("_leg") {
-                crate::contacts::events::TrailingModel::Leg
-            } else {
-                crate::contacts::events::TrailingModel::Both
-            };
-            let soft = contacts.parameters.optimal_force * contact_weight.sqrt();
-            contacts.target_optimal_force = match model_kind {
-                crate::contacts::events::TrailingModel::Vertical => {
-                    vec![ROOT_RESIDUAL_OPTIMAL_FORCE]
-                }
-                _ if variant.contains("_soft") => vec![ROOT_RESIDUAL_OPTIMAL_FORCE, soft],
-                _ => vec![ROOT_RESIDUAL_OPTIMAL_FORCE; 2],
-            };
-            let points = contacts.points.clone();
-            contacts.force_target = crate::contacts::events::trailing_targets(
-                &gait_events,
-                h,
-                n,
-                model_kind,
-                |t| crate::contacts::events::required_force(&model, &states, t),
-                |t, side| {
-                    crate::contacts::events::forefoot_to_com(&model, &states, &points, t, side)
-                },
-            );
-            if !variant.contains("_w") {
-                contacts.time_weight = [Vec::new(), Vec::new()];
-            }
-        }
-    }
-    contacts.off_weight = crate::contacts::events::off_weight(
-        contacts.parameters.optimal_force,
-        contact_weight,
-        ROOT_RESIDUAL_OPTIMAL_FORCE,
-    );
     let dir = analyze::results_dir(&setup, opts)?;
     // The prediction's plan: the user's, its force sets with the root
     // residuals replaced, plus the foot contacts, all in memory (the files
@@ -676,7 +629,15 @@ pub fn run_with(
             side,
             &prediction.events.feet[s],
             &prediction.contacts.off_intervals[s],
+            strength.is_some(),
         ));
+        prediction
+            .summary
+            .notes
+            .extend(crate::contacts::events::targets_note(
+                side,
+                &prediction.contacts.force_target[s],
+            ));
     }
     prediction.root_residual = prediction.summary.root_force_series.clone();
     let contact_table = dir.join(format!("{}_{}_ContactForces.sto", setup.name, so_name));
@@ -817,7 +778,12 @@ pub fn run_with(
 
 /// The run's line on foot `side`'s gait events and the intervals its
 /// contacts were off.
-fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64, f64)]) -> String {
+fn events_note(
+    side: char,
+    f: &crate::contacts::events::FootEvents,
+    off: &[(f64, f64)],
+    torque_driven: bool,
+) -> String {
     let times = |v: &[f64]| {
         if v.is_empty() {
             "none".to_string()
@@ -828,7 +794,9 @@ fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64,
                 .join(", ")
         }
     };
-    let off = if off.is_empty() {
+    let off = if !torque_driven {
+        "no step-to-step transition model (a muscle-driven model's effort minimum shares the load between the feet itself)".to_string()
+    } else if off.is_empty() {
         "its contacts are never switched off (no strike takes over from a foot on the floor)"
             .to_string()
     } else {
