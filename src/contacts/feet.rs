@@ -143,10 +143,6 @@ pub struct FootContactSet {
     /// The factor on a contact's weight within its off intervals
     /// (`off_weight`): 0 unless set.
     pub off_weight: f64,
-    /// Per foot: knots (t, factor) of the factor on its contacts' weights
-    /// (`time_weight`; the smooth transition of double support,
-    /// [`super::events::transition_weights`]); empty unless set.
-    pub time_weight: [Vec<(f64, f64)>; 2],
     /// Per foot: knots of its contacts' summed force target along
     /// `target_axes` (`force_target`, group `foot_r` / `foot_l`; the trailing
     /// foot's smooth transition, [`super::events::trailing_targets`]);
@@ -429,7 +425,6 @@ pub fn build(
         parameters,
         off_intervals: [Vec::new(), Vec::new()],
         off_weight: 0.0,
-        time_weight: [Vec::new(), Vec::new()],
         force_target: [Vec::new(), Vec::new()],
         target_optimal_force: Vec::new(),
     })
@@ -587,7 +582,6 @@ impl FootContactSet {
                 off_intervals_xml(
                     &self.off_intervals[if pt.side == 'r' { 0 } else { 1 }],
                     self.off_weight,
-                    &self.time_weight[if pt.side == 'r' { 0 } else { 1 }]
                 ) + &self.force_target_xml(pt.side)
             ));
         }
@@ -628,22 +622,16 @@ impl FootContactSet {
 }
 
 /// The `<off_intervals>` line of a contact (empty when there are none).
-fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64, knots: &[(f64, f64)]) -> String {
-    let knots = if knots.is_empty() {
-        String::new()
-    } else {
-        let k: Vec<String> = knots.iter().map(|&(t, f)| format!("{t} {f}")).collect();
-        format!("\t\t\t\t<time_weight>{}</time_weight>\n", k.join(" "))
-    };
+fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64) -> String {
     if intervals.is_empty() {
-        return knots;
+        return String::new();
     }
     let times: Vec<String> = intervals
         .iter()
         .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
         .collect();
     format!(
-        "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n{knots}",
+        "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n",
         times.join(" ")
     )
 }
