@@ -598,3 +598,70 @@ fn a_contact_idle_at_every_w0_is_named_once() {
         lines[0]
     );
 }
+
+/// A group force target (`force_target_*`, statopt, issue 36) holds: a
+/// block of 10 kg resting on two floor contacts that cost the same. The
+/// effort minimum shares its weight equally; with contact `a`'s vertical
+/// force held to 30 N from 0.2 to 0.8 s (and to 0 N of force across a
+/// tilted axis: a force along (0.2, 1, 0)), `a` carries 30 N there and `b`
+/// the rest, and outside the target the two share equally again. A second
+/// contact of the group with another target is an error naming both.
+#[test]
+fn a_force_target_holds_the_group_force_and_only_within_its_knots() {
+    let floor = |name: &str, x: f64, extra: &str| {
+        format!(
+            r#"<PointOnPlaneContact name="{name}"><point_body>block</point_body><point_location>{x} 0 0</point_location>
+<plane_body>ground</plane_body><plane_normal>0 1 0</plane_normal><static_friction>0.8</static_friction><v_trans>0.1</v_trans>{extra}</PointOnPlaneContact>"#
+        )
+    };
+    // Across (0.2, 1, 0): the unit axis (1, -0.2, 0)/|.|.
+    let k = 1.0 / (1.0f64 + 0.04).sqrt();
+    let rows = |t: f64, on: u8| format!("{t} {on} 0 1 0 30 {} {} 0 0", k, -0.2 * k);
+    let target = format!(
+        "<force_target_group>a</force_target_group><force_target_rows>2</force_target_rows><force_target>{} {}</force_target>",
+        rows(0.2, 1),
+        rows(0.8, 1)
+    );
+    let model = common::block_model(&(floor("a", -0.1, &target) + &floor("b", 0.1, "")));
+    let text = motion(&["tx", "ty", "tz"], 11, 1.0, |_| vec![0.0, -0.0005, 0.0]);
+    let (out, s) = run_case("target", &model, &text, "", 1.0);
+    assert_eq!(s.failed, 0);
+    let cf = storage::read(&out.join("target_SO_ContactForces.sto")).unwrap();
+    let (ax, ay, by) = (col(&cf, "a_fx"), col(&cf, "a_fy"), col(&cf, "b_fy"));
+    let w = 10.0 * G;
+    for (i, &t) in cf.time.iter().enumerate() {
+        let (a, b) = (ay[i].abs(), by[i].abs());
+        assert!(
+            (a + b - w).abs() < 1e-3 * w,
+            "t = {t}: {a} + {b} against {w}"
+        );
+        if (0.2..=0.8).contains(&t) {
+            assert!((a - 30.0).abs() < 0.05, "t = {t}: a carries {a} N, not 30");
+            assert!(
+                (ax[i].abs() - 0.2 * a).abs() < 0.05,
+                "t = {t}: a's shear {} against 0.2 x {a}",
+                ax[i]
+            );
+        } else {
+            assert!((a - b).abs() < 1e-3 * w, "t = {t}: {a} against {b}");
+        }
+    }
+    // One group, two targets: an error with both names.
+    let other = target.replace("0 1 0 30", "0 1 0 20");
+    let model = common::block_model(&(floor("a", -0.1, &target) + &floor("b", 0.1, &other)));
+    let dir = common::out_dir("contact_truth_target_mismatch");
+    std::fs::write(dir.join("model.osim"), model).unwrap();
+    std::fs::write(dir.join("motion.mot"), &text).unwrap();
+    std::fs::write(dir.join("setup.xml"), setup("mismatch", "", 1.0)).unwrap();
+    let Setup::Analyze(a) = Setup::read(&dir.join("setup.xml")).unwrap() else {
+        unreachable!()
+    };
+    let e = statopt::tools::analyze::run(&a, &RunOptions::default())
+        .err()
+        .expect("two targets in one group")
+        .to_string();
+    assert!(
+        e.contains("'b'") && e.contains("'a'") && e.contains("force_target_group"),
+        "{e}"
+    );
+}

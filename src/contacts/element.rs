@@ -27,6 +27,10 @@
 //! | `off_intervals` | none | statopt: pairs of times `t0 t1 ...` (s, ascending, t0 < t1): the contact carries nothing for t0 <= t < t1 (its weight is multiplied by `off_weight`); predict-grf writes a landing foot's swing before its kinematic foot strike (docs/grf_prediction.md, "The step-to-step transition"). Absent: always on |
 //! | `off_weight` | 0 | statopt: the factor on the contact's weight within `off_intervals`, in [0, 1) (0: off) |
 //! | `time_weight` | none | statopt: knots `t0 f0 t1 f1 ...` (times ascending, factors in [0, 1]): the contact's weight is multiplied by f, linear between the knots and the end knots' values before and after them; predict-grf writes the smooth transition of double support (docs/grf_prediction.md) |
+//! | `force_target_group` | none | statopt: a name shared by the contacts whose summed force on their point bodies is held to `force_target` (a soft equality, [`super::targets`]); predict-grf writes the trailing foot's share of double support (Ren et al. 2008) |
+//! | `force_target_rows` | none | statopt: m, the number of axes (1–3) along which the group's force is targeted |
+//! | `force_target` | none | statopt: knots `t on ax ay az f ...` (s; 1 or 0; then m times a unit axis in ground and the force in N along it; times ascending): linear between two knots that are both on (the axis renormalised); no target elsewhere |
+//! | `force_target_optimal_force` | 1 | statopt: S (N), one for all rows or one per row: a departure e from the target costs (e/S)², what an actuator of optimal force S costs |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
 //! The bodies may also be given as OpenSim-4 style sockets
@@ -113,6 +117,9 @@ pub struct Contact {
     /// `time_weight` (statopt): knots (t, factor) of a piecewise-linear
     /// factor on the weight; empty: 1.
     pub time_weight: Vec<(f64, f64)>,
+    /// `force_target_*` (statopt): the group force target this contact
+    /// belongs to ([`super::targets`]); None: no target.
+    pub force_target: Option<super::targets::TargetSpec>,
     pub applies_force: bool,
     /// Where the element is: file, line, element (for messages such as
     /// `--check`'s plane facing away from the point's body).
@@ -284,6 +291,7 @@ impl Contact {
             }
             _ => Vec::new(),
         };
+        let force_target = super::targets::TargetSpec::from_xml(el, &name)?;
         Ok(Some(Contact {
             loc: el.loc(),
             name,
@@ -307,6 +315,7 @@ impl Contact {
             off_intervals,
             off_weight,
             time_weight,
+            force_target,
             applies_force: applies_force(el)?,
         }))
     }

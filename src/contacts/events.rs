@@ -69,6 +69,9 @@ pub struct FootEvents {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GaitEvents {
     pub feet: [FootEvents; 2],
+    /// The last time of the kinematics the events were found on (s): a
+    /// foot whose foot-off is not found before it is still on the floor.
+    pub end: f64,
 }
 
 /// Double support (s) when the trailing foot's foot-off is not in the
@@ -92,41 +95,94 @@ pub fn trailing_share(tau: f64, t_ds: f64) -> f64 {
     }
 }
 
-/// Knots of the factor on each foot's contact weights (`time_weight`)
-/// over the double support after each transition strike: the landing
-/// foot's rises from 0 as the complement of Ren's smooth transition
-/// ([`trailing_share`] s). With the feet's forces in proportion to the
-/// squares of their weights (a contact force f costs f²/w²), a landing foot
-/// weighted min(1, √((1−s)/s)) against a trailing foot at full weight
-/// takes at most the share 1 − s. The trailing foot is left at full
-/// weight: it pushes off through double support as the effort minimum
-/// needs (weakening it as well took its push-off and shear away: AP rho
-/// fell by 0.1 on two development trials). The double support ends at the
-/// trailing foot's first foot-off after the strike (within 0.3 s), or lasts
-/// [`DEFAULT_DOUBLE_SUPPORT`]. Factor 1 outside.
-pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
-    let mut out: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
-    for (s, knots) in out.iter_mut().enumerate() {
+/// The double support after a strike at `ts` while foot `trailing` stands
+/// (s): to the trailing foot's first foot-off after the strike, within
+/// 0.3 s; without one, [`DEFAULT_DOUBLE_SUPPORT`], or to the end of the
+/// kinematics when that is later (within 0.3 s): a foot-off is an extremum
+/// inside the trial, so a trailing foot with none is still on the floor at
+/// its end.
+pub fn double_support(events: &GaitEvents, trailing: usize, ts: f64) -> f64 {
+    events.feet[trailing]
+        .offs
+        .iter()
+        .copied()
+        .find(|&x| x > ts && x <= ts + 0.3)
+        .map(|x| x - ts)
+        .unwrap_or_else(|| {
+            let rest = events.end - ts;
+            if rest > DEFAULT_DOUBLE_SUPPORT && rest <= 0.3 {
+                rest
+            } else {
+                DEFAULT_DOUBLE_SUPPORT
+            }
+        })
+}
+
+/// A knot of a foot's force target ([`super::targets::Knot`]).
+pub type TargetKnot = super::targets::Knot;
+
+/// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
+/// force targets of the **trailing** foot, with its force along its leg:
+/// over the double support T_ds after each transition strike at t_s of the
+/// other foot,
+/// - its force along the floor normal n is F(t_s + τ) = F(t_s) ·
+///   exp(−(2τ/T_ds)³), F(t_s) the force the motion requires of the floor at
+///   the strike (`required(t_s)`, all of it on the trailing foot then: the
+///   landing foot has carried nothing before it), and at most what the
+///   motion requires then (`required(t)`: the landing foot cannot pull);
+/// - its force has no part across `lean(t, foot)`, the line from its toe
+///   (hallux point) to the body's mass centre, in the plane of the walking
+///   direction h and n: a leg pushes along itself (the compliant leg of
+///   walking, Geyer, Seyfarth & Blickhan 2006, Proc R Soc B 273:2861), and
+///   in pre-swing the trailing foot rolls over its toes (Perry & Burnfield
+///   2010), so its force acts there.
+///
+/// The landing foot takes the rest, R(t) − F(t), through the equations of
+/// motion. Knots every [`TRANSITION_KNOT_STEP`], rows (n, F) and (across,
+/// 0); the target ends just after the double support. Per foot (0 right,
+/// 1 left), the knots of the feet that trail; a transition whose
+/// requirement or lean is not known (at the first or last row) gets none.
+pub fn trailing_targets(
+    events: &GaitEvents,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
+    mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
+    mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for s in 0..2 {
         let o = 1 - s;
         let f = &events.feet[s];
         for (k, &ts) in f.strikes.iter().enumerate() {
             if !f.transitions.get(k).copied().unwrap_or(false) {
                 continue;
             }
-            let t_ds = events.feet[o]
-                .offs
-                .iter()
-                .copied()
-                .find(|&x| x > ts && x <= ts + 0.3)
-                .map(|x| x - ts)
-                .unwrap_or(DEFAULT_DOUBLE_SUPPORT);
-            let n = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
-            knots.push((ts - 1e-6, 1.0));
-            for i in 0..=n {
-                let tau = t_ds * i as f64 / n as f64;
-                knots.push((ts + tau, landing_factor(trailing_share(tau, t_ds))));
+            let Some(r) = required(ts) else {
+                continue;
+            };
+            let t_ds = double_support(events, o, ts);
+            let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
+            let mut knots = Vec::new();
+            for i in 0..=steps {
+                let tau = t_ds * i as f64 / steps as f64;
+                let Some(l) = lean(ts + tau, o) else {
+                    knots.clear();
+                    break;
+                };
+                // Across the leg: in the plane of h and n, perpendicular to
+                // the leg's line.
+                let across = (h * l.dot(&n) - n * l.dot(&h)).normalize();
+                // A foot cannot pull: the trailing foot carries at most what
+                // the motion requires of the floor then.
+                let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
+                let vertical = (r.dot(&n) * trailing_share(tau, t_ds)).min(now.max(0.0));
+                knots.push((ts + tau, true, vec![(n, vertical), (across, 0.0)]));
             }
-            knots.push((ts + t_ds + 1e-6, 1.0));
+            if let Some(last) = knots.last() {
+                let rows = last.2.clone();
+                knots.push((ts + t_ds + 1e-6, false, rows));
+            }
+            out[o].extend(knots);
         }
     }
     for k in out.iter_mut() {
@@ -136,16 +192,143 @@ pub fn transition_weights(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
     out
 }
 
-/// The landing foot's weight factor for a trailing share `s`:
-/// min(1, √((1−s)/s)), 0 at s = 1.
-pub fn landing_factor(s: f64) -> f64 {
-    if s >= 1.0 {
-        0.0
-    } else if s <= 0.0 {
-        1.0
-    } else {
-        ((1.0 - s) / s).sqrt().min(1.0)
+/// The step-to-step transition of walking written into the contact set
+/// `set` (a torque-driven model's; docs/grf_prediction.md, step 8): per
+/// foot, its contacts carry nothing from its foot-off until each
+/// transition strike ([`off_intervals`]; a force there costs what one on
+/// the root residual of optimal force `root_optimal_force` costs,
+/// [`off_weight`] at contact weight `w0`), and the trailing foot's force is
+/// held through double support ([`trailing_targets`] on `states`, the
+/// filtered motion; a newton off it costs what one on the root residual
+/// costs).
+pub fn apply_transition(
+    model: &Model,
+    states: &States,
+    events: &GaitEvents,
+    set: &mut FootContactSet,
+    w0: f64,
+    root_optimal_force: f64,
+) {
+    for s in 0..2 {
+        set.off_intervals[s] = off_intervals(&events.feet[s]);
     }
+    set.off_weight = off_weight(set.parameters.optimal_force, w0, root_optimal_force);
+    let n = set.floor_normal();
+    let h = set.decision.evidence.heading;
+    let h = (h - n * h.dot(&n)).normalize();
+    set.target_optimal_force = vec![root_optimal_force; 2];
+    let points = set.points.clone();
+    set.force_target = trailing_targets(
+        events,
+        h,
+        n,
+        |t| required_force(model, states, t),
+        |t, side| toe_to_com(model, states, &points, t, side),
+    );
+}
+
+/// The summary's line on the force targets of foot `side` (None without
+/// any): each double support it trails through.
+pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
+    let mut spans = Vec::new();
+    let mut start: Option<&TargetKnot> = None;
+    for (i, k) in knots.iter().enumerate() {
+        if k.1 && start.is_none() {
+            start = Some(k);
+        }
+        let ends = !k.1 || i + 1 == knots.len();
+        if let (true, Some(a)) = (ends, start) {
+            let last = if k.1 { k } else { &knots[i - 1] };
+            spans.push(format!(
+                "[{:.3}, {:.3}] s from {:.0} N",
+                a.0,
+                last.0,
+                a.2.first().map_or(0.0, |r| r.1)
+            ));
+            start = None;
+        }
+    }
+    (!spans.is_empty()).then(|| {
+        format!(
+            "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre; the landing foot carries the rest",
+            spans.join(", ")
+        )
+    })
+}
+
+/// The line from foot `side`'s toe (its hallux point, the mean of them if
+/// several) to the body's mass centre at the row of `states` nearest `t`
+/// (ground).
+pub fn toe_to_com(
+    model: &Model,
+    states: &States,
+    points: &[FootPoint],
+    t: f64,
+    side: usize,
+) -> Option<Vector3<f64>> {
+    let i = (0..states.time.len()).min_by(|&a, &b| {
+        (states.time[a] - t)
+            .abs()
+            .total_cmp(&(states.time[b] - t).abs())
+    })?;
+    let mut data = Data::new(model);
+    data.q.copy_from_slice(&states.q[i]);
+    kinematics::positions(model, &mut data);
+    let c = if side == 0 { 'r' } else { 'l' };
+    let (sum, k) = points
+        .iter()
+        .filter(|p| p.side == c && p.name.contains("hallux"))
+        .fold((Vector3::zeros(), 0usize), |(s, k), p| {
+            (s + data.station_position(p.body, &p.local), k + 1)
+        });
+    if k == 0 {
+        return None;
+    }
+    let mass: f64 = model.bodies.iter().map(|b| b.mass).sum();
+    let com = model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(b, body)| data.station_position(b, &body.mass_center) * body.mass)
+        .sum::<Vector3<f64>>()
+        / mass;
+    Some(com - sum / k as f64)
+}
+
+/// The force (N, ground) the motion in `states` requires of the floor at
+/// the row nearest `t`: M (a − g), a the whole-body mass centre's
+/// acceleration by the three-point second difference over that row and its
+/// neighbours (None at the first or last row).
+pub fn required_force(model: &Model, states: &States, t: f64) -> Option<Vector3<f64>> {
+    let n = states.time.len();
+    let i = (0..n).min_by(|&a, &b| {
+        (states.time[a] - t)
+            .abs()
+            .total_cmp(&(states.time[b] - t).abs())
+    })?;
+    if i == 0 || i + 1 >= n {
+        return None;
+    }
+    let mut data = Data::new(model);
+    let mass: f64 = model.bodies.iter().map(|b| b.mass).sum();
+    let mut com = |row: usize| {
+        data.q.copy_from_slice(&states.q[row]);
+        kinematics::positions(model, &mut data);
+        model
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(b, body)| data.station_position(b, &body.mass_center) * body.mass)
+            .sum::<Vector3<f64>>()
+            / mass
+    };
+    let (c0, c1, c2) = (com(i - 1), com(i), com(i + 1));
+    let (h1, h2) = (
+        states.time[i] - states.time[i - 1],
+        states.time[i + 1] - states.time[i],
+    );
+    let a = ((c2 - c1) / h2 - (c1 - c0) / h1) * (2.0 / (h1 + h2));
+    Some((a - model.gravity) * mass)
 }
 
 /// The factor on a contact's weight before its foot's strike
@@ -323,7 +506,10 @@ fn landmarks(model: &Model, states: &States, points: &[FootPoint]) -> Landmarks 
 pub fn detect(model: &Model, raw: &States, filtered: &States, set: &FootContactSet) -> GaitEvents {
     let heading = set.decision.evidence.heading;
     let l = landmarks(model, raw, &set.points);
-    let mut out = GaitEvents::default();
+    let mut out = GaitEvents {
+        end: raw.time.last().copied().unwrap_or(0.0),
+        ..GaitEvents::default()
+    };
     for s in 0..2 {
         out.feet[s] = zeni_events(&raw.time, &l.heel[s], &l.toe[s], &l.pelvis, &heading);
         // O'Connor's foot-velocity refinement: the foot centre (heel and
@@ -446,17 +632,17 @@ mod tests {
         assert!((time[m[0]] - 0.5).abs() <= 0.03, "{}", time[m[0]]);
     }
 
-    /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off; the
-    /// landing foot's factor rises from 0 to 1 (reached where s = 1/2) and
-    /// its knots span the double support to the trailing foot's foot-off.
+    /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off. The
+    /// trailing foot's targets span the double support to its foot-off
+    /// (else to the end of the kinematics, or 0.11 s), hold its vertical
+    /// force to the requirement at the strike times the share, and its
+    /// force along its leg (no part across the line from its toe to the
+    /// mass centre); the landing foot gets none.
     #[test]
-    fn the_landing_foot_rises_through_double_support() {
+    fn the_trailing_foot_follows_rens_transition_along_its_leg() {
         assert_eq!(trailing_share(0.0, 0.12), 1.0);
         assert!((trailing_share(0.06, 0.12) - (-1.0f64).exp()).abs() < 1e-12);
         assert!(trailing_share(0.12, 0.12) < 1e-3);
-        assert_eq!(landing_factor(1.0), 0.0);
-        assert!((landing_factor(0.8) - 0.5).abs() < 1e-12);
-        assert_eq!(landing_factor(0.5), 1.0);
         let mut ev = GaitEvents::default();
         ev.feet[0] = FootEvents {
             strikes: vec![0.5],
@@ -464,19 +650,38 @@ mod tests {
             transitions: vec![true],
         };
         ev.feet[1].offs = vec![0.62];
-        let k = transition_weights(&ev);
-        assert!(k[1].is_empty(), "the trailing foot is left alone");
-        let r = &k[0];
-        assert_eq!(r.first().unwrap().1, 1.0);
-        assert_eq!(r.last().unwrap().1, 1.0);
-        assert!((r.last().unwrap().0 - 0.62).abs() < 1e-5);
-        let at = |t: f64| r.iter().find(|p| (p.0 - t).abs() < 1e-9).unwrap().1;
-        assert_eq!(at(0.5), 0.0);
-        assert!(r.windows(2).all(|w| w[0].0 < w[1].0));
-        // Without the trailing foot's foot-off: the default double support.
+        let (h, n) = (Vector3::x(), Vector3::y());
+        let r = Vector3::new(40.0, 700.0, 3.0);
+        // The mass centre 0.3 m ahead of the toe and 0.9 m above it.
+        let lean = Vector3::new(0.3, 0.9, 0.0);
+        let k = trailing_targets(&ev, h, n, |_| Some(r), |_, _| Some(lean));
+        assert!(k[0].is_empty(), "the landing foot has no target");
+        let t = &k[1];
+        assert!(t.windows(2).all(|w| w[0].0 < w[1].0));
+        assert_eq!(t.first().unwrap().0, 0.5);
+        let last = t.last().unwrap();
+        assert!(!last.1 && (last.0 - 0.62).abs() < 1e-5, "{last:?}");
+        for (tk, on, rows) in &t[..t.len() - 1] {
+            assert!(*on);
+            let want = 700.0 * trailing_share(tk - 0.5, 0.12);
+            assert_eq!(rows[0].0, n);
+            assert!((rows[0].1 - want).abs() < 1e-9, "{tk}: {rows:?}");
+            // A force along the leg has no part across it.
+            assert!(rows[1].0.dot(&lean).abs() < 1e-12 && rows[1].1 == 0.0);
+            assert!((rows[1].0.norm() - 1.0).abs() < 1e-12);
+        }
+        // Without the trailing foot's foot-off: to the end of the
+        // kinematics when that is within 0.3 s, else 0.11 s.
         ev.feet[1].offs.clear();
-        let r = &transition_weights(&ev)[0];
-        assert!((r.last().unwrap().0 - 0.5 - DEFAULT_DOUBLE_SUPPORT).abs() < 1e-5);
+        ev.end = 0.68;
+        let t = &trailing_targets(&ev, h, n, |_| Some(r), |_, _| Some(lean))[1];
+        assert!((t.last().unwrap().0 - 0.68).abs() < 1e-5);
+        ev.end = 0.9;
+        let t = &trailing_targets(&ev, h, n, |_| Some(r), |_, _| Some(lean))[1];
+        assert!((t.last().unwrap().0 - 0.5 - DEFAULT_DOUBLE_SUPPORT).abs() < 1e-5);
+        // No requirement known at the strike: no target.
+        let t = trailing_targets(&ev, h, n, |_| None, |_, _| Some(lean));
+        assert!(t[1].is_empty());
     }
 
     #[test]

@@ -143,10 +143,14 @@ pub struct FootContactSet {
     /// The factor on a contact's weight within its off intervals
     /// (`off_weight`): 0 unless set.
     pub off_weight: f64,
-    /// Per foot: knots (t, factor) of the factor on its contacts' weights
-    /// (`time_weight`; the smooth transition of double support,
-    /// [`super::events::transition_weights`]); empty unless set.
-    pub time_weight: [Vec<(f64, f64)>; 2],
+    /// Per foot: knots of its contacts' summed force target along
+    /// `target_axes` (`force_target`, group `foot_r` / `foot_l`; the trailing
+    /// foot's smooth transition, [`super::events::trailing_targets`]);
+    /// empty unless set.
+    pub force_target: [Vec<super::events::TargetKnot>; 2],
+    /// What a newton off the target costs (`force_target_optimal_force`, N,
+    /// per axis).
+    pub target_optimal_force: Vec<f64>,
 }
 
 /// The foot points of `model` (see the module doc). A model without
@@ -421,7 +425,8 @@ pub fn build(
         parameters,
         off_intervals: [Vec::new(), Vec::new()],
         off_weight: 0.0,
-        time_weight: [Vec::new(), Vec::new()],
+        force_target: [Vec::new(), Vec::new()],
+        target_optimal_force: Vec::new(),
     })
 }
 
@@ -577,8 +582,7 @@ impl FootContactSet {
                 off_intervals_xml(
                     &self.off_intervals[if pt.side == 'r' { 0 } else { 1 }],
                     self.off_weight,
-                    &self.time_weight[if pt.side == 'r' { 0 } else { 1 }]
-                )
+                ) + &self.force_target_xml(pt.side)
             ));
         }
         s.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
@@ -586,23 +590,48 @@ impl FootContactSet {
     }
 }
 
+impl FootContactSet {
+    /// The `force_target_*` lines of a contact of foot `side` (empty when
+    /// the foot has no target).
+    fn force_target_xml(&self, side: char) -> String {
+        let knots = &self.force_target[if side == 'r' { 0 } else { 1 }];
+        if knots.is_empty() {
+            return String::new();
+        }
+        let k: Vec<String> = knots
+            .iter()
+            .map(|(t, on, rows)| {
+                let v: Vec<String> = rows
+                    .iter()
+                    .map(|(a, f)| format!("{} {} {} {f}", a.x, a.y, a.z))
+                    .collect();
+                format!("{t} {} {}", u8::from(*on), v.join(" "))
+            })
+            .collect();
+        let m = knots[0].2.len();
+        format!(
+            "\t\t\t\t<force_target_group>foot_{side}</force_target_group>\n\t\t\t\t<force_target_rows>{m}</force_target_rows>\n\t\t\t\t<force_target>{}</force_target>\n\t\t\t\t<force_target_optimal_force>{}</force_target_optimal_force>\n",
+            k.join(" "),
+            self.target_optimal_force
+                .iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        )
+    }
+}
+
 /// The `<off_intervals>` line of a contact (empty when there are none).
-fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64, knots: &[(f64, f64)]) -> String {
-    let knots = if knots.is_empty() {
-        String::new()
-    } else {
-        let k: Vec<String> = knots.iter().map(|&(t, f)| format!("{t} {f}")).collect();
-        format!("\t\t\t\t<time_weight>{}</time_weight>\n", k.join(" "))
-    };
+fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64) -> String {
     if intervals.is_empty() {
-        return knots;
+        return String::new();
     }
     let times: Vec<String> = intervals
         .iter()
         .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
         .collect();
     format!(
-        "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n{knots}",
+        "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n",
         times.join(" ")
     )
 }

@@ -22,6 +22,7 @@ pub mod floor;
 pub mod ground;
 pub mod kinematics;
 pub mod plates;
+pub mod targets;
 #[cfg(test)]
 mod tests;
 

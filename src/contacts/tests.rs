@@ -922,3 +922,54 @@ fn time_weight_scales_a_contact_between_its_knots() {
         );
     }
 }
+
+/// `force_target_*` (statopt, issue 36): read into one spec per contact;
+/// the target holds linearly between two knots that are both on, at an on
+/// knot's own time, and nowhere else; a partial set, a row count or knot
+/// that does not fit, an axis that is not a unit vector or a non-positive
+/// optimal force is refused with the line.
+#[test]
+fn force_target_knots_hold_between_on_knots() {
+    let m = test_model();
+    let props = "<point_body>ground</point_body><point_location>0.5 -0.6 0.1</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>";
+    assert!(contact(&m, props).force_target.is_none());
+    let c = contact(
+        &m,
+        &format!(
+            "{props}<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows>
+             <force_target>0.1 1 0 1 0 100 0.2 1 1 0 0 50 0.3 0 0 1 0 0 0.5 1 0 1 0 10</force_target>
+             <force_target_optimal_force>2</force_target_optimal_force>"
+        ),
+    );
+    let spec = c.force_target.as_ref().unwrap();
+    assert_eq!((spec.group.as_str(), spec.rows), ("g", 1));
+    assert_eq!(spec.optimal_force, vec![2.0]);
+    let at = |t: f64| spec.value_at(t).map(|v| v[0]);
+    assert_eq!(at(0.05), None);
+    assert_eq!(at(0.1), Some((Vector3::y(), 100.0)));
+    let (axis, f) = at(0.15).unwrap();
+    assert!((f - 75.0).abs() < 1e-12);
+    assert!((axis - Vector3::new(1.0, 1.0, 0.0).normalize()).norm() < 1e-12);
+    assert_eq!(at(0.25), None, "the third knot is off");
+    assert_eq!(at(0.4), None);
+    assert_eq!(at(0.5), Some((Vector3::y(), 10.0)));
+    assert_eq!(at(0.6), None);
+    for bad in [
+        "<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows>",
+        "<force_target_group>g</force_target_group><force_target_rows>4</force_target_rows><force_target>0 1 0 1 0 1</force_target>",
+        "<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows><force_target>0 1 0 2 0 1</force_target>",
+        "<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows><force_target>0 1 0 1 0 1 0 1 0 1 0 2</force_target>",
+        "<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows><force_target>0 2 0 1 0 1</force_target>",
+        "<force_target_group>g</force_target_group><force_target_rows>1</force_target_rows><force_target>0 1 0 1 0 1</force_target><force_target_optimal_force>0</force_target_optimal_force>",
+    ] {
+        let e = contact_err(
+            &m,
+            &format!("<PointOnPlaneContact name=\"c\">{props}{bad}</PointOnPlaneContact>"),
+        );
+        assert!(
+            e.contains("force_target") && e.contains("line"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -229,6 +229,7 @@ impl SoProblem {
                 None => Error::msg(format!("{}: {e}", setup.setup_file.display())),
             },
         )?;
+        let targets = crate::contacts::targets::groups(&contacts)?;
         if so.activation_exponent != 2.0 {
             warnings.push(format!(
                 "activation_exponent {} is solved with power cones",
@@ -252,6 +253,7 @@ impl SoProblem {
                 contacts,
                 ties,
                 knees,
+                targets,
             },
             warnings,
         ))

@@ -73,6 +73,10 @@ pub struct SoProblem {
     /// each after the knee rows: the heads of one muscle under the knee
     /// contact method (`frame::knee_contact::equal_activation_pairs`).
     pub ties: Vec<[usize; 2]>,
+    /// Group force targets of the contacts (`force_target_*`,
+    /// `contacts::targets`): one row and one free variable per axis of each
+    /// group, the rows after the ties', the variables after the knees'.
+    pub targets: Vec<crate::contacts::targets::ForceTarget>,
 }
 
 /// The ForceSet part of a force-file row (labels or values): each control's
@@ -351,11 +355,12 @@ impl SoProblem {
         // The knee contact method's rows and variables follow (two each per knee).
         let nk = self.knees.len();
         let nt = self.ties.len();
-        let nrt = nr + 2 * nk + nt;
+        let ng: usize = self.targets.iter().map(|g| g.rows()).sum();
+        let nrt = nr + 2 * nk + nt + ng;
         let a = &mut problem.a;
         // Every column is written below, whole: no need to clear them.
-        if a.shape() != (nrt, nv + 3 * nc + 2 * nk) {
-            *a = DMatrix::zeros(nrt, nv + 3 * nc + 2 * nk);
+        if a.shape() != (nrt, nv + 3 * nc + 2 * nk + ng) {
+            *a = DMatrix::zeros(nrt, nv + 3 * nc + 2 * nk + ng);
         }
         let b = &mut problem.b;
         if b.len() != nrt {
@@ -400,7 +405,7 @@ impl SoProblem {
             scale[v] = f;
             if let Some(fd) = &fd {
                 let col = fd.column(self, t, data, mf, gen, f);
-                a.set_column(v, &col);
+                a.view_mut((0, v), (nr, 1)).copy_from(&col);
                 continue;
             }
             let column = &mut a.as_mut_slice()[v * nrt..v * nrt + nr];
@@ -441,7 +446,7 @@ impl SoProblem {
             for (k, col) in cols.iter().enumerate() {
                 if let Some(fd) = &fd {
                     let column = fd.column(self, t, data, mf, col, 1.0);
-                    a.set_column(v0 + k, &column);
+                    a.view_mut((0, v0 + k), (nr, 1)).copy_from(&column);
                     continue;
                 }
                 let column = &mut a.as_mut_slice()[(v0 + k) * nrt..(v0 + k) * nrt + nr];
@@ -496,10 +501,64 @@ impl SoProblem {
             problem.a[(r, *j)] = -1.0;
             problem.b[r] = 0.0;
         }
+        if ng > 0 {
+            self.target_rows(t, states, problem, nr + 2 * nk + nt, nv + 3 * nc + 2 * nk);
+        }
         problem.exponent = self.options.activation_exponent;
         problem.friction = self.options.friction;
         problem.settings = self.options.solve;
         fd.map(|fd| fd.finish(model, data))
+    }
+
+    /// The group force targets' rows (from row `r0`) and free variables
+    /// (from column `v0`), written whole (A is not cleared between frames):
+    /// per row of a group, Σ_c Σ_k (a(t) · f_ck) λ_ck − S x = target(t),
+    /// f_ck the force on contact c's point body of its multiplier k at unit
+    /// value in the frame's regime; outside the target's span the row is
+    /// −S x = 0 (`contacts::targets`). The variables are free, weighted 1.
+    fn target_rows(
+        &self,
+        t: f64,
+        states: &[crate::contacts::ContactState],
+        problem: &mut FrameProblem,
+        r0: usize,
+        v0: usize,
+    ) {
+        let ncol = problem.a.ncols();
+        let nv = self.controls.len();
+        let mut r = r0;
+        for g in &self.targets {
+            let value = g.spec.value_at(t);
+            for ai in 0..g.rows() {
+                for c in 0..ncol {
+                    problem.a[(r, c)] = 0.0;
+                }
+                let v = v0 + (r - r0);
+                problem.a[(r, v)] = -g.spec.optimal_force[ai];
+                problem.b[r] = 0.0;
+                if let Some(value) = &value {
+                    let (axis, f) = value[ai];
+                    problem.b[r] = f;
+                    for &ci in &g.contacts {
+                        let (c, st) = (&self.contacts[ci], &states[ci]);
+                        let kinetic = st.regime == Regime::Kinetic;
+                        for k in 0..3 {
+                            let mut lambda = [0.0; 3];
+                            lambda[k] = 1.0;
+                            let (f, _, _) = c.forces(st, lambda, kinetic);
+                            problem.a[(r, nv + 3 * ci + k)] = axis.dot(&f);
+                        }
+                    }
+                }
+                r += 1;
+            }
+        }
+        let ng = r - r0;
+        problem
+            .lower
+            .extend(std::iter::repeat_n(f64::NEG_INFINITY, ng));
+        problem.upper.extend(std::iter::repeat_n(f64::INFINITY, ng));
+        problem.weights.extend(std::iter::repeat_n(1.0, ng));
     }
 
     /// Adds the passive force elements' generalized forces to

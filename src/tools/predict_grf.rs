@@ -306,18 +306,19 @@ pub fn run_with(
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
-    for s in 0..2 {
-        contacts.off_intervals[s] = crate::contacts::events::off_intervals(&gait_events.feet[s]);
+    // The step-to-step transition of walking, for torque-driven models: a
+    // muscle-driven model's effort minimum shares the load itself
+    // (docs/grf_prediction.md, step 8).
+    if strength.is_some() {
+        crate::contacts::events::apply_transition(
+            &model,
+            &states,
+            &gait_events,
+            &mut contacts,
+            contact_weight,
+            ROOT_RESIDUAL_OPTIMAL_FORCE,
+        );
     }
-    // Before its strike a landing foot costs what the root residual costs
-    // per newton: a force there is as doubtful as one on the pelvis, and is
-    // used only where nothing else can give what the motion requires.
-    contacts.time_weight = crate::contacts::events::transition_weights(&gait_events);
-    contacts.off_weight = crate::contacts::events::off_weight(
-        contacts.parameters.optimal_force,
-        contact_weight,
-        ROOT_RESIDUAL_OPTIMAL_FORCE,
-    );
     let dir = inputs::results_dir(&setup, opts)?;
     // The prediction's plan: the user's, its force sets with the root
     // residuals replaced, plus the foot contacts, all in memory (the files
@@ -373,7 +374,15 @@ pub fn run_with(
             side,
             &prediction.events.feet[s],
             &prediction.contacts.off_intervals[s],
+            strength.is_some(),
         ));
+        prediction
+            .summary
+            .notes
+            .extend(crate::contacts::events::targets_note(
+                side,
+                &prediction.contacts.force_target[s],
+            ));
     }
     prediction.root_residual = prediction.summary.root_force_series.clone();
     let contact_table = dir.join(so_run.file(OutputKind::ContactForces));
@@ -514,7 +523,12 @@ pub fn run_with(
 
 /// The run's line on foot `side`'s gait events and the intervals its
 /// contacts were off.
-fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64, f64)]) -> String {
+fn events_note(
+    side: char,
+    f: &crate::contacts::events::FootEvents,
+    off: &[(f64, f64)],
+    torque_driven: bool,
+) -> String {
     let times = |v: &[f64]| {
         if v.is_empty() {
             "none".to_string()
@@ -525,7 +539,9 @@ fn events_note(side: char, f: &crate::contacts::events::FootEvents, off: &[(f64,
                 .join(", ")
         }
     };
-    let off = if off.is_empty() {
+    let off = if !torque_driven {
+        "no step-to-step transition model (a muscle-driven model's effort minimum shares the load between the feet itself)".to_string()
+    } else if off.is_empty() {
         "its contacts are never switched off (no strike takes over from a foot on the floor)"
             .to_string()
     } else {
