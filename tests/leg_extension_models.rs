@@ -494,6 +494,7 @@ fn inverse_dynamics_matches_opensim() {
         time_range: (0.0, 5.0),
         forces_to_exclude: vec!["Muscles".into()],
         external_loads_file: None,
+        external_load_scales: Vec::new(),
         results_directory: out.clone(),
         results_directory_loc: Default::default(),
         output_gen_force_file: "id.sto".into(),
