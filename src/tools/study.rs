@@ -466,6 +466,11 @@ pub fn run(plan: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
 
 fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     let (runs, expected, moved) = prepare(study, opts.results_dir.as_deref())?;
+    // The tables the figures and metrics draw: kept in memory until drawn
+    // (`storage::results::want`; the study's capture ends with the run).
+    expected
+        .iter()
+        .for_each(|(f, _)| crate::storage::results::want(f));
     let out = opts
         .results_dir
         .clone()
@@ -549,6 +554,23 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
         summary.results_dirs.push(out);
     }
     Ok(summary)
+}
+
+/// Say that the tables `elements` name (relative to `dir`) will be read
+/// by this run's figures and metrics: the run keeps them in memory
+/// (`storage::results::want`; its capture ends with the run).
+pub fn want_tables(elements: &[FigureOrMetric], dir: &Path) {
+    for r in elements.iter().flat_map(FigureOrMetric::tables) {
+        crate::storage::results::want(&resolve(dir, r.value));
+    }
+}
+
+/// The figures and metrics of `elements` have read their tables (see
+/// [`want_tables`]): the run's capture may drop them.
+pub fn tables_read(elements: &[FigureOrMetric], dir: &Path) {
+    for r in elements.iter().flat_map(FigureOrMetric::tables) {
+        crate::storage::results::done(&resolve(dir, r.value));
+    }
 }
 
 /// Draw `<Figure>`s and compute `<Metric>`s (file paths relative to `dir`,
