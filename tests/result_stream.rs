@@ -44,6 +44,8 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_study");
     let _ = std::fs::remove_dir_all(&out);
+    // The run's capture, held past the run to see what it keeps.
+    let capture = statopt::storage::results::Capture::new(Some(&out));
     let summary = run_setup(
         &root.join("setups/leg_extension_study.xml"),
         &RunOptions {
@@ -53,6 +55,21 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
     )
     .unwrap_or_else(|e| panic!("{e}"));
     let written = files_under(&out);
+    // It keeps only what the run's consumers read, until read: at the end,
+    // the tables the study's own figures and metrics draw (a few of its
+    // 54 MB of tables; it kept them all before).
+    let (kept, kept_bytes) = capture.kept();
+    drop(capture);
+    let table_bytes: u64 = written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "sto"))
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .sum();
+    println!("kept at the end: {kept} outputs, {kept_bytes} of {table_bytes} bytes of tables");
+    assert!(
+        kept_bytes * 20 < table_bytes,
+        "kept {kept} outputs, {kept_bytes} of {table_bytes} bytes of tables"
+    );
     // The study wrote its tables, statistics, knee tables, figures and metrics.
     let count = |end: &str| {
         written

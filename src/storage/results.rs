@@ -13,13 +13,15 @@
 //! file's, bit for bit) and open no file. `--resume` reads what an earlier
 //! run left on the disk: that is the one reading of earlier output.
 //!
-//! Memory: a capture holds the bytes of the outputs it covers until it ends
-//! (with the run). A capture that writes files keeps at most
-//! [`KEPT_LIMIT`] bytes of tables (as a motion file is held up to
-//! `storage::IN_MEMORY_LIMIT`): a table that would pass it is not kept,
-//! and its consumers read its file, so that memory stays bounded however
-//! long the trial. A capture in memory only keeps everything (there is no
-//! file to fall back on).
+//! Memory: a capture in memory only keeps every output it covers until it
+//! ends (they are the run's result; there is no file to fall back on). A
+//! capture that writes files keeps only the outputs a consumer of this run
+//! will read, as the run's plan declares them ([`want`]), and drops each
+//! once its last consumer has read it ([`done`]): the other outputs are in
+//! their files only. It keeps at most [`KEPT_LIMIT`] bytes (as a motion
+//! file is held up to `storage::IN_MEMORY_LIMIT`): a table that would pass
+//! it is not kept, and its consumers read its file, so that memory stays
+//! bounded however long the trial.
 
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
@@ -69,6 +71,13 @@ struct Scope {
     /// Whether files are written too.
     files: bool,
     budget: Budget,
+    /// Whether every output is kept (a capture in memory only: the outputs
+    /// are the run's result), else only those a consumer of the run will
+    /// read ([`want`]).
+    keep_all: bool,
+    /// The outputs a consumer of the run will read, by normalised path:
+    /// how many consumers have not read it yet ([`want`], [`done`]).
+    wanted: HashMap<PathBuf, usize>,
     /// Outputs by normalised path, in the order they were finished.
     outputs: Vec<(PathBuf, Bytes)>,
     index: HashMap<PathBuf, usize>,
@@ -130,15 +139,18 @@ impl Capture {
             root: root.clone(),
             files,
             budget: Budget::new(limit),
+            keep_all: !files,
+            wanted: HashMap::new(),
             outputs: Vec::new(),
             index: HashMap::new(),
         });
         Capture { id, root }
     }
 
-    /// Keep every output written under `root` (every output, for None)
-    /// while the capture lasts (tables up to [`KEPT_LIMIT`] bytes); files
-    /// are written as well.
+    /// Keep the outputs written under `root` (every path, for None) that a
+    /// consumer of the run will read ([`want`]) while the capture lasts
+    /// (tables up to [`KEPT_LIMIT`] bytes), each until its last consumer
+    /// has read it ([`done`]); files are written as well.
     pub fn new(root: Option<&Path>) -> Capture {
         Self::start(root, true, KEPT_LIMIT)
     }
@@ -168,6 +180,18 @@ impl Capture {
         self.root.as_deref()
     }
 
+    /// How many outputs the capture holds now, and their bytes.
+    pub fn kept(&self) -> (usize, u64) {
+        scopes()
+            .iter()
+            .find(|s| s.id == self.id)
+            .map(|s| {
+                let bytes = s.outputs.iter().map(|(_, b)| b.len() as u64).sum();
+                (s.outputs.len(), bytes)
+            })
+            .unwrap_or_default()
+    }
+
     /// The outputs kept so far, in the order they were finished: (path,
     /// bytes). The paths are normalised (absolute).
     pub fn outputs(&self) -> Vec<(PathBuf, Bytes)> {
@@ -192,23 +216,77 @@ pub fn writes_file(path: &Path) -> bool {
     scope_of(&mut scopes(), &k).is_none_or(|s| s.files)
 }
 
-/// Whether an output at `path` is kept in memory (a capture covers it).
+/// Whether a capture covers `path` (it keeps the outputs there that it
+/// keeps: every one, or those a consumer [`want`]s).
 pub fn captured(path: &Path) -> bool {
-    budget(path).is_some()
+    let k = key(path);
+    scope_of(&mut scopes(), &k).is_some()
 }
 
-/// The budget of the capture that covers `path` (None: not kept).
+/// The budget of the capture that covers `path`, when it keeps the output
+/// there (None: not kept).
 pub(super) fn budget(path: &Path) -> Option<Budget> {
     let k = key(path);
-    scope_of(&mut scopes(), &k).map(|s| s.budget.clone())
+    scope_of(&mut scopes(), &k)
+        .filter(|s| s.keeps(&k))
+        .map(|s| s.budget.clone())
 }
 
-/// Keep `bytes` as the output at `path` when a capture covers it (a later
-/// output at the same path replaces it).
-pub fn keep(path: &Path, bytes: Bytes) {
+impl Scope {
+    /// Whether the output at (normalised) `k` is kept.
+    fn keeps(&self, k: &Path) -> bool {
+        self.keep_all || self.wanted.contains_key(k)
+    }
+}
+
+/// Say that a consumer of this run will read the output at `path` (the
+/// plan knows which: a w0 sweep's statistics read the per-w0 tables they
+/// average, a JointReaction its forces file, the knee tables the
+/// ReactionLoads, a study's figures and metrics the tables they name): a
+/// capture that writes files keeps only such outputs. Each call is paired
+/// with one [`done`] when that consumer has read it.
+pub fn want(path: &Path) {
     let k = key(path);
     let mut all = scopes();
     if let Some(s) = scope_of(&mut all, &k) {
+        *s.wanted.entry(k).or_default() += 1;
+    }
+}
+
+/// A consumer that [`want`]ed the output at `path` has read it: once its
+/// last consumer has, a capture that writes files drops it (its file
+/// holds it).
+pub fn done(path: &Path) {
+    let k = key(path);
+    let mut all = scopes();
+    let Some(s) = scope_of(&mut all, &k) else {
+        return;
+    };
+    let Some(n) = s.wanted.get_mut(&k) else {
+        return;
+    };
+    *n = n.saturating_sub(1);
+    if *n > 0 || s.keep_all {
+        return;
+    }
+    s.wanted.remove(&k);
+    if let Some(i) = s.index.remove(&k) {
+        let (_, bytes) = s.outputs.remove(i);
+        s.budget.give(bytes.len());
+        for j in s.index.values_mut() {
+            if *j > i {
+                *j -= 1;
+            }
+        }
+    }
+}
+
+/// Keep `bytes` as the output at `path` when a capture covers it and keeps
+/// it (a later output at the same path replaces it).
+pub fn keep(path: &Path, bytes: Bytes) {
+    let k = key(path);
+    let mut all = scopes();
+    if let Some(s) = scope_of(&mut all, &k).filter(|s| s.keeps(&k)) {
         match s.index.get(&k) {
             Some(&i) => s.outputs[i].1 = bytes,
             None => {
@@ -228,14 +306,16 @@ pub fn get(path: &Path) -> Option<Bytes> {
 }
 
 /// Write an output that is not a table (an XML document, a CSV, a report,
-/// a figure): kept when a capture covers `path`, and written to the file
+/// a figure): kept when a capture covers `path` and keeps it, and written to the file
 /// unless the capture is in memory only.
 pub fn write(path: &Path, bytes: Vec<u8>) -> Result<()> {
     let files = writes_file(path);
     if files {
         std::fs::write(path, &bytes).map_err(|e| Error::io(path, e))?;
     }
-    keep(path, Arc::new(bytes));
+    if budget(path).is_some_and(|b| b.take(bytes.len())) {
+        keep(path, Arc::new(bytes));
+    }
     Ok(())
 }
 
@@ -249,6 +329,8 @@ mod tests {
         let tmp2 = crate::test_dir::TempDir::new("results_capture_other");
         let (dir, other) = (tmp.path().to_path_buf(), tmp2.path().to_path_buf());
         let c = Capture::new(Some(&dir));
+        want(&dir.join("a.txt"));
+        want(&other.join("b.txt"));
         write(&dir.join("a.txt"), b"one".to_vec()).unwrap();
         write(&other.join("b.txt"), b"two".to_vec()).unwrap();
         // Spelt another way, the same file.
@@ -268,6 +350,7 @@ mod tests {
         let _c = Capture::with_limit(Some(dir), 400);
         let table = |name: &str, rows: usize| {
             let p = dir.join(name);
+            want(&p);
             let mut w =
                 crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
                     .unwrap();
@@ -302,5 +385,43 @@ mod tests {
         assert_eq!(t.rows, vec![vec![0.33333333], vec![2.0]]);
         assert_eq!(crate::storage::times_opened(&p), 0);
         assert_eq!(c.outputs().len(), 1);
+    }
+
+    #[test]
+    fn a_capture_with_files_keeps_only_what_a_consumer_reads_until_it_has() {
+        let tmp = crate::test_dir::TempDir::new("results_wanted");
+        let dir = tmp.path();
+        let c = Capture::new(Some(dir));
+        let table = |name: &str| {
+            let p = dir.join(name);
+            let mut w =
+                crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
+                    .unwrap();
+            for k in 0..3 {
+                w.write_row(k as f64, &[0.5]).unwrap();
+            }
+            w.finish().unwrap();
+            p
+        };
+        // Two consumers read `read.sto`; nobody reads `unread.sto` or the report.
+        let read = dir.join("read.sto");
+        want(&read);
+        want(&read);
+        table("read.sto");
+        let unread = table("unread.sto");
+        write(&dir.join("report.txt"), b"not read".to_vec()).unwrap();
+        let (n, bytes) = c.kept();
+        assert_eq!(n, 1, "{:?}", c.outputs());
+        assert_eq!(bytes, std::fs::metadata(&read).unwrap().len());
+        assert!(get(&unread).is_none());
+        // Both files are whole on the disk.
+        assert_eq!(crate::storage::read(&unread).unwrap().len(), 3);
+        crate::storage::read(&read).unwrap();
+        assert_eq!(crate::storage::times_opened(&read), 0);
+        done(&read);
+        assert_eq!(c.kept().0, 1, "dropped before its last consumer read it");
+        done(&read);
+        assert_eq!(c.kept(), (0, 0));
+        assert!(get(&read).is_none());
     }
 }

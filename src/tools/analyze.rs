@@ -63,6 +63,8 @@ fn run_in(
     {
         return Err(e);
     }
+    // The figures and metrics read them from the run's kept outputs.
+    crate::tools::figures::want_tables(&setup.figures, &out);
     let run =
         crate::frame::threads::in_pool(opts.threads, || run_analyses(setup, motion, model, opts));
     run.and_then(|mut summary| {
@@ -76,6 +78,7 @@ fn run_in(
                 &setup.name,
                 &Default::default(),
             )?);
+            crate::tools::figures::tables_read(&setup.figures, &out);
         }
         Ok(summary)
     })
@@ -129,6 +132,16 @@ fn run_analyses(
         None => None,
     };
     let model = shared.as_ref();
+    // A JointReaction's forces file may be this run's force table: kept
+    // in memory until the JointReaction has read it (`storage::results`).
+    let forces_file = |a: &Analysis| match a {
+        Analysis::JointReaction(jr) => jr.forces_file.clone(),
+        _ => None,
+    };
+    let forces_files: Vec<_> = active.iter().filter_map(|a| forces_file(a)).collect();
+    forces_files
+        .iter()
+        .for_each(|f| crate::storage::results::want(f));
     for a in active {
         match a {
             Analysis::MuscleAnalysis(m) => {
@@ -150,6 +163,9 @@ fn run_analyses(
                     continue; // computed inside static optimization
                 }
                 let s = joint_reaction::run(setup, jr, &motion, model, opts)?;
+                if let Some(f) = &jr.forces_file {
+                    crate::storage::results::done(f);
+                }
                 summary.absorb(s, None);
                 if summary.stopped.is_some() {
                     return Ok(summary);

@@ -385,3 +385,20 @@ pub fn figure_reference_problems(setup: &AnalyzeSetup, dir: &Path) -> Vec<Error>
     }
     errors
 }
+
+/// Say that the tables `elements` name (relative to `dir`) will be read
+/// by this run's figures and metrics: the run keeps them in memory
+/// (`storage::results::want`; its capture ends with the run).
+pub fn want_tables(elements: &[FigureOrMetric], dir: &Path) {
+    for r in elements.iter().flat_map(FigureOrMetric::tables) {
+        crate::storage::results::want(&resolve(dir, r.value));
+    }
+}
+
+/// The figures and metrics of `elements` have read their tables (see
+/// [`want_tables`]): the run's capture may drop them.
+pub fn tables_read(elements: &[FigureOrMetric], dir: &Path) {
+    for r in elements.iter().flat_map(FigureOrMetric::tables) {
+        crate::storage::results::done(&resolve(dir, r.value));
+    }
+}

@@ -159,6 +159,13 @@ pub fn run(
     // the frames the pass solved (the motion is read once); a resumed pass
     // solves only its remaining frames, and they read the motion again.
     let wants_positions = reactions.iter().any(|jr| jr.knee_loads) || !problem.knees.is_empty();
+    // The tables this run's own consumers read (the knee tables, the
+    // sweep's statistics): the run keeps them in memory until read
+    // (`storage::results::want`), the others are in their files only.
+    let read_later = read_by_this_run(&setup.name, &specs, reactions, &problem, sweep, &dir);
+    read_later
+        .iter()
+        .for_each(|p| crate::storage::results::want(p));
     let (summaries, positions) = run_sweep(
         &problem,
         stream,
@@ -191,6 +198,7 @@ pub fn run(
                         &setup.setup_file,
                         opts.precision.unwrap_or(setup.output_precision),
                     )?);
+                    crate::storage::results::done(&table);
                 }
             }
         }
@@ -198,16 +206,18 @@ pub fn run(
             let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
             let (jr, _) = spec.reactions.last().expect("the knee contact reactions");
             let out = RunKey::setup(&setup.name, spec.run.sweep).file(OutputKind::KneeContact);
+            let table = dir.join(jr.file(OutputKind::ReactionLoads));
             knee_files.push(crate::tools::knee_contact_table::write(
                 &problem.model,
                 &problem.knees,
                 &states.0,
                 &states.1,
-                &dir.join(jr.file(OutputKind::ReactionLoads)),
+                &table,
                 &dir.join(out),
                 &setup.setup_file,
                 opts.precision.unwrap_or(setup.output_precision),
             )?);
+            crate::storage::results::done(&table);
         }
         let label = format!("w0 = {}", spec.w0);
         summary.absorb(s, sweep.then_some(label.as_str()));
@@ -246,6 +256,7 @@ pub fn run(
                 &weights,
                 precision,
             )?);
+            files.iter().for_each(|f| crate::storage::results::done(f));
         }
         for (jr_setup, (name, _)) in reactions.iter().zip(&jr_specs) {
             let kinds: &[OutputKind] = if jr_setup.knee_loads {
@@ -268,6 +279,7 @@ pub fn run(
                     &weights,
                     precision,
                 )?);
+                files.iter().for_each(|f| crate::storage::results::done(f));
             }
         }
     }
@@ -293,6 +305,7 @@ pub fn run(
             &weights,
             precision,
         )?);
+        files.iter().for_each(|f| crate::storage::results::done(f));
     }
     summary.files.extend(knee_files);
     warnings.extend(summary.warnings);
@@ -439,6 +452,54 @@ pub fn frame_outputs(
         }
     }
     Ok(())
+}
+
+/// The tables of a run's `specs` that the run's own consumers read after
+/// writing them, once per consumer (`storage::results::want`): each
+/// JointReaction's ReactionLoads for its knee loads, the knee contact
+/// reactions for the knee contact table, and in a w0 sweep every table
+/// the statistics average. [`run`] reads exactly these.
+fn read_by_this_run(
+    name: &str,
+    specs: &[RunSpec],
+    reactions: &[JointReactionSetup],
+    problem: &SoProblem,
+    sweep: bool,
+    dir: &std::path::Path,
+) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for spec in specs {
+        for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
+            let mut kinds = Vec::new();
+            if jr_setup.knee_loads {
+                kinds.push(OutputKind::ReactionLoads);
+            }
+            if sweep {
+                kinds.push(OutputKind::ReactionLoads);
+                if jr_setup.knee_loads {
+                    kinds.push(OutputKind::KneeLoads);
+                }
+            }
+            out.extend(kinds.into_iter().map(|k| dir.join(jr.file(k))));
+        }
+        if !problem.knees.is_empty() {
+            if let Some((jr, _)) = spec.reactions.last() {
+                out.push(dir.join(jr.file(OutputKind::ReactionLoads)));
+            }
+            if sweep {
+                let knee = RunKey::setup(name, spec.run.sweep).file(OutputKind::KneeContact);
+                out.push(dir.join(knee));
+            }
+        }
+        if sweep {
+            for kind in OutputKind::SWEEP_TABLES {
+                if !(problem.contacts.is_empty() && kind.needs_contacts()) {
+                    out.push(dir.join(spec.run.file(kind.clone())));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// One run of a sweep: its contact weight, its tables' run and its

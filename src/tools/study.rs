@@ -237,6 +237,11 @@ pub fn run(plan: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
 
 fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     let (runs, expected, moved) = prepare(study, opts.results_dir.as_deref())?;
+    // The tables the figures and metrics draw: kept in memory until drawn
+    // (`storage::results::want`; the study's capture ends with the run).
+    expected
+        .iter()
+        .for_each(|(f, _)| crate::storage::results::want(f));
     let out = opts
         .results_dir
         .clone()
