@@ -228,13 +228,7 @@ fn run<'py>(
         Err(e) => return Err(to_py(py, e)),
     };
     if let Some(c) = &capture {
-        let root = c.root().map(|r| r.display().to_string());
-        d.set_item("in_memory_root", root)?;
-        let outputs = PyList::empty(py);
-        for (path, bytes) in c.outputs() {
-            outputs.append((path.display().to_string(), PyBytes::new(py, &bytes)))?;
-        }
-        d.set_item("outputs", outputs)?;
+        in_memory_outputs(py, &d, c)?;
     }
     Ok(d)
 }
@@ -297,9 +291,11 @@ fn table_parts<'py>(py: Python<'py>, r: statopt::Result<Storage>) -> PyResult<Ta
 /// `statopt-tool predict-grf SETUP`: ground reactions from kinematics alone.
 /// Returns the run summary as a dict with the prediction under
 /// `"prediction"` (agreement with the measured loads per foot and axis,
-/// stance metrics, the foot contacts).
+/// stance metrics, the foot contacts). `in_memory`: as [`run`]'s, no file
+/// is written and `outputs` holds them.
 #[pyfunction]
-#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None, allow_unknown=false))]
+#[pyo3(signature = (setup, text=None, results_dir=None, threads=None, progress=None, allow_unknown=false, in_memory=false))]
+#[allow(clippy::too_many_arguments)]
 fn predict_grf<'py>(
     py: Python<'py>,
     setup: PathBuf,
@@ -308,8 +304,19 @@ fn predict_grf<'py>(
     threads: Option<usize>,
     progress: Option<PyObject>,
     allow_unknown: bool,
+    in_memory: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
+    if in_memory && results_dir.is_some() {
+        return Err(StatoptError::new_err(
+            "in_memory=True writes no file: give no results_dir",
+        ));
+    }
+    let capture = in_memory.then(storage::results::Capture::in_memory);
+    let results_dir = match &capture {
+        Some(c) => c.root().map(PathBuf::from),
+        None => results_dir,
+    };
     let opts = RunOptions {
         results_dir,
         verbose: false,
@@ -364,7 +371,26 @@ fn predict_grf<'py>(
     pred.set_item("rejected", p.rejected.clone())?;
     pred.set_item("body_weight", p.body_weight)?;
     d.set_item("prediction", pred)?;
+    if let Some(c) = &capture {
+        in_memory_outputs(py, &d, c)?;
+    }
     Ok(d)
+}
+
+/// A run in memory's folder name (never created) and its outputs, (path,
+/// bytes) in the order written, in the summary `d`.
+fn in_memory_outputs(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    c: &storage::results::Capture,
+) -> PyResult<()> {
+    let root = c.root().map(|r| r.display().to_string());
+    d.set_item("in_memory_root", root)?;
+    let outputs = PyList::empty(py);
+    for (path, bytes) in c.outputs() {
+        outputs.append((path.display().to_string(), PyBytes::new(py, &bytes)))?;
+    }
+    d.set_item("outputs", outputs)
 }
 
 /// Candidates from Python dicts: `w0`, `expressions` ({force: text}),

@@ -374,7 +374,7 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
     inputs = None
     out = Path(results_dir) if results_dir is not None else None
     # A run without results_dir is kept in memory by the engine: no file.
-    in_memory = results_dir is None and native is _native.run
+    in_memory = results_dir is None and native in (_native.run, _native.predict_grf)
     overrides = dict(overrides)
     if "external_load_scale" in overrides:
         # Scaled by the engine as it reads the loads (no scaled copy).

@@ -548,6 +548,35 @@ def test_predict_grf_equals_cli(repo, cli, tmp_path):
     assert res.summary["prediction"]["contact_points"] > 0
 
 
+def test_predict_grf_without_results_dir_creates_no_file(repo, tmp_path, monkeypatch):
+    """statopt.predict_grf(setup) without results_dir creates no file, as
+    run() (issue 37): no temporary folder, nothing beside the setup."""
+    import tempfile
+
+    setup = repo.parent / "shared" / "models" / "gait2392" / "subject01_walk" / "setup_SO.xml"
+    if not setup.exists():
+        pytest.skip(f"SKIP {setup} is absent")
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    monkeypatch.chdir(cwd)
+    watched = [tmp, cwd, setup.parent]
+    before = [_listing(d) for d in watched]
+
+    def no_folder(*a, **k):
+        raise AssertionError("predict_grf made a temporary results folder")
+
+    # (A folder made and removed again would leave the listings alike.)
+    monkeypatch.setattr(tempfile, "mkdtemp", no_folder)
+    res = statopt.predict_grf(setup, progress=False)
+    assert len(res.predicted_grf) > 0 and res.metrics
+    assert [_listing(d) for d in watched] == before
+    assert res.files == [] and res.summary["files"] == []
+
+
 def test_sweep_own_local_cluster_of_processes(repo):
     # no client: a LocalCluster of worker processes is started and closed
     df = statopt.sweep(repo / "setups" / "leg_extension_cam1.xml", {"contact_weight": [1, 500]},

@@ -326,7 +326,7 @@ pub fn run_with(
     let own = RunKey::setup(&setup.name, Sweep::Single);
     let contacts_file = dir.join(own.file(OutputKind::FootContacts));
     let contacts_xml = contacts.force_set_xml();
-    std::fs::write(&contacts_file, &contacts_xml).map_err(|e| Error::io(&contacts_file, e))?;
+    crate::storage::results::write(&contacts_file, contacts_xml.clone().into_bytes())?;
     let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
     setup.set_force_set_documents(force_sets);
     setup
@@ -617,7 +617,7 @@ fn write_foot_loads(
 
 fn write_metrics(metrics: &[AxisMetrics], stance: &[StanceMetrics], path: &PathBuf) -> Result<()> {
     let err = |e: csv::Error| Error::input(Location::file(path), e.to_string());
-    let mut w = csv::Writer::from_path(path).map_err(err)?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "foot",
         "axis",
@@ -646,7 +646,10 @@ fn write_metrics(metrics: &[AxisMetrics], stance: &[StanceMetrics], path: &PathB
         ])
         .map_err(err)?;
     }
-    w.flush().map_err(|e| Error::io(path, e))
+    let bytes = w
+        .into_inner()
+        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
+    crate::storage::results::write(path, bytes)
 }
 
 pub use crate::forces::external_loads::ForceLayout;
@@ -743,7 +746,7 @@ fn write_external_loads(
     let text = format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Ground reactions predicted by statopt predict-grf; replaces the measured loads in an OpenSim or statopt setup. -->\n<OpenSimDocument Version=\"40000\">\n\t<ExternalLoads name=\"predicted_grf\">\n\t\t<objects>\n{objects}\t\t</objects>\n\t\t<groups />\n\t\t<datafile>{datafile}</datafile>\n\t</ExternalLoads>\n</OpenSimDocument>\n"
     );
-    std::fs::write(&xml, text).map_err(|e| Error::io(&xml, e))?;
+    crate::storage::results::write(&xml, text.into_bytes())?;
     Ok((mot, xml))
 }
 
@@ -810,8 +813,8 @@ fn weak_root_residuals(
             RunKey::setup(&setup.name, Sweep::Single)
                 .file(OutputKind::ForceSetWithoutRootResiduals(k)),
         );
-        std::fs::write(&out, crate::tools::scene::to_xml_string(&filtered))
-            .map_err(|e| Error::io(&out, e))?;
+        let text = crate::tools::scene::to_xml_string(&filtered);
+        crate::storage::results::write(&out, text.into_bytes())?;
         written.push(out);
         *doc = filtered;
     }
@@ -835,7 +838,7 @@ fn weak_root_residuals(
     }
     xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
     let out = dir.join(RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::RootResiduals));
-    std::fs::write(&out, &xml).map_err(|e| Error::io(&out, e))?;
+    crate::storage::results::write(&out, xml.clone().into_bytes())?;
     documents.push(crate::forces::force_set_document(&xml, &out)?);
     written.push(out);
     Ok((documents, written))
