@@ -54,7 +54,10 @@ fn keep_outputs(opts: &RunOptions) -> Option<crate::storage::results::Capture> {
 
 /// Run a setup already read (the Python binding's, after its setters),
 /// its outputs kept in memory for its own consumers as [`run_setup`] keeps them.
-pub fn run_parsed(setup: crate::parse::setup::Setup, opts: &RunOptions) -> crate::Result<RunSummary> {
+pub fn run_parsed(
+    setup: crate::parse::setup::Setup,
+    opts: &RunOptions,
+) -> crate::Result<RunSummary> {
     use crate::parse::setup::Setup;
     let _outputs = keep_outputs(opts);
     match setup {
