@@ -147,6 +147,26 @@ fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
     e
 }
 
+/// A run in memory (`storage::results::Capture::in_memory`, no file
+/// written) when `in_memory`, with the results folder it is kept under;
+/// else no capture and `results_dir` as given. Both at once is an error.
+fn in_memory_capture(
+    in_memory: bool,
+    results_dir: Option<PathBuf>,
+) -> PyResult<(Option<storage::results::Capture>, Option<PathBuf>)> {
+    if in_memory && results_dir.is_some() {
+        return Err(StatoptError::new_err(
+            "in_memory=True writes no file: give no results_dir",
+        ));
+    }
+    let capture = in_memory.then(storage::results::Capture::in_memory);
+    let results_dir = match &capture {
+        Some(c) => c.root().map(PathBuf::from),
+        None => results_dir,
+    };
+    Ok((capture, results_dir))
+}
+
 /// Run a setup (a study, an InverseDynamicsTool or an AnalyzeTool setup) as
 /// `statopt-tool SETUP` does; `text`, when given, is the setup document read
 /// as if it were the file `setup`. Returns the run summary as a dict. The
@@ -181,16 +201,7 @@ fn run<'py>(
     external_scales: Vec<(String, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
-    if in_memory && results_dir.is_some() {
-        return Err(StatoptError::new_err(
-            "in_memory=True writes no file: give no results_dir",
-        ));
-    }
-    let capture = in_memory.then(storage::results::Capture::in_memory);
-    let results_dir = match &capture {
-        Some(c) => c.root().map(PathBuf::from),
-        None => results_dir,
-    };
+    let (capture, results_dir) = in_memory_capture(in_memory, results_dir)?;
     let opts = RunOptions {
         results_dir,
         precision,
@@ -307,16 +318,7 @@ fn predict_grf<'py>(
     in_memory: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
-    if in_memory && results_dir.is_some() {
-        return Err(StatoptError::new_err(
-            "in_memory=True writes no file: give no results_dir",
-        ));
-    }
-    let capture = in_memory.then(storage::results::Capture::in_memory);
-    let results_dir = match &capture {
-        Some(c) => c.root().map(PathBuf::from),
-        None => results_dir,
-    };
+    let (capture, results_dir) = in_memory_capture(in_memory, results_dir)?;
     let opts = RunOptions {
         results_dir,
         verbose: false,
