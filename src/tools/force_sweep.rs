@@ -173,14 +173,7 @@ fn plan_metric(
     // The tables a run of this setup writes, each with its source: the
     // metric's file is one of their names (any w0 the setup runs: a
     // candidate's own tables are read).
-    let weights: Vec<f64> = setup
-        .static_optimization()
-        .map(|so| so.contact_weights.clone())
-        .unwrap_or_default();
-    let mut sweeps = Sweep::all(&weights);
-    if !sweeps.contains(&Sweep::Single) {
-        sweeps.push(Sweep::Single);
-    }
+    let sweeps = crate::writers::names::Planned::sweeps(setup);
     let mut keys = Vec::new();
     let mut sources = Vec::new();
     for &sweep in &sweeps {

@@ -437,22 +437,28 @@ pub struct Planned {
 }
 
 impl Planned {
+    /// The places in a w0 sweep that setup `setup`'s runs may carry: a
+    /// sweep's runs and statistics, and the single run too (a model without
+    /// contacts is solved once, without w0 in the names).
+    pub fn sweeps(setup: &crate::parse::setup::AnalyzeSetup) -> Vec<Sweep> {
+        let weights: Vec<f64> = setup
+            .static_optimization()
+            .map(|so| so.contact_weights.clone())
+            .unwrap_or_default();
+        let mut sweeps = Sweep::all(&weights);
+        if !sweeps.contains(&Sweep::Single) {
+            sweeps.push(Sweep::Single);
+        }
+        sweeps
+    }
+
     /// The outputs of setup `setup`'s analyses that are on.
     pub fn of(setup: &crate::parse::setup::AnalyzeSetup) -> Planned {
         use crate::parse::analyses::KneeSelection;
         use crate::parse::kinematics::KinematicsSetup;
         use crate::parse::setup::Analysis;
         let name = setup.name.as_str();
-        let weights: Vec<f64> = setup
-            .static_optimization()
-            .map(|so| so.contact_weights.clone())
-            .unwrap_or_default();
-        // A sweep's runs and statistics; the single run too (a model without
-        // contacts is solved once, without w0 in the names).
-        let mut sweeps = Sweep::all(&weights);
-        if !sweeps.contains(&Sweep::Single) {
-            sweeps.push(Sweep::Single);
-        }
+        let sweeps = Planned::sweeps(setup);
         let mut p = Planned::default();
         let own = RunKey::setup(name, Sweep::Single);
         p.keys.push(own.key(OutputKind::Metrics));
