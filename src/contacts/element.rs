@@ -25,6 +25,7 @@
 //! | `plane_velocity` | `0 0 0` | statopt: velocity (m/s, plane body frame) of the plane's surface relative to its body, e.g. a treadmill belt `-1.2 0 0`; slip is taken against the moving surface. 0: the paper's rigid plane |
 //! | `speed_weight` | off | statopt: two slip speeds `s_full s_zero` (m/s): the contact weakens with the slip speed of its point over the plane, full strength up to `s_full`, none from `s_zero` (a C¹ smoothstep between), multiplying w(d); AnyBody's ground-reaction prediction uses about `0.12 0.8`. Off (absent) by default, so the paper's model is unchanged |
 //! | `off_intervals` | none | statopt: pairs of times `t0 t1 ...` (s, ascending, t0 < t1): the contact carries nothing for t0 <= t < t1 (its weight is multiplied by `off_weight`); predict-grf writes a landing foot's swing before its kinematic foot strike (docs/grf_prediction.md, "The step-to-step transition"). Absent: always on |
+//! | `held_intervals` | none | statopt: pairs of times `t0 t1 ...` (s, ascending, t0 < t1): for t0 <= t < t1 the contact's point is on the floor whatever its slip: its slip-speed gate (`speed_weight`) is not applied and its regime is static; predict-grf writes a trailing foot's double support, where the model's rigid toe point moves as the real foot rolls over its toes (docs/grf_prediction.md, step 8). Absent: never |
 //! | `off_weight` | 0 | statopt: the factor on the contact's weight within `off_intervals`, in [0, 1) (0: off) |
 //! | `time_weight` | none | statopt: knots `t0 f0 t1 f1 ...` (times ascending, factors in [0, 1]): the contact's weight is multiplied by f, linear between the knots and the end knots' values before and after them; predict-grf writes the smooth transition of double support (docs/grf_prediction.md) |
 //! | `force_target_group` | none | statopt: a name shared by the contacts whose summed force on their point bodies is held to `force_target` (a soft equality, [`super::targets`]); predict-grf writes the trailing foot's share of double support (Ren et al. 2008) |
@@ -114,6 +115,10 @@ pub struct Contact {
     /// `off_weight` (statopt): the factor on the weight within the off
     /// intervals, in [0, 1).
     pub off_weight: f64,
+    /// `held_intervals` (statopt): times [t0, t1) over which the contact's
+    /// slip-speed gate is not applied and its regime is static; empty:
+    /// never.
+    pub held_intervals: Vec<(f64, f64)>,
     /// `time_weight` (statopt): knots (t, factor) of a piecewise-linear
     /// factor on the weight; empty: 1.
     pub time_weight: Vec<(f64, f64)>,
@@ -248,23 +253,13 @@ impl Contact {
             }
             _ => None,
         };
-        let off_intervals = match el.child("off_intervals") {
-            Some(w) if !w.text().trim().is_empty() => {
-                let v = w.numbers()?;
-                let ok = v.len() % 2 == 0
-                    && v.chunks(2).all(|p| p[0] < p[1])
-                    && v.windows(2).all(|p| p[0] <= p[1]);
-                if !ok {
-                    return Err(w.error(format!(
-                        "{} '{name}': <off_intervals> takes pairs of times in s, t0 t1 with t0 < t1, in ascending order (the contact carries nothing for t0 <= t < t1), found '{}'",
-                        el.name,
-                        w.text().trim()
-                    )));
-                }
-                v.chunks(2).map(|p| (p[0], p[1])).collect()
-            }
-            _ => Vec::new(),
-        };
+        let off_intervals = intervals(el, &name, "off_intervals", "the contact carries nothing")?;
+        let held_intervals = intervals(
+            el,
+            &name,
+            "held_intervals",
+            "the contact is on the floor whatever its slip",
+        )?;
         let off_weight = number(el, "off_weight", 0.0)?;
         if !(0.0..1.0).contains(&off_weight) {
             return Err(at(el, "off_weight").error(format!(
@@ -314,6 +309,7 @@ impl Contact {
             surface_velocity,
             off_intervals,
             off_weight,
+            held_intervals,
             time_weight,
             force_target,
             applies_force: applies_force(el)?,
@@ -324,6 +320,28 @@ impl Contact {
 /// The element to blame for a bad property: the property if present.
 fn at<'a>(el: &'a Element, prop: &str) -> &'a Element {
     el.child(prop).unwrap_or(el)
+}
+
+/// Optional pairs of times `t0 t1 ...` (s; t0 < t1, ascending) of
+/// property `prop`; `meaning` says what holds for t0 <= t < t1.
+fn intervals(el: &Element, name: &str, prop: &str, meaning: &str) -> Result<Vec<(f64, f64)>> {
+    match el.child(prop) {
+        Some(w) if !w.text().trim().is_empty() => {
+            let v = w.numbers()?;
+            let ok = v.len() % 2 == 0
+                && v.chunks(2).all(|p| p[0] < p[1])
+                && v.windows(2).all(|p| p[0] <= p[1]);
+            if !ok {
+                return Err(w.error(format!(
+                    "{} '{name}': <{prop}> takes pairs of times in s, t0 t1 with t0 < t1, in ascending order ({meaning} for t0 <= t < t1), found '{}'",
+                    el.name,
+                    w.text().trim()
+                )));
+            }
+            Ok(v.chunks(2).map(|p| (p[0], p[1])).collect())
+        }
+        _ => Ok(Vec::new()),
+    }
 }
 
 /// An optional finite number.

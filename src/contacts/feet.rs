@@ -143,6 +143,11 @@ pub struct FootContactSet {
     /// The factor on a contact's weight within its off intervals
     /// (`off_weight`): 0 unless set.
     pub off_weight: f64,
+    /// Per foot: the times [t0, t1) over which its contacts are on the
+    /// floor whatever their slip (`held_intervals`): the trailing foot's
+    /// double support ([`super::events::apply_transition`]); empty unless
+    /// set.
+    pub held_intervals: [Vec<(f64, f64)>; 2],
     /// Per foot: knots of its contacts' summed force target along
     /// `target_axes` (`force_target`, group `foot_r` / `foot_l`; the trailing
     /// foot's smooth transition, [`super::events::trailing_targets`]);
@@ -425,6 +430,7 @@ pub fn build(
         parameters,
         off_intervals: [Vec::new(), Vec::new()],
         off_weight: 0.0,
+        held_intervals: [Vec::new(), Vec::new()],
         force_target: [Vec::new(), Vec::new()],
         target_optimal_force: Vec::new(),
     })
@@ -582,7 +588,8 @@ impl FootContactSet {
                 off_intervals_xml(
                     &self.off_intervals[if pt.side == 'r' { 0 } else { 1 }],
                     self.off_weight,
-                ) + &self.force_target_xml(pt.side)
+                ) + &held_intervals_xml(&self.held_intervals[if pt.side == 'r' { 0 } else { 1 }])
+                    + &self.force_target_xml(pt.side)
             ));
         }
         s.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
@@ -632,6 +639,20 @@ fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64) -> String {
         .collect();
     format!(
         "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n",
+        times.join(" ")
+    )
+}
+
+fn held_intervals_xml(intervals: &[(f64, f64)]) -> String {
+    if intervals.is_empty() {
+        return String::new();
+    }
+    let times: Vec<String> = intervals
+        .iter()
+        .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
+        .collect();
+    format!(
+        "\t\t\t\t<held_intervals>{}</held_intervals>\n",
         times.join(" ")
     )
 }

@@ -173,6 +173,20 @@ impl Contact {
         self.off_intervals.iter().any(|&(a, b)| t >= a && t < b)
     }
 
+    /// Whether the contact is held at time `t` (`held_intervals`).
+    pub fn is_held_at(&self, t: f64) -> bool {
+        self.held_intervals.iter().any(|&(a, b)| t >= a && t < b)
+    }
+
+    /// `st` as a held contact has it (`held_intervals`): on the floor
+    /// whatever its slip, so its weight is w(d) alone (no slip-speed gate)
+    /// and its regime static.
+    pub fn hold(&self, st: &mut ContactState) {
+        st.weight = weight(st.distance, self.d_tol, self.d_trans);
+        st.beta = 0.0;
+        st.regime = Regime::Static;
+    }
+
     /// The factor of `time_weight` at time `t`: linear between its knots,
     /// the first (last) knot's value before (after) them; 1 without knots.
     pub fn time_factor(&self, t: f64) -> f64 {

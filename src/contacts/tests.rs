@@ -802,6 +802,63 @@ fn speed_weight_weakens_a_sliding_contact() {
     assert!(e.contains("speed_weight") && e.contains("line"), "{e}");
 }
 
+/// `held_intervals` (statopt, issue 36): within t0 <= t < t1 a contact is on
+/// the floor whatever its slip: its weight is w(d) alone (no slip-speed
+/// gate) and its regime static; outside, the gate and the kinetic regime
+/// apply as before. Bad values are refused naming the element and its line.
+#[test]
+fn held_intervals_keep_a_rolling_contact_on_the_floor() {
+    let m = test_model();
+    let p = Vector3::new(0.5, -0.6, 0.1);
+    let props = format!(
+        "<point_body>ground</point_body><point_location>{}</point_location>
+         <plane_body>spin</plane_body><plane_normal>0 1 0</plane_normal>
+         <v_trans>0.8</v_trans><speed_weight>0.12 0.8</speed_weight>",
+        v3(p.into())
+    );
+    let plain = contact(&m, &props);
+    assert!(plain.held_intervals.is_empty() && !plain.is_held_at(0.2));
+    let c = contact(
+        &m,
+        &format!("{props}<held_intervals>0.1 0.3 0.5 0.55</held_intervals>"),
+    );
+    assert_eq!(c.held_intervals, vec![(0.1, 0.3), (0.5, 0.55)]);
+    for (t, held) in [
+        (0.0, false),
+        (0.1, true),
+        (0.2999, true),
+        (0.3, false),
+        (0.52, true),
+    ] {
+        assert_eq!(c.is_held_at(t), held, "t = {t}");
+    }
+    // Sliding at 1.2 m/s: gated to nothing and kinetic; held: full w(d)
+    // and static, the distance's weight unchanged.
+    let q: f64 = 0.3;
+    let k = (-p.y * q.cos() + p.x * q.sin()).abs();
+    let d = data_at(&m, &[("qs", q)], &[("qs", 1.2 / k)]);
+    let mut st = c.state(&m, &d);
+    assert!((st.slip_speed - 1.2).abs() < 1e-12);
+    assert_eq!((st.weight, st.regime), (0.0, Regime::Kinetic));
+    c.hold(&mut st);
+    let w = weight(st.distance, c.d_tol, c.d_trans);
+    assert!(w > 0.0 && st.weight == w, "{} against {w}", st.weight);
+    assert_eq!((st.beta, st.regime), (0.0, Regime::Static));
+    for bad in [
+        "<held_intervals>0.3 0.1</held_intervals>",
+        "<held_intervals>0.1 0.3 0.5</held_intervals>",
+    ] {
+        let e = contact_err(
+            &m,
+            &format!("<PointOnPlaneContact name=\"c\">{props}{bad}</PointOnPlaneContact>"),
+        );
+        assert!(
+            e.contains("held_intervals") && e.contains("line"),
+            "{bad}: {e}"
+        );
+    }
+}
+
 /// `plane_velocity` (statopt): slip is taken against the plane's moving
 /// surface. A point at rest over a belt running at +1 m/s slips at −1 m/s
 /// (kinetic); a point moving with the belt does not slip (static).

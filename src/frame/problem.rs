@@ -430,6 +430,9 @@ impl SoProblem {
         }
         for (ci, c) in self.contacts.iter().enumerate() {
             let mut st = c.state(model, data);
+            if c.is_held_at(t) {
+                c.hold(&mut st);
+            }
             if c.is_off_at(t) {
                 st.weight *= c.off_weight;
             }

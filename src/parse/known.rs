@@ -78,6 +78,7 @@ const CONTACT_PROPERTIES: &[&str] = &[
     "speed_weight",
     "off_intervals",
     "off_weight",
+    "held_intervals",
     "time_weight",
     "force_target_group",
     "force_target_rows",
