@@ -288,7 +288,7 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     }
     (!spans.is_empty()).then(|| {
         format!(
-            "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre; the landing foot carries the rest",
+            "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
             spans.join(", ")
         )
     })
