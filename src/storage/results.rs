@@ -33,6 +33,182 @@ use crate::error::{Error, Result};
 /// One output's bytes, shared by its readers.
 pub type Bytes = Arc<Vec<u8>>;
 
+/// One kept output: a table as its values, or the bytes of any other
+/// output (an XML document, a CSV, a report, a figure).
+#[derive(Clone, Debug)]
+pub enum Output {
+    Table(Arc<KeptTable>),
+    Bytes(Bytes),
+}
+
+impl Output {
+    /// The memory the output holds, in bytes (a table: its values and
+    /// times, 8 bytes each).
+    pub fn size(&self) -> u64 {
+        match self {
+            Output::Table(t) => t.size(),
+            Output::Bytes(b) => b.len() as u64,
+        }
+    }
+}
+
+/// A table a run wrote, as typed values: its header (name, labels,
+/// metadata, as [`super::read`] gives them from the file) and its rows of
+/// f64, each value the one the file prints ([`as_printed`]: the writer's
+/// value rounded to the table's precision, as the reader would parse the
+/// printed digits), built as the writer formats each row; nothing is
+/// parsed. What the reader would refuse in the file (a value that is not
+/// finite, a time that does not increase) is refused when it is read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeptTable {
+    table: super::Storage,
+    /// The line of the file the first data row is on.
+    first_line: usize,
+    precision: usize,
+    /// The first row the reader would refuse: its line, column and what.
+    refused: Option<(usize, Option<String>, String)>,
+}
+
+impl KeptTable {
+    /// A table with the header of `head` (a table file's bytes up to and
+    /// including its label line, `nRows=` 0) and no rows yet.
+    pub(super) fn new(path: &Path, head: &[u8], precision: usize) -> Result<KeptTable> {
+        let table = super::read::read_text(path, head)?;
+        let first_line = head.iter().filter(|&&b| b == b'\n').count() + 1;
+        Ok(KeptTable {
+            table,
+            first_line,
+            precision,
+            refused: None,
+        })
+    }
+
+    /// A table already holding `table`'s rows (a resumed table's, read
+    /// from its file) whose first data row is on line `first_line`.
+    pub(super) fn resumed(table: super::Storage, first_line: usize, precision: usize) -> KeptTable {
+        KeptTable {
+            table,
+            first_line,
+            precision,
+            refused: None,
+        }
+    }
+
+    /// The memory one row of `n` values takes.
+    pub(super) fn row_size(n: usize) -> usize {
+        8 * (n + 1) + std::mem::size_of::<Vec<f64>>()
+    }
+
+    pub(super) fn size(&self) -> u64 {
+        let n = self.table.labels.len();
+        (self.table.len() * Self::row_size(n)) as u64
+    }
+
+    /// Append a row, its values as the file prints them.
+    pub(super) fn push(&mut self, t: f64, values: &[f64]) {
+        let p = self.precision;
+        let t = as_printed(t, p);
+        let row: Vec<f64> = values.iter().map(|&v| as_printed(v, p)).collect();
+        if self.refused.is_none() {
+            let line = self.first_line + self.table.len();
+            let printed = |v: f64| super::format_c_fixed(v, 0, p);
+            let labels = &self.table.labels;
+            if !t.is_finite() {
+                self.refused = Some((line, Some("time".into()), not_finite(&printed(t))));
+            } else if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                self.refused = Some((line, Some(labels[j].clone()), not_finite(&printed(row[j]))));
+            } else if let Some(&last) = self.table.time.last() {
+                if t <= last {
+                    self.refused = Some((
+                        line,
+                        Some("time".into()),
+                        format!("time must increase from row to row, but {t} follows {last}"),
+                    ));
+                }
+            }
+        }
+        self.table.time.push(t);
+        self.table.rows.push(row);
+    }
+
+    /// The table, or the error the reader would give for its file.
+    pub fn table(&self, path: &Path) -> Result<&super::Storage> {
+        match &self.refused {
+            None => Ok(&self.table),
+            Some((line, column, what)) => {
+                let mut at = crate::error::Location::file(path).with_line(*line);
+                if let Some(c) = column {
+                    at = at.with_element(format!("column '{c}'"));
+                }
+                Err(Error::input(at, what.clone()))
+            }
+        }
+    }
+}
+
+/// The reader's message for a value that is not finite.
+fn not_finite(token: &str) -> String {
+    format!("value '{token}' is not finite (NaN/Inf are not accepted in input data)")
+}
+
+/// `x` as a table printed with `precision` decimals gives it back to its
+/// reader: C `printf("%.*f")` rounds the exact binary value to `precision`
+/// decimals (ties to even), and the reader parses those digits to the
+/// nearest f64. Computed, not parsed: `x`·10^p exactly as the sum of two
+/// f64 (a fused multiply-add gives the product's rounding error), rounded
+/// to the integer N the digits spell, then N / 10^p (both exact, so the
+/// quotient is the f64 nearest the printed decimal, as the reader's
+/// parse). Where N or 10^p is not exact in an f64 (|x|·10^p ≥ 2^52 or
+/// p > 22), the digits are printed and parsed. Not finite: `x` itself.
+pub fn as_printed(x: f64, precision: usize) -> f64 {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    if !x.is_finite() {
+        return x;
+    }
+    let scale = match POW10.get(precision) {
+        Some(&s) => s,
+        None => return slow_as_printed(x, precision),
+    };
+    let hi = x * scale;
+    if !(hi.abs() < 4_503_599_627_370_496.0) {
+        return slow_as_printed(x, precision);
+    }
+    // x·10^p = hi + lo exactly.
+    let lo = x.mul_add(scale, -hi);
+    let r = hi.round();
+    // hi - r is exact (|hi| < 2^52) and in [-0.5, 0.5]; lo is below half
+    // an ulp of hi, so only a distance of exactly one half is moved by it.
+    let d = hi - r;
+    let n = if d == 0.5 || d == -0.5 {
+        // hi is a half-integer (round() took it away from zero).
+        let (below, above) = if d > 0.0 { (r, r + 1.0) } else { (r - 1.0, r) };
+        // hi + lo against the midpoint `below + 0.5`.
+        if lo > 0.0 {
+            above
+        } else if lo < 0.0 {
+            below
+        } else if below % 2.0 == 0.0 {
+            below
+        } else {
+            above
+        }
+    } else {
+        r
+    };
+    // Keep the sign of a value printed as -0.000…: the reader gives -0.0.
+    let n = if n == 0.0 { 0.0f64.copysign(x) } else { n };
+    n / scale
+}
+
+/// [`as_printed`] by printing the digits as the writer does and parsing
+/// them.
+fn slow_as_printed(x: f64, precision: usize) -> f64 {
+    super::format_c_fixed(x, 0, precision).parse().unwrap_or(x)
+}
+
 /// The most bytes of tables a capture that writes files keeps: 256 MiB
 /// (the leg extension study writes 54 MB of tables).
 pub const KEPT_LIMIT: u64 = super::IN_MEMORY_LIMIT;
@@ -79,7 +255,7 @@ struct Scope {
     /// how many consumers have not read it yet ([`want`], [`done`]).
     wanted: HashMap<PathBuf, usize>,
     /// Outputs by normalised path, in the order they were finished.
-    outputs: Vec<(PathBuf, Bytes)>,
+    outputs: Vec<(PathBuf, Output)>,
     index: HashMap<PathBuf, usize>,
 }
 
@@ -186,15 +362,15 @@ impl Capture {
             .iter()
             .find(|s| s.id == self.id)
             .map(|s| {
-                let bytes = s.outputs.iter().map(|(_, b)| b.len() as u64).sum();
+                let bytes = s.outputs.iter().map(|(_, o)| o.size()).sum();
                 (s.outputs.len(), bytes)
             })
             .unwrap_or_default()
     }
 
     /// The outputs kept so far, in the order they were finished: (path,
-    /// bytes). The paths are normalised (absolute).
-    pub fn outputs(&self) -> Vec<(PathBuf, Bytes)> {
+    /// output). The paths are normalised (absolute).
+    pub fn outputs(&self) -> Vec<(PathBuf, Output)> {
         scopes()
             .iter()
             .find(|s| s.id == self.id)
@@ -271,8 +447,8 @@ pub fn done(path: &Path) {
     }
     s.wanted.remove(&k);
     if let Some(i) = s.index.remove(&k) {
-        let (_, bytes) = s.outputs.remove(i);
-        s.budget.give(bytes.len());
+        let (_, output) = s.outputs.remove(i);
+        s.budget.give(output.size() as usize);
         for j in s.index.values_mut() {
             if *j > i {
                 *j -= 1;
@@ -281,24 +457,24 @@ pub fn done(path: &Path) {
     }
 }
 
-/// Keep `bytes` as the output at `path` when a capture covers it and keeps
-/// it (a later output at the same path replaces it).
-pub fn keep(path: &Path, bytes: Bytes) {
+/// Keep `output` as the output at `path` when a capture covers it and
+/// keeps it (a later output at the same path replaces it).
+pub fn keep(path: &Path, output: Output) {
     let k = key(path);
     let mut all = scopes();
     if let Some(s) = scope_of(&mut all, &k).filter(|s| s.keeps(&k)) {
         match s.index.get(&k) {
-            Some(&i) => s.outputs[i].1 = bytes,
+            Some(&i) => s.outputs[i].1 = output,
             None => {
                 s.index.insert(k.clone(), s.outputs.len());
-                s.outputs.push((k, bytes));
+                s.outputs.push((k, output));
             }
         }
     }
 }
 
-/// The bytes this run wrote at `path`, when a capture kept them.
-pub fn get(path: &Path) -> Option<Bytes> {
+/// The output this run wrote at `path`, when a capture kept it.
+pub fn get(path: &Path) -> Option<Output> {
     let k = key(path);
     let all = scopes();
     all.iter()
@@ -314,7 +490,7 @@ pub fn write(path: &Path, bytes: Vec<u8>) -> Result<()> {
         std::fs::write(path, &bytes).map_err(|e| Error::io(path, e))?;
     }
     if budget(path).is_some_and(|b| b.take(bytes.len())) {
-        keep(path, Arc::new(bytes));
+        keep(path, Output::Bytes(Arc::new(bytes)));
     }
     Ok(())
 }
@@ -335,7 +511,11 @@ mod tests {
         write(&other.join("b.txt"), b"two".to_vec()).unwrap();
         // Spelt another way, the same file.
         let again = dir.join("x").join("..").join("a.txt");
-        assert_eq!(get(&again).unwrap().as_slice(), b"one");
+        let bytes = |o: Option<Output>| match o {
+            Some(Output::Bytes(b)) => b,
+            o => panic!("{o:?}"),
+        };
+        assert_eq!(bytes(get(&again)).as_slice(), b"one");
         assert!(get(&other.join("b.txt")).is_none());
         assert_eq!(std::fs::read(dir.join("a.txt")).unwrap(), b"one");
         assert_eq!(c.outputs().len(), 1);
@@ -412,7 +592,8 @@ mod tests {
         write(&dir.join("report.txt"), b"not read".to_vec()).unwrap();
         let (n, bytes) = c.kept();
         assert_eq!(n, 1, "{:?}", c.outputs());
-        assert_eq!(bytes, std::fs::metadata(&read).unwrap().len());
+        // Three rows of a time and one value, as f64.
+        assert_eq!(bytes, 3 * KeptTable::row_size(1) as u64);
         assert!(get(&unread).is_none());
         // Both files are whole on the disk.
         assert_eq!(crate::storage::read(&unread).unwrap().len(), 3);
@@ -423,5 +604,111 @@ mod tests {
         done(&read);
         assert_eq!(c.kept(), (0, 0));
         assert!(get(&read).is_none());
+    }
+
+    #[test]
+    fn a_kept_value_is_the_value_its_file_gives_back() {
+        // The printed digits parsed (the reader's `str::parse`, bit for
+        // bit) against the value computed: random values of every scale,
+        // the halfway cases, zeros of both signs, large values.
+        let printed = |x: f64, p: usize| -> f64 {
+            crate::storage::format_c_fixed(x, 0, p)
+                .trim()
+                .parse()
+                .unwrap()
+        };
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut values = vec![0.0, -0.0, 1e-12, -1e-12, 0.5, -0.5, 2.5e-8, -2.5e-8];
+        // Exact binary halfway cases at 8 decimals: odd multiples of 5^8 / 2^9.
+        for k in [1.0, 3.0, 5.0, 7.0, 1001.0, -3.0] {
+            values.push(k * 390625.0 / 512.0 * 1e-8);
+            values.push(k * 390625.0 / 512.0);
+        }
+        for _ in 0..200_000 {
+            let m = (next() >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let e = (next() % 24) as i32 - 12;
+            values.push(m * 10f64.powi(e));
+        }
+        values.extend([4.4e7, -4.6e7, 1e15, 1.0e300]);
+        for &x in &values {
+            for p in [0, 3, 8, 12, 16, 20, 25] {
+                let (got, want) = (as_printed(x, p), printed(x, p));
+                assert_eq!(
+                    got.to_bits(),
+                    want.to_bits(),
+                    "{x:e} at {p} decimals: {got} != {want}"
+                );
+            }
+        }
+        assert!(as_printed(f64::NAN, 8).is_nan());
+    }
+
+    #[test]
+    fn a_kept_table_reads_as_its_file_and_refuses_what_the_reader_refuses() {
+        let tmp = crate::test_dir::TempDir::new("results_typed");
+        let dir = tmp.path();
+        let _c = Capture::new(Some(dir));
+        let labels = ["a".to_string(), "b".to_string()];
+        let write = |name: &str, rows: &[(f64, [f64; 2])]| {
+            let p = dir.join(name);
+            want(&p);
+            let mut w = crate::storage::StoWriter::create_for_setup(
+                Path::new("setup.xml"),
+                &p,
+                "t",
+                "a description\nkey=value\n",
+                &labels,
+                8,
+                false,
+            )
+            .unwrap();
+            for (t, v) in rows {
+                w.write_row(*t, v).unwrap();
+            }
+            w.finish().unwrap();
+            p
+        };
+        let good = write(
+            "good.sto",
+            &[(0.0, [1.0 / 3.0, -1e-12]), (0.01, [2.0, 123.456789125])],
+        );
+        let file =
+            crate::storage::read_file(&crate::storage::TableFile::read(&good).unwrap()).unwrap();
+        let kept = crate::storage::read(&good).unwrap();
+        assert_eq!(
+            crate::storage::times_opened(&good),
+            1,
+            "the kept table was read from its file"
+        );
+        assert_eq!(format!("{kept:?}"), format!("{file:?}"));
+        let mut rows = crate::storage::open_rows(&good).unwrap();
+        assert_eq!(rows.table.labels, file.labels);
+        let mut row = Vec::new();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.0));
+        let mark = rows.mark();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.01));
+        assert_eq!(row, file.rows[1]);
+        assert_eq!(rows.next_row(&mut row).unwrap(), None);
+        rows.seek(&mark).unwrap();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.01));
+        // What the reader refuses in the file is refused the same way.
+        for (name, rows) in [
+            ("nan.sto", vec![(0.0, [1.0, 1.0]), (0.1, [1.0, f64::NAN])]),
+            ("time.sto", vec![(0.0, [1.0, 1.0]), (0.0, [1.0, 1.0])]),
+        ] {
+            let p = write(name, &rows);
+            let from_file =
+                crate::storage::read_file(&crate::storage::TableFile::read(&p).unwrap())
+                    .unwrap_err()
+                    .to_string();
+            let kept = crate::storage::read(&p).unwrap_err().to_string();
+            assert_eq!(kept, from_file);
+        }
     }
 }
