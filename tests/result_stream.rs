@@ -130,3 +130,60 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
     statopt::storage::read(one).unwrap();
     assert_eq!(statopt::storage::times_opened(one), 1);
 }
+
+#[test]
+fn two_runs_in_memory_at_once_in_one_process_keep_apart() {
+    // Two threads of one process each run the cam 1 setup in memory (as
+    // two Python threads or Dask workers in threads would): each run's
+    // capture holds its own outputs only, under its own folder name, and
+    // the two hold the same tables; no file is created.
+    use statopt::storage::results::{Capture, Output};
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let setup = root.join("setups/leg_extension_cam1.xml");
+    let both = std::sync::Barrier::new(2);
+    let run = || {
+        let c = Capture::in_memory();
+        let dir = c.root().unwrap().to_path_buf();
+        both.wait(); // both runs hold their captures
+        run_setup(
+            &setup,
+            &RunOptions {
+                results_dir: Some(dir.clone()),
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert!(!dir.exists(), "{} was created", dir.display());
+        let outputs: Vec<(PathBuf, Output)> = c
+            .outputs()
+            .into_iter()
+            .map(|(p, o)| {
+                assert!(p.starts_with(&dir), "{} is not this run's", p.display());
+                (p.strip_prefix(&dir).unwrap().to_path_buf(), o)
+            })
+            .collect();
+        outputs
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(run);
+        let b = s.spawn(run);
+        (a.join().unwrap(), b.join().unwrap())
+    });
+    let tables = |o: &[(PathBuf, Output)]| -> Vec<(PathBuf, statopt::storage::Storage)> {
+        o.iter()
+            .filter_map(|(p, o)| match o {
+                Output::Table(t) => Some((p.clone(), t.table(p).unwrap().clone())),
+                Output::Bytes(_) => None,
+            })
+            .filter(|(p, _)| !p.to_string_lossy().contains("diagnostics"))
+            .collect()
+    };
+    let (ta, tb) = (tables(&a), tables(&b));
+    assert!(ta.len() >= 20, "{} tables", ta.len());
+    assert_eq!(a.len(), b.len());
+    let mut ta = ta;
+    let mut tb = tb;
+    ta.sort_by(|x, y| x.0.cmp(&y.0));
+    tb.sort_by(|x, y| x.0.cmp(&y.0));
+    assert!(ta == tb, "the two runs' tables differ");
+}

@@ -240,7 +240,8 @@ impl Budget {
     }
 }
 
-struct Scope {
+/// One run's capture: what it covers and keeps, and the outputs kept.
+struct Run {
     id: u64,
     /// The folder the capture covers (None: every path).
     root: Option<PathBuf>,
@@ -251,6 +252,11 @@ struct Scope {
     /// are the run's result), else only those a consumer of the run will
     /// read ([`want`]).
     keep_all: bool,
+    kept: Mutex<Kept>,
+}
+
+#[derive(Default)]
+struct Kept {
     /// The outputs a consumer of the run will read, by normalised path:
     /// how many consumers have not read it yet ([`want`], [`done`]).
     wanted: HashMap<PathBuf, usize>,
@@ -259,11 +265,28 @@ struct Scope {
     index: HashMap<PathBuf, usize>,
 }
 
-static SCOPES: Mutex<Vec<Scope>> = Mutex::new(Vec::new());
+impl Run {
+    fn kept(&self) -> std::sync::MutexGuard<'_, Kept> {
+        self.kept.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Whether the output at (normalised) `k` is kept.
+    fn keeps(&self, k: &Path) -> bool {
+        self.keep_all || self.kept().wanted.contains_key(k)
+    }
+}
+
+/// A number no other capture of the process takes (a capture's id, the
+/// folder name of a capture in memory): a counter, not a registry.
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
-fn scopes() -> std::sync::MutexGuard<'static, Vec<Scope>> {
-    SCOPES.lock().unwrap_or_else(|e| e.into_inner())
+thread_local! {
+    /// The captures of the runs this thread works for, innermost last: the
+    /// run's context ([`Context`]). Each run owns its capture; the
+    /// context only says which run a thread's work belongs to, so that two
+    /// runs in one process (threads of a Python program, Dask workers)
+    /// never see each other's outputs.
+    static ENTERED: std::cell::RefCell<Vec<Arc<Run>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// `path` made absolute and `.`/`..` resolved by its text (no file system
@@ -283,44 +306,63 @@ fn key(path: &Path) -> PathBuf {
     out
 }
 
-/// The scope that covers the (normalised) path `k`: the one whose folder
-/// is the longest start of it, else the newest that covers every path.
-fn scope_of<'a>(scopes: &'a mut [Scope], k: &Path) -> Option<&'a mut Scope> {
-    let mut best: Option<(usize, usize)> = None;
-    for (i, s) in scopes.iter().enumerate() {
-        let depth = match &s.root {
-            Some(r) if k.starts_with(r) => r.components().count() + 1,
-            Some(_) => continue,
-            None => 0,
-        };
-        if best.is_none_or(|(_, d)| depth >= d) {
-            best = Some((i, depth));
+/// The capture of this thread's run that covers the (normalised) path
+/// `k`: the one whose folder is the longest start of it, else the
+/// innermost that covers every path.
+fn run_of(k: &Path) -> Option<Arc<Run>> {
+    ENTERED.with(|e| {
+        let runs = e.borrow();
+        let mut best: Option<(usize, usize)> = None;
+        for (i, r) in runs.iter().enumerate() {
+            let depth = match &r.root {
+                Some(root) if k.starts_with(root) => root.components().count() + 1,
+                Some(_) => continue,
+                None => 0,
+            };
+            if best.is_none_or(|(_, d)| depth >= d) {
+                best = Some((i, depth));
+            }
         }
-    }
-    best.map(move |(i, _)| &mut scopes[i])
+        best.map(|(i, _)| runs[i].clone())
+    })
 }
 
-/// A run's capture of its outputs (ends when dropped).
+/// Remove the last entry of `id` from this thread's captures.
+fn leave(id: u64) {
+    // (At a thread's exit the list may be gone already.)
+    let _ = ENTERED.try_with(|e| {
+        let mut runs = e.borrow_mut();
+        if let Some(i) = runs.iter().rposition(|r| r.id == id) {
+            runs.remove(i);
+        }
+    });
+}
+
+/// A run's capture of its outputs, owned by the run: it covers the work of
+/// the thread that made it, and of the threads that work is handed to with
+/// the run's [`Context`]; it ends when dropped. Not `Send`: it is dropped
+/// on the thread that made it.
 pub struct Capture {
-    id: u64,
-    root: Option<PathBuf>,
+    run: Arc<Run>,
+    _thread: std::marker::PhantomData<*const ()>,
 }
 
 impl Capture {
     fn start(root: Option<&Path>, files: bool, limit: u64) -> Capture {
         let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
-        let root = root.map(key);
-        scopes().push(Scope {
+        let run = Arc::new(Run {
             id,
-            root: root.clone(),
+            root: root.map(key),
             files,
             budget: Budget::new(limit),
             keep_all: !files,
-            wanted: HashMap::new(),
-            outputs: Vec::new(),
-            index: HashMap::new(),
+            kept: Mutex::new(Kept::default()),
         });
-        Capture { id, root }
+        ENTERED.with(|e| e.borrow_mut().push(run.clone()));
+        Capture {
+            run,
+            _thread: std::marker::PhantomData,
+        }
     }
 
     /// Keep the outputs written under `root` (every path, for None) that a
@@ -353,66 +395,91 @@ impl Capture {
 
     /// The folder the capture covers (None: every path).
     pub fn root(&self) -> Option<&Path> {
-        self.root.as_deref()
+        self.run.root.as_deref()
     }
 
-    /// How many outputs the capture holds now, and their bytes.
+    /// How many outputs the capture holds now, and their size in bytes
+    /// ([`Output::size`]).
     pub fn kept(&self) -> (usize, u64) {
-        scopes()
-            .iter()
-            .find(|s| s.id == self.id)
-            .map(|s| {
-                let bytes = s.outputs.iter().map(|(_, o)| o.size()).sum();
-                (s.outputs.len(), bytes)
-            })
-            .unwrap_or_default()
+        let kept = self.run.kept();
+        let bytes = kept.outputs.iter().map(|(_, o)| o.size()).sum();
+        (kept.outputs.len(), bytes)
     }
 
     /// The outputs kept so far, in the order they were finished: (path,
     /// output). The paths are normalised (absolute).
     pub fn outputs(&self) -> Vec<(PathBuf, Output)> {
-        scopes()
-            .iter()
-            .find(|s| s.id == self.id)
-            .map(|s| s.outputs.clone())
-            .unwrap_or_default()
+        self.run.kept().outputs.clone()
     }
 }
 
 impl Drop for Capture {
     fn drop(&mut self) {
-        scopes().retain(|s| s.id != self.id);
+        leave(self.run.id);
+    }
+}
+
+/// The captures the current thread's work writes to and reads from: its
+/// run's. Work handed to another thread (the frame loop's sinks, a worker
+/// pool, a study's setups side by side) takes it along and enters it
+/// there ([`Context::enter`]), so that thread's outputs are its run's.
+#[derive(Clone, Default)]
+pub struct Context(Vec<Arc<Run>>);
+
+/// This thread's [`Context`].
+pub fn context() -> Context {
+    ENTERED.with(|e| Context(e.borrow().clone()))
+}
+
+/// While it lives, the current thread works for the context it entered.
+pub struct Entered {
+    ids: Vec<u64>,
+    _thread: std::marker::PhantomData<*const ()>,
+}
+
+impl Context {
+    /// Work for this context on the current thread until the guard is
+    /// dropped.
+    pub fn enter(&self) -> Entered {
+        ENTERED.with(|e| e.borrow_mut().extend(self.0.iter().cloned()));
+        Entered {
+            ids: self.0.iter().map(|r| r.id).collect(),
+            _thread: std::marker::PhantomData,
+        }
+    }
+
+    /// `f` working for this context.
+    pub fn run<T>(&self, f: impl FnOnce() -> T) -> T {
+        let _entered = self.enter();
+        f()
+    }
+}
+
+impl Drop for Entered {
+    fn drop(&mut self) {
+        for &id in self.ids.iter().rev() {
+            leave(id);
+        }
     }
 }
 
 /// Whether an output at `path` is written to a file (false under a
 /// capture in memory only).
 pub fn writes_file(path: &Path) -> bool {
-    let k = key(path);
-    scope_of(&mut scopes(), &k).is_none_or(|s| s.files)
+    run_of(&key(path)).is_none_or(|r| r.files)
 }
 
-/// Whether a capture covers `path` (it keeps the outputs there that it
-/// keeps: every one, or those a consumer [`want`]s).
+/// Whether a capture of this thread's run covers `path` (it keeps the
+/// outputs there that it keeps: every one, or those a consumer [`want`]s).
 pub fn captured(path: &Path) -> bool {
-    let k = key(path);
-    scope_of(&mut scopes(), &k).is_some()
+    run_of(&key(path)).is_some()
 }
 
 /// The budget of the capture that covers `path`, when it keeps the output
 /// there (None: not kept).
 pub(super) fn budget(path: &Path) -> Option<Budget> {
     let k = key(path);
-    scope_of(&mut scopes(), &k)
-        .filter(|s| s.keeps(&k))
-        .map(|s| s.budget.clone())
-}
-
-impl Scope {
-    /// Whether the output at (normalised) `k` is kept.
-    fn keeps(&self, k: &Path) -> bool {
-        self.keep_all || self.wanted.contains_key(k)
-    }
+    run_of(&k).filter(|r| r.keeps(&k)).map(|r| r.budget.clone())
 }
 
 /// Say that a consumer of this run will read the output at `path` (the
@@ -423,9 +490,8 @@ impl Scope {
 /// with one [`done`] when that consumer has read it.
 pub fn want(path: &Path) {
     let k = key(path);
-    let mut all = scopes();
-    if let Some(s) = scope_of(&mut all, &k) {
-        *s.wanted.entry(k).or_default() += 1;
+    if let Some(r) = run_of(&k) {
+        *r.kept().wanted.entry(k).or_default() += 1;
     }
 }
 
@@ -434,22 +500,22 @@ pub fn want(path: &Path) {
 /// holds it).
 pub fn done(path: &Path) {
     let k = key(path);
-    let mut all = scopes();
-    let Some(s) = scope_of(&mut all, &k) else {
+    let Some(r) = run_of(&k) else {
         return;
     };
-    let Some(n) = s.wanted.get_mut(&k) else {
+    let mut kept = r.kept();
+    let Some(n) = kept.wanted.get_mut(&k) else {
         return;
     };
     *n = n.saturating_sub(1);
-    if *n > 0 || s.keep_all {
+    if *n > 0 || r.keep_all {
         return;
     }
-    s.wanted.remove(&k);
-    if let Some(i) = s.index.remove(&k) {
-        let (_, output) = s.outputs.remove(i);
-        s.budget.give(output.size() as usize);
-        for j in s.index.values_mut() {
+    kept.wanted.remove(&k);
+    if let Some(i) = kept.index.remove(&k) {
+        let (_, output) = kept.outputs.remove(i);
+        r.budget.give(output.size() as usize);
+        for j in kept.index.values_mut() {
             if *j > i {
                 *j -= 1;
             }
@@ -461,24 +527,29 @@ pub fn done(path: &Path) {
 /// keeps it (a later output at the same path replaces it).
 pub fn keep(path: &Path, output: Output) {
     let k = key(path);
-    let mut all = scopes();
-    if let Some(s) = scope_of(&mut all, &k).filter(|s| s.keeps(&k)) {
-        match s.index.get(&k) {
-            Some(&i) => s.outputs[i].1 = output,
-            None => {
-                s.index.insert(k.clone(), s.outputs.len());
-                s.outputs.push((k, output));
-            }
+    let Some(r) = run_of(&k).filter(|r| r.keeps(&k)) else {
+        return;
+    };
+    let mut kept = r.kept();
+    match kept.index.get(&k) {
+        Some(&i) => kept.outputs[i].1 = output,
+        None => {
+            let i = kept.outputs.len();
+            kept.index.insert(k.clone(), i);
+            kept.outputs.push((k, output));
         }
     }
 }
 
-/// The output this run wrote at `path`, when a capture kept it.
+/// The output this thread's run wrote at `path`, when its capture kept it.
 pub fn get(path: &Path) -> Option<Output> {
     let k = key(path);
-    let all = scopes();
-    all.iter()
-        .find_map(|s| s.index.get(&k).map(|&i| s.outputs[i].1.clone()))
+    ENTERED.with(|e| {
+        e.borrow().iter().rev().find_map(|r| {
+            let kept = r.kept();
+            kept.index.get(&k).map(|&i| kept.outputs[i].1.clone())
+        })
+    })
 }
 
 /// Write an output that is not a table (an XML document, a CSV, a report,
@@ -710,5 +781,56 @@ mod tests {
             let kept = crate::storage::read(&p).unwrap_err().to_string();
             assert_eq!(kept, from_file);
         }
+    }
+
+    #[test]
+    fn two_runs_in_one_process_keep_apart_even_in_one_folder() {
+        // Two runs on two threads, both capturing the same folder, at the
+        // same time: each keeps its own outputs only and reads only its
+        // own (a registry shared by the process would hand both to the
+        // newer capture).
+        let tmp = crate::test_dir::TempDir::new("results_two_runs");
+        let dir = tmp.path().to_path_buf();
+        let both = std::sync::Barrier::new(2);
+        let run = |name: &str, value: f64| {
+            let c = Capture::new(Some(&dir));
+            both.wait(); // both captures exist
+            let p = dir.join(name);
+            want(&p);
+            let mut w =
+                crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
+                    .unwrap();
+            w.write_row(0.0, &[value]).unwrap();
+            w.finish().unwrap();
+            both.wait(); // both tables written
+            let other = dir.join(if name == "a.sto" { "b.sto" } else { "a.sto" });
+            let outputs: Vec<PathBuf> = c.outputs().into_iter().map(|(p, _)| p).collect();
+            let mine = crate::storage::read(&p).unwrap().rows;
+            (outputs, get(&other).is_some(), mine, key(&p))
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(|| run("a.sto", 1.0));
+            let b = s.spawn(|| run("b.sto", 2.0));
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        for ((outputs, sees_other, rows, own), v) in [(a, 1.0), (b, 2.0)] {
+            assert_eq!(outputs, vec![own], "a capture holds another run's output");
+            assert!(!sees_other, "a run sees another run's output");
+            assert_eq!(rows, vec![vec![v]]);
+        }
+        // Work handed to another thread with the run's context is the run's.
+        let c = Capture::new(Some(&dir));
+        let ctx = context();
+        let p = dir.join("handed.sto");
+        want(&p);
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                assert!(!captured(&p), "a thread without the run's context");
+                let _run = ctx.enter();
+                write(&p, b"x".to_vec()).unwrap();
+            });
+        });
+        assert_eq!(c.outputs().len(), 1);
+        assert!(get(&p).is_some());
     }
 }

@@ -691,8 +691,10 @@ fn run_sweep(
     } else {
         None
     };
+    let run = crate::storage::results::context();
     let (writers, first, first_block) = std::thread::scope(|scope| {
         let opening = scope.spawn(|| {
+            let _run = run.enter();
             runs.iter()
                 .zip(&log_names)
                 .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))

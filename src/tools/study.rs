@@ -273,9 +273,13 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // taken in the study's order, whatever order the setups finish in; the
     // first error in that order is the study's.
     use rayon::prelude::*;
+    // Each setup's work is the study run's (its capture) on whichever
+    // worker thread runs it.
+    let study_run = crate::storage::results::context();
     let done: Vec<Result<RunSummary>> = runs
         .par_iter()
         .map(|r| {
+            let _run = study_run.enter();
             let run_opts = RunOptions {
                 results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
                 ..opts.clone()
