@@ -186,14 +186,11 @@ pub fn as_printed(x: f64, precision: usize) -> f64 {
         // hi is a half-integer (round() took it away from zero).
         let (below, above) = if d > 0.0 { (r, r + 1.0) } else { (r - 1.0, r) };
         // hi + lo against the midpoint `below + 0.5`.
-        if lo > 0.0 {
+        // (On the midpoint itself, ties go to the even one.)
+        if lo > 0.0 || (lo == 0.0 && below % 2.0 != 0.0) {
             above
-        } else if lo < 0.0 {
-            below
-        } else if below % 2.0 == 0.0 {
-            below
         } else {
-            above
+            below
         }
     } else {
         r
