@@ -187,3 +187,69 @@ fn two_runs_in_memory_at_once_in_one_process_keep_apart() {
     tb.sort_by(|x, y| x.0.cmp(&y.0));
     assert!(ta == tb, "the two runs' tables differ");
 }
+
+#[test]
+fn a_sweeps_statistics_from_the_frame_stream_equal_those_of_its_tables() {
+    // The cam 1 sweep (w0 = 1, 500, 1000) makes its mean, min and max
+    // tables as the frames arrive (`writers::sweep_statistics::
+    // SweepStatistics`); made again afterwards from its per-w0 tables on
+    // the disk, the way they were made before, they are the same bytes.
+    use statopt::writers::names::Stat;
+    use statopt::writers::sweep_statistics::write_sweep_statistics;
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let setup = root.join("setups/leg_extension_cam1.xml");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_sweep_stats");
+    let again = out.join("again");
+    let _ = std::fs::remove_dir_all(&out);
+    run_setup(
+        &setup,
+        &RunOptions {
+            results_dir: Some(out.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    std::fs::create_dir_all(&again).unwrap();
+    let weights = [1.0, 500.0, 1000.0];
+    let mut compared = 0;
+    for (run, kind) in [
+        ("SO", "activation"),
+        ("SO", "force"),
+        ("SO", "ContactForces"),
+        ("SO", "ContactBodyForces"),
+        ("SO", "GeneralizedForcesBySource"),
+        ("SO", "MusclePower"),
+        ("JR", "ReactionLoads"),
+    ] {
+        let name = |tag: &str| format!("leg_extension_cam1_{run}_w0_{tag}_{kind}.sto");
+        let files: Vec<PathBuf> = ["1", "500", "1000"]
+            .iter()
+            .map(|t| out.join(name(t)))
+            .collect();
+        let streamed = std::fs::read_to_string(out.join(name("mean"))).unwrap();
+        let table = streamed.lines().next().unwrap().trim_end_matches(" mean");
+        let row = streamed.lines().find(|l| l.starts_with(' ')).unwrap();
+        let value = row.split('\t').next().unwrap().trim();
+        let precision = value.len() - value.find('.').unwrap() - 1;
+        write_sweep_statistics(
+            &setup,
+            &files,
+            &|stat: Stat| again.join(name(stat.as_str())),
+            table,
+            &weights,
+            precision,
+        )
+        .unwrap();
+        for stat in Stat::ALL {
+            let a = std::fs::read(out.join(name(stat.as_str()))).unwrap();
+            let b = std::fs::read(again.join(name(stat.as_str()))).unwrap();
+            assert!(
+                a == b,
+                "{} differs from the tables' statistics",
+                name(stat.as_str())
+            );
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 21);
+}
