@@ -5,6 +5,8 @@
 //! them from the run's kept outputs (`storage::results`). Before, the study
 //! opened 266 of its output files for reading.
 
+mod common;
+
 use std::path::{Component, Path, PathBuf};
 
 use statopt::tools::{run_setup, RunOptions};
@@ -252,4 +254,75 @@ fn a_sweeps_statistics_from_the_frame_stream_equal_those_of_its_tables() {
         }
     }
     assert_eq!(compared, 21);
+}
+
+#[test]
+fn a_joint_reaction_reading_another_setups_forces_is_declared_ahead() {
+    // A study of two setups: `jr.xml` (listed first) runs a JointReaction
+    // on the force table that `so.xml`'s static optimization writes. The
+    // study knows it before it runs: `so.xml` runs first, keeps the table
+    // in memory until the JointReaction has read it, and with `-o` the
+    // JointReaction reads it where it was moved. No output file is opened
+    // for reading; the reactions are those of the two setups run one after
+    // the other, the second reading the first's file.
+    let dir = common::out_dir("result_stream_cross_setup_jr");
+    std::fs::write(dir.join("block.osim"), common::block_model("")).unwrap();
+    let mut motion = String::from(
+        "block\nversion=1\nnRows=41\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n",
+    );
+    for k in 0..41 {
+        let t = k as f64 * 0.01;
+        motion.push_str(&format!("{t:.6}\t{:.12}\t0\t0\n", 0.2 * (t * 0.5).sin()));
+    }
+    std::fs::write(dir.join("motion.mot"), motion).unwrap();
+    let setup = |name: &str, analysis: &str| {
+        let text = format!(
+            r#"<OpenSimDocument Version="40000"><AnalyzeTool name="{name}"><model_file>block.osim</model_file><results_directory>out_{name}</results_directory>
+<initial_time>0</initial_time><final_time>100000</final_time><output_precision>12</output_precision>
+<AnalysisSet name="Analyses"><objects>{analysis}</objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#
+        );
+        std::fs::write(dir.join(format!("{name}.xml")), text).unwrap();
+        dir.join(format!("{name}.xml"))
+    };
+    let so = setup("so", r#"<StaticOptimization name="SO"/>"#);
+    let jr = setup(
+        "jr",
+        r#"<JointReaction name="JR"><forces_file>out_so/so_SO_force.sto</forces_file><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>"#,
+    );
+    std::fs::write(
+        dir.join("study.xml"),
+        r#"<OpenSimDocument Version="40000"><StatoptStudy name="cross"><setups>jr.xml so.xml</setups><results_directory>out_study</results_directory></StatoptStudy></OpenSimDocument>"#,
+    )
+    .unwrap();
+    let moved = dir.join("moved");
+    run_setup(
+        &dir.join("study.xml"),
+        &RunOptions {
+            results_dir: Some(moved.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let m = normal(&moved);
+    let read_back: Vec<(PathBuf, usize)> = statopt::storage::opened()
+        .into_iter()
+        .filter(|(p, _)| normal(p).starts_with(&m))
+        .collect();
+    assert!(
+        read_back.is_empty(),
+        "output files opened for reading: {read_back:?}"
+    );
+    assert!(!dir.join("out_so").exists(), "the study wrote outside -o");
+    // The same two setups run one after the other, into their own folders.
+    for s in [&so, &jr] {
+        run_setup(s, &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let table = "jr_JR_ReactionLoads.sto";
+    let study = std::fs::read(moved.join("out_jr").join(table)).unwrap();
+    let alone = std::fs::read(dir.join("out_jr").join(table)).unwrap();
+    assert!(
+        study == alone,
+        "the study's reactions differ from the setups run alone"
+    );
 }
