@@ -970,3 +970,31 @@ fn the_architecture_doc_names_code_that_exists() {
         wrong.join("\n")
     );
 }
+
+/// docs/architecture.md, "Results stay in memory": each run owns its
+/// capture; `storage::results` keeps no process-wide registry of outputs
+/// (its one `static` is an id counter, the runs a thread works for are
+/// thread-local).
+#[test]
+fn a_run_owns_its_outputs_in_no_process_wide_registry() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let code = shipped_code(&std::fs::read_to_string(root.join("src/storage/results.rs")).unwrap());
+    let mut in_thread_local = false;
+    let mut statics = Vec::new();
+    for line in code.lines() {
+        let t = line.trim_start();
+        if t.starts_with("thread_local!") {
+            in_thread_local = true;
+        } else if in_thread_local && t.starts_with('}') {
+            in_thread_local = false;
+        }
+        let t = t.strip_prefix("pub ").unwrap_or(t);
+        if t.starts_with("static ") && !in_thread_local {
+            statics.push(t.to_string());
+        }
+    }
+    assert!(
+        statics.iter().all(|s| s.contains(": AtomicU64 ")) && statics.len() <= 1,
+        "process-wide statics in storage/results.rs: {statics:?}"
+    );
+}

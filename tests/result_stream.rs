@@ -5,6 +5,8 @@
 //! them from the run's kept outputs (`storage::results`). Before, the study
 //! opened 266 of its output files for reading.
 
+mod common;
+
 use std::path::{Component, Path, PathBuf};
 
 use statopt::tools::{run_setup, RunOptions};
@@ -129,4 +131,198 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
         .unwrap();
     statopt::storage::read(one).unwrap();
     assert_eq!(statopt::storage::times_opened(one), 1);
+}
+
+#[test]
+fn two_runs_in_memory_at_once_in_one_process_keep_apart() {
+    // Two threads of one process each run the cam 1 setup in memory (as
+    // two Python threads or Dask workers in threads would): each run's
+    // capture holds its own outputs only, under its own folder name, and
+    // the two hold the same tables; no file is created.
+    use statopt::storage::results::{Capture, Output};
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let setup = root.join("setups/leg_extension_cam1.xml");
+    let both = std::sync::Barrier::new(2);
+    let run = || {
+        let c = Capture::in_memory();
+        let dir = c.root().unwrap().to_path_buf();
+        both.wait(); // both runs hold their captures
+        run_setup(
+            &setup,
+            &RunOptions {
+                results_dir: Some(dir.clone()),
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert!(!dir.exists(), "{} was created", dir.display());
+        let outputs: Vec<(PathBuf, Output)> = c
+            .outputs()
+            .into_iter()
+            .map(|(p, o)| {
+                assert!(p.starts_with(&dir), "{} is not this run's", p.display());
+                (p.strip_prefix(&dir).unwrap().to_path_buf(), o)
+            })
+            .collect();
+        outputs
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(run);
+        let b = s.spawn(run);
+        (a.join().unwrap(), b.join().unwrap())
+    });
+    let tables = |o: &[(PathBuf, Output)]| -> Vec<(PathBuf, statopt::storage::Storage)> {
+        o.iter()
+            .filter_map(|(p, o)| match o {
+                Output::Table(t) => Some((p.clone(), t.table(p).unwrap().clone())),
+                Output::Bytes(_) => None,
+            })
+            .filter(|(p, _)| !p.to_string_lossy().contains("diagnostics"))
+            .collect()
+    };
+    let (ta, tb) = (tables(&a), tables(&b));
+    assert!(ta.len() >= 20, "{} tables", ta.len());
+    assert_eq!(a.len(), b.len());
+    let mut ta = ta;
+    let mut tb = tb;
+    ta.sort_by(|x, y| x.0.cmp(&y.0));
+    tb.sort_by(|x, y| x.0.cmp(&y.0));
+    assert!(ta == tb, "the two runs' tables differ");
+}
+
+#[test]
+fn a_sweeps_statistics_from_the_frame_stream_equal_those_of_its_tables() {
+    // The cam 1 sweep (w0 = 1, 500, 1000) makes its mean, min and max
+    // tables as the frames arrive (`writers::sweep_statistics::
+    // SweepStatistics`); made again afterwards from its per-w0 tables on
+    // the disk, the way they were made before, they are the same bytes.
+    use statopt::writers::names::Stat;
+    use statopt::writers::sweep_statistics::write_sweep_statistics;
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let setup = root.join("setups/leg_extension_cam1.xml");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_sweep_stats");
+    let again = out.join("again");
+    let _ = std::fs::remove_dir_all(&out);
+    run_setup(
+        &setup,
+        &RunOptions {
+            results_dir: Some(out.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    std::fs::create_dir_all(&again).unwrap();
+    let weights = [1.0, 500.0, 1000.0];
+    let mut compared = 0;
+    for (run, kind) in [
+        ("SO", "activation"),
+        ("SO", "force"),
+        ("SO", "ContactForces"),
+        ("SO", "ContactBodyForces"),
+        ("SO", "GeneralizedForcesBySource"),
+        ("SO", "MusclePower"),
+        ("JR", "ReactionLoads"),
+    ] {
+        let name = |tag: &str| format!("leg_extension_cam1_{run}_w0_{tag}_{kind}.sto");
+        let files: Vec<PathBuf> = ["1", "500", "1000"]
+            .iter()
+            .map(|t| out.join(name(t)))
+            .collect();
+        let streamed = std::fs::read_to_string(out.join(name("mean"))).unwrap();
+        let table = streamed.lines().next().unwrap().trim_end_matches(" mean");
+        let row = streamed.lines().find(|l| l.starts_with(' ')).unwrap();
+        let value = row.split('\t').next().unwrap().trim();
+        let precision = value.len() - value.find('.').unwrap() - 1;
+        write_sweep_statistics(
+            &setup,
+            &files,
+            &|stat: Stat| again.join(name(stat.as_str())),
+            table,
+            &weights,
+            precision,
+        )
+        .unwrap();
+        for stat in Stat::ALL {
+            let a = std::fs::read(out.join(name(stat.as_str()))).unwrap();
+            let b = std::fs::read(again.join(name(stat.as_str()))).unwrap();
+            assert!(
+                a == b,
+                "{} differs from the tables' statistics",
+                name(stat.as_str())
+            );
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 21);
+}
+
+#[test]
+fn a_joint_reaction_reading_another_setups_forces_is_declared_ahead() {
+    // A study of two setups: `jr.xml` (listed first) runs a JointReaction
+    // on the force table that `so.xml`'s static optimization writes. The
+    // study knows it before it runs: `so.xml` runs first, keeps the table
+    // in memory until the JointReaction has read it, and with `-o` the
+    // JointReaction reads it where it was moved. No output file is opened
+    // for reading; the reactions are those of the two setups run one after
+    // the other, the second reading the first's file.
+    let dir = common::out_dir("result_stream_cross_setup_jr");
+    std::fs::write(dir.join("block.osim"), common::block_model("")).unwrap();
+    let mut motion = String::from(
+        "block\nversion=1\nnRows=41\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n",
+    );
+    for k in 0..41 {
+        let t = k as f64 * 0.01;
+        motion.push_str(&format!("{t:.6}\t{:.12}\t0\t0\n", 0.2 * (t * 0.5).sin()));
+    }
+    std::fs::write(dir.join("motion.mot"), motion).unwrap();
+    let setup = |name: &str, analysis: &str| {
+        let text = format!(
+            r#"<OpenSimDocument Version="40000"><AnalyzeTool name="{name}"><model_file>block.osim</model_file><results_directory>out_{name}</results_directory>
+<initial_time>0</initial_time><final_time>100000</final_time><output_precision>12</output_precision>
+<AnalysisSet name="Analyses"><objects>{analysis}</objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#
+        );
+        std::fs::write(dir.join(format!("{name}.xml")), text).unwrap();
+        dir.join(format!("{name}.xml"))
+    };
+    let so = setup("so", r#"<StaticOptimization name="SO"/>"#);
+    let jr = setup(
+        "jr",
+        r#"<JointReaction name="JR"><forces_file>out_so/so_SO_force.sto</forces_file><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>"#,
+    );
+    std::fs::write(
+        dir.join("study.xml"),
+        r#"<OpenSimDocument Version="40000"><StatoptStudy name="cross"><setups>jr.xml so.xml</setups><results_directory>out_study</results_directory></StatoptStudy></OpenSimDocument>"#,
+    )
+    .unwrap();
+    let moved = dir.join("moved");
+    run_setup(
+        &dir.join("study.xml"),
+        &RunOptions {
+            results_dir: Some(moved.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let m = normal(&moved);
+    let read_back: Vec<(PathBuf, usize)> = statopt::storage::opened()
+        .into_iter()
+        .filter(|(p, _)| normal(p).starts_with(&m))
+        .collect();
+    assert!(
+        read_back.is_empty(),
+        "output files opened for reading: {read_back:?}"
+    );
+    assert!(!dir.join("out_so").exists(), "the study wrote outside -o");
+    // The same two setups run one after the other, into their own folders.
+    for s in [&so, &jr] {
+        run_setup(s, &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let table = "jr_JR_ReactionLoads.sto";
+    let study = std::fs::read(moved.join("out_jr").join(table)).unwrap();
+    let alone = std::fs::read(dir.join("out_jr").join(table)).unwrap();
+    assert!(
+        study == alone,
+        "the study's reactions differ from the setups run alone"
+    );
 }

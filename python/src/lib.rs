@@ -180,8 +180,9 @@ fn in_memory_capture(
 /// With `in_memory` (no `results_dir`) the run writes no file
 /// (`storage::results::Capture::in_memory`): the summary's `files` name
 /// the outputs under a folder that is not created (`in_memory_root`), and
-/// `outputs` holds each output's bytes, (path, bytes) in the order written
-/// (tables as their files would hold them; `parse_tables` reads them).
+/// `outputs` holds each output, (path, output) in the order written: a
+/// table as its parts (`read_table`'s tuple, the values its file would
+/// give), any other output as its bytes.
 #[pyfunction]
 #[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false, in_memory=false, external_scales=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
@@ -380,7 +381,7 @@ fn predict_grf<'py>(
 }
 
 /// A run in memory's folder name (never created) and its outputs, (path,
-/// bytes) in the order written, in the summary `d`.
+/// table parts or bytes) in the order written, in the summary `d`.
 fn in_memory_outputs(
     py: Python<'_>,
     d: &Bound<'_, PyDict>,
@@ -389,8 +390,16 @@ fn in_memory_outputs(
     let root = c.root().map(|r| r.display().to_string());
     d.set_item("in_memory_root", root)?;
     let outputs = PyList::empty(py);
-    for (path, bytes) in c.outputs() {
-        outputs.append((path.display().to_string(), PyBytes::new(py, &bytes)))?;
+    for (path, output) in c.outputs() {
+        let path = path.display().to_string();
+        match output {
+            // A table as its values (nothing printed or parsed).
+            storage::results::Output::Table(t) => {
+                let st = t.table(std::path::Path::new(&path)).cloned();
+                outputs.append((path, table_parts(py, st)?))?
+            }
+            storage::results::Output::Bytes(b) => outputs.append((path, PyBytes::new(py, &b)))?,
+        }
     }
     d.set_item("outputs", outputs)
 }

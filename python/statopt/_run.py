@@ -59,7 +59,7 @@ class Result:
     def __init__(self, setup: str, summary: Dict[str, Any], table_files: List[Tuple[str, Path]],
                  metrics: Dict[str, float], files: List[str], scratch: Optional[Path] = None,
                  keys: Optional[List[Optional[Dict[str, Any]]]] = None,
-                 kept: Optional[Dict[str, bytes]] = None):
+                 kept: Optional[Dict[str, Any]] = None):
         self.setup = setup
         self.summary = summary
         self.metrics = metrics
@@ -70,7 +70,8 @@ class Result:
         self._keys: Dict[str, Optional[Dict[str, Any]]] = {
             k: key for (k, _), key in zip(table_files, keys or [None] * len(table_files))
         }
-        # The tables' bytes of a run kept in memory, by normalised path.
+        # The outputs of a run kept in memory, by normalised path: a table
+        # as its parts (the engine's values), any other output as bytes.
         self._kept = kept
         self._tables: Optional[Dict[str, pd.DataFrame]] = None
         self._lock = threading.Lock()
@@ -86,9 +87,13 @@ class Result:
             if self._tables is None:
                 try:
                     if self._kept is not None:
-                        parts = _native.parse_tables(
-                            [(str(p), self._kept[os.path.normpath(str(p))]) for _, p in self._table_files])
-                        dfs = [_frame(t) for t in parts]
+                        # Tables come as their values; a table kept as
+                        # bytes only (none the engine writes) is parsed.
+                        kept = [self._kept[os.path.normpath(str(p))] for _, p in self._table_files]
+                        as_bytes = [(str(p), k) for (_, p), k in zip(self._table_files, kept)
+                                    if isinstance(k, bytes)]
+                        parsed = iter(_native.parse_tables(as_bytes) if as_bytes else [])
+                        dfs = [_frame(next(parsed) if isinstance(k, bytes) else k) for k in kept]
                         self._kept = None
                     else:
                         dfs = read_tables([p for _, p in self._table_files]) if self._table_files else []
@@ -235,7 +240,7 @@ def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
     return out
 
 
-def _read_metrics(files: List[str], kept: Optional[Dict[str, bytes]] = None) -> Dict[str, float]:
+def _read_metrics(files: List[str], kept: Optional[Dict[str, Any]] = None) -> Dict[str, float]:
     """The metrics of the ``_metrics.csv`` files among ``files`` (from their
     bytes in ``kept`` for a run kept in memory)."""
     metrics: Dict[str, float] = {}

@@ -40,11 +40,13 @@ impl SoProblem {
         // thread of their own while the model is read and compiled; they are
         // bound to the model where `build_from` reads them, so errors come
         // in the same order.
+        let run = crate::storage::results::context();
         let (am, loads) = std::thread::scope(|scope| {
+            let run = &run;
             let loads = setup
                 .external_loads_file
                 .as_deref()
-                .map(|p| scope.spawn(move || ExternalLoadsFiles::read(p, setup.dir())));
+                .map(|p| scope.spawn(move || run.run(|| ExternalLoadsFiles::read(p, setup.dir()))));
             let am = load_analysis_model(setup);
             let loads = loads.map(|h| {
                 h.join()

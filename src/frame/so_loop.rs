@@ -90,14 +90,19 @@ pub fn solve_frames(
             drop(pool);
         }
     };
+    // The sinks write and read the run's outputs: on their threads they
+    // work for the caller's run (its capture, `storage::results`).
+    let run = crate::storage::results::context();
     std::thread::scope(|scope| -> Result<bool> {
         let release = &release;
+        let run = &run;
         let mut senders = Vec::with_capacity(sinks.len());
         let mut threads = Vec::with_capacity(sinks.len());
         for sink in sinks {
             let (tx, rx) = std::sync::mpsc::sync_channel::<Shared>(FRAMES_IN_FLIGHT);
             senders.push(tx);
             threads.push(scope.spawn(move || -> Result<()> {
+                let _run = run.enter();
                 for results in rx {
                     sink(&results)?;
                     release(results);

@@ -8,13 +8,18 @@ use crate::error::{Error, Result};
 
 /// `f` in a pool of `threads` worker threads (at least one), or in the
 /// pool the caller runs in when `threads` is None.
+/// The work runs for the caller's run (its outputs' capture,
+/// `storage::results::context`) on whichever thread runs it.
 pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
     match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build()
-            .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?
-            .install(f),
+        Some(n) => {
+            let run = crate::storage::results::context();
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::internal(format!("cannot start {n} worker threads: {e}")))?
+                .install(move || run.run(f))
+        }
         None => f(),
     }
 }

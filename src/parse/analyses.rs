@@ -517,6 +517,12 @@ pub struct JointReactionSetup {
 }
 
 impl JointReactionSetup {
+    /// Take the actuators' forces from `path` instead (a study run with
+    /// `-o DIR` reads another setup's force table where it moved it).
+    pub fn set_forces_file(&mut self, path: PathBuf) {
+        self.forces_file = Some(path);
+    }
+
     /// A `<JointReaction>` element given as text, read as if it stood in
     /// the file `path` (paths in it resolve against `setup_dir`).
     pub fn from_text(

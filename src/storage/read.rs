@@ -26,8 +26,11 @@ use std::path::Path;
 /// A table this run wrote (kept by a [`super::results::Capture`]) is read
 /// from the bytes kept in memory: the file is not opened.
 pub fn read(path: &Path) -> Result<Storage> {
-    if let Some(bytes) = super::results::get(path) {
-        return read_text(path, &bytes);
+    use super::results::Output;
+    match super::results::get(path) {
+        Some(Output::Table(t)) => return t.table(path).cloned(),
+        Some(Output::Bytes(bytes)) => return read_text(path, &bytes),
+        None => {}
     }
     let bytes = super::source::read_bytes(path)?;
     read_text(path, &bytes)
@@ -43,7 +46,7 @@ pub fn read_file(file: &TableFile) -> Result<Storage> {
 }
 
 /// [`read`] on the bytes of the file `path`.
-fn read_text(path: &Path, bytes: &[u8]) -> Result<Storage> {
+pub(super) fn read_text(path: &Path, bytes: &[u8]) -> Result<Storage> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         Error::input(
             Location::file(path),
@@ -740,6 +743,9 @@ pub struct RowReader {
     /// The data rows a [`TableFile`] parsed ahead ([`super::source`]), and
     /// the index of the one expected next.
     parsed: Option<(std::sync::Arc<super::source::ParsedRows>, usize)>,
+    /// A table this run kept as values (`super::results`): its rows are
+    /// handed out in turn, nothing is parsed.
+    kept: Option<std::sync::Arc<super::results::KeptTable>>,
 }
 
 /// A position between rows, to come back to with [`RowReader::seek`].
@@ -811,8 +817,33 @@ enum RowFormat {
 /// A table this run wrote (kept by a [`super::results::Capture`]) is read
 /// from the bytes kept in memory: the file is not opened.
 pub fn open_rows(path: &Path) -> Result<RowReader> {
+    use super::results::Output;
     match super::results::get(path) {
-        Some(bytes) => open_rows_in(&TableFile::kept(path, bytes)),
+        Some(Output::Table(t)) => {
+            let table = t.table(path)?;
+            Ok(RowReader {
+                path: path.to_path_buf(),
+                table: Storage {
+                    time: Vec::new(),
+                    rows: Vec::new(),
+                    ..table.clone()
+                },
+                lines: LineSource {
+                    reader: Box::new(std::io::Cursor::new(Vec::new())),
+                    offset: 0,
+                    buf: Vec::new(),
+                },
+                line_no: 0,
+                format: RowFormat::Legacy,
+                limit: table.len(),
+                count: 0,
+                last_time: f64::NEG_INFINITY,
+                last_line: 0,
+                parsed: None,
+                kept: Some(t),
+            })
+        }
+        Some(Output::Bytes(bytes)) => open_rows_in(&TableFile::kept(path, bytes)),
         None => open_rows_in(&TableFile::on_disk(path)),
     }
 }
@@ -896,6 +927,7 @@ pub fn open_rows_in(file: &TableFile) -> Result<RowReader> {
             last_time: f64::NEG_INFINITY,
             last_line: label_line,
             parsed: None,
+            kept: None,
         });
     }
     let (table, limit) = legacy_table(path, h, label_line, &label_text, is_mot)?;
@@ -914,6 +946,7 @@ pub fn open_rows_in(file: &TableFile) -> Result<RowReader> {
         last_time: f64::NEG_INFINITY,
         last_line: label_line,
         parsed,
+        kept: None,
     })
 }
 
@@ -938,6 +971,10 @@ impl RowReader {
     /// while reading this file.
     pub fn seek(&mut self, m: &RowMark) -> Result<()> {
         use std::io::Seek;
+        if self.kept.is_some() {
+            self.count = m.count;
+            return Ok(());
+        }
         if let RowFormat::Table { ended, .. } = &mut self.format {
             *ended = false;
         }
@@ -999,6 +1036,15 @@ impl RowReader {
     pub fn next_row(&mut self, row: &mut Vec<f64>) -> Result<Option<f64>> {
         if self.count >= self.limit {
             return Ok(None); // OpenSim reads exactly nRows rows
+        }
+        if let Some(kept) = &self.kept {
+            // Checked when opened (`KeptTable::table`).
+            let k = self.count;
+            let t = kept.table(&self.path)?;
+            row.clear();
+            row.extend_from_slice(&t.rows[k]);
+            self.count += 1;
+            return Ok(Some(t.time[k]));
         }
         let ahead = self.parsed_ahead(row);
         let line_no = &mut self.line_no;

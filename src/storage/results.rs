@@ -33,6 +33,179 @@ use crate::error::{Error, Result};
 /// One output's bytes, shared by its readers.
 pub type Bytes = Arc<Vec<u8>>;
 
+/// One kept output: a table as its values, or the bytes of any other
+/// output (an XML document, a CSV, a report, a figure).
+#[derive(Clone, Debug)]
+pub enum Output {
+    Table(Arc<KeptTable>),
+    Bytes(Bytes),
+}
+
+impl Output {
+    /// The memory the output holds, in bytes (a table: its values and
+    /// times, 8 bytes each).
+    pub fn size(&self) -> u64 {
+        match self {
+            Output::Table(t) => t.size(),
+            Output::Bytes(b) => b.len() as u64,
+        }
+    }
+}
+
+/// A table a run wrote, as typed values: its header (name, labels,
+/// metadata, as [`super::read`] gives them from the file) and its rows of
+/// f64, each value the one the file prints ([`as_printed`]: the writer's
+/// value rounded to the table's precision, as the reader would parse the
+/// printed digits), built as the writer formats each row; nothing is
+/// parsed. What the reader would refuse in the file (a value that is not
+/// finite, a time that does not increase) is refused when it is read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeptTable {
+    table: super::Storage,
+    /// The line of the file the first data row is on.
+    first_line: usize,
+    precision: usize,
+    /// The first row the reader would refuse: its line, column and what.
+    refused: Option<(usize, Option<String>, String)>,
+}
+
+impl KeptTable {
+    /// A table with the header of `head` (a table file's bytes up to and
+    /// including its label line, `nRows=` 0) and no rows yet.
+    pub(super) fn new(path: &Path, head: &[u8], precision: usize) -> Result<KeptTable> {
+        let table = super::read::read_text(path, head)?;
+        let first_line = head.iter().filter(|&&b| b == b'\n').count() + 1;
+        Ok(KeptTable {
+            table,
+            first_line,
+            precision,
+            refused: None,
+        })
+    }
+
+    /// A table already holding `table`'s rows (a resumed table's, read
+    /// from its file) whose first data row is on line `first_line`.
+    pub(super) fn resumed(table: super::Storage, first_line: usize, precision: usize) -> KeptTable {
+        KeptTable {
+            table,
+            first_line,
+            precision,
+            refused: None,
+        }
+    }
+
+    /// The memory one row of `n` values takes.
+    pub(super) fn row_size(n: usize) -> usize {
+        8 * (n + 1) + std::mem::size_of::<Vec<f64>>()
+    }
+
+    pub(super) fn size(&self) -> u64 {
+        let n = self.table.labels.len();
+        (self.table.len() * Self::row_size(n)) as u64
+    }
+
+    /// Append a row, its values as the file prints them.
+    pub(super) fn push(&mut self, t: f64, values: &[f64]) {
+        let p = self.precision;
+        let t = as_printed(t, p);
+        let row: Vec<f64> = values.iter().map(|&v| as_printed(v, p)).collect();
+        if self.refused.is_none() {
+            let line = self.first_line + self.table.len();
+            let printed = |v: f64| super::format_c_fixed(v, 0, p);
+            let labels = &self.table.labels;
+            if !t.is_finite() {
+                self.refused = Some((line, Some("time".into()), not_finite(&printed(t))));
+            } else if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                self.refused = Some((line, Some(labels[j].clone()), not_finite(&printed(row[j]))));
+            } else if let Some(&last) = self.table.time.last() {
+                if t <= last {
+                    self.refused = Some((
+                        line,
+                        Some("time".into()),
+                        format!("time must increase from row to row, but {t} follows {last}"),
+                    ));
+                }
+            }
+        }
+        self.table.time.push(t);
+        self.table.rows.push(row);
+    }
+
+    /// The table, or the error the reader would give for its file.
+    pub fn table(&self, path: &Path) -> Result<&super::Storage> {
+        match &self.refused {
+            None => Ok(&self.table),
+            Some((line, column, what)) => {
+                let mut at = crate::error::Location::file(path).with_line(*line);
+                if let Some(c) = column {
+                    at = at.with_element(format!("column '{c}'"));
+                }
+                Err(Error::input(at, what.clone()))
+            }
+        }
+    }
+}
+
+/// The reader's message for a value that is not finite.
+fn not_finite(token: &str) -> String {
+    format!("value '{token}' is not finite (NaN/Inf are not accepted in input data)")
+}
+
+/// `x` as a table printed with `precision` decimals gives it back to its
+/// reader: C `printf("%.*f")` rounds the exact binary value to `precision`
+/// decimals (ties to even), and the reader parses those digits to the
+/// nearest f64. Computed, not parsed: `x`·10^p exactly as the sum of two
+/// f64 (a fused multiply-add gives the product's rounding error), rounded
+/// to the integer N the digits spell, then N / 10^p (both exact, so the
+/// quotient is the f64 nearest the printed decimal, as the reader's
+/// parse). Where N or 10^p is not exact in an f64 (|x|·10^p ≥ 2^52 or
+/// p > 22), the digits are printed and parsed. Not finite: `x` itself.
+pub fn as_printed(x: f64, precision: usize) -> f64 {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    if !x.is_finite() {
+        return x;
+    }
+    let scale = match POW10.get(precision) {
+        Some(&s) => s,
+        None => return slow_as_printed(x, precision),
+    };
+    let hi = x * scale;
+    if !(hi.abs() < 4_503_599_627_370_496.0) {
+        return slow_as_printed(x, precision);
+    }
+    // x·10^p = hi + lo exactly.
+    let lo = x.mul_add(scale, -hi);
+    let r = hi.round();
+    // hi - r is exact (|hi| < 2^52) and in [-0.5, 0.5]; lo is below half
+    // an ulp of hi, so only a distance of exactly one half is moved by it.
+    let d = hi - r;
+    let n = if d == 0.5 || d == -0.5 {
+        // hi is a half-integer (round() took it away from zero).
+        let (below, above) = if d > 0.0 { (r, r + 1.0) } else { (r - 1.0, r) };
+        // hi + lo against the midpoint `below + 0.5`.
+        // (On the midpoint itself, ties go to the even one.)
+        if lo > 0.0 || (lo == 0.0 && below % 2.0 != 0.0) {
+            above
+        } else {
+            below
+        }
+    } else {
+        r
+    };
+    // Keep the sign of a value printed as -0.000…: the reader gives -0.0.
+    let n = if n == 0.0 { 0.0f64.copysign(x) } else { n };
+    n / scale
+}
+
+/// [`as_printed`] by printing the digits as the writer does and parsing
+/// them.
+fn slow_as_printed(x: f64, precision: usize) -> f64 {
+    super::format_c_fixed(x, 0, precision).parse().unwrap_or(x)
+}
+
 /// The most bytes of tables a capture that writes files keeps: 256 MiB
 /// (the leg extension study writes 54 MB of tables).
 pub const KEPT_LIMIT: u64 = super::IN_MEMORY_LIMIT;
@@ -64,7 +237,8 @@ impl Budget {
     }
 }
 
-struct Scope {
+/// One run's capture: what it covers and keeps, and the outputs kept.
+struct Run {
     id: u64,
     /// The folder the capture covers (None: every path).
     root: Option<PathBuf>,
@@ -75,19 +249,41 @@ struct Scope {
     /// are the run's result), else only those a consumer of the run will
     /// read ([`want`]).
     keep_all: bool,
+    kept: Mutex<Kept>,
+}
+
+#[derive(Default)]
+struct Kept {
     /// The outputs a consumer of the run will read, by normalised path:
     /// how many consumers have not read it yet ([`want`], [`done`]).
     wanted: HashMap<PathBuf, usize>,
     /// Outputs by normalised path, in the order they were finished.
-    outputs: Vec<(PathBuf, Bytes)>,
+    outputs: Vec<(PathBuf, Output)>,
     index: HashMap<PathBuf, usize>,
 }
 
-static SCOPES: Mutex<Vec<Scope>> = Mutex::new(Vec::new());
+impl Run {
+    fn kept(&self) -> std::sync::MutexGuard<'_, Kept> {
+        self.kept.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Whether the output at (normalised) `k` is kept.
+    fn keeps(&self, k: &Path) -> bool {
+        self.keep_all || self.kept().wanted.contains_key(k)
+    }
+}
+
+/// A number no other capture of the process takes (a capture's id, the
+/// folder name of a capture in memory): a counter, not a registry.
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
-fn scopes() -> std::sync::MutexGuard<'static, Vec<Scope>> {
-    SCOPES.lock().unwrap_or_else(|e| e.into_inner())
+thread_local! {
+    /// The captures of the runs this thread works for, innermost last: the
+    /// run's context ([`Context`]). Each run owns its capture; the
+    /// context only says which run a thread's work belongs to, so that two
+    /// runs in one process (threads of a Python program, Dask workers)
+    /// never see each other's outputs.
+    static ENTERED: std::cell::RefCell<Vec<Arc<Run>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// `path` made absolute and `.`/`..` resolved by its text (no file system
@@ -107,44 +303,63 @@ fn key(path: &Path) -> PathBuf {
     out
 }
 
-/// The scope that covers the (normalised) path `k`: the one whose folder
-/// is the longest start of it, else the newest that covers every path.
-fn scope_of<'a>(scopes: &'a mut [Scope], k: &Path) -> Option<&'a mut Scope> {
-    let mut best: Option<(usize, usize)> = None;
-    for (i, s) in scopes.iter().enumerate() {
-        let depth = match &s.root {
-            Some(r) if k.starts_with(r) => r.components().count() + 1,
-            Some(_) => continue,
-            None => 0,
-        };
-        if best.is_none_or(|(_, d)| depth >= d) {
-            best = Some((i, depth));
+/// The capture of this thread's run that covers the (normalised) path
+/// `k`: the one whose folder is the longest start of it, else the
+/// innermost that covers every path.
+fn run_of(k: &Path) -> Option<Arc<Run>> {
+    ENTERED.with(|e| {
+        let runs = e.borrow();
+        let mut best: Option<(usize, usize)> = None;
+        for (i, r) in runs.iter().enumerate() {
+            let depth = match &r.root {
+                Some(root) if k.starts_with(root) => root.components().count() + 1,
+                Some(_) => continue,
+                None => 0,
+            };
+            if best.is_none_or(|(_, d)| depth >= d) {
+                best = Some((i, depth));
+            }
         }
-    }
-    best.map(move |(i, _)| &mut scopes[i])
+        best.map(|(i, _)| runs[i].clone())
+    })
 }
 
-/// A run's capture of its outputs (ends when dropped).
+/// Remove the last entry of `id` from this thread's captures.
+fn leave(id: u64) {
+    // (At a thread's exit the list may be gone already.)
+    let _ = ENTERED.try_with(|e| {
+        let mut runs = e.borrow_mut();
+        if let Some(i) = runs.iter().rposition(|r| r.id == id) {
+            runs.remove(i);
+        }
+    });
+}
+
+/// A run's capture of its outputs, owned by the run: it covers the work of
+/// the thread that made it, and of the threads that work is handed to with
+/// the run's [`Context`]; it ends when dropped. Not `Send`: it is dropped
+/// on the thread that made it.
 pub struct Capture {
-    id: u64,
-    root: Option<PathBuf>,
+    run: Arc<Run>,
+    _thread: std::marker::PhantomData<*const ()>,
 }
 
 impl Capture {
     fn start(root: Option<&Path>, files: bool, limit: u64) -> Capture {
         let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
-        let root = root.map(key);
-        scopes().push(Scope {
+        let run = Arc::new(Run {
             id,
-            root: root.clone(),
+            root: root.map(key),
             files,
             budget: Budget::new(limit),
             keep_all: !files,
-            wanted: HashMap::new(),
-            outputs: Vec::new(),
-            index: HashMap::new(),
+            kept: Mutex::new(Kept::default()),
         });
-        Capture { id, root }
+        ENTERED.with(|e| e.borrow_mut().push(run.clone()));
+        Capture {
+            run,
+            _thread: std::marker::PhantomData,
+        }
     }
 
     /// Keep the outputs written under `root` (every path, for None) that a
@@ -177,66 +392,91 @@ impl Capture {
 
     /// The folder the capture covers (None: every path).
     pub fn root(&self) -> Option<&Path> {
-        self.root.as_deref()
+        self.run.root.as_deref()
     }
 
-    /// How many outputs the capture holds now, and their bytes.
+    /// How many outputs the capture holds now, and their size in bytes
+    /// ([`Output::size`]).
     pub fn kept(&self) -> (usize, u64) {
-        scopes()
-            .iter()
-            .find(|s| s.id == self.id)
-            .map(|s| {
-                let bytes = s.outputs.iter().map(|(_, b)| b.len() as u64).sum();
-                (s.outputs.len(), bytes)
-            })
-            .unwrap_or_default()
+        let kept = self.run.kept();
+        let bytes = kept.outputs.iter().map(|(_, o)| o.size()).sum();
+        (kept.outputs.len(), bytes)
     }
 
     /// The outputs kept so far, in the order they were finished: (path,
-    /// bytes). The paths are normalised (absolute).
-    pub fn outputs(&self) -> Vec<(PathBuf, Bytes)> {
-        scopes()
-            .iter()
-            .find(|s| s.id == self.id)
-            .map(|s| s.outputs.clone())
-            .unwrap_or_default()
+    /// output). The paths are normalised (absolute).
+    pub fn outputs(&self) -> Vec<(PathBuf, Output)> {
+        self.run.kept().outputs.clone()
     }
 }
 
 impl Drop for Capture {
     fn drop(&mut self) {
-        scopes().retain(|s| s.id != self.id);
+        leave(self.run.id);
+    }
+}
+
+/// The captures the current thread's work writes to and reads from: its
+/// run's. Work handed to another thread (the frame loop's sinks, a worker
+/// pool, a study's setups side by side) takes it along and enters it
+/// there ([`Context::enter`]), so that thread's outputs are its run's.
+#[derive(Clone, Default)]
+pub struct Context(Vec<Arc<Run>>);
+
+/// This thread's [`Context`].
+pub fn context() -> Context {
+    ENTERED.with(|e| Context(e.borrow().clone()))
+}
+
+/// While it lives, the current thread works for the context it entered.
+pub struct Entered {
+    ids: Vec<u64>,
+    _thread: std::marker::PhantomData<*const ()>,
+}
+
+impl Context {
+    /// Work for this context on the current thread until the guard is
+    /// dropped.
+    pub fn enter(&self) -> Entered {
+        ENTERED.with(|e| e.borrow_mut().extend(self.0.iter().cloned()));
+        Entered {
+            ids: self.0.iter().map(|r| r.id).collect(),
+            _thread: std::marker::PhantomData,
+        }
+    }
+
+    /// `f` working for this context.
+    pub fn run<T>(&self, f: impl FnOnce() -> T) -> T {
+        let _entered = self.enter();
+        f()
+    }
+}
+
+impl Drop for Entered {
+    fn drop(&mut self) {
+        for &id in self.ids.iter().rev() {
+            leave(id);
+        }
     }
 }
 
 /// Whether an output at `path` is written to a file (false under a
 /// capture in memory only).
 pub fn writes_file(path: &Path) -> bool {
-    let k = key(path);
-    scope_of(&mut scopes(), &k).is_none_or(|s| s.files)
+    run_of(&key(path)).is_none_or(|r| r.files)
 }
 
-/// Whether a capture covers `path` (it keeps the outputs there that it
-/// keeps: every one, or those a consumer [`want`]s).
+/// Whether a capture of this thread's run covers `path` (it keeps the
+/// outputs there that it keeps: every one, or those a consumer [`want`]s).
 pub fn captured(path: &Path) -> bool {
-    let k = key(path);
-    scope_of(&mut scopes(), &k).is_some()
+    run_of(&key(path)).is_some()
 }
 
 /// The budget of the capture that covers `path`, when it keeps the output
 /// there (None: not kept).
 pub(super) fn budget(path: &Path) -> Option<Budget> {
     let k = key(path);
-    scope_of(&mut scopes(), &k)
-        .filter(|s| s.keeps(&k))
-        .map(|s| s.budget.clone())
-}
-
-impl Scope {
-    /// Whether the output at (normalised) `k` is kept.
-    fn keeps(&self, k: &Path) -> bool {
-        self.keep_all || self.wanted.contains_key(k)
-    }
+    run_of(&k).filter(|r| r.keeps(&k)).map(|r| r.budget.clone())
 }
 
 /// Say that a consumer of this run will read the output at `path` (the
@@ -247,9 +487,8 @@ impl Scope {
 /// with one [`done`] when that consumer has read it.
 pub fn want(path: &Path) {
     let k = key(path);
-    let mut all = scopes();
-    if let Some(s) = scope_of(&mut all, &k) {
-        *s.wanted.entry(k).or_default() += 1;
+    if let Some(r) = run_of(&k) {
+        *r.kept().wanted.entry(k).or_default() += 1;
     }
 }
 
@@ -258,22 +497,22 @@ pub fn want(path: &Path) {
 /// holds it).
 pub fn done(path: &Path) {
     let k = key(path);
-    let mut all = scopes();
-    let Some(s) = scope_of(&mut all, &k) else {
+    let Some(r) = run_of(&k) else {
         return;
     };
-    let Some(n) = s.wanted.get_mut(&k) else {
+    let mut kept = r.kept();
+    let Some(n) = kept.wanted.get_mut(&k) else {
         return;
     };
     *n = n.saturating_sub(1);
-    if *n > 0 || s.keep_all {
+    if *n > 0 || r.keep_all {
         return;
     }
-    s.wanted.remove(&k);
-    if let Some(i) = s.index.remove(&k) {
-        let (_, bytes) = s.outputs.remove(i);
-        s.budget.give(bytes.len());
-        for j in s.index.values_mut() {
+    kept.wanted.remove(&k);
+    if let Some(i) = kept.index.remove(&k) {
+        let (_, output) = kept.outputs.remove(i);
+        r.budget.give(output.size() as usize);
+        for j in kept.index.values_mut() {
             if *j > i {
                 *j -= 1;
             }
@@ -281,28 +520,33 @@ pub fn done(path: &Path) {
     }
 }
 
-/// Keep `bytes` as the output at `path` when a capture covers it and keeps
-/// it (a later output at the same path replaces it).
-pub fn keep(path: &Path, bytes: Bytes) {
+/// Keep `output` as the output at `path` when a capture covers it and
+/// keeps it (a later output at the same path replaces it).
+pub fn keep(path: &Path, output: Output) {
     let k = key(path);
-    let mut all = scopes();
-    if let Some(s) = scope_of(&mut all, &k).filter(|s| s.keeps(&k)) {
-        match s.index.get(&k) {
-            Some(&i) => s.outputs[i].1 = bytes,
-            None => {
-                s.index.insert(k.clone(), s.outputs.len());
-                s.outputs.push((k, bytes));
-            }
+    let Some(r) = run_of(&k).filter(|r| r.keeps(&k)) else {
+        return;
+    };
+    let mut kept = r.kept();
+    match kept.index.get(&k) {
+        Some(&i) => kept.outputs[i].1 = output,
+        None => {
+            let i = kept.outputs.len();
+            kept.index.insert(k.clone(), i);
+            kept.outputs.push((k, output));
         }
     }
 }
 
-/// The bytes this run wrote at `path`, when a capture kept them.
-pub fn get(path: &Path) -> Option<Bytes> {
+/// The output this thread's run wrote at `path`, when its capture kept it.
+pub fn get(path: &Path) -> Option<Output> {
     let k = key(path);
-    let all = scopes();
-    all.iter()
-        .find_map(|s| s.index.get(&k).map(|&i| s.outputs[i].1.clone()))
+    ENTERED.with(|e| {
+        e.borrow().iter().rev().find_map(|r| {
+            let kept = r.kept();
+            kept.index.get(&k).map(|&i| kept.outputs[i].1.clone())
+        })
+    })
 }
 
 /// Write an output that is not a table (an XML document, a CSV, a report,
@@ -314,7 +558,7 @@ pub fn write(path: &Path, bytes: Vec<u8>) -> Result<()> {
         std::fs::write(path, &bytes).map_err(|e| Error::io(path, e))?;
     }
     if budget(path).is_some_and(|b| b.take(bytes.len())) {
-        keep(path, Arc::new(bytes));
+        keep(path, Output::Bytes(Arc::new(bytes)));
     }
     Ok(())
 }
@@ -335,7 +579,11 @@ mod tests {
         write(&other.join("b.txt"), b"two".to_vec()).unwrap();
         // Spelt another way, the same file.
         let again = dir.join("x").join("..").join("a.txt");
-        assert_eq!(get(&again).unwrap().as_slice(), b"one");
+        let bytes = |o: Option<Output>| match o {
+            Some(Output::Bytes(b)) => b,
+            o => panic!("{o:?}"),
+        };
+        assert_eq!(bytes(get(&again)).as_slice(), b"one");
         assert!(get(&other.join("b.txt")).is_none());
         assert_eq!(std::fs::read(dir.join("a.txt")).unwrap(), b"one");
         assert_eq!(c.outputs().len(), 1);
@@ -412,7 +660,8 @@ mod tests {
         write(&dir.join("report.txt"), b"not read".to_vec()).unwrap();
         let (n, bytes) = c.kept();
         assert_eq!(n, 1, "{:?}", c.outputs());
-        assert_eq!(bytes, std::fs::metadata(&read).unwrap().len());
+        // Three rows of a time and one value, as f64.
+        assert_eq!(bytes, 3 * KeptTable::row_size(1) as u64);
         assert!(get(&unread).is_none());
         // Both files are whole on the disk.
         assert_eq!(crate::storage::read(&unread).unwrap().len(), 3);
@@ -423,5 +672,162 @@ mod tests {
         done(&read);
         assert_eq!(c.kept(), (0, 0));
         assert!(get(&read).is_none());
+    }
+
+    #[test]
+    fn a_kept_value_is_the_value_its_file_gives_back() {
+        // The printed digits parsed (the reader's `str::parse`, bit for
+        // bit) against the value computed: random values of every scale,
+        // the halfway cases, zeros of both signs, large values.
+        let printed = |x: f64, p: usize| -> f64 {
+            crate::storage::format_c_fixed(x, 0, p)
+                .trim()
+                .parse()
+                .unwrap()
+        };
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut values = vec![0.0, -0.0, 1e-12, -1e-12, 0.5, -0.5, 2.5e-8, -2.5e-8];
+        // Exact binary halfway cases at 8 decimals: odd multiples of 5^8 / 2^9.
+        for k in [1.0, 3.0, 5.0, 7.0, 1001.0, -3.0] {
+            values.push(k * 390625.0 / 512.0 * 1e-8);
+            values.push(k * 390625.0 / 512.0);
+        }
+        for _ in 0..200_000 {
+            let m = (next() >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let e = (next() % 24) as i32 - 12;
+            values.push(m * 10f64.powi(e));
+        }
+        values.extend([4.4e7, -4.6e7, 1e15, 1.0e300]);
+        for &x in &values {
+            for p in [0, 3, 8, 12, 16, 20, 25] {
+                let (got, want) = (as_printed(x, p), printed(x, p));
+                assert_eq!(
+                    got.to_bits(),
+                    want.to_bits(),
+                    "{x:e} at {p} decimals: {got} != {want}"
+                );
+            }
+        }
+        assert!(as_printed(f64::NAN, 8).is_nan());
+    }
+
+    #[test]
+    fn a_kept_table_reads_as_its_file_and_refuses_what_the_reader_refuses() {
+        let tmp = crate::test_dir::TempDir::new("results_typed");
+        let dir = tmp.path();
+        let _c = Capture::new(Some(dir));
+        let labels = ["a".to_string(), "b".to_string()];
+        let write = |name: &str, rows: &[(f64, [f64; 2])]| {
+            let p = dir.join(name);
+            want(&p);
+            let mut w = crate::storage::StoWriter::create_for_setup(
+                Path::new("setup.xml"),
+                &p,
+                "t",
+                "a description\nkey=value\n",
+                &labels,
+                8,
+                false,
+            )
+            .unwrap();
+            for (t, v) in rows {
+                w.write_row(*t, v).unwrap();
+            }
+            w.finish().unwrap();
+            p
+        };
+        let good = write(
+            "good.sto",
+            &[(0.0, [1.0 / 3.0, -1e-12]), (0.01, [2.0, 123.456789125])],
+        );
+        let file =
+            crate::storage::read_file(&crate::storage::TableFile::read(&good).unwrap()).unwrap();
+        let kept = crate::storage::read(&good).unwrap();
+        assert_eq!(
+            crate::storage::times_opened(&good),
+            1,
+            "the kept table was read from its file"
+        );
+        assert_eq!(format!("{kept:?}"), format!("{file:?}"));
+        let mut rows = crate::storage::open_rows(&good).unwrap();
+        assert_eq!(rows.table.labels, file.labels);
+        let mut row = Vec::new();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.0));
+        let mark = rows.mark();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.01));
+        assert_eq!(row, file.rows[1]);
+        assert_eq!(rows.next_row(&mut row).unwrap(), None);
+        rows.seek(&mark).unwrap();
+        assert_eq!(rows.next_row(&mut row).unwrap(), Some(0.01));
+        // What the reader refuses in the file is refused the same way.
+        for (name, rows) in [
+            ("nan.sto", vec![(0.0, [1.0, 1.0]), (0.1, [1.0, f64::NAN])]),
+            ("time.sto", vec![(0.0, [1.0, 1.0]), (0.0, [1.0, 1.0])]),
+        ] {
+            let p = write(name, &rows);
+            let from_file =
+                crate::storage::read_file(&crate::storage::TableFile::read(&p).unwrap())
+                    .unwrap_err()
+                    .to_string();
+            let kept = crate::storage::read(&p).unwrap_err().to_string();
+            assert_eq!(kept, from_file);
+        }
+    }
+
+    #[test]
+    fn two_runs_in_one_process_keep_apart_even_in_one_folder() {
+        // Two runs on two threads, both capturing the same folder, at the
+        // same time: each keeps its own outputs only and reads only its
+        // own (a registry shared by the process would hand both to the
+        // newer capture).
+        let tmp = crate::test_dir::TempDir::new("results_two_runs");
+        let dir = tmp.path().to_path_buf();
+        let both = std::sync::Barrier::new(2);
+        let run = |name: &str, value: f64| {
+            let c = Capture::new(Some(&dir));
+            both.wait(); // both captures exist
+            let p = dir.join(name);
+            want(&p);
+            let mut w =
+                crate::storage::StoWriter::create(&p, "t", "", &["a".to_string()], 8, false)
+                    .unwrap();
+            w.write_row(0.0, &[value]).unwrap();
+            w.finish().unwrap();
+            both.wait(); // both tables written
+            let other = dir.join(if name == "a.sto" { "b.sto" } else { "a.sto" });
+            let outputs: Vec<PathBuf> = c.outputs().into_iter().map(|(p, _)| p).collect();
+            let mine = crate::storage::read(&p).unwrap().rows;
+            (outputs, get(&other).is_some(), mine, key(&p))
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(|| run("a.sto", 1.0));
+            let b = s.spawn(|| run("b.sto", 2.0));
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        for ((outputs, sees_other, rows, own), v) in [(a, 1.0), (b, 2.0)] {
+            assert_eq!(outputs, vec![own], "a capture holds another run's output");
+            assert!(!sees_other, "a run sees another run's output");
+            assert_eq!(rows, vec![vec![v]]);
+        }
+        // Work handed to another thread with the run's context is the run's.
+        let c = Capture::new(Some(&dir));
+        let ctx = context();
+        let p = dir.join("handed.sto");
+        want(&p);
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                assert!(!captured(&p), "a thread without the run's context");
+                let _run = ctx.enter();
+                write(&p, b"x".to_vec()).unwrap();
+            });
+        });
+        assert_eq!(c.outputs().len(), 1);
+        assert!(get(&p).is_some());
     }
 }

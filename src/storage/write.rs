@@ -341,10 +341,11 @@ fn write_at(file: &mut File, bytes: &[u8], offset: u64) -> std::io::Result<()> {
 pub struct StoWriter {
     /// The file (None: a run kept in memory only, `super::results`).
     file: Option<File>,
-    /// Every byte the file gets, when a capture keeps the run's outputs
-    /// (`super::results`): at [`Self::finish`] they become the output the
-    /// run's own consumers read instead of the file.
-    kept: Option<Vec<u8>>,
+    /// The table as typed values, when a capture keeps the run's outputs
+    /// (`super::results`): its header and each row as the file prints it,
+    /// built as the rows are formatted; at [`Self::finish`] it becomes the
+    /// output the run's own consumers read instead of the file.
+    kept: Option<super::results::KeptTable>,
     /// What the capture may still keep (`kept` is dropped when it runs out).
     budget: Option<super::results::Budget>,
     path: PathBuf,
@@ -436,8 +437,19 @@ impl StoWriter {
         } else {
             None
         };
-        let budget = super::results::budget(path).filter(|b| b.take(head.len()));
-        let kept = budget.is_some().then(|| head.into_bytes());
+        let mut budget = super::results::budget(path);
+        let kept = match budget
+            .as_ref()
+            .map(|_| super::results::KeptTable::new(path, head.as_bytes(), precision))
+        {
+            Some(Ok(k)) => Some(k),
+            // A header the reader refuses: the file says so to its readers.
+            Some(Err(e)) if file.is_none() => return Err(e),
+            _ => {
+                budget = None;
+                None
+            }
+        };
         Ok(StoWriter {
             file,
             kept,
@@ -500,6 +512,21 @@ impl StoWriter {
         }
         self.line.push(b'\n');
         self.n_rows += 1;
+        if let (Some(kept), Some(budget)) = (&mut self.kept, &self.budget) {
+            if budget.take(super::results::KeptTable::row_size(values.len())) {
+                kept.push(t, values);
+            } else if self.file.is_some() {
+                // Past the capture's limit: the file is the table's.
+                budget.give(kept.size() as usize);
+                self.kept = None;
+                self.budget = None;
+            } else {
+                return Err(Error::internal(format!(
+                    "{}: a table kept in memory only ran out of its budget",
+                    self.path.display()
+                )));
+            }
+        }
         let due = match &self.batch {
             None => true,
             Some(b) => self.n_rows % b.rows == 0 || b.last_write.elapsed() >= b.max_age,
@@ -532,20 +559,6 @@ impl StoWriter {
         }
         if self.line.is_empty() {
             return Ok(());
-        }
-        if let (Some(kept), Some(budget)) = (&mut self.kept, &self.budget) {
-            if budget.take(self.line.len()) {
-                kept.extend_from_slice(&self.line);
-            } else if self.file.is_some() {
-                // Past the capture's limit: the file is the table's.
-                budget.give(kept.len());
-                self.kept = None;
-            } else {
-                return Err(Error::internal(format!(
-                    "{}: a table kept in memory only ran out of its budget",
-                    self.path.display()
-                )));
-            }
         }
         let count = self.n_rows_field();
         let Some(file) = &mut self.file else {
@@ -623,14 +636,23 @@ impl StoWriter {
         file.write_all(format!("{keep:<NROWS_WIDTH$}").as_bytes())
             .map_err(io)?;
         file.seek(SeekFrom::End(0)).map_err(io)?;
-        // The kept rows are this run's output too.
-        let budget = super::results::budget(path).filter(|b| b.take(offset));
-        let kept = budget.is_some().then(|| {
-            let mut kept = bytes[..offset].to_vec();
+        // The kept rows are this run's output too (read from the earlier
+        // run's file, as `--resume` reads it).
+        let mut budget = super::results::budget(path);
+        let mut kept = None;
+        if let Some(b) = &budget {
+            let mut head = bytes[..offset].to_vec();
             let at = n_rows_offset as usize;
-            kept[at..at + NROWS_WIDTH].copy_from_slice(format!("{keep:<NROWS_WIDTH$}").as_bytes());
-            kept
-        });
+            head[at..at + NROWS_WIDTH].copy_from_slice(format!("{keep:<NROWS_WIDTH$}").as_bytes());
+            let first_line = bytes[..labels_end].iter().filter(|&&c| c == b'\n').count() + 1;
+            let table = super::read::read_text(path, &head)?;
+            let k = super::results::KeptTable::resumed(table, first_line, precision);
+            if b.take(k.size() as usize) {
+                kept = Some(k);
+            } else {
+                budget = None;
+            }
+        }
         Ok(StoWriter {
             file: Some(file),
             kept,
@@ -659,10 +681,11 @@ impl StoWriter {
         if let Some(file) = &mut self.file {
             file.flush().map_err(|e| Error::io(&self.path, e))?;
         }
-        if let Some(mut kept) = self.kept.take() {
-            let at = self.n_rows_offset as usize;
-            kept[at..at + NROWS_WIDTH].copy_from_slice(&self.n_rows_field());
-            super::results::keep(&self.path, std::sync::Arc::new(kept));
+        if let Some(kept) = self.kept.take() {
+            super::results::keep(
+                &self.path,
+                super::results::Output::Table(std::sync::Arc::new(kept)),
+            );
         }
         Ok(())
     }

@@ -238,10 +238,12 @@ pub fn draw(
     // listed in the study's order.
     use rayon::prelude::*;
     let tables = Tables::new(dir, moved);
+    // The run's outputs (its capture) on whichever worker draws.
+    let run = crate::storage::results::context();
     let figures: Vec<Vec<PathBuf>> = elements
         .par_iter()
         .filter_map(|e| match e {
-            FigureOrMetric::Figure(f) => Some(figure(f, &tables, out)),
+            FigureOrMetric::Figure(f) => Some(run.run(|| figure(f, &tables, out))),
             FigureOrMetric::Metric(_) => None,
         })
         .collect::<Result<_>>()?;
@@ -249,7 +251,7 @@ pub fn draw(
     let metrics: Vec<(String, f64)> = elements
         .par_iter()
         .filter_map(|e| match e {
-            FigureOrMetric::Metric(m) => Some(metric(m, &tables)),
+            FigureOrMetric::Metric(m) => Some(run.run(|| metric(m, &tables))),
             FigureOrMetric::Figure(_) => None,
         })
         .collect::<Result<_>>()?;

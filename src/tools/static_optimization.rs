@@ -32,7 +32,7 @@ use crate::writers::frame_log::{FrameLog, LogNames};
 use crate::writers::resume::resume_point;
 use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
-use crate::writers::sweep_statistics::write_sweep_statistics;
+use crate::writers::sweep_statistics::{write_sweep_statistics, SweepStatistics};
 
 // The per-frame stage (`frame`) holds the problem; these paths stay for users.
 pub use crate::frame::problem::{
@@ -162,11 +162,34 @@ pub fn run(
     // The tables this run's own consumers read (the knee tables, the
     // sweep's statistics): the run keeps them in memory until read
     // (`storage::results::want`), the others are in their files only.
-    let read_later = read_by_this_run(&setup.name, &specs, reactions, &problem, sweep, &dir);
+    // A sweep's statistics of the runs' own tables are a sink of the frame
+    // stream (a resumed sweep's are made of its tables, which hold the
+    // frames it does not solve again).
+    let precision = opts.precision.unwrap_or(setup.output_precision);
+    let mut stats = (sweep && !opts.resume).then(|| {
+        sweep_statistics_sink(
+            setup,
+            &problem,
+            &specs,
+            reactions.len(),
+            &weights,
+            &dir,
+            precision,
+        )
+    });
+    let read_later = read_by_this_run(
+        &setup.name,
+        &specs,
+        reactions,
+        &problem,
+        sweep,
+        stats.is_none(),
+        &dir,
+    );
     read_later
         .iter()
         .for_each(|p| crate::storage::results::want(p));
-    let (summaries, positions) = run_sweep(
+    let swept = run_sweep(
         &problem,
         stream,
         setup,
@@ -176,7 +199,17 @@ pub fn run(
         opts,
         &RunKey::analysis(&setup.name, so_name, Sweep::Single).label(),
         wants_positions,
-    )?;
+        stats.as_mut(),
+    );
+    let (summaries, positions) = match swept {
+        Ok(s) => s,
+        Err(e) => {
+            if let Some(stats) = stats {
+                stats.abandon();
+            }
+            return Err(e);
+        }
+    };
     let mut knee_states = positions;
     // A statement about a contact that every w0 of a sweep makes alike is
     // said once, for all of them (summary.contacts keeps one per w0).
@@ -231,15 +264,26 @@ pub fn run(
     );
     if summary.stopped.is_some() {
         // The sweep's statistics need every w0: none are written.
+        if let Some(stats) = stats {
+            stats.abandon();
+        }
         warnings.extend(std::mem::take(&mut summary.warnings));
         summary.warnings = warnings;
         return Ok(summary);
     }
+    // The statistics the frame stream made, per kind in the order below.
+    let mut streamed = match stats {
+        Some(s) => s.finish()?.into_iter(),
+        None => Vec::new().into_iter(),
+    };
     if sweep {
-        let precision = opts.precision.unwrap_or(setup.output_precision);
         for kind in OutputKind::SWEEP_TABLES {
             // A sweep of the knee contact method alone has no contact tables.
             if problem.contacts.is_empty() && kind.needs_contacts() {
+                continue;
+            }
+            if let Some(files) = streamed.next() {
+                summary.files.extend(files);
                 continue;
             }
             let files: Vec<std::path::PathBuf> = runs
@@ -265,6 +309,12 @@ pub fn run(
                 &[OutputKind::ReactionLoads]
             };
             for kind in kinds {
+                if *kind == OutputKind::ReactionLoads {
+                    if let Some(files) = streamed.next() {
+                        summary.files.extend(files);
+                        continue;
+                    }
+                }
                 let run = |sweep| RunKey::analysis(&setup.name, name, sweep);
                 let files: Vec<std::path::PathBuf> = weights
                     .iter()
@@ -285,7 +335,6 @@ pub fn run(
     }
     if sweep && !problem.knees.is_empty() {
         // The knee contact method's table: mean, min and max over w0 too.
-        let precision = opts.precision.unwrap_or(setup.output_precision);
         let files: Vec<std::path::PathBuf> = weights
             .iter()
             .map(|w0| {
@@ -454,6 +503,60 @@ pub fn frame_outputs(
     Ok(())
 }
 
+/// A sweep's statistics of its runs' tables (the SO tables, then each
+/// JointReaction's ReactionLoads) as a sink of the frame stream, in the
+/// order the sweep lists them.
+fn sweep_statistics_sink(
+    setup: &AnalyzeSetup,
+    problem: &SoProblem,
+    specs: &[RunSpec],
+    n_reactions: usize,
+    weights: &[f64],
+    dir: &std::path::Path,
+    precision: usize,
+) -> SweepStatistics {
+    use crate::writers::sweep_statistics::Source;
+    let mut stats = SweepStatistics::new(
+        &setup.setup_file,
+        weights,
+        problem.controls.len(),
+        precision,
+    );
+    let first = &specs[0];
+    for kind in OutputKind::SWEEP_TABLES {
+        if problem.contacts.is_empty() && kind.needs_contacts() {
+            continue;
+        }
+        let (source, labels) = match kind {
+            OutputKind::Activation => (Source::Activation, problem.labels.clone()),
+            OutputKind::Force => (Source::Force, problem.force_labels.clone()),
+            OutputKind::ContactForces => (Source::ContactForces, problem.contact_labels()),
+            OutputKind::ContactBodyForces => {
+                (Source::ContactBodyForces, problem.contact_body_labels())
+            }
+            OutputKind::GeneralizedForcesBySource => (
+                Source::GeneralizedForcesBySource,
+                problem.by_source_labels(),
+            ),
+            OutputKind::MusclePower => (Source::MusclePower, problem.muscle_labels()),
+            _ => unreachable!("OutputKind::SWEEP_TABLES lists the SO tables"),
+        };
+        let path = |stat| dir.join(first.run.with_sweep(Sweep::Stat(stat)).file(kind.clone()));
+        stats.add(source, &kind.table(), &labels, &path);
+    }
+    for (k, (jr, specs)) in first.reactions.iter().enumerate().take(n_reactions) {
+        let kind = OutputKind::ReactionLoads;
+        let path = |stat| dir.join(jr.with_sweep(Sweep::Stat(stat)).file(kind.clone()));
+        stats.add(
+            Source::Reaction(k),
+            &kind.table(),
+            &crate::reactions::column_labels(specs),
+            &path,
+        );
+    }
+    stats
+}
+
 /// The tables of a run's `specs` that the run's own consumers read after
 /// writing them, once per consumer (`storage::results::want`): each
 /// JointReaction's ReactionLoads for its knee loads, the knee contact
@@ -465,6 +568,7 @@ fn read_by_this_run(
     reactions: &[JointReactionSetup],
     problem: &SoProblem,
     sweep: bool,
+    stats_from_tables: bool,
     dir: &std::path::Path,
 ) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();
@@ -475,7 +579,9 @@ fn read_by_this_run(
                 kinds.push(OutputKind::ReactionLoads);
             }
             if sweep {
-                kinds.push(OutputKind::ReactionLoads);
+                if stats_from_tables {
+                    kinds.push(OutputKind::ReactionLoads);
+                }
                 if jr_setup.knee_loads {
                     kinds.push(OutputKind::KneeLoads);
                 }
@@ -491,7 +597,7 @@ fn read_by_this_run(
                 out.push(dir.join(knee));
             }
         }
-        if sweep {
+        if sweep && stats_from_tables {
             for kind in OutputKind::SWEEP_TABLES {
                 if !(problem.contacts.is_empty() && kind.needs_contacts()) {
                     out.push(dir.join(spec.run.file(kind.clone())));
@@ -671,6 +777,7 @@ fn run_sweep(
     opts: &RunOptions,
     label: &str,
     keep_positions: bool,
+    mut stats: Option<&mut SweepStatistics>,
 ) -> Result<(Vec<RunSummary>, Option<Positions>)> {
     let log_names: Vec<LogNames> = runs
         .iter()
@@ -691,8 +798,10 @@ fn run_sweep(
     } else {
         None
     };
+    let run = crate::storage::results::context();
     let (writers, first, first_block) = std::thread::scope(|scope| {
         let opening = scope.spawn(|| {
+            let _run = run.enter();
             runs.iter()
                 .zip(&log_names)
                 .map(|(r, names)| RunWriters::open(problem, setup, dir, r, names, opts))
@@ -753,6 +862,9 @@ fn run_sweep(
         }
         for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
             w.write(r, rows)?;
+        }
+        if let Some(stats) = stats.as_deref_mut() {
+            stats.push(results)?;
         }
         Ok(())
     };

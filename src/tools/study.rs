@@ -190,6 +190,104 @@ fn check_references(
     Ok((from_runs, moved_refs))
 }
 
+/// A JointReaction of one setup of the study (`consumer`) whose
+/// `<forces_file>` is a table another setup (`producer`) writes; `moved`:
+/// where that setup writes it in this run (its own folder, or under
+/// `-o DIR`).
+struct CrossReference {
+    consumer: usize,
+    producer: usize,
+    /// The `<forces_file>` as the setup names it (normalised).
+    named: PathBuf,
+    moved: PathBuf,
+}
+
+/// The study's cross references and each setup's wave: a setup runs after
+/// the setups whose tables its JointReactions read (wave 0 reads none).
+fn cross_references(runs: &[PlannedRun]) -> Result<(Vec<usize>, Vec<CrossReference>)> {
+    use crate::plan::Analysis;
+    let mut crossed = Vec::new();
+    for (i, r) in runs.iter().enumerate() {
+        let Setup::Analyze(a) = r.setup else {
+            continue;
+        };
+        for an in a.analyses.iter().filter(|an| an.common().on) {
+            let Analysis::JointReaction(jr) = an else {
+                continue;
+            };
+            let Some(f) = &jr.forces_file else {
+                continue;
+            };
+            let path = normalise(f);
+            let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+            let producer = runs.iter().enumerate().find(|(j, p)| {
+                *j != i
+                    && path.parent() == Some(normalise(&p.own_dir).as_path())
+                    && p.planned.find(file).is_some()
+            });
+            if let Some((j, p)) = producer {
+                let moved = std::path::absolute(p.out_dir.join(file))
+                    .map_err(|e| Error::io(&p.out_dir, e))?;
+                crossed.push(CrossReference {
+                    consumer: i,
+                    producer: j,
+                    named: path.clone(),
+                    moved,
+                });
+            }
+        }
+    }
+    let mut levels = vec![0usize; runs.len()];
+    for _ in 0..=runs.len() {
+        let mut changed = false;
+        for c in &crossed {
+            if levels[c.consumer] <= levels[c.producer] {
+                levels[c.consumer] = levels[c.producer] + 1;
+                changed = true;
+            }
+        }
+        if !changed {
+            return Ok((levels, crossed));
+        }
+    }
+    let c = crossed
+        .iter()
+        .max_by_key(|c| levels[c.consumer])
+        .expect("a cross reference");
+    Err(Error::input(
+        Location::file(&runs[c.consumer].file).with_element("<JointReaction>"),
+        format!(
+            "its <forces_file> {} is written by a setup that waits, in turn, for this one's tables",
+            c.moved.display()
+        ),
+    ))
+}
+
+/// `setup` with each JointReaction that reads another setup's table
+/// reading it where this run writes it (None: nothing moved).
+fn redirect<'c>(setup: &Setup, crossed: impl Iterator<Item = &'c CrossReference>) -> Option<Setup> {
+    use crate::plan::Analysis;
+    let mut out = None;
+    for c in crossed {
+        let Setup::Analyze(a) = out.get_or_insert_with(|| setup.clone()) else {
+            return None;
+        };
+        for an in a.analyses.iter_mut() {
+            if let Analysis::JointReaction(jr) = an {
+                let reads = jr.common.on
+                    && jr
+                        .forces_file
+                        .as_deref()
+                        .is_some_and(|f| normalise(f) == c.named);
+                if reads && c.named != c.moved {
+                    jr.set_forces_file(c.moved.clone());
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Everything [`run`] checks before its first run (figure and metric
 /// references against the runs, metric ops).
 pub fn check(plan: &StudyPlan) -> Result<()> {
@@ -272,25 +370,66 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // contacts, sweep statistics) overlap another's frames. Summaries are
     // taken in the study's order, whatever order the setups finish in; the
     // first error in that order is the study's.
-    use rayon::prelude::*;
-    let done: Vec<Result<RunSummary>> = runs
-        .par_iter()
-        .map(|r| {
-            let run_opts = RunOptions {
-                results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
-                ..opts.clone()
-            };
-            match r.setup {
-                Setup::Analyze(a) => analyze::run(a, &run_opts),
-                Setup::InverseDynamics(i) => inverse_dynamics::run(i, &run_opts),
-            }
-        })
+    // A JointReaction that takes its forces from a table another setup of
+    // the study writes is declared ahead: that setup runs first, keeps the
+    // table in memory until the JointReaction has read it, and with
+    // `-o DIR` the JointReaction reads it where it was moved.
+    let (levels, crossed) = cross_references(&runs)?;
+    crossed
+        .iter()
+        .for_each(|c| crate::storage::results::want(&c.moved));
+    let redirected: Vec<Option<Setup>> = runs
+        .iter()
+        .enumerate()
+        .map(|(i, r)| redirect(r.setup, crossed.iter().filter(|c| c.consumer == i)))
         .collect();
+    use rayon::prelude::*;
+    // Each setup's work is the study run's (its capture) on whichever
+    // worker thread runs it.
+    let study_run = crate::storage::results::context();
+    let mut done: Vec<Option<Result<RunSummary>>> = runs.iter().map(|_| None).collect();
+    for level in 0..=levels.iter().copied().max().unwrap_or(0) {
+        let wave: Vec<usize> = (0..runs.len()).filter(|&i| levels[i] == level).collect();
+        let results: Vec<(usize, Result<RunSummary>)> = wave
+            .par_iter()
+            .map(|&i| {
+                let _run = study_run.enter();
+                let r = &runs[i];
+                let run_opts = RunOptions {
+                    results_dir: opts.results_dir.as_ref().map(|_| r.out_dir.clone()),
+                    ..opts.clone()
+                };
+                let done = match redirected[i].as_ref().unwrap_or(r.setup) {
+                    Setup::Analyze(a) => analyze::run(a, &run_opts),
+                    Setup::InverseDynamics(s) => inverse_dynamics::run(s, &run_opts),
+                };
+                (i, done)
+            })
+            .collect();
+        // A setup that failed or was stopped: the setups that wait for its
+        // tables do not run.
+        let go_on = results
+            .iter()
+            .all(|(_, r)| r.as_ref().is_ok_and(|s| s.stopped.is_none()));
+        for (i, r) in results {
+            for c in crossed.iter().filter(|c| c.consumer == i) {
+                crate::storage::results::done(&c.moved);
+            }
+            done[i] = Some(r);
+        }
+        if !go_on {
+            break;
+        }
+    }
     let mut summary = RunSummary {
         warnings: study.warnings.clone(),
         ..Default::default()
     };
     for (r, done) in runs.iter().zip(done) {
+        // (Runs after one that failed or stopped did not run.)
+        let Some(done) = done else {
+            continue;
+        };
         let s = r.file.display().to_string();
         summary.absorb(done?, Some(s.as_str()));
         if summary.stopped.is_some() {

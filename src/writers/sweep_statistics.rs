@@ -87,3 +87,198 @@ pub fn write_sweep_statistics(
     }
     Ok(out)
 }
+
+/// Which values of a frame's outputs one table of a sweep holds.
+#[derive(Clone, Copy)]
+pub enum Source {
+    Activation,
+    Force,
+    ContactForces,
+    ContactBodyForces,
+    GeneralizedForcesBySource,
+    MusclePower,
+    /// The rows of the k-th joint reaction.
+    Reaction(usize),
+}
+
+impl Source {
+    fn row<'r>(
+        &self,
+        r: &'r crate::frame::problem::FrameResult,
+        rows: &'r [Vec<f64>],
+        n_controls: usize,
+    ) -> &'r [f64] {
+        match *self {
+            Source::Activation => &r.solution.x[..n_controls],
+            Source::Force => &r.force_row,
+            Source::ContactForces => &r.contacts.contact,
+            Source::ContactBodyForces => &r.contacts.bodies,
+            Source::GeneralizedForcesBySource => &r.by_source,
+            Source::MusclePower => &r.muscle_power,
+            Source::Reaction(k) => &rows[k],
+        }
+    }
+}
+
+/// The statistics of a contact-weight sweep as a sink of the frame stream
+/// (`frame::so_loop`): each frame's outputs of every w0 arrive together,
+/// and the mean, minimum and maximum of every column are written as they
+/// do, taken of the values the runs' tables print
+/// (`storage::results::as_printed`: what [`write_sweep_statistics`] reads
+/// back from those tables, bit for bit, so the tables are the same). No
+/// per-w0 table is kept or read for them. The tables are created with the
+/// first frame (no file is touched before the pass solves one).
+pub struct SweepStatistics {
+    setup_file: std::path::PathBuf,
+    weights: Vec<f64>,
+    tables: Vec<StatTables>,
+    n_controls: usize,
+    precision: usize,
+    /// Reused for each statistic's row.
+    row: Vec<f64>,
+    printed: Vec<Vec<f64>>,
+}
+
+struct StatTables {
+    source: Source,
+    kind: String,
+    labels: Vec<String>,
+    paths: Vec<std::path::PathBuf>,
+    /// Mean, min, max (none before the first frame).
+    writers: Vec<StoWriter>,
+}
+
+impl SweepStatistics {
+    pub fn new(
+        setup_file: &std::path::Path,
+        weights: &[f64],
+        n_controls: usize,
+        precision: usize,
+    ) -> SweepStatistics {
+        SweepStatistics {
+            setup_file: setup_file.to_path_buf(),
+            weights: weights.to_vec(),
+            tables: Vec::new(),
+            n_controls,
+            precision,
+            row: Vec::new(),
+            printed: Vec::new(),
+        }
+    }
+
+    /// The mean, min and max tables of one kind of table: `kind` its name,
+    /// `labels` its columns, `stat_path` the path of each statistic's table
+    /// (`writers::names`).
+    pub fn add(
+        &mut self,
+        source: Source,
+        kind: &str,
+        labels: &[String],
+        stat_path: &dyn Fn(crate::writers::names::Stat) -> std::path::PathBuf,
+    ) {
+        use crate::writers::names::Stat;
+        self.tables.push(StatTables {
+            source,
+            kind: kind.to_string(),
+            labels: labels.to_vec(),
+            paths: Stat::ALL.iter().map(|&s| stat_path(s)).collect(),
+            writers: Vec::new(),
+        });
+    }
+
+    /// Create the tables (as [`write_sweep_statistics`] does).
+    fn open(&mut self) -> Result<()> {
+        use crate::writers::names::Stat;
+        let weights = &self.weights;
+        for t in self.tables.iter_mut().filter(|t| t.writers.is_empty()) {
+            let kind = &t.kind;
+            for (stat, path) in Stat::ALL.iter().zip(&t.paths) {
+                let stat = stat.as_str();
+                let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
+                let mut w = StoWriter::create_for_setup(
+                    &self.setup_file,
+                    path,
+                    &format!("{kind} {stat}"),
+                    &desc,
+                    &t.labels,
+                    self.precision,
+                    false,
+                )?;
+                w.batch_rows(32, std::time::Duration::from_millis(200));
+                t.writers.push(w);
+            }
+        }
+        Ok(())
+    }
+
+    /// One frame's outputs, one per w0 in the sweep's order.
+    pub fn push(&mut self, results: &[crate::frame::so_loop::FrameOutput]) -> Result<()> {
+        use crate::storage::results::as_printed;
+        use crate::writers::names::Stat;
+        let Some((first, _)) = results.first() else {
+            return Ok(());
+        };
+        if self.tables.first().is_some_and(|t| t.writers.is_empty()) {
+            self.open()?;
+        }
+        let p = self.precision;
+        let t = as_printed(first.time, p);
+        let n = results.len();
+        self.printed.resize_with(n, Vec::new);
+        for table in &mut self.tables {
+            for ((r, rows), printed) in results.iter().zip(self.printed.iter_mut()) {
+                printed.clear();
+                printed.extend(
+                    table
+                        .source
+                        .row(r, rows, self.n_controls)
+                        .iter()
+                        .map(|&v| as_printed(v, p)),
+                );
+            }
+            let nl = table.labels.len();
+            for (stat, w) in Stat::ALL.iter().zip(table.writers.iter_mut()) {
+                self.row.clear();
+                for j in 0..nl {
+                    let vals = self.printed.iter().map(|r| r[j]);
+                    self.row.push(match *stat {
+                        Stat::Mean => vals.sum::<f64>() / n as f64,
+                        Stat::Min => vals.fold(f64::INFINITY, f64::min),
+                        Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
+                    });
+                }
+                w.write_row(t, &self.row)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The tables finished, their paths per kind in the order added.
+    pub fn finish(mut self) -> Result<Vec<Vec<std::path::PathBuf>>> {
+        self.open()?;
+        let mut out = Vec::new();
+        for t in self.tables {
+            for w in t.writers {
+                w.finish()?;
+            }
+            out.push(t.paths);
+        }
+        Ok(out)
+    }
+
+    /// A sweep stopped before its last frame has no statistics: the tables
+    /// begun are removed.
+    pub fn abandon(self) {
+        for t in self.tables {
+            let begun = !t.writers.is_empty();
+            drop(t.writers);
+            if begun {
+                for p in t.paths {
+                    if crate::storage::results::writes_file(&p) {
+                        let _ = std::fs::remove_file(p);
+                    }
+                }
+            }
+        }
+    }
+}
