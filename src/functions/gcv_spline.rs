@@ -582,16 +582,6 @@ type Basis = (
     Vec<[f64; MAX_COEF]>,
 );
 
-/// The knots, factored system and basis slopes of splines of half-order
-/// `m` through the abscissae `x`.
-fn make_basis(m: usize, x: &[f64]) -> Basis {
-    let t = knot_vector(2 * m - 1, x);
-    let mut slopes = Vec::with_capacity(x.len());
-    let mut band = system(m, x, &t, Some(&mut slopes));
-    let band = band.factor().map(|_| band).map_err(|_| ());
-    (t, band, slopes)
-}
-
 /// Interpolating splines of one degree on one set of abscissae: the spline
 /// system is assembled and factored once (on the first column whose data
 /// pass [`GcvSpline::interpolating`]'s checks) and reused for every column.
@@ -644,24 +634,18 @@ impl<'a> SplineFitter<'a> {
             } else {
                 check_data(self.degree, x, y).map_err(|e| (c, e))?
             };
-            let (_, band, _) = self.basis.get_or_insert_with(|| make_basis(m, x));
+            let (_, band, _) = self.basis.get_or_insert_with(|| {
+                let t = knot_vector(2 * m - 1, x);
+                let mut slopes = Vec::with_capacity(x.len());
+                let mut band = system(m, x, &t, Some(&mut slopes));
+                let band = band.factor().map(|_| band).map_err(|_| ());
+                (t, band, slopes)
+            });
             if band.is_err() {
                 return Err((c, singular()));
             }
         }
         Ok(m)
-    }
-
-    /// Assemble and factor the spline system now, from the abscissae alone,
-    /// when they pass [`check_data`]'s checks (otherwise the first column
-    /// does, as without this call): e.g. on another thread while the
-    /// columns are being made. The same system, results and errors as
-    /// when the first column builds it: with checked abscissae, a column's
-    /// checks fail exactly as `check_y` says.
-    pub fn prepare(&mut self) {
-        if self.basis.is_none() && check_data(self.degree, self.x, self.x).is_ok() {
-            self.basis = Some(make_basis(self.degree.div_ceil(2), self.x));
-        }
     }
 
     /// B-spline coefficients of checked columns, [`LANES`] at a time.

@@ -691,33 +691,18 @@ impl<'m> StateStream<'m> {
         let w1 = hi;
         let len = w1 - w0;
         let time: Vec<f64> = self.gbuf.iter().take(len).map(|r| r.0).collect();
-        // q and u on [ua, ub), u̇ on [a, b) (indices relative to w0).
-        let (qa, qb) = (
-            a.saturating_sub(2 * s).max(w0) - w0,
-            (b + 2 * s).min(w1) - w0,
-        );
-        let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
         // F on the window, per carried column.
         let ncol = self.labels.len() - self.synthetic.len();
         let mut cols: Vec<Vec<f64>> = (0..ncol)
             .map(|j| self.gbuf.iter().take(len).map(|r| r.1[j]).collect())
             .collect();
         if let Some((fa, fb)) = &self.filter {
-            let filter = |col: &mut Vec<f64>| {
+            for col in cols.iter_mut() {
                 let mut fwd = iir_pass(fa, fb, col);
                 fwd.reverse();
                 let mut back = iir_pass(fa, fb, &fwd);
                 back.reverse();
                 *col = back;
-            };
-            // Each column its own recurrence (a chain of dependent
-            // operations): split over the pool's threads, the same bits,
-            // beside the positions' spline system (abscissae only).
-            if rayon::current_num_threads() > 1 {
-                use rayon::prelude::*;
-                rayon::join(|| cols.par_iter_mut().for_each(filter), || fit_q.prepare());
-            } else {
-                cols.iter_mut().for_each(filter);
             }
         }
         cols.extend(self.synthetic.iter().map(|&v| vec![v; len]));
@@ -734,8 +719,13 @@ impl<'m> StateStream<'m> {
                 }
             }
         }
+        // q and u on [ua, ub), u̇ on [a, b) (indices relative to w0).
+        let (qa, qb) = (
+            a.saturating_sub(2 * s).max(w0) - w0,
+            (b + 2 * s).min(w1) - w0,
+        );
         if self.kind == StatesKind::InverseDynamics {
-            let block = self.inverse_dynamics_block(a, b, w0, &time, &cols, (qa, qb), fit_q)?;
+            let block = self.inverse_dynamics_block(a, b, w0, &time, &cols, (qa, qb))?;
             self.next_out = b;
             return Ok(Some(block));
         }
@@ -746,24 +736,13 @@ impl<'m> StateStream<'m> {
         let mut u = vec![vec![0.0; nq]; nu];
         // u = S_q′ and u̇ = S_u′ at the knots: one spline system per set of
         // abscissae, shared by the columns (the same bits as splining each).
+        let mut fit_q = SplineFitter::new(self.degree, &time[qa..qb]);
         let mut slopes = Vec::new();
         let (picked, vs) = self.model_columns(&cols, qa..qb);
         let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
-        // The speeds' spline system (on other abscissae) is assembled and
-        // factored beside the positions' splines.
-        let mut fit_u_ahead = ((ua, ub) != (qa, qb) && rayon::current_num_threads() > 1)
-            .then(|| SplineFitter::new(self.degree, &time[ua..ub]));
-        let fitted = match fit_u_ahead.as_mut() {
-            Some(ahead) => {
-                rayon::join(
-                    || fit_q.knot_slopes_columns(&ys, &mut slopes),
-                    || ahead.prepare(),
-                )
-                .0
-            }
-            None => fit_q.knot_slopes_columns(&ys, &mut slopes),
-        };
-        fitted.map_err(|(i, e)| self.column_error(picked[i].1, e))?;
+        fit_q
+            .knot_slopes_columns(&ys, &mut slopes)
+            .map_err(|(i, e)| self.column_error(picked[i].1, e))?;
         for ((&(c, _, _), v), sl) in picked.iter().zip(&vs).zip(&slopes) {
             for i in 0..nu {
                 q[i][c] = v[ua + i - qa];
@@ -778,7 +757,7 @@ impl<'m> StateStream<'m> {
         let mut fit_u = if (ua, ub) == (qa, qb) {
             fit_q
         } else {
-            fit_u_ahead.unwrap_or_else(|| SplineFitter::new(self.degree, &time[ua..ub]))
+            SplineFitter::new(self.degree, &time[ua..ub])
         };
         let us: Vec<Vec<f64>> = (0..nq).map(|c| u.iter().map(|r| r[c]).collect()).collect();
         let ys: Vec<&[f64]> = us.iter().map(|v| v.as_slice()).collect();
@@ -839,12 +818,10 @@ impl StateStream<'_> {
 
     /// Rows `a..b` of the InverseDynamicsTool's states from the window
     /// starting at row `w0` (`time`, the filtered `cols` in file units):
-    /// each coordinate's spline through the window's rows `qa..qb` (by
-    /// `fit_q`, on their times), and its
+    /// each coordinate's spline through the window's rows `qa..qb`, and its
     /// value and first two derivatives at the rows (`GcvSpline::value`,
     /// `derivative`: a motion in one window gives the bits of one spline
     /// through all of it).
-    #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics_block(
         &self,
         a: usize,
@@ -853,7 +830,6 @@ impl StateStream<'_> {
         time: &[f64],
         cols: &[Vec<f64>],
         (qa, qb): (usize, usize),
-        mut fit_q: SplineFitter,
     ) -> Result<StateBlock> {
         let nq = self.model.nq();
         let n = b - a;
@@ -868,7 +844,7 @@ impl StateStream<'_> {
         }
         let (picked, vs) = self.model_columns(cols, qa..qb);
         let ys: Vec<&[f64]> = vs.iter().map(|v| v.as_slice()).collect();
-        let splines = fit_q
+        let splines = SplineFitter::new(self.degree, &time[qa..qb])
             .splines(&ys)
             .map_err(|(i, e)| self.column_error(picked[i].1, e))?;
         let times = &time[a - w0..b - w0];
