@@ -46,180 +46,12 @@ pub fn times_parsed(path: &Path) -> usize {
 /// Parse XML text; `file` is used only for error messages.
 pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
     let file: Arc<Path> = Arc::from(file);
-    let lines = line_starts(text);
-    parse_part(text, &file, &lines, Span::Whole).map(|(root, _)| root)
-}
-
-/// Parse an XML file into its root element as [`parse_file`] does, the
-/// members of the first `<objects>` list inside the element `<split_in …>`
-/// (a model's `<ForceSet>`: gait2392's muscles, 72 % of its 0.6 MB) read in
-/// two halves, one of them on a thread of its own, beside the rest of the
-/// document.
-///
-/// The same tree, lines and errors as [`parse_file`]: each half is read as
-/// the content of an element of its own, and the rest with the list's
-/// content left out; the pieces are joined only when each half is a
-/// sequence of complete elements with no text of its own and the list's
-/// start tag is where it was looked for in the rest. Reading one element's
-/// content in two pieces then gives the elements one reading gives. In any
-/// other case (and for files under 256 KiB) the file is read in one piece,
-/// which also makes every error message the one-piece reading's.
-pub fn parse_file_split(path: &Path, split_in: &str) -> Result<Element> {
-    PARSED.count(path);
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    if text.len() >= SPLIT_MIN_BYTES {
-        if let Some(root) = parse_split(&text, path, split_in) {
-            return Ok(root);
-        }
-    }
-    parse_str(&text, path)
-}
-
-/// Files smaller than this are read in one piece ([`parse_file_split`]).
-const SPLIT_MIN_BYTES: usize = 256 * 1024;
-
-/// The opening and closing tags around a piece read on its own.
-const WRAP_OPEN: &str = "<piece>";
-const WRAP_CLOSE: &str = "</piece>";
-
-/// Byte offsets of the starts of the text's lines.
-fn line_starts(text: &str) -> Vec<usize> {
-    std::iter::once(0)
+    let line_starts: Vec<usize> = std::iter::once(0)
         .chain(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1))
-        .collect()
-}
-
-/// Where a piece being read lies in the whole text (for line numbers).
-#[derive(Clone, Copy)]
-enum Span {
-    /// The whole text.
-    Whole,
-    /// `WRAP_OPEN`, the whole text's bytes from `start` on, `WRAP_CLOSE`.
-    Piece { start: usize },
-    /// The whole text without its bytes `cut..cut + removed`; the element
-    /// whose start tag ends at `cut` is the hole the pieces fill.
-    Rest { cut: usize, removed: usize },
-}
-
-impl Span {
-    /// The whole text's offset of the piece's offset `pos`.
-    fn global(self, pos: u64) -> u64 {
-        match self {
-            Span::Whole => pos,
-            Span::Piece { start } => (start as u64 + pos).saturating_sub(WRAP_OPEN.len() as u64),
-            Span::Rest { cut, removed } if pos as usize >= cut => pos + removed as u64,
-            Span::Rest { .. } => pos,
-        }
-    }
-}
-
-/// [`parse_file_split`]'s split reading, or None to read in one piece.
-fn parse_split(text: &str, path: &Path, split_in: &str) -> Option<Element> {
-    let bytes = text.as_bytes();
-    let open = format!("<{split_in}");
-    let at = memchr::memmem::find_iter(bytes, open.as_bytes()).find(|&i| {
-        matches!(
-            bytes.get(i + open.len()),
-            Some(b' ' | b'\t' | b'\r' | b'\n' | b'>')
-        )
-    })?;
-    let close = format!("</{split_in}>");
-    let end = at + memchr::memmem::find(&bytes[at..], close.as_bytes())?;
-    // The list's content: after the first `<objects>`, up to the last
-    // `</objects>` before the element's end.
-    let cs = at + memchr::memmem::find(&bytes[at..end], b"<objects>")? + "<objects>".len();
-    let ce = cs + memchr::memmem::rfind(&bytes[cs..end], b"</objects>")?;
-    // Two halves, the first about half the file (read beside the rest and
-    // the second half); split before a member, found as a line indented
-    // as the first member.
-    let first = cs + memchr::memchr(b'<', &bytes[cs..ce])?;
-    let line = bytes[..first].iter().rposition(|&b| b == b'\n')? + 1;
-    let indent = &bytes[line..first];
-    if !indent.iter().all(|&b| b == b' ' || b == b'\t') {
-        return None;
-    }
-    let mut marker = Vec::with_capacity(indent.len() + 2);
-    marker.push(b'\n');
-    marker.extend_from_slice(indent);
-    marker.push(b'<');
-    let goal = (cs + text.len() / 2).clamp(cs, ce);
-    let sp =
-        goal + memchr::memmem::find_iter(&bytes[goal..ce], &marker).find(|&i| {
-            bytes
-                .get(goal + i + marker.len())
-                .is_some_and(|b| b.is_ascii_alphabetic() || *b == b'_')
-        })? + 1;
-    let piece = |a: usize, b: usize| {
-        let mut s = String::with_capacity(b - a + WRAP_OPEN.len() + WRAP_CLOSE.len());
-        s.push_str(WRAP_OPEN);
-        s.push_str(&text[a..b]);
-        s.push_str(WRAP_CLOSE);
-        s
-    };
-    let (first_half, second_half) = (piece(cs, sp), piece(sp, ce));
-    let mut rest = String::with_capacity(text.len() - (ce - cs));
-    rest.push_str(&text[..cs]);
-    rest.push_str(&text[ce..]);
-    let file: Arc<Path> = Arc::from(path);
-    let lines = line_starts(text);
-    let read_piece = |s: &str, start: usize| -> Option<Vec<Element>> {
-        let (wrap, _) = parse_part(s, &file, &lines, Span::Piece { start }).ok()?;
-        (wrap.text.is_empty() && wrap.attrs.is_empty()).then_some(wrap.children)
-    };
-    let (a, b, outer) = std::thread::scope(|s| {
-        let a = std::thread::Builder::new()
-            .name("xml-piece".into())
-            .spawn_scoped(s, || read_piece(&first_half, cs));
-        let outer = parse_part(
-            &rest,
-            &file,
-            &lines,
-            Span::Rest {
-                cut: cs,
-                removed: ce - cs,
-            },
-        )
-        .ok();
-        let b = read_piece(&second_half, sp);
-        let a = match a {
-            Ok(h) => h.join().ok().flatten(),
-            Err(_) => read_piece(&first_half, cs),
-        };
-        (a, b, outer)
-    });
-    let (mut root, hole) = outer?;
-    let mut el = &mut root;
-    for i in hole? {
-        el = el.children.get_mut(i)?;
-    }
-    if !el.children.is_empty() || !el.text.is_empty() {
-        return None;
-    }
-    let mut members = a?;
-    members.extend(b?);
-    el.children = members;
-    Some(root)
-}
-
-/// Read `text`, a piece of the whole text whose line starts are `lines`:
-/// the root element and, for [`Span::Rest`], the path of child indices
-/// from the root to the element whose start tag ends at the cut (None if
-/// there is none).
-fn parse_part(
-    text: &str,
-    file: &Arc<Path>,
-    lines: &[usize],
-    span: Span,
-) -> Result<(Element, Option<Vec<usize>>)> {
-    let file = file.clone();
-    let hole_at = match span {
-        Span::Rest { cut, .. } => Some(cut as u64),
-        _ => None,
-    };
-    let mut hole = None;
+        .collect();
     let line_of = |pos: u64| -> usize {
-        let pos = span.global(pos) as usize;
-        match lines.binary_search(&pos) {
+        let pos = pos as usize;
+        match line_starts.binary_search(&pos) {
             Ok(i) => i + 1,
             Err(i) => i,
         }
@@ -277,9 +109,6 @@ fn parse_part(
                         err_at(start, "more than one root element".into())
                     })?;
                 } else {
-                    if hole_at == Some(reader.buffer_position()) {
-                        hole = Some(stack.iter().map(|e| e.children.len()).collect());
-                    }
                     stack.push(el);
                 }
             }
@@ -345,7 +174,7 @@ fn parse_part(
             "malformed XML: element is never closed (file truncated?)",
         ));
     }
-    let root = root.ok_or_else(|| {
+    root.ok_or_else(|| {
         Error::input(
             Location {
                 file: Some(file.to_path_buf()),
@@ -353,8 +182,7 @@ fn parse_part(
             },
             "no XML element found",
         )
-    })?;
-    Ok((root, hole))
+    })
 }
 
 fn leading_ws(text: &str, pos: usize) -> usize {
@@ -583,119 +411,6 @@ pub fn parse_number(t: &str) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A model-like document over `SPLIT_MIN_BYTES`: a force set of `n`
-    /// members, each with comments, text and nested `<objects>` lists;
-    /// `member(i)` may replace the i-th member's text.
-    fn big_document(n: usize, member: impl Fn(usize) -> Option<String>) -> String {
-        let mut s = String::from(
-            "<?xml version=\"1.0\"?>\n<OpenSimDocument Version=\"40000\">\n\t<Model name=\"m\">\n\t\t<BodySet><objects><Body name=\"b\"/></objects></BodySet>\n\t\t<ForceSet name=\"forces\">\n\t\t\t<objects>\n",
-        );
-        for i in 0..n {
-            s.push_str(&member(i).unwrap_or_else(|| {
-                format!(
-                    "\t\t\t\t<!-- member {i} -->\n\t\t\t\t<Thelen2003Muscle name=\"m{i}\">\n\t\t\t\t\t<max_isometric_force>{i}.5</max_isometric_force>\n\t\t\t\t\t<GeometryPath>\n\t\t\t\t\t\t<PathPointSet>\n\t\t\t\t\t\t\t<objects>\n\t\t\t\t\t\t\t\t<PathPoint name=\"p{i}\"><location>1 2 &amp; 3</location></PathPoint>\n\t\t\t\t\t\t\t</objects>\n\t\t\t\t\t\t</PathPointSet>\n\t\t\t\t\t</GeometryPath>\n\t\t\t\t</Thelen2003Muscle>\n"
-                )
-            }));
-        }
-        s.push_str("\t\t\t</objects>\n\t\t\t<groups/>\n\t\t</ForceSet>\n\t\t<MarkerSet><objects/></MarkerSet>\n\t</Model>\n</OpenSimDocument>\n");
-        assert!(s.len() >= SPLIT_MIN_BYTES);
-        s
-    }
-
-    /// Read in pieces, a document gives the tree (names, attributes, text,
-    /// lines) of one reading.
-    #[test]
-    fn split_reading_gives_the_one_piece_tree() {
-        let tmp = crate::test_dir::TempDir::new("xml_split");
-        let path = tmp.path().join("big.osim");
-        std::fs::write(&path, big_document(1200, |_| None)).unwrap();
-        let text = std::fs::read_to_string(&path).unwrap();
-        let split = parse_split(&text, &path, "ForceSet").expect("read in pieces");
-        let whole = parse_file(&path).unwrap();
-        assert_eq!(format!("{split:?}"), format!("{whole:?}"));
-        let members = &split.children[0].child("ForceSet").unwrap().children[0].children;
-        assert_eq!(members.len(), 1200);
-        assert_eq!(
-            members[1199].line,
-            whole.children[0].children[1].children[0].children[1199].line
-        );
-        assert_eq!(
-            format!("{:?}", parse_file_split(&path, "ForceSet").unwrap()),
-            format!("{whole:?}")
-        );
-    }
-
-    /// The shared models (gait2392, Rajagopal, the knee and walking
-    /// models) read in pieces give their one-piece trees.
-    #[test]
-    fn shared_models_read_in_pieces_as_in_one() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            println!(
-                "SKIP shared_models_read_in_pieces_as_in_one: {} absent",
-                dir.display()
-            );
-            return;
-        };
-        let mut split = 0;
-        for model in entries.flatten() {
-            for f in std::fs::read_dir(model.path())
-                .into_iter()
-                .flatten()
-                .flatten()
-            {
-                let path = f.path();
-                if path.extension().is_none_or(|e| e != "osim") {
-                    continue;
-                }
-                let text = std::fs::read_to_string(&path).unwrap();
-                let whole = parse_file(&path).unwrap();
-                if let Some(pieces) = parse_split(&text, &path, "ForceSet") {
-                    assert_eq!(
-                        format!("{pieces:?}"),
-                        format!("{whole:?}"),
-                        "{}",
-                        path.display()
-                    );
-                    split += 1;
-                }
-            }
-        }
-        assert!(split >= 2, "only {split} shared models were read in pieces");
-    }
-
-    /// What a split reading cannot join (a malformed member in either
-    /// half, text among the members) is read in one piece: the one-piece
-    /// error or tree.
-    #[test]
-    fn split_reading_falls_back_to_one_piece() {
-        let tmp = crate::test_dir::TempDir::new("xml_split_fallback");
-        let path = tmp.path().join("bad.osim");
-        for bad in [10, 1100] {
-            let doc = big_document(1200, |i| {
-                (i == bad)
-                    .then(|| "\t\t\t\t<Thelen2003Muscle name=\"x\">\n\t\t\t\t</Thelen>\n".into())
-            });
-            std::fs::write(&path, &doc).unwrap();
-            assert!(parse_split(&doc, &path, "ForceSet").is_none());
-            let e = parse_file_split(&path, "ForceSet").unwrap_err().to_string();
-            assert_eq!(e, parse_file(&path).unwrap_err().to_string());
-            assert!(e.contains("malformed XML"), "{e}");
-        }
-        let doc = big_document(1200, |i| (i == 900).then(|| "\t\t\t\tloose text\n".into()));
-        std::fs::write(&path, &doc).unwrap();
-        assert!(parse_split(&doc, &path, "ForceSet").is_none());
-        let whole = parse_file(&path).unwrap();
-        assert_eq!(
-            format!("{:?}", parse_file_split(&path, "ForceSet").unwrap()),
-            format!("{whole:?}")
-        );
-        assert_eq!(
-            whole.children[0].child("ForceSet").unwrap().children[0].text(),
-            "loose text"
-        );
-    }
 
     /// Text around comments and child elements concatenates as read; the
     /// indentation before an element's first text is dropped (`text()`

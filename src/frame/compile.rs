@@ -236,11 +236,6 @@ impl SoProblem {
                 so.activation_exponent
             ));
         }
-        // The force elements (gait2392: 92 muscles' trees, 3 M instructions
-        // to free) are freed on a thread of their own, inline if none starts.
-        let _ = std::thread::Builder::new()
-            .name("drop-forces".into())
-            .spawn(move || drop(forces));
         Ok((
             SoProblem {
                 model,

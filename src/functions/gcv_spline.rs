@@ -476,9 +476,6 @@ fn rhs(m: usize, y: &[f64]) -> Vec<f64> {
 /// coefficients on abscissae `x` (knots `t`). With `slopes`, also the first
 /// derivatives of the k+1 basis functions at x_0 … x_{n−2} (spans k … k+n−2),
 /// from the same basis evaluations as the interior rows.
-/// Knots from which [`system`] fills its rows on two threads.
-const SPLIT_KNOTS: usize = 1024;
-
 fn system(m: usize, x: &[f64], t: &[f64], mut slopes: Option<&mut Vec<[f64; MAX_COEF]>>) -> Band {
     let n = x.len();
     let k = 2 * m - 1;
@@ -508,39 +505,15 @@ fn system(m: usize, x: &[f64], t: &[f64], mut slopes: Option<&mut Vec<[f64; MAX_
     // Interior knots x_i (i = 1..n-2): row m-1+i, columns i..i+k-1
     // (B_{i+k} vanishes at the left end of its span).
     let nd = slopes.is_some() as usize;
-    // The rows of knots lo..hi (band rows m-1+lo.., `rows` their data) and
-    // their slopes (`sl`, one per knot, when asked for).
-    let (w, kl) = (a.w, a.kl);
-    let fill = |lo: usize, hi: usize, rows: &mut [f64], sl: &mut [[f64; MAX_COEF]]| {
-        for i in lo..hi {
-            let ders = basis_derivatives(t, k + i, k, x[i], nd);
-            let row = m - 1 + i;
-            let at = (i - lo) * w + kl + i - row; // `Band::idx(row, i)`
-            rows[at..at + k].copy_from_slice(&ders[0][..k]);
-            if let Some(s) = sl.get_mut(i - lo) {
-                *s = ders[1];
-            }
+    for i in 1..n - 1 {
+        let span = k + i;
+        let ders = basis_derivatives(t, span, k, x[i], nd);
+        let row = m - 1 + i;
+        for r in 0..k {
+            a.set(row, i + r, ders[0][r]);
         }
-    };
-    if n > 2 {
-        let mut none: [[f64; MAX_COEF]; 0] = [];
-        let sl: &mut [[f64; MAX_COEF]] = match slopes.as_deref_mut() {
-            Some(out) => {
-                out.resize(n - 1, [0.0; MAX_COEF]);
-                &mut out[1..]
-            }
-            None => &mut none,
-        };
-        let rows = &mut a.data[m * w..(m + n - 2) * w];
-        // Each knot's row is its own (the same bits in any order): a long
-        // motion's knots in two halves over the pool's threads.
-        if n >= SPLIT_KNOTS && rayon::current_num_threads() > 1 {
-            let mid = n / 2;
-            let (ra, rb) = rows.split_at_mut((mid - 1) * w);
-            let (sa, sb) = sl.split_at_mut(if nd == 1 { mid - 1 } else { 0 });
-            rayon::join(|| fill(1, mid, ra, sa), || fill(mid, n - 1, rb, sb));
-        } else {
-            fill(1, n - 1, rows, sl);
+        if let Some(out) = slopes.as_deref_mut() {
+            out.push(ders[1]);
         }
     }
     // Right end: rows nb-1-s for f^(m-1+s)(x_{n-1}) = 0, value row nb-1.
@@ -1194,63 +1167,6 @@ mod tests {
             assert!(fresh.seg.iter().all(|s| s.get().is_none()));
             assert!(lone.seg.iter().all(|s| s.get().is_none()));
             assert!(lone.basis.seg.iter().all(|s| s.get().is_none()));
-        }
-    }
-
-    /// A long series' spline system is filled on two threads from
-    /// `SPLIT_KNOTS` knots on: the same coefficients and knot slopes, bit
-    /// for bit, as on one thread.
-    #[test]
-    fn long_systems_filled_on_two_threads_are_bit_identical() {
-        let pools: Vec<rayon::ThreadPool> = [1, 2]
-            .iter()
-            .map(|&n| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .unwrap()
-            })
-            .collect();
-        for (degree, n) in [(5, SPLIT_KNOTS), (5, 1501), (3, 3001), (7, 2048)] {
-            let x: Vec<f64> = (0..n)
-                .map(|i| i as f64 * 0.01 + (i as f64 * 0.37).sin() * 1e-3)
-                .collect();
-            let cols: Vec<Vec<f64>> = (0..3)
-                .map(|c| {
-                    x.iter()
-                        .map(|&t| (t * (c + 1) as f64).sin() + 0.1 * t * t)
-                        .collect()
-                })
-                .collect();
-            let ys: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-            let runs: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = pools
-                .iter()
-                .map(|pool| {
-                    pool.install(|| {
-                        let mut out = Vec::new();
-                        SplineFitter::new(degree, &x)
-                            .knot_slopes_columns(&ys, &mut out)
-                            .unwrap();
-                        let coefs = ys
-                            .iter()
-                            .map(|y| GcvSpline::interpolating(degree, &x, y).unwrap().coef)
-                            .collect();
-                        (out, coefs)
-                    })
-                })
-                .collect();
-            for c in 0..ys.len() {
-                assert_eq!(
-                    bits(&runs[0].0[c]),
-                    bits(&runs[1].0[c]),
-                    "slopes, degree {degree} n {n}"
-                );
-                assert_eq!(
-                    bits(&runs[0].1[c]),
-                    bits(&runs[1].1[c]),
-                    "coefficients, degree {degree} n {n}"
-                );
-            }
         }
     }
 

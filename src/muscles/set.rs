@@ -39,7 +39,11 @@ impl MuscleSet {
     /// with the element's location.
     pub fn compile(spec: &ModelSpec, forces: &[Element], model: &Model) -> Result<MuscleSet> {
         let wrap_objects = compile_wrap_objects(model, &spec.wrap_objects)?;
-        let one = |(i, el): (usize, &Element)| -> Result<PathMuscle> {
+        let mut muscles = Vec::new();
+        for (i, el) in forces.iter().enumerate() {
+            if !is_muscle(el) {
+                continue;
+            }
             let muscle = Muscle::from_xml_with_version(el, spec.version as i64)?;
             let gp = el
                 .child("GeometryPath")
@@ -47,32 +51,12 @@ impl MuscleSet {
                 .ok_or_else(|| el.error("muscle has no GeometryPath"))?;
             let path = GeometryPath::from_xml(gp, model, &wrap_objects)
                 .map_err(|e| e.context(format!("muscle '{}'", muscle.name)))?;
-            Ok(PathMuscle {
+            muscles.push(PathMuscle {
                 muscle,
                 path,
                 force_index: i,
-            })
-        };
-        // Each muscle on its own, over the pool's threads (gait2392's 92:
-        // 3.4 M instructions at the start of a run), in force order; the
-        // first error in that order is the one reported, as one by one.
-        let compiled: Vec<Result<PathMuscle>> = if rayon::current_num_threads() > 1 {
-            use rayon::prelude::*;
-            forces
-                .par_iter()
-                .enumerate()
-                .filter(|(_, el)| is_muscle(el))
-                .map(one)
-                .collect()
-        } else {
-            forces
-                .iter()
-                .enumerate()
-                .filter(|(_, el)| is_muscle(el))
-                .map(one)
-                .collect()
-        };
-        let muscles = compiled.into_iter().collect::<Result<Vec<_>>>()?;
+            });
+        }
         Ok(MuscleSet {
             muscles,
             wrap_objects,
