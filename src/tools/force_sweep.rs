@@ -29,7 +29,7 @@ use crate::forces::lepton::Expression;
 use crate::forces::passive::PassiveForce;
 use crate::frame::candidates::{CandidateScratch, ForceCandidate};
 use crate::frame::driver::{for_each_frame, Prefetched, PreparingLoads};
-use crate::frame::problem::{status_code, Control, FrameResult, SoProblem};
+use crate::frame::problem::{status_code, Control, FrameResult, Outputs, SoProblem};
 use crate::frame::settings::{ConstraintMatrix, StaticOptimizationSetup, CONTACT_WEIGHT_RANGE};
 use crate::frame::threads::in_pool;
 use crate::frame::workspace::Workspace;
@@ -556,6 +556,29 @@ impl Plan {
         Ok(())
     }
 
+    /// The outputs of a candidate's frame result its metrics read, or
+    /// every output when its tables are written.
+    fn outputs(&self, tables: bool) -> Outputs {
+        if tables {
+            return Outputs::ALL;
+        }
+        let mut want = Outputs::NONE;
+        for m in &self.metrics {
+            match m.source {
+                Source::Force => want.force_row = true,
+                Source::ContactForces | Source::ContactBodyForces => want.contacts = true,
+                Source::GeneralizedForces => want.by_source = true,
+                Source::MusclePower => want.muscle_power = true,
+                Source::Activation
+                | Source::Diagnostics
+                | Source::Reactions(_)
+                | Source::Knee(_)
+                | Source::KneeContact(_) => {}
+            }
+        }
+        want
+    }
+
     /// Every candidate of a prepared frame: its metrics' values.
     fn solve(
         &self,
@@ -582,6 +605,7 @@ impl Plan {
             results: Vec::new(),
         };
         let nv = problem.controls.len();
+        let want = self.outputs(tables);
         for (k, cand) in cands.iter().enumerate() {
             let chain = chain_of[k];
             // Warm start: the previous candidate's multipliers, or their
@@ -616,6 +640,7 @@ impl Plan {
                 &mut frame.ws,
                 cand,
                 y0,
+                want,
                 &mut frame.scratch,
                 &mut buf.result,
             );
