@@ -170,6 +170,7 @@ impl SoProblem {
     /// only `want`'s). Leaves the candidate's generalized
     /// force change in `scratch.dg` (for its joint reactions); the frame in
     /// `ws` is left as it was assembled.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_candidate_into(
         &self,
         t: f64,

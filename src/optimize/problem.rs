@@ -233,10 +233,12 @@ impl FrameProblem {
             let (i, j) = (k % m, k / m);
             return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
         }
-        if let Some(i) = check_b
-            .then(|| self.b.iter().position(|v| !v.is_finite()))
-            .flatten()
-        {
+        let bad_b = if check_b {
+            self.b.iter().position(|v| !v.is_finite())
+        } else {
+            None
+        };
+        if let Some(i) = bad_b {
             return bad(format!("b[{i}] = {} is not finite", self.b[i]));
         }
         for i in 0..n {
