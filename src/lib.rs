@@ -43,6 +43,7 @@ pub mod plan;
 pub mod plots;
 pub mod reactions;
 pub mod storage;
+pub mod sweep;
 #[cfg(test)]
 pub(crate) mod test_dir;
 pub mod tools;

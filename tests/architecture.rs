@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The pipeline, in order: a stage may import from the stages before it.
-const PIPELINE: [&str; 17] = [
+const PIPELINE: [&str; 18] = [
     "functions",
     "parse",
     "plan",
@@ -26,6 +26,7 @@ const PIPELINE: [&str; 17] = [
     "reactions",
     "metrics",
     "writers",
+    "sweep",
     "tools",
 ];
 /// Modules any stage may use; they import only each other (`test_dir`:

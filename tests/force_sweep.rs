@@ -806,3 +806,88 @@ fn a_knee_contact_w0_sweep_writes_its_statistics() {
         std::fs::read_to_string(out.join("leg_extension_rajagopal_cam2_kc_metrics.csv")).unwrap();
     assert!(metrics.contains("peak_tf_total_N,"), "{metrics}");
 }
+
+/// A candidate's frame result holds only the outputs its metrics read
+/// (`frame::problem::Outputs`): metrics of every static-optimization table
+/// (activations, forces, diagnostics, contact rows, generalized forces by
+/// source), computed without tables, equal those of the candidate's own
+/// tables written by the same sweep (20 digits: the values themselves).
+#[test]
+fn metrics_of_every_table_equal_those_of_the_written_tables() {
+    let dir = tmp("outputs");
+    let text = setup_text(Some(500.0), 100.0, None);
+    let spec = CandidateSpec {
+        w0: 500.0,
+        expressions: vec![("cam_torque".into(), "-30-20*cos(q)^2".into())],
+        ..Default::default()
+    };
+    let opts = RunOptions {
+        threads: Some(2),
+        precision: Some(20),
+        ..Default::default()
+    };
+    let tables = dir.join("tables");
+    let with_tables = force_sweep::run_file(
+        &root().join(SETUP),
+        Some(&text),
+        std::slice::from_ref(&spec),
+        &opts,
+        &SweepOptions {
+            tables: vec![force_sweep::CandidateTables {
+                dir: tables.clone(),
+                w0_tag: false,
+            }],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    // Per table, the column of the largest values (diagnostics: the
+    // objective; its solve time is no result).
+    let mut metrics = String::new();
+    for kind in [
+        "activation",
+        "force",
+        "diagnostics",
+        "ContactForces",
+        "ContactBodyForces",
+        "GeneralizedForcesBySource",
+    ] {
+        let file = format!("leg_extension_rajagopal_cam2_SO_{kind}.sto");
+        let t = storage::read(&tables.join(&file)).unwrap();
+        let column = if kind == "diagnostics" {
+            "objective".to_string()
+        } else {
+            let big = |j: usize| t.rows.iter().fold(0.0f64, |m, r| m.max(r[j].abs()));
+            let j = (0..t.labels.len())
+                .max_by(|&a, &b| big(a).total_cmp(&big(b)))
+                .unwrap();
+            assert!(big(j) > 0.0, "{file}: every column is 0");
+            t.labels[j].clone()
+        };
+        metrics.push_str(&format!(
+            "<Metric name=\"m_{kind}\" file=\"{file}\" columns=\"{column}\" op=\"max\"/>\n\t\t"
+        ));
+    }
+    let at = text.find("<Metric ").unwrap();
+    let mut extended = text.clone();
+    extended.insert_str(at, &metrics);
+    let only = force_sweep::run_file(
+        &root().join(SETUP),
+        Some(&extended),
+        std::slice::from_ref(&spec),
+        &opts,
+        &SweepOptions::default(),
+    )
+    .unwrap();
+    let own = metrics_of_run(&extended, &tables);
+    assert_eq!(only.metric_names.len(), own.len());
+    assert_eq!(own.len(), with_tables.metric_names.len() + 6);
+    for (m, (name, v)) in own.iter().enumerate() {
+        assert_eq!(&only.metric_names[m], name);
+        let s = only.values[0][m];
+        assert!(
+            close(s, *v, 1e-12),
+            "{name}: metrics only {s} vs tables {v}"
+        );
+    }
+}

@@ -450,7 +450,7 @@ fn candidate_specs(
 
 fn outcome_dict<'py>(
     py: Python<'py>,
-    out: statopt::tools::force_sweep::SweepOutcome,
+    out: statopt::sweep::SweepOutcome,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("metric_names", out.metric_names)?;
@@ -471,10 +471,11 @@ fn outcome_dict<'py>(
 }
 
 /// A setup compiled and every frame assembled once, kept to solve batch
-/// after batch of candidates (`statopt::tools::force_sweep::Scene`).
+/// after batch of candidates (`statopt::sweep::Scene`).
 #[pyclass(module = "statopt._native")]
 struct Scene {
-    inner: std::sync::Mutex<statopt::tools::force_sweep::Scene>,
+    inner: std::sync::Mutex<statopt::sweep::Scene>,
+    threads: Option<usize>,
 }
 
 #[pymethods]
@@ -489,11 +490,12 @@ impl Scene {
     ) -> PyResult<Self> {
         let scene = py
             .allow_threads(|| {
-                statopt::tools::force_sweep::Scene::compile(&setup, text.as_deref(), threads)
+                statopt::tools::force_sweep::compile_scene(&setup, text.as_deref(), threads)
             })
             .map_err(|e| to_py(py, e))?;
         Ok(Scene {
             inner: std::sync::Mutex::new(scene),
+            threads,
         })
     }
 
@@ -530,7 +532,7 @@ impl Scene {
                 .inner
                 .lock()
                 .map_err(|_| statopt::Error::internal("the scene's lock is poisoned"))?;
-            scene.run(&specs, &sweep)
+            statopt::tools::force_sweep::run_scene(&mut scene, &specs, self.threads, &sweep)
         });
         outcome_dict(py, result.map_err(|e| to_py(py, e))?)
     }

@@ -174,7 +174,7 @@ def force_sweep(setup, candidates: Sequence[Dict[str, Any]], *, threads: Optiona
                 warm: bool = True, write_tables: Union[str, "os.PathLike[str]", None] = None,
                 **overrides: Any) -> List[Dict[str, Any]]:
     """Candidates of one setup that differ only in forces, on one compiled
-    scene, in this process (the engine's ``tools::force_sweep``): one row
+    scene, in this process (the engine's ``sweep`` stage): one row
     per candidate, ``frames``, ``failed`` and the setup's ``<Metric>``
     values (unrounded). A candidate is ``{"w0": 500, "expressions":
     {"cam_torque": "-50"}, "optimal_forces": {"reserve_x": 100},

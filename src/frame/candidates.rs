@@ -30,7 +30,7 @@
 use nalgebra::DVector;
 
 use crate::forces::passive::PassiveForce;
-use crate::frame::problem::{Control, FrameResult, SoProblem};
+use crate::frame::problem::{Control, FrameResult, Outputs, SoProblem};
 use crate::frame::workspace::Workspace;
 use crate::optimize;
 
@@ -78,6 +78,14 @@ pub struct CandidateScratch {
     pub external_forces: Vec<(usize, crate::dynamics::BodyForce)>,
     /// Whether every entry of the frame's A is finite (checked once).
     a_finite: bool,
+    /// Whether the frame's program is valid but for A's entries and b
+    /// (checked once: a candidate changes b, A's scaled columns, which are
+    /// checked with each, and the contact weights, 1/w0 with w0 in
+    /// `CONTACT_WEIGHT_RANGE`).
+    valid_but_a_b: bool,
+    /// Per passive force of the problem: its generalized force at the
+    /// frame, once a candidate replaced it (empty until then).
+    passive_g0: Vec<Vec<f64>>,
 }
 
 impl SoProblem {
@@ -92,6 +100,9 @@ impl SoProblem {
     ) -> crate::error::Result<()> {
         let asm = &ws.assembly;
         scratch.a_finite = asm.problem.a.iter().all(|v| v.is_finite());
+        scratch.valid_but_a_b = asm.problem.validate_but_a_entries_and_b().is_ok();
+        scratch.passive_g0.resize_with(self.passive.len(), Vec::new);
+        scratch.passive_g0.iter_mut().for_each(Vec::clear);
         scratch.b0.clone_from(&asm.problem.b);
         scratch.passive0.clone_from(&asm.passive);
         scratch.external0.clone_from(&asm.external);
@@ -155,15 +166,18 @@ impl SoProblem {
     /// Solve the frame kept by [`begin_candidates`](Self::begin_candidates)
     /// for `cand`, from the multipliers `y0` when given, into `out` (the
     /// frame's outputs as [`SoProblem::solve_frame_into`] makes them for a
-    /// run of the candidate's setup). Leaves the candidate's generalized
+    /// run of the candidate's setup; of those [`Outputs`] can leave out,
+    /// only `want`'s). Leaves the candidate's generalized
     /// force change in `scratch.dg` (for its joint reactions); the frame in
     /// `ws` is left as it was assembled.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_candidate_into(
         &self,
         t: f64,
         ws: &mut Workspace,
         cand: &ForceCandidate,
         y0: Option<&[f64]>,
+        want: Outputs,
         scratch: &mut CandidateScratch,
         out: &mut FrameResult,
     ) {
@@ -185,10 +199,18 @@ impl SoProblem {
             for (d, x) in scratch.dg.iter_mut().zip(g.iter()) {
                 *d += x;
             }
-            g.iter_mut().for_each(|x| *x = 0.0);
-            self.passive[*j].add_generalized_force(model, data, t, g);
-            for (d, x) in scratch.dg.iter_mut().zip(g.iter()) {
+            // The replaced force's, once per frame.
+            let g0 = &mut scratch.passive_g0[*j];
+            if g0.is_empty() {
+                g0.resize(g.len(), 0.0);
+                self.passive[*j].add_generalized_force(model, data, t, g0);
+            }
+            for (d, x) in scratch.dg.iter_mut().zip(g0.iter()) {
                 *d -= x;
+            }
+            if !want.force_row {
+                // Its record values are the force table's only.
+                continue;
             }
             scratch.record.clear();
             pf.record_values_into(data, t, &mut scratch.record);
@@ -268,12 +290,10 @@ impl SoProblem {
                 .saved
                 .iter()
                 .all(|(v, _, _)| asm.problem.a.column(*v).iter().all(|x| x.is_finite()));
-        if a_finite {
-            optimize::solve_into_finite_a(&asm.problem, y0, &mut out.solution);
-        } else {
-            optimize::solve_into(&asm.problem, y0, &mut out.solution);
-        }
-        self.frame_result_into(t, asm, None, data, mf, out);
+        let valid =
+            scratch.valid_but_a_b && a_finite && asm.problem.b.iter().all(|v| v.is_finite());
+        optimize::solve_into_valid(&asm.problem, y0, &mut out.solution, valid);
+        self.frame_outputs_into(t, asm, None, data, mf, want, out);
         for (v, col, f0) in scratch.saved.drain(..) {
             asm.problem.a.column_mut(v).copy_from_slice(&col);
             asm.scale[v] = f0;

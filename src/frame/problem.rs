@@ -896,6 +896,23 @@ impl SoProblem {
         mf: &MuscleFrame,
         out: &mut FrameResult,
     ) {
+        self.frame_outputs_into(t, asm, m_r, data, mf, Outputs::ALL, out);
+    }
+
+    /// [`frame_result_into`](Self::frame_result_into) making only the
+    /// outputs `want` names (the others are left as they were); the
+    /// forces, residual and friction violation are always made.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn frame_outputs_into(
+        &self,
+        t: f64,
+        asm: &mut Assembly,
+        m_r: Option<&DMatrix<f64>>,
+        data: &Data,
+        mf: &MuscleFrame,
+        want: Outputs,
+        out: &mut FrameResult,
+    ) {
         let Assembly {
             problem,
             scale,
@@ -925,13 +942,61 @@ impl SoProblem {
             .iter()
             .map(|c| self.options.friction.violation(c, &solution.x))
             .fold(0.0, f64::max);
-        self.contact_outputs_into(
-            states,
-            &solution.x[nv..],
-            data,
-            &mut scratch.bodies,
-            &mut out.contacts,
-        );
+        out.time = t;
+        if want.contacts {
+            self.contact_outputs_into(
+                states,
+                &solution.x[nv..],
+                data,
+                &mut scratch.bodies,
+                &mut out.contacts,
+            );
+        }
+        if want.by_source {
+            self.by_source_into(problem, &solution.x, m_r, scratch, &mut out.by_source);
+        }
+        if want.muscle_power {
+            // Mechanical power of each muscle: tension x shortening speed.
+            out.muscle_power.clear();
+            out.muscle_power
+                .extend(
+                    self.controls
+                        .iter()
+                        .zip(&out.forces)
+                        .filter_map(|(c, f)| match c {
+                            Control::Muscle(m) => Some(-f * mf.speed[*m]),
+                            Control::Actuator(_) => None,
+                        }),
+                );
+        }
+        if want.force_row {
+            out.force_row.clear();
+            force_file_row_into(
+                &out.forces,
+                passive_values,
+                self.passive.iter().map(|p| p.record_size()),
+                &self.passive_after,
+                &mut out.force_row,
+            );
+            out.force_row.extend_from_slice(external);
+        }
+        if want.state {
+            out.q.clone_from(&data.q);
+            out.u.clone_from(&data.u);
+            out.udot.clone_from(&data.udot);
+        }
+    }
+
+    /// Generalized forces by source on each free coordinate (reduced
+    /// rows), of the solution `x` of `problem`, into `by_source`.
+    fn by_source_into(
+        &self,
+        problem: &FrameProblem,
+        x: &[f64],
+        m_r: Option<&DMatrix<f64>>,
+        scratch: &mut ResultScratch,
+        by_source: &mut Vec<f64>,
+    ) {
         // Generalized forces by source on each free coordinate (reduced rows):
         // required, muscles, other actuators, contacts. Perturbation rows are
         // accelerations: M_r turns them into generalized forces.
@@ -953,7 +1018,7 @@ impl SoProblem {
                 Some(Control::Actuator(_)) => 2,
                 None => 3,
             };
-            parts[k].axpy(solution.x[v], &problem.a.column(v).rows(0, nr), 1.0);
+            parts[k].axpy(x[v], &problem.a.column(v).rows(0, nr), 1.0);
         }
         if let Some(m) = m_r {
             let product = &mut scratch.product;
@@ -965,36 +1030,48 @@ impl SoProblem {
                 p.copy_from(product);
             }
         }
-        out.by_source.clear();
+        by_source.clear();
         for r in 0..nr {
-            out.by_source.extend(parts.iter().map(|p| p[r]));
+            by_source.extend(parts.iter().map(|p| p[r]));
         }
-        // Mechanical power of each muscle: tension x shortening speed.
-        out.muscle_power.clear();
-        out.muscle_power
-            .extend(
-                self.controls
-                    .iter()
-                    .zip(&out.forces)
-                    .filter_map(|(c, f)| match c {
-                        Control::Muscle(m) => Some(-f * mf.speed[*m]),
-                        Control::Actuator(_) => None,
-                    }),
-            );
-        out.force_row.clear();
-        force_file_row_into(
-            &out.forces,
-            passive_values,
-            self.passive.iter().map(|p| p.record_size()),
-            &self.passive_after,
-            &mut out.force_row,
-        );
-        out.force_row.extend_from_slice(external);
-        out.time = t;
-        out.q.clone_from(&data.q);
-        out.u.clone_from(&data.u);
-        out.udot.clone_from(&data.udot);
     }
+}
+
+/// Which of a [`FrameResult`]'s outputs to make
+/// ([`SoProblem::solve_candidate_into`]: a force sweep's metrics read a
+/// few of them); the forces, the solution's diagnostics, the relative
+/// residual and the friction violation are always made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Outputs {
+    /// The contact tables' rows (`FrameResult::contacts`).
+    pub contacts: bool,
+    /// The generalized forces by source.
+    pub by_source: bool,
+    /// The muscles' power.
+    pub muscle_power: bool,
+    /// The force table's row.
+    pub force_row: bool,
+    /// The frame's q, u, u̇.
+    pub state: bool,
+}
+
+impl Outputs {
+    /// Every output (a run's frame).
+    pub const ALL: Outputs = Outputs {
+        contacts: true,
+        by_source: true,
+        muscle_power: true,
+        force_row: true,
+        state: true,
+    };
+    /// None but those always made.
+    pub const NONE: Outputs = Outputs {
+        contacts: false,
+        by_source: false,
+        muscle_power: false,
+        force_row: false,
+        state: false,
+    };
 }
 
 /// Status code written to the diagnostics table.

@@ -4,7 +4,10 @@
 //!
 //! - [`grf`]: predict-grf's agreement with the measured plates and its
 //!   acceptance by the physics (root residual, mean support of the feet).
+//! - [`series`]: a `<Metric>`'s statistic of a series (max, integral,
+//!   argmax, crossing, ...).
 pub mod grf;
+pub mod series;
 
 /// The exit status of a run whose results are not a result: static
 /// optimization left frames unsolved, or the physics rejects a prediction

@@ -626,12 +626,17 @@ impl Newton {
             (&mut self.x, n_cols),
             (&mut self.q, n_cols),
             (&mut self.dv, n_cols),
-            (&mut self.h, n_rows * n_rows),
-            (&mut self.l, n_rows * n_rows),
         ] {
             buf.clear();
             buf.resize(len, 0.0);
         }
+        // H and its factor are written whole before they are read (H by
+        // `Block::hessian` at a cold start and at a warm start's first
+        // step, `h_stale`; L copied from H): not cleared, which was a
+        // block's largest cost when a warm start needs one step (a force
+        // sweep's candidates).
+        self.h.resize(n_rows * n_rows, 0.0);
+        self.l.resize(n_rows * n_rows, 0.0);
         self.deriv.clear();
         self.deriv.resize(n_groups, Deriv::Zero);
         self.h_deriv.clear();

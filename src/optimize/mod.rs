@@ -34,7 +34,7 @@ pub use problem::{
     FrameProblem, FrameSolution, SolveSettings, SolveStatus, SolverChoice, SolverKind,
     StaticContact,
 };
-pub use solve::{solve, solve_clarabel, solve_into, solve_into_finite_a};
+pub use solve::{solve, solve_clarabel, solve_into, solve_into_finite_a, solve_into_valid};
 
 #[cfg(test)]
 mod tests;

@@ -183,7 +183,7 @@ impl FrameProblem {
 
     /// Checks dimensions and values; the error message says what is wrong.
     pub fn validate(&self) -> Result<()> {
-        self.validate_with(true)
+        self.validate_with(true, true)
     }
 
     /// [`validate`](Self::validate) but for the finiteness of A's entries,
@@ -191,10 +191,17 @@ impl FrameProblem {
     /// A checked once for all its candidates, which change b, the weights
     /// and a few columns it checks).
     pub fn validate_but_a_entries(&self) -> Result<()> {
-        self.validate_with(false)
+        self.validate_with(false, true)
     }
 
-    fn validate_with(&self, check_a: bool) -> Result<()> {
+    /// [`validate`](Self::validate) but for the finiteness of A's and b's
+    /// entries (`frame::candidates`: a frame's program checked once, each
+    /// candidate's b and changed columns apart).
+    pub fn validate_but_a_entries_and_b(&self) -> Result<()> {
+        self.validate_with(false, false)
+    }
+
+    fn validate_with(&self, check_a: bool, check_b: bool) -> Result<()> {
         let n = self.n_var();
         let m = self.n_eq();
         let bad = |msg: String| Err(Error::msg(format!("optimisation problem: {msg}")));
@@ -226,7 +233,12 @@ impl FrameProblem {
             let (i, j) = (k % m, k / m);
             return bad(format!("A[{i},{j}] = {} is not finite", self.a[(i, j)]));
         }
-        if let Some(i) = self.b.iter().position(|v| !v.is_finite()) {
+        let bad_b = if check_b {
+            self.b.iter().position(|v| !v.is_finite())
+        } else {
+            None
+        };
+        if let Some(i) = bad_b {
             return bad(format!("b[{i}] = {} is not finite", self.b[i]));
         }
         for i in 0..n {

@@ -85,6 +85,19 @@ pub fn solve_into_finite_a(p: &FrameProblem, y0: Option<&[f64]>, out: &mut Frame
     solve_into_checked(p, y0, out, p.validate_but_a_entries().is_ok());
 }
 
+/// [`solve_into`] of a problem the caller validated
+/// ([`FrameProblem::validate`]: `valid` is whether it passed; a force sweep
+/// checks a frame's program once, then of each candidate only what it
+/// changed).
+pub fn solve_into_valid(
+    p: &FrameProblem,
+    y0: Option<&[f64]>,
+    out: &mut FrameSolution,
+    valid: bool,
+) {
+    solve_into_checked(p, y0, out, valid);
+}
+
 fn solve_into_checked(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution, valid: bool) {
     if p.settings.solver == SolverChoice::Clarabel || !valid {
         *out = solve_clarabel(p);

@@ -9,40 +9,11 @@ use std::path::{Path, PathBuf};
 use crate::dynamics::{kinematics, Data};
 use crate::error::{Error, Result};
 use crate::frame::knee_contact::{compartments, Knee};
-use crate::model::{Model, Transform};
-use crate::reactions::ReactionSpec;
+use crate::model::Model;
+use crate::reactions::knee_loads::flexion_degrees;
 use crate::storage::{self, StoWriter};
-use crate::tools::knee_loads::flexion_degrees;
 
-/// The name of the reactions the method reports (`<name>_KneeContact_ReactionLoads.sto`).
-pub const REACTIONS_NAME: &str = "KneeContact";
-
-/// Each knee's reaction on its tibia, in the tibia's body frame, at the joint centre.
-pub fn reaction_specs(model: &Model, knees: &[Knee]) -> Vec<ReactionSpec> {
-    knees
-        .iter()
-        .map(|k| {
-            let tibia = &model.bodies[k.tibia].name;
-            ReactionSpec {
-                joint: k.tibia,
-                on_child: true,
-                frame_body: k.tibia,
-                frame: Transform::identity(),
-                label_root: format!("{}_on_{tibia}_in_{tibia}", k.name),
-            }
-        })
-        .collect()
-}
-
-/// Column labels of `<name>_KneeContact.sto`.
-pub fn labels(knees: &[Knee]) -> Vec<String> {
-    knees
-        .iter()
-        .flat_map(|k| {
-            ["flexion_deg", "total_N", "medial_N", "lateral_N"].map(|c| format!("{}_{c}", k.name))
-        })
-        .collect()
-}
+pub use crate::reactions::knee_contact::{labels, reaction_specs, REACTIONS_NAME};
 
 pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact method (docs/knee_contact.md): per knee, flexion in degrees (flexion positive); total_N = magnitude of the tibiofemoral reaction on the tibia; medial_N, lateral_N = the compartments' compressive loads (along the tibial long axis, balancing the frontal-plane moment at 40 mm apart). Units N.";
 
