@@ -3,7 +3,10 @@
 //! them, writers write them).
 //!
 //! - [`grf`]: predict-grf's agreement with the measured plates and its
-//!   acceptance by the physics (root residual, mean support of the feet).
+//!   acceptance by the physics (root residual, mean support of the feet);
+//! - [`emg`]: activations against measured EMG (emg-compare: Pearson r,
+//!   on/off agreement, the best electromechanical delay).
+pub mod emg;
 pub mod grf;
 
 /// The exit status of a run whose results are not a result: static
