@@ -13,7 +13,9 @@
 //!   from measured plates (predict-grf);
 //! - [`closure`]: coordinates solved on every row of a motion so that a
 //!   contact stays closed (`<close_contacts>`: a machine's lever follows
-//!   the pad on the shin).
+//!   the pad on the shin);
+//! - [`motion`]: a synthetic motion's table with its contacts closed or
+//!   planted on every row (`statopt-tool motion`).
 pub mod closure;
 pub mod element;
 pub mod events;
@@ -21,6 +23,7 @@ pub mod feet;
 pub mod floor;
 pub mod ground;
 pub mod kinematics;
+pub mod motion;
 pub mod plates;
 pub mod targets;
 #[cfg(test)]

@@ -12,6 +12,8 @@
 //! - [`candidates`]: one assembled frame solved for many candidates that
 //!   differ only in forces (w0, a passive force, an optimal force).
 //! - [`perturbation`]: the constraint matrix by forward-dynamics perturbation.
+//! - [`reduce`]: `<reduce_model>`, the run's model reduced to what the
+//!   motion moves.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly;
@@ -27,6 +29,7 @@ pub mod knee_contact;
 pub mod options;
 pub mod perturbation;
 pub mod problem;
+pub mod reduce;
 pub mod settings;
 pub mod so_loop;
 pub mod threads;

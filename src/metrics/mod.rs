@@ -3,9 +3,12 @@
 //! them, writers write them).
 //!
 //! - [`grf`]: predict-grf's agreement with the measured plates and its
-//!   acceptance by the physics (root residual, mean support of the feet).
+//!   acceptance by the physics (root residual, mean support of the feet);
+//! - [`emg`]: activations against measured EMG (emg-compare: Pearson r,
+//!   on/off agreement, the best electromechanical delay);
 //! - [`series`]: a `<Metric>`'s statistic of a series (max, integral,
 //!   argmax, crossing, ...).
+pub mod emg;
 pub mod grf;
 pub mod series;
 

@@ -2,5 +2,6 @@
 pub mod checks;
 pub mod coordinates;
 pub mod filter;
+pub mod generate;
 pub mod states;
 pub mod stream;

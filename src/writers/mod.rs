@@ -19,8 +19,10 @@
 //!   peaks) and the warnings made from it;
 //! - [`contact_findings`]: what the run's contacts did that the summary
 //!   names (slid or too deep while loaded, carried nothing, at a limit on
-//!   an unsolved frame), from the rows the ContactForces table holds.
+//!   an unsolved frame), from the rows the ContactForces table holds;
+//! - [`emg`]: emg-compare's table and figure.
 pub mod contact_findings;
+pub mod emg;
 pub mod frame_log;
 pub mod kinematics_tables;
 pub mod names;
