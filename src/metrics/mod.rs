@@ -4,10 +4,13 @@
 //!
 //! - [`grf`]: predict-grf's agreement with the measured plates and its
 //!   acceptance by the physics (root residual, mean support of the feet);
+//! - [`differences`]: a results table against a reference run's (max and
+//!   RMS |Δ|, vector norms; bench --grid);
 //! - [`emg`]: activations against measured EMG (emg-compare: Pearson r,
 //!   on/off agreement, the best electromechanical delay);
 //! - [`series`]: a `<Metric>`'s statistic of a series (max, integral,
 //!   argmax, crossing, ...).
+pub mod differences;
 pub mod emg;
 pub mod grf;
 pub mod series;

@@ -14,20 +14,26 @@
 //! one-factor-at-a-time grid around the setup's own options plus a few
 //! combinations. [`write_csv`] and [`write_chart`] write `bench_grid.csv`
 //! and `bench_grid.png`/`.svg` (max |Δactivation| on a log axis, the Pareto
-//! front marked, OpenSim 4.6's time per frame as a vertical line when given).
+//! front marked, OpenSim 4.6's time per frame as a vertical line when given;
+//! `writers::bench_grid`). The errors are `metrics::differences`. This
+//! driver edits the plan per choice, runs it and reads its tables.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{Error, Location, Result};
+use crate::metrics::differences::{scalar_errors, vector_error};
 use crate::parse::analyses::{
     ConstraintMatrix, FrictionModel, SolverChoice, StaticOptimizationSetup,
 };
 use crate::parse::setup::{Analysis, AnalyzeSetup, Setup};
-use crate::plots::{self, RefLine, Scatter, ScatterPoint};
 use crate::storage::{self, Storage};
 use crate::tools::{analyze, RunOptions};
 use crate::writers::names::{OutputKind, RunKey, Sweep};
+
+pub use crate::writers::bench_grid::{
+    pareto_rows, write_chart, write_csv, GridRow, CHART_FLOOR, CSV_COLUMNS,
+};
 
 /// An edit of a setup that makes one method choice.
 pub type Edit = Arc<dyn Fn(&mut AnalyzeSetup) -> Result<()> + Send + Sync>;
@@ -79,45 +85,6 @@ pub struct GridOptions {
     /// The contact weight w0 of every run (default: the setup's first).
     pub contact_weight: Option<f64>,
 }
-
-/// One row of the grid table.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GridRow {
-    pub choice: String,
-    pub threads: usize,
-    pub frames: usize,
-    /// Best time per frame of the per-frame loop, ms.
-    pub ms_per_frame: f64,
-    /// Against the reference run: max and RMS |Δactivation| over the
-    /// muscles (every actuator when the model has none) and frames.
-    pub max_dactivation: f64,
-    pub rms_dactivation: f64,
-    /// Max |Δ contact force| (N, vector norm), when the model has contacts.
-    pub max_dcontact: Option<f64>,
-    /// Max |Δ reaction force| (N, vector norm) of the knee (or first)
-    /// reaction, when the setup runs a JointReaction with static optimization.
-    pub max_dreaction: Option<f64>,
-    /// Max |Δactivation| against OpenSim's activations: the same columns,
-    /// common times.
-    pub max_dactivation_opensim: Option<f64>,
-    /// Failed frames (solver status not solved) of the run.
-    pub failed_frames: usize,
-}
-
-/// CSV columns, in order.
-pub const CSV_COLUMNS: [&str; 11] = [
-    "choice",
-    "threads",
-    "frames",
-    "ms_per_frame",
-    "max_dactivation",
-    "rms_dactivation",
-    "max_dcontact_force_N",
-    "max_dreaction_force_N",
-    "max_dactivation_vs_opensim",
-    "failed_frames",
-    "pareto",
-];
 
 /// The active StaticOptimization analysis of the setup.
 fn so_analysis(setup: &mut AnalyzeSetup) -> Result<&mut StaticOptimizationSetup> {
@@ -394,91 +361,6 @@ fn run_choice(
     ))
 }
 
-/// The row of `reference` at time `t`: the row with that time (within
-/// 1e-9 s), else linear interpolation between the neighbouring rows (runs
-/// whose frames differ, e.g. a filter that resamples a non-uniform motion);
-/// None outside the reference's time range.
-fn row_at(reference: &Storage, t: f64) -> Option<Vec<f64>> {
-    let n = reference.time.len();
-    let i = reference.time.partition_point(|&x| x < t - 1e-9);
-    if i < n && (reference.time[i] - t).abs() <= 1e-9 {
-        return Some(reference.rows[i].clone());
-    }
-    if i == 0 || i >= n {
-        return None;
-    }
-    let (t0, t1) = (reference.time[i - 1], reference.time[i]);
-    let w = (t - t0) / (t1 - t0);
-    Some(
-        reference.rows[i - 1]
-            .iter()
-            .zip(&reference.rows[i])
-            .map(|(a, b)| a + w * (b - a))
-            .collect(),
-    )
-}
-
-/// (max, RMS) of |Δ| over the common columns and times.
-fn scalar_errors(ours: &Storage, reference: &Storage) -> (f64, f64) {
-    let cols: Vec<(usize, usize)> = reference
-        .labels
-        .iter()
-        .enumerate()
-        .filter_map(|(j, l)| ours.column_index(l).map(|k| (k, j)))
-        .collect();
-    let (mut max, mut sum, mut n) = (0.0f64, 0.0, 0usize);
-    for (i, &t) in ours.time.iter().enumerate() {
-        let Some(r) = row_at(reference, t) else {
-            continue;
-        };
-        for &(k, j) in &cols {
-            let d = (ours.rows[i][k] - r[j]).abs();
-            let d = if d.is_nan() { f64::INFINITY } else { d };
-            max = max.max(d);
-            sum += d * d;
-            n += 1;
-        }
-    }
-    if n == 0 {
-        return (f64::NAN, f64::NAN);
-    }
-    (max, (sum / n as f64).sqrt())
-}
-
-/// Max norm of Δ of the vectors `<root>_fx/_fy/_fz` for the given roots.
-fn vector_error(ours: &Storage, reference: &Storage, roots: &[String]) -> f64 {
-    let mut max = 0.0f64;
-    let mut any = false;
-    for root in roots {
-        let idx = |t: &Storage| -> Option<[usize; 3]> {
-            Some([
-                t.column_index(&format!("{root}_fx"))?,
-                t.column_index(&format!("{root}_fy"))?,
-                t.column_index(&format!("{root}_fz"))?,
-            ])
-        };
-        let (Some(a), Some(b)) = (idx(ours), idx(reference)) else {
-            continue;
-        };
-        for (i, &t) in ours.time.iter().enumerate() {
-            let Some(r) = row_at(reference, t) else {
-                continue;
-            };
-            any = true;
-            let d: f64 = (0..3)
-                .map(|c| (ours.rows[i][a[c]] - r[b[c]]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            max = max.max(if d.is_nan() { f64::INFINITY } else { d });
-        }
-    }
-    if any {
-        max
-    } else {
-        f64::NAN
-    }
-}
-
 /// Run the setup under the reference choice and every choice (the
 /// reference first, and as a row of its own named as it is).
 pub fn run_grid(
@@ -544,114 +426,6 @@ pub fn run_grid(
     }
     let _ = std::fs::remove_dir_all(&runs);
     Ok(rows)
-}
-
-/// Indices of the rows on the Pareto front of (ms per frame, max |Δa|).
-pub fn pareto_rows(rows: &[GridRow]) -> Vec<usize> {
-    let pts: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|r| (r.ms_per_frame, r.max_dactivation))
-        .collect();
-    plots::pareto_front(&pts)
-}
-
-/// `bench_grid.csv`: one row per choice, [`CSV_COLUMNS`]; empty cells where
-/// a column does not apply.
-pub fn write_csv(rows: &[GridRow], path: &Path) -> Result<()> {
-    let front = pareto_rows(rows);
-    let err = |e: csv::Error| Error::input(Location::file(path), format!("cannot write CSV: {e}"));
-    let mut w = csv::Writer::from_path(path).map_err(err)?;
-    w.write_record(CSV_COLUMNS).map_err(err)?;
-    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
-    for (i, r) in rows.iter().enumerate() {
-        w.write_record([
-            r.choice.clone(),
-            r.threads.to_string(),
-            r.frames.to_string(),
-            format!("{}", r.ms_per_frame),
-            format!("{:e}", r.max_dactivation),
-            format!("{:e}", r.rms_dactivation),
-            opt(r.max_dcontact),
-            opt(r.max_dreaction),
-            opt(r.max_dactivation_opensim),
-            r.failed_frames.to_string(),
-            front.contains(&i).to_string(),
-        ])
-        .map_err(err)?;
-    }
-    w.flush().map_err(|e| Error::io(path, e))
-}
-
-/// Smallest error drawn on the log axis; a zero error (the reference) is
-/// drawn there and labelled so.
-pub const CHART_FLOOR: f64 = 1e-12;
-
-/// `<stem>.png` and `<stem>.svg`: time per frame against max |Δactivation|.
-pub fn write_chart(
-    rows: &[GridRow],
-    stem: &Path,
-    title: &str,
-    opensim_ms: Option<f64>,
-) -> Result<Vec<PathBuf>> {
-    // Points are numbered as the CSV's rows (1 = the reference); the key
-    // right of the plot names them, and points on the Pareto front also
-    // carry their name.
-    let front = pareto_rows(rows);
-    let key: Vec<String> = rows
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let zero = if r.max_dactivation == 0.0 {
-                " (error 0)"
-            } else {
-                ""
-            };
-            format!("{}  {}{zero}", k + 1, r.choice)
-        })
-        .collect();
-    let points = rows
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let y = if r.max_dactivation > 0.0 || r.max_dactivation.is_nan() {
-                // NaN (no common frames) is not drawn.
-                r.max_dactivation
-            } else {
-                CHART_FLOOR
-            };
-            let label = if front.contains(&k) {
-                format!("{} {}", k + 1, r.choice)
-            } else {
-                format!("{}", k + 1)
-            };
-            ScatterPoint {
-                label,
-                x: r.ms_per_frame,
-                y: if y.is_nan() { y } else { y.max(CHART_FLOOR) },
-                color: r.threads.saturating_sub(1),
-            }
-        })
-        .collect();
-    let s = Scatter {
-        title: title.to_string(),
-        x_label: "time per frame (ms, best of repeats)".into(),
-        y_label: "max |Δactivation| vs reference".into(),
-        points,
-        log_x: true,
-        log_y: true,
-        pareto: true,
-        key,
-        size: (1400, 800),
-        reference: opensim_ms
-            .map(|v| {
-                vec![RefLine::Vertical {
-                    value: v,
-                    label: "OpenSim 4.6".into(),
-                }]
-            })
-            .unwrap_or_default(),
-    };
-    plots::write_scatter(&s, stem)
 }
 
 /// Whether the setup's model has contacts (the friction choices apply).
