@@ -1005,12 +1005,13 @@ fn a_run_owns_its_outputs_in_no_process_wide_registry() {
 /// lines not counted) stay under `TOOLS_SHIPPED_LIMIT`. Issue 37 found 9.1k
 /// lines there, more than any stage, with engine work in them (motion
 /// generation, the model reduction, EMG statistics, the grid's errors);
-/// moving those into their stages brought it under the limit, and a
+/// moving those and the force sweep's engine into their stages brought it to
+/// 5.3k, and the limit is 5 % over that, and a
 /// numerical routine added back to a tool instead of its stage fails here.
 /// The test prints every stage's count (the numbers the document quotes).
 #[test]
 fn tools_stay_thin_drivers() {
-    const TOOLS_SHIPPED_LIMIT: usize = 6_500;
+    const TOOLS_SHIPPED_LIMIT: usize = 5_600;
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut counts = std::collections::BTreeMap::new();
     for stage in PIPELINE {
