@@ -633,28 +633,30 @@ fn off_intervals_xml(intervals: &[(f64, f64)], weight: f64) -> String {
     if intervals.is_empty() {
         return String::new();
     }
-    let times: Vec<String> = intervals
-        .iter()
-        .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
-        .collect();
     format!(
         "\t\t\t\t<off_intervals>{}</off_intervals>\n\t\t\t\t<off_weight>{weight}</off_weight>\n",
-        times.join(" ")
+        intervals_text(intervals)
     )
 }
 
+/// The `<held_intervals>` line of a contact (empty when there are none).
 fn held_intervals_xml(intervals: &[(f64, f64)]) -> String {
     if intervals.is_empty() {
         return String::new();
     }
-    let times: Vec<String> = intervals
-        .iter()
-        .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
-        .collect();
     format!(
         "\t\t\t\t<held_intervals>{}</held_intervals>\n",
-        times.join(" ")
+        intervals_text(intervals)
     )
+}
+
+/// Intervals as the property's text: `t0 t1 t0 t1 ...`.
+fn intervals_text(intervals: &[(f64, f64)]) -> String {
+    intervals
+        .iter()
+        .flat_map(|&(a, b)| [format!("{a}"), format!("{b}")])
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]
