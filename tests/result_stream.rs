@@ -266,25 +266,7 @@ fn a_joint_reaction_reading_another_setups_forces_is_declared_ahead() {
     // for reading; the reactions are those of the two setups run one after
     // the other, the second reading the first's file.
     let dir = common::out_dir("result_stream_cross_setup_jr");
-    std::fs::write(dir.join("block.osim"), common::block_model("")).unwrap();
-    let mut motion = String::from(
-        "block\nversion=1\nnRows=41\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n",
-    );
-    for k in 0..41 {
-        let t = k as f64 * 0.01;
-        motion.push_str(&format!("{t:.6}\t{:.12}\t0\t0\n", 0.2 * (t * 0.5).sin()));
-    }
-    std::fs::write(dir.join("motion.mot"), motion).unwrap();
-    let setup = |name: &str, analysis: &str| {
-        let text = format!(
-            r#"<OpenSimDocument Version="40000"><AnalyzeTool name="{name}"><model_file>block.osim</model_file><results_directory>out_{name}</results_directory>
-<initial_time>0</initial_time><final_time>100000</final_time><output_precision>12</output_precision>
-<AnalysisSet name="Analyses"><objects>{analysis}</objects></AnalysisSet>
-<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#
-        );
-        std::fs::write(dir.join(format!("{name}.xml")), text).unwrap();
-        dir.join(format!("{name}.xml"))
-    };
+    let setup = |name: &str, analysis: &str| cross_setup(&dir, name, analysis);
     let so = setup("so", r#"<StaticOptimization name="SO"/>"#);
     let jr = setup(
         "jr",
@@ -324,5 +306,64 @@ fn a_joint_reaction_reading_another_setups_forces_is_declared_ahead() {
     assert!(
         study == alone,
         "the study's reactions differ from the setups run alone"
+    );
+}
+
+/// A setup `name`.xml in `dir` (the block model and its motion written
+/// beside it) running `analysis`, its tables in `out_<name>`.
+fn cross_setup(dir: &Path, name: &str, analysis: &str) -> PathBuf {
+    std::fs::write(dir.join("block.osim"), common::block_model("")).unwrap();
+    let mut motion = String::from(
+        "block\nversion=1\nnRows=41\nnColumns=4\ninDegrees=no\nendheader\ntime\ttx\tty\ttz\n",
+    );
+    for k in 0..41 {
+        let t = k as f64 * 0.01;
+        motion.push_str(&format!("{t:.6}\t{:.12}\t0\t0\n", 0.2 * (t * 0.5).sin()));
+    }
+    std::fs::write(dir.join("motion.mot"), motion).unwrap();
+    let text = format!(
+        r#"<OpenSimDocument Version="40000"><AnalyzeTool name="{name}"><model_file>block.osim</model_file><results_directory>out_{name}</results_directory>
+<initial_time>0</initial_time><final_time>100000</final_time><output_precision>12</output_precision>
+<AnalysisSet name="Analyses"><objects>{analysis}</objects></AnalysisSet>
+<coordinates_file>motion.mot</coordinates_file></AnalyzeTool></OpenSimDocument>"#
+    );
+    std::fs::write(dir.join(format!("{name}.xml")), text).unwrap();
+    dir.join(format!("{name}.xml"))
+}
+
+#[test]
+fn a_cycle_of_joint_reactions_across_setups_is_found_by_check_as_by_a_run() {
+    // Setup a's JointReaction reads b's forces and b's reads a's: neither
+    // can run first. A run of the study refuses it before running anything;
+    // `--check` says the same (it did not look before).
+    let dir = common::out_dir("result_stream_cross_setup_cycle");
+    let jr = |other: &str| {
+        format!(
+            r#"<StaticOptimization name="SO"/><JointReaction name="JR"><forces_file>out_{other}/{other}_SO_force.sto</forces_file><joint_names>slide</joint_names><apply_on_bodies>child</apply_on_bodies><express_in_frame>ground</express_in_frame></JointReaction>"#
+        )
+    };
+    cross_setup(&dir, "a", &jr("b"));
+    cross_setup(&dir, "b", &jr("a"));
+    let study = dir.join("study.xml");
+    std::fs::write(
+        &study,
+        r#"<OpenSimDocument Version="40000"><StatoptStudy name="cycle"><setups>a.xml b.xml</setups><results_directory>out_study</results_directory></StatoptStudy></OpenSimDocument>"#,
+    )
+    .unwrap();
+    let said = "waits, in turn, for this one's tables";
+    let err = run_setup(&study, &RunOptions::default())
+        .err()
+        .expect("a cycle must not run");
+    assert!(err.to_string().contains(said), "{err}");
+    assert!(!dir.join("out_a").exists() && !dir.join("out_b").exists());
+    let report = statopt::tools::check::run(&study, false);
+    assert!(
+        report.errors.iter().any(|e| e.to_string().contains(said)),
+        "--check missed the cycle: {:?}",
+        report
+            .errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
     );
 }

@@ -299,13 +299,22 @@ pub fn check_in(plan: &StudyPlan, moved_to: Option<&Path>) -> Result<()> {
     prepare(plan, moved_to).map(|_| ())
 }
 
-/// Plan the runs, check every reference and metric, and say where figure
-/// references point once the runs have written.
-#[allow(clippy::type_complexity)]
-fn prepare<'a>(
-    study: &'a StudyPlan,
-    moved_to: Option<&Path>,
-) -> Result<(Vec<PlannedRun<'a>>, Vec<(PathBuf, Location)>, Moved)> {
+/// What [`prepare`] finds before the first run: the planned runs, the
+/// tables the figures and metrics draw, where references point, and the
+/// setups' waves with the cross references that order them.
+struct Prepared<'a> {
+    runs: Vec<PlannedRun<'a>>,
+    expected: Vec<(PathBuf, Location)>,
+    moved: Moved,
+    levels: Vec<usize>,
+    crossed: Vec<CrossReference>,
+}
+
+/// Plan the runs, check every reference and metric, order the setups whose
+/// JointReactions read another's tables (a cycle is an input error), and
+/// say where figure references point once the runs have written. `--check`
+/// and a run call this same function.
+fn prepare<'a>(study: &'a StudyPlan, moved_to: Option<&Path>) -> Result<Prepared<'a>> {
     let runs: Vec<PlannedRun> = study
         .runs
         .iter()
@@ -314,7 +323,14 @@ fn prepare<'a>(
     // (Every figure's and metric's attributes, its op among them, were
     // checked when the study was read: `plan::figures`.)
     let (expected, moved) = check_references(&study.figures, &study.dir, &runs)?;
-    Ok((runs, expected, moved))
+    let (levels, crossed) = cross_references(&runs)?;
+    Ok(Prepared {
+        runs,
+        expected,
+        moved,
+        levels,
+        crossed,
+    })
 }
 
 /// Run a study document. Everything it names is checked before the first
@@ -334,7 +350,13 @@ pub fn run(plan: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
 }
 
 fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
-    let (runs, expected, moved) = prepare(study, opts.results_dir.as_deref())?;
+    let Prepared {
+        runs,
+        expected,
+        moved,
+        levels,
+        crossed,
+    } = prepare(study, opts.results_dir.as_deref())?;
     // The tables the figures and metrics draw: kept in memory until drawn
     // (`storage::results::want`; the study's capture ends with the run).
     expected
@@ -374,7 +396,6 @@ fn run_study(study: &StudyPlan, opts: &RunOptions) -> Result<RunSummary> {
     // the study writes is declared ahead: that setup runs first, keeps the
     // table in memory until the JointReaction has read it, and with
     // `-o DIR` the JointReaction reads it where it was moved.
-    let (levels, crossed) = cross_references(&runs)?;
     crossed
         .iter()
         .for_each(|c| crate::storage::results::want(&c.moved));
