@@ -321,6 +321,60 @@ pub fn torque_driven_strength(
     (n > 0).then(|| (log_sum / n as f64).exp())
 }
 
+/// Peak tension of the plantar aponeurosis in walking, as a share of body
+/// weight: 96 % BW in late stance (Erdemir et al. 2004, J Bone Joint Surg
+/// Am 86:546, cadaver feet loaded through a simulated stance).
+pub const PLANTAR_APONEUROSIS_PEAK_BW: f64 = 0.96;
+
+/// Moment arm of the plantar aponeurosis about the metatarsophalangeal
+/// joints (m): it wraps the metatarsal heads, of about 1 cm radius (the
+/// windlass, Hicks 1954, J Anat 88:25).
+pub const PLANTAR_APONEUROSIS_MOMENT_ARM: f64 = 0.01;
+
+/// The toe (metatarsophalangeal) coordinates of `model` that nothing but
+/// muscles drives: unconstrained coordinates of the joints whose child is a
+/// `toes_r`/`toes_l` body, with no `CoordinateActuator` of `forces` on them
+/// and no reserves (`reserves` None). In pre-swing a foot rolls over its
+/// toes, and the moment about those joints is carried mostly by the plantar
+/// aponeurosis, tensed by the toes' dorsiflexion (the windlass, Hicks
+/// 1954), which these models lack; with the toe flexors alone, a force on
+/// the toes must pass close to the joint's axis, so the trailing foot's toe
+/// brakes at its friction cone's edge where the plates show it pushing
+/// (docs/grf_prediction.md, step 5).
+pub fn undriven_toe_coordinates(
+    forces: &[crate::xml::Element],
+    model: &crate::model::Model,
+    reserves: Option<f64>,
+) -> Vec<usize> {
+    if reserves.is_some() {
+        return Vec::new();
+    }
+    (0..model.nq())
+        .filter(|&c| {
+            let co = &model.coordinates[c];
+            let body = model.bodies[co.body].name.as_str();
+            !co.is_constrained()
+                && (body == "toes_r" || body == "toes_l")
+                && !forces.iter().any(|f| {
+                    f.name == "CoordinateActuator"
+                        && f.child_text("coordinate").map(str::trim) == Some(co.name.as_str())
+                })
+        })
+        .collect()
+}
+
+/// The optimal force (N m) of the actuator that stands for the plantar
+/// aponeurosis on each toe coordinate ([`undriven_toe_coordinates`]): its
+/// peak tension times its moment arm, 0.96 BW x 1 cm (7.1 N m at 75 kg), so
+/// that the aponeurosis at its walking peak costs what a muscle at full
+/// activation costs.
+pub fn plantar_aponeurosis_strength(model: &crate::model::Model) -> f64 {
+    PLANTAR_APONEUROSIS_PEAK_BW
+        * model.total_mass()
+        * model.gravity.norm()
+        * PLANTAR_APONEUROSIS_MOMENT_ARM
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
