@@ -379,6 +379,90 @@ pub fn plantar_aponeurosis_strength(model: &crate::model::Model) -> f64 {
 mod tests {
     use super::*;
 
+    /// A foot of two bodies per side on pin joints: `calcn_s` on `ankle_s`
+    /// from ground, `toes_s` on `mtp_angle_s` from it; the left toe joint
+    /// locked. Bodies of 2 kg (8 kg in all).
+    fn feet_model() -> crate::model::Model {
+        let body = |n: &str| {
+            format!(
+                r#"<Body name="{n}"><mass>2</mass><mass_center>0 0 0</mass_center><inertia>1 1 1 0 0 0</inertia></Body>"#
+            )
+        };
+        let pin = |j: &str, parent: &str, child: &str, c: &str, locked: bool| {
+            format!(
+                r#"<PinJoint name="{j}"><socket_parent_frame>{parent}</socket_parent_frame><socket_child_frame>{child}</socket_child_frame><coordinates><Coordinate name="{c}"><locked>{locked}</locked></Coordinate></coordinates></PinJoint>"#
+            )
+        };
+        let text = format!(
+            r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000"><Model name="feet">
+<BodySet name="bodyset"><objects>{}{}{}{}</objects></BodySet>
+<JointSet name="jointset"><objects>{}{}{}{}</objects></JointSet>
+</Model></OpenSimDocument>"#,
+            body("calcn_r"),
+            body("toes_r"),
+            body("calcn_l"),
+            body("toes_l"),
+            pin("ankle_r", "/ground", "/bodyset/calcn_r", "ankle_r", false),
+            pin(
+                "mtp_r",
+                "/bodyset/calcn_r",
+                "/bodyset/toes_r",
+                "mtp_angle_r",
+                false
+            ),
+            pin("ankle_l", "/ground", "/bodyset/calcn_l", "ankle_l", false),
+            pin(
+                "mtp_l",
+                "/bodyset/calcn_l",
+                "/bodyset/toes_l",
+                "mtp_angle_l",
+                true
+            ),
+        );
+        let path = std::path::Path::new("feet.osim");
+        let root = crate::xml::parse_str(&text, path).unwrap();
+        crate::model::compile(&crate::parse::osim::ModelSpec::from_document(&root, path).unwrap())
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The plantar aponeurosis goes on a free toe joint that nothing but
+    /// muscles drives: not on a locked one, not where reserves or a
+    /// coordinate actuator drive it; 0.96 BW x 1 cm.
+    #[test]
+    fn the_plantar_aponeurosis_goes_on_free_undriven_toe_joints() {
+        let model = feet_model();
+        let name = |v: Vec<usize>| -> Vec<String> {
+            v.into_iter()
+                .map(|c| model.coordinates[c].name.clone())
+                .collect()
+        };
+        assert_eq!(
+            name(undriven_toe_coordinates(&[], &model, None)),
+            vec!["mtp_angle_r"]
+        );
+        assert!(undriven_toe_coordinates(&[], &model, Some(10.0)).is_empty());
+        let path = std::path::Path::new("forces.xml");
+        let act = crate::xml::parse_str(
+            "<CoordinateActuator name=\"a\"><coordinate> mtp_angle_r </coordinate><optimal_force>5</optimal_force></CoordinateActuator>",
+            path,
+        )
+        .unwrap();
+        assert!(undriven_toe_coordinates(&[act], &model, None).is_empty());
+        let other = crate::xml::parse_str(
+            "<CoordinateActuator name=\"b\"><coordinate>ankle_r</coordinate></CoordinateActuator>",
+            path,
+        )
+        .unwrap();
+        assert_eq!(
+            name(undriven_toe_coordinates(&[other], &model, None)),
+            vec!["mtp_angle_r"]
+        );
+        let s = plantar_aponeurosis_strength(&model);
+        let expected = 0.96 * 8.0 * model.gravity.norm() * 0.01;
+        assert!((s - expected).abs() < 1e-12, "{s} against {expected}");
+    }
+
     /// Two plates under the right foot, one under the left: the foot's
     /// force is their sum and its centre of pressure the plates' weighted
     /// by their vertical forces (it was the last plate's).
