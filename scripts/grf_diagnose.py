@@ -61,7 +61,12 @@ def main():
     ap.add_argument("--out", default="/tmp/grf_dev_table")
     ap.add_argument("--setups", default="target/grf_dev_setups")
     ap.add_argument("--only", default="")
+    ap.add_argument("--walk-ap", action="store_true",
+                    help="the AP error of the muscle-model walking trials, phase by phase")
+    ap.add_argument("--shared", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared"))
     a = ap.parse_args()
+    if a.walk_ap:
+        return walk_ap(a)
     if not os.path.isdir(a.setups):
         print(f"SKIP: {a.setups} is absent (run scripts/grf_dev_setups.py)")
         return 0
@@ -138,6 +143,130 @@ def main():
         ratio = np.abs(meas["x"][st]) / meas["y"][st]
         cells.append("%.0f %% (max %.2f)" % (100 * np.mean(ratio > 0.35), ratio.max()))
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+    return 0
+
+
+def plates(setup_path):
+    """Per foot (r, l) and axis (x, y): the plates' force, as (time, value)."""
+    setup = open(setup_path).read()
+    here = os.path.dirname(setup_path)
+    loads_xml = os.path.join(here, tag(setup, "external_loads_file"))
+    lx = open(loads_xml).read()
+    mot = os.path.join(os.path.dirname(loads_xml), tag(lx, "datafile"))
+    ids = re.findall(r"<force_identifier>\s*([^<]*?)\s*</force_identifier>", lx)
+    bodies = re.findall(r"<applied_to_body>\s*([^<]*?)\s*</applied_to_body>", lx)
+    gl, g = read(mot)
+    feet = {}
+    for i, b in zip(ids, bodies):
+        for ax in "xy":
+            feet[(b[-1], ax)] = feet.get((b[-1], ax), 0) + g[:, gl.index(i + ax)]
+    model = open(os.path.join(here, tag(setup, "model_file"))).read()
+    bw = sum(float(x) for x in re.findall(r"<mass>([^<]+)</mass>", model)) * 9.80665
+    return g[:, 0], feet, bw
+
+
+def walk_ap(a):
+    """Where the AP error of walking with muscle models sits (issue 36).
+
+    Per foot e = predicted - measured AP force. Over both feet the squared
+    error splits exactly into a part from the feet's sum, E = e_r + e_l
+    (E^2 / 2 per frame), and a part from the split between them,
+    d = (e_r - e_l) / 2 (2 d^2 per frame). E itself is the kinematics'
+    (the requirement less the plates' sum) plus the prediction's (its sum
+    less the requirement: the root residual's AP part). Counterfactuals of
+    the bar's figure (mean over the feet of rho): the prediction's sum
+    split as the plates split their vertical force ("split right"), the
+    plates' sum split as the prediction splits it ("sum right").
+    """
+    shared = os.path.abspath(a.shared)
+    trials = [
+        ("gait10dof18musc_walk", os.path.join(shared, "validation/gait10dof18musc_walk/setup_SO.xml")),
+        ("moco_walk3d", os.path.join(shared, "validation/moco_walk3d/setup_SO.xml")),
+        ("gait2392_subject01_walk", os.path.join(shared, "models/gait2392/subject01_walk/setup_SO.xml")),
+        ("knee_gc5_ss1", os.path.join(a.setups, "knee_gc5_ss1.xml")),
+    ]
+    for name, setup in trials:
+        out = os.path.join(a.out, name)
+        if not os.path.isfile(setup) or not os.path.isdir(out) or (a.only and a.only not in name):
+            continue
+        pre = [f for f in os.listdir(out) if f.endswith("_predicted_grf.sto")][0][: -len("_predicted_grf.sto")]
+        pl, p = read(os.path.join(out, pre + "_predicted_grf.sto"))
+        t = p[:, 0]
+        gl_, gen_ = read(os.path.join(out, pre + "_StaticOptimization_GeneralizedForcesBySource.sto"))
+        req = np.interp(t, gen_[:, 0], gen_[:, gl_.index("pelvis_tx_required")])
+        tg, feet, bw = plates(setup)
+        m = {k: np.interp(t, tg, v) for k, v in feet.items()}
+        pr = {(s, ax): p[:, pl.index(f"{s}_force_v{ax}")] for s in "rl" for ax in "xy"}
+        e = {s: pr[(s, "x")] - m[(s, "x")] for s in "rl"}
+        E = e["r"] + e["l"]
+        d = (e["r"] - e["l"]) / 2
+        M = m[("r", "x")] + m[("l", "x")]
+        on = {s: m[(s, "y")] > 20 for s in "rl"}
+        ds = on["r"] & on["l"]
+        ss = on["r"] ^ on["l"]
+        tot = np.sum(E ** 2 / 2 + 2 * d ** 2)
+        bar = np.mean([np.corrcoef(pr[(s, "x")], m[(s, "x")])[0, 1] for s in "rl"])
+        vy = m[("r", "y")] + m[("l", "y")]
+        w = {s: np.where(vy > 20, m[(s, "y")] / np.maximum(vy, 1e-9), 0.5) for s in "rl"}
+        split_right = np.mean([np.corrcoef(m[(s, "x")] + E * w[s], m[(s, "x")])[0, 1] for s in "rl"])
+        sum_right = np.mean([np.corrcoef(pr[(s, "x")] - E * w[s], m[(s, "x")])[0, 1] for s in "rl"])
+        kin = np.mean([np.corrcoef(m[(s, "x")] + (req - M) * w[s], m[(s, "x")])[0, 1] for s in "rl"])
+        print(f"## {name}: AP rho (mean of feet) {bar:.3f}; split right {split_right:.3f}; sum right {sum_right:.3f}; "
+              f"requirement split as the plates {kin:.3f}")
+        r_req, rm_req = rho_rmse(req, M, bw)
+        r_sum, rm_sum = rho_rmse(pr[("r", "x")] + pr[("l", "x")], M, bw)
+        print(f"  sum: requirement vs plates rho {r_req:.3f} / {rm_req:.1f} % BW; predicted sum vs plates {r_sum:.3f} / {rm_sum:.1f}; "
+              f"predicted sum - requirement RMS {100*np.sqrt(np.mean((pr[('r','x')]+pr[('l','x')]-req)**2))/bw:.1f} % BW")
+        for ph, sel in (("double support", ds), ("single support", ss), ("neither", ~(ds | ss))):
+            if not sel.any():
+                continue
+            se = np.sum(E[sel] ** 2 / 2)
+            sd = np.sum(2 * d[sel] ** 2)
+            ek = (req - M)[sel]
+            print(f"  {ph}: {sel.sum()} frames, {100*(se+sd)/tot:.0f} % of the squared error "
+                  f"(sum {100*se/tot:.0f} %, split {100*sd/tot:.0f} %); mean sum error {E[sel].mean():+.0f} N "
+                  f"(kinematics {ek.mean():+.0f} N, RMS {np.sqrt(np.mean(ek**2)):.0f}; prediction vs requirement "
+                  f"{(E[sel]-ek).mean():+.0f} N, RMS {np.sqrt(np.mean((E[sel]-ek)**2)):.0f})")
+        # Double support's first and second half: the squeeze after the
+        # strike, the trailing foot's pre-swing.
+        k = np.flatnonzero(ds)
+        half = np.zeros_like(ds)
+        for rr in np.split(k, np.flatnonzero(np.diff(k) > 1) + 1) if len(k) else []:
+            half[rr[len(rr) // 2:]] = True
+        for ph, sel in (("first half of double support", ds & ~half), ("second half", ds & half)):
+            print(f"    {ph}: split {100*np.sum(2*d[sel]**2)/tot:.0f} % of the squared error")
+        # Double support, per foot: the leading (braking) and trailing (pushing) foot.
+        for s, o in (("r", "l"), ("l", "r")):
+            k = np.flatnonzero(ds)
+            if not len(k):
+                continue
+            # runs of double support
+            runs = np.split(k, np.flatnonzero(np.diff(k) > 1) + 1)
+            for rr in runs:
+                if len(rr) < 2:
+                    continue
+                # the trailing foot is the one loaded before the run began
+                pre_ = rr[0] - 1
+                trailing = s if pre_ >= 0 and on[s][pre_] else None
+                if trailing is None:
+                    continue
+                lead = o
+                print(f"    DS {t[rr[0]]:.3f}-{t[rr[-1]]:.3f} s, trailing {s}: trailing AP pred - meas mean {e[s][rr].mean():+.0f} N "
+                      f"(max {e[s][rr].max():+.0f}), leading {e[lead][rr].mean():+.0f} N (min {e[lead][rr].min():+.0f}); "
+                      f"sum error {E[rr].mean():+.0f}, kinematics {(req - M)[rr].mean():+.0f}")
+        # Peaks per stance: braking (min) and propulsion (max).
+        for s in "rl":
+            k = np.flatnonzero(on[s])
+            if not len(k):
+                continue
+            for rr in np.split(k, np.flatnonzero(np.diff(k) > 1) + 1):
+                if len(rr) < 10:
+                    continue
+                mm, pp = m[(s, "x")][rr], pr[(s, "x")][rr]
+                i, j = np.argmin(mm), np.argmin(pp)
+                I, J = np.argmax(mm), np.argmax(pp)
+                print(f"    stance {s} {t[rr[0]]:.3f}-{t[rr[-1]]:.3f}: braking {mm[i]:.0f} N at {t[rr[i]]:.3f} vs pred {pp[j]:.0f} at {t[rr[j]]:.3f}; "
+                      f"push-off {mm[I]:.0f} at {t[rr[I]]:.3f} vs {pp[J]:.0f} at {t[rr[J]]:.3f}")
     return 0
 
 

@@ -321,9 +321,147 @@ pub fn torque_driven_strength(
     (n > 0).then(|| (log_sum / n as f64).exp())
 }
 
+/// Peak tension of the plantar aponeurosis in walking, as a share of body
+/// weight: 96 % BW in late stance (Erdemir et al. 2004, J Bone Joint Surg
+/// Am 86:546, cadaver feet loaded through a simulated stance).
+pub const PLANTAR_APONEUROSIS_PEAK_BW: f64 = 0.96;
+
+/// Moment arm of the plantar aponeurosis about the metatarsophalangeal
+/// joints (m): it wraps the metatarsal heads, of about 1 cm radius (the
+/// windlass, Hicks 1954, J Anat 88:25).
+pub const PLANTAR_APONEUROSIS_MOMENT_ARM: f64 = 0.01;
+
+/// The toe (metatarsophalangeal) coordinates of `model` that nothing but
+/// muscles drives: unconstrained coordinates of the joints whose child is a
+/// `toes_r`/`toes_l` body, with no `CoordinateActuator` of `forces` on them
+/// and no reserves (`reserves` None). In pre-swing a foot rolls over its
+/// toes, and the moment about those joints is carried mostly by the plantar
+/// aponeurosis, tensed by the toes' dorsiflexion (the windlass, Hicks
+/// 1954), which these models lack; with the toe flexors alone, a force on
+/// the toes must pass close to the joint's axis, so the trailing foot's toe
+/// brakes at its friction cone's edge where the plates show it pushing
+/// (docs/grf_prediction.md, step 5).
+pub fn undriven_toe_coordinates(
+    forces: &[crate::xml::Element],
+    model: &crate::model::Model,
+    reserves: Option<f64>,
+) -> Vec<usize> {
+    if reserves.is_some() {
+        return Vec::new();
+    }
+    (0..model.nq())
+        .filter(|&c| {
+            let co = &model.coordinates[c];
+            let body = model.bodies[co.body].name.as_str();
+            !co.is_constrained()
+                && (body == "toes_r" || body == "toes_l")
+                && !forces.iter().any(|f| {
+                    f.name == "CoordinateActuator"
+                        && f.child_text("coordinate").map(str::trim) == Some(co.name.as_str())
+                })
+        })
+        .collect()
+}
+
+/// The optimal force (N m) of the actuator that stands for the plantar
+/// aponeurosis on each toe coordinate ([`undriven_toe_coordinates`]): its
+/// peak tension times its moment arm, 0.96 BW x 1 cm (7.1 N m at 75 kg), so
+/// that the aponeurosis at its walking peak costs what a muscle at full
+/// activation costs.
+pub fn plantar_aponeurosis_strength(model: &crate::model::Model) -> f64 {
+    PLANTAR_APONEUROSIS_PEAK_BW
+        * model.total_mass()
+        * model.gravity.norm()
+        * PLANTAR_APONEUROSIS_MOMENT_ARM
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A foot of two bodies per side on pin joints: `calcn_s` on `ankle_s`
+    /// from ground, `toes_s` on `mtp_angle_s` from it; the left toe joint
+    /// locked. Bodies of 2 kg (8 kg in all).
+    fn feet_model() -> crate::model::Model {
+        let body = |n: &str| {
+            format!(
+                r#"<Body name="{n}"><mass>2</mass><mass_center>0 0 0</mass_center><inertia>1 1 1 0 0 0</inertia></Body>"#
+            )
+        };
+        let pin = |j: &str, parent: &str, child: &str, c: &str, locked: bool| {
+            format!(
+                r#"<PinJoint name="{j}"><socket_parent_frame>{parent}</socket_parent_frame><socket_child_frame>{child}</socket_child_frame><coordinates><Coordinate name="{c}"><locked>{locked}</locked></Coordinate></coordinates></PinJoint>"#
+            )
+        };
+        let text = format!(
+            r#"<?xml version="1.0"?>
+<OpenSimDocument Version="40000"><Model name="feet">
+<BodySet name="bodyset"><objects>{}{}{}{}</objects></BodySet>
+<JointSet name="jointset"><objects>{}{}{}{}</objects></JointSet>
+</Model></OpenSimDocument>"#,
+            body("calcn_r"),
+            body("toes_r"),
+            body("calcn_l"),
+            body("toes_l"),
+            pin("ankle_r", "/ground", "/bodyset/calcn_r", "ankle_r", false),
+            pin(
+                "mtp_r",
+                "/bodyset/calcn_r",
+                "/bodyset/toes_r",
+                "mtp_angle_r",
+                false
+            ),
+            pin("ankle_l", "/ground", "/bodyset/calcn_l", "ankle_l", false),
+            pin(
+                "mtp_l",
+                "/bodyset/calcn_l",
+                "/bodyset/toes_l",
+                "mtp_angle_l",
+                true
+            ),
+        );
+        let path = std::path::Path::new("feet.osim");
+        let root = crate::xml::parse_str(&text, path).unwrap();
+        crate::model::compile(&crate::parse::osim::ModelSpec::from_document(&root, path).unwrap())
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The plantar aponeurosis goes on a free toe joint that nothing but
+    /// muscles drives: not on a locked one, not where reserves or a
+    /// coordinate actuator drive it; 0.96 BW x 1 cm.
+    #[test]
+    fn the_plantar_aponeurosis_goes_on_free_undriven_toe_joints() {
+        let model = feet_model();
+        let name = |v: Vec<usize>| -> Vec<String> {
+            v.into_iter()
+                .map(|c| model.coordinates[c].name.clone())
+                .collect()
+        };
+        assert_eq!(
+            name(undriven_toe_coordinates(&[], &model, None)),
+            vec!["mtp_angle_r"]
+        );
+        assert!(undriven_toe_coordinates(&[], &model, Some(10.0)).is_empty());
+        let path = std::path::Path::new("forces.xml");
+        let act = crate::xml::parse_str(
+            "<CoordinateActuator name=\"a\"><coordinate> mtp_angle_r </coordinate><optimal_force>5</optimal_force></CoordinateActuator>",
+            path,
+        )
+        .unwrap();
+        assert!(undriven_toe_coordinates(&[act], &model, None).is_empty());
+        let other = crate::xml::parse_str(
+            "<CoordinateActuator name=\"b\"><coordinate>ankle_r</coordinate></CoordinateActuator>",
+            path,
+        )
+        .unwrap();
+        assert_eq!(
+            name(undriven_toe_coordinates(&[other], &model, None)),
+            vec!["mtp_angle_r"]
+        );
+        let s = plantar_aponeurosis_strength(&model);
+        let expected = 0.96 * 8.0 * model.gravity.norm() * 0.01;
+        assert!((s - expected).abs() < 1e-12, "{s} against {expected}");
+    }
 
     /// Two plates under the right foot, one under the left: the foot's
     /// force is their sum and its centre of pressure the plates' weighted

@@ -281,6 +281,7 @@ pub fn run_with(
     let composed = crate::forces::analysis_model::load_composed_model_of(&setup)?;
     let am = crate::forces::analysis_model::with_force_sets(composed.clone(), &setup)?;
     let strength = torque_driven_strength(&am.forces, &am.model, reserves);
+    let toes = crate::contacts::ground::undriven_toe_coordinates(&am.forces, &am.model, reserves);
     let default_weight = match strength {
         Some(s) => FOOT_CONTACT_WEIGHT * (s / MUSCLE_STRENGTH_REFERENCE).powi(2),
         None => FOOT_CONTACT_WEIGHT,
@@ -327,7 +328,7 @@ pub fn run_with(
     let contacts_file = dir.join(own.file(OutputKind::FootContacts));
     let contacts_xml = contacts.force_set_xml();
     crate::storage::results::write(&contacts_file, contacts_xml.clone().into_bytes())?;
-    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
+    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves, &toes)?;
     setup.set_force_set_documents(force_sets);
     setup
         .force_set_documents
@@ -369,6 +370,13 @@ pub fn run_with(
             "contact weight w0 = {contact_weight:.3} (torque-driven model: its actuators make {s:.0} N m per unit of control per coordinate, against {MUSCLE_STRENGTH_REFERENCE:.0} N m of the muscle-driven models w0 = {FOOT_CONTACT_WEIGHT} was chosen on: w0 = {FOOT_CONTACT_WEIGHT} x ({s:.0}/{MUSCLE_STRENGTH_REFERENCE:.0})^2)"
         ),
     });
+    if !toes.is_empty() {
+        prediction.summary.notes.push(format!(
+            "toe joints {} carried by the plantar aponeurosis as well as the toe flexors: an actuator of {:.1} N m each (0.96 BW x 1 cm; docs/grf_prediction.md, step 5)",
+            toes.iter().map(|&c| model.coordinates[c].name.as_str()).collect::<Vec<_>>().join(", "),
+            crate::contacts::ground::plantar_aponeurosis_strength(&model)
+        ));
+    }
     for (s, side) in ['r', 'l'].into_iter().enumerate() {
         prediction.summary.notes.push(events_note(
             side,
@@ -784,6 +792,7 @@ fn weak_root_residuals(
     model: &crate::model::Model,
     dir: &std::path::Path,
     reserves: Option<f64>,
+    toes: &[usize],
 ) -> Result<(Vec<crate::xml::Element>, Vec<PathBuf>)> {
     let mut documents = setup.force_set_documents.clone();
     for f in &setup.force_set_files {
@@ -792,7 +801,7 @@ fn weak_root_residuals(
     let roots: Vec<usize> = (0..model.nq())
         .filter(|&c| model.is_root_coordinate(c))
         .collect();
-    if roots.is_empty() && reserves.is_none() {
+    if roots.is_empty() && reserves.is_none() && toes.is_empty() {
         return Ok((documents, Vec::new()));
     }
     let root_body = roots
@@ -835,6 +844,14 @@ fn weak_root_residuals(
                 "\t\t\t<CoordinateActuator name=\"{name}_reserve\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{f}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
             ));
         }
+    }
+    // The plantar aponeurosis on the toe joints nothing else drives.
+    let pa = crate::contacts::ground::plantar_aponeurosis_strength(model);
+    for &c in toes {
+        let name = &model.coordinates[c].name;
+        xml.push_str(&format!(
+            "\t\t\t<CoordinateActuator name=\"{name}_plantar_aponeurosis\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{pa}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
+        ));
     }
     xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
     let out = dir.join(RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::RootResiduals));
