@@ -15,7 +15,7 @@ use crate::storage::{self, StoWriter};
 
 pub use crate::reactions::knee_contact::{labels, reaction_specs, REACTIONS_NAME};
 
-pub const DESCRIPTION: &str = "Knee contact forces of statopt's knee contact method (docs/knee_contact.md): per knee, flexion in degrees (flexion positive); total_N = magnitude of the tibiofemoral reaction on the tibia; medial_N, lateral_N = the compartments' compressive loads (along the tibial long axis, balancing the frontal-plane moment at 40 mm apart). Units N.";
+pub use crate::writers::knee_tables::CONTACT_DESCRIPTION as DESCRIPTION;
 
 /// Write `out` from the knees' reaction table `reactions` (from
 /// [`reaction_specs`]), knee angles from the positions `q` at `time` at the

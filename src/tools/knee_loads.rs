@@ -38,7 +38,7 @@ use crate::storage::{self, StoWriter};
 pub use crate::reactions::knee_loads::{flexion_degrees, knee_row, labels, sides, Side};
 
 /// Header text of the table.
-pub const DESCRIPTION: &str = "Knee loads per side (statopt, docs/leg_extension_results.md): knee_flexion in degrees (flexion positive); tibiofemoral reaction on the tibia in the tibia frame: tf_compression = -Fy (along the tibial long axis, compression positive), tf_shear = +Fx (anterior, perpendicular to the long axis: PCL-type positive, ACL-type negative); pf_compression = magnitude of the patellofemoral reaction on the patella (absent without a patella body). Units N.";
+pub use crate::writers::knee_tables::LOADS_DESCRIPTION as DESCRIPTION;
 
 /// Write the knee loads of the reaction table `reactions` to `out`, knee
 /// angles from the positions `q` at `time` at the table's times (each

@@ -29,6 +29,7 @@ use crate::storage::TableFile;
 use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
+use crate::writers::knee_tables::{KneeKind, KneeTables};
 use crate::writers::resume::resume_point;
 use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
@@ -177,6 +178,16 @@ pub fn run(
             precision,
         )
     });
+    // The knee tables are a sink of the frame stream too (a resumed run's
+    // are fed from its tables, which hold the frames it does not solve
+    // again).
+    let mut knees = if opts.resume {
+        None
+    } else {
+        knee_tables_sink(
+            setup, &problem, &specs, reactions, &weights, &dir, precision,
+        )?
+    };
     let read_later = read_by_this_run(
         &setup.name,
         &specs,
@@ -184,6 +195,7 @@ pub fn run(
         &problem,
         sweep,
         stats.is_none(),
+        knees.is_none(),
         &dir,
     );
     read_later
@@ -198,14 +210,18 @@ pub fn run(
         &specs,
         opts,
         &RunKey::analysis(&setup.name, so_name, Sweep::Single).label(),
-        wants_positions,
+        wants_positions && knees.is_none(),
         stats.as_mut(),
+        knees.as_mut(),
     );
     let (summaries, positions) = match swept {
         Ok(s) => s,
         Err(e) => {
             if let Some(stats) = stats {
                 stats.abandon();
+            }
+            if let Some(knees) = knees {
+                knees.abandon();
             }
             return Err(e);
         }
@@ -217,7 +233,7 @@ pub fn run(
     let common = common_contact_lines(&mut summaries);
     for (spec, s) in specs.iter().zip(summaries) {
         let stopped = s.stopped.is_some();
-        if !stopped {
+        if !stopped && knees.is_none() {
             for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
                 if jr_setup.knee_loads {
                     let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
@@ -235,7 +251,7 @@ pub fn run(
                 }
             }
         }
-        if !stopped && !problem.knees.is_empty() {
+        if !stopped && knees.is_none() && !problem.knees.is_empty() {
             let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
             let (jr, _) = spec.reactions.last().expect("the knee contact reactions");
             let out = RunKey::setup(&setup.name, spec.run.sweep).file(OutputKind::KneeContact);
@@ -267,6 +283,9 @@ pub fn run(
         if let Some(stats) = stats {
             stats.abandon();
         }
+        if let Some(knees) = knees {
+            knees.abandon();
+        }
         warnings.extend(std::mem::take(&mut summary.warnings));
         summary.warnings = warnings;
         return Ok(summary);
@@ -275,6 +294,16 @@ pub fn run(
     let mut streamed = match stats {
         Some(s) => s.finish()?.into_iter(),
         None => Vec::new().into_iter(),
+    };
+    // The knee tables the frame stream made: per run, and their statistics
+    // (KneeLoads per JointReaction, then KneeContact).
+    let mut knee_stats = match knees {
+        Some(k) => {
+            let (per_run, stats) = k.finish()?;
+            knee_files.extend(per_run.into_iter().flatten());
+            Some(stats.into_iter())
+        }
+        None => None,
     };
     if sweep {
         for kind in OutputKind::SWEEP_TABLES {
@@ -309,11 +338,13 @@ pub fn run(
                 &[OutputKind::ReactionLoads]
             };
             for kind in kinds {
-                if *kind == OutputKind::ReactionLoads {
-                    if let Some(files) = streamed.next() {
-                        summary.files.extend(files);
-                        continue;
-                    }
+                let made = match kind {
+                    OutputKind::ReactionLoads => streamed.next(),
+                    _ => knee_stats.as_mut().and_then(|k| k.next()),
+                };
+                if let Some(files) = made {
+                    summary.files.extend(files);
+                    continue;
                 }
                 let run = |sweep| RunKey::analysis(&setup.name, name, sweep);
                 let files: Vec<std::path::PathBuf> = weights
@@ -333,7 +364,10 @@ pub fn run(
             }
         }
     }
-    if sweep && !problem.knees.is_empty() {
+    let knee_contact_stats = knee_stats.as_mut().and_then(|k| k.next());
+    if let Some(files) = knee_contact_stats {
+        summary.files.extend(files);
+    } else if sweep && !problem.knees.is_empty() {
         // The knee contact method's table: mean, min and max over w0 too.
         let files: Vec<std::path::PathBuf> = weights
             .iter()
@@ -557,6 +591,77 @@ fn sweep_statistics_sink(
     stats
 }
 
+/// The knee tables of a run (each JointReaction's KneeLoads, then the
+/// knee contact method's KneeContact) as a sink of the frame stream, with
+/// their statistics in a sweep; None when the run has none.
+fn knee_tables_sink<'a>(
+    setup: &AnalyzeSetup,
+    problem: &'a SoProblem,
+    specs: &[RunSpec],
+    reactions: &[JointReactionSetup],
+    weights: &[f64],
+    dir: &std::path::Path,
+    precision: usize,
+) -> Result<Option<KneeTables<'a>>> {
+    let mut knees = KneeTables::new(
+        &problem.model,
+        &problem.knees,
+        &setup.setup_file,
+        weights,
+        precision,
+    );
+    let Some(first) = specs.first() else {
+        return Ok(None);
+    };
+    for (k, (jr_setup, (jr, jr_specs))) in reactions.iter().zip(&first.reactions).enumerate() {
+        if !jr_setup.knee_loads {
+            continue;
+        }
+        // The sides' columns in the ReactionLoads table (its path in errors).
+        let table = crate::storage::Storage {
+            labels: crate::reactions::column_labels(jr_specs),
+            ..Default::default()
+        };
+        let path = dir.join(jr.file(OutputKind::ReactionLoads));
+        let (sides, patella) = crate::reactions::knee_loads::sides(&problem.model, &table, &path)?;
+        let paths = specs
+            .iter()
+            .map(|s| dir.join(s.reactions[k].0.file(OutputKind::KneeLoads)))
+            .collect();
+        let stat_path =
+            |stat| dir.join(jr.with_sweep(Sweep::Stat(stat)).file(OutputKind::KneeLoads));
+        knees.add(
+            KneeKind::Loads {
+                reaction: k,
+                sides: Box::new(sides),
+                patella,
+            },
+            paths,
+            &stat_path,
+            &OutputKind::KneeLoads.table(),
+        );
+    }
+    if !problem.knees.is_empty() {
+        let reaction = first.reactions.len() - 1;
+        let paths = specs
+            .iter()
+            .map(|s| {
+                dir.join(RunKey::setup(&setup.name, s.run.sweep).file(OutputKind::KneeContact))
+            })
+            .collect();
+        let stat_path = |stat| {
+            dir.join(RunKey::setup(&setup.name, Sweep::Stat(stat)).file(OutputKind::KneeContact))
+        };
+        knees.add(
+            KneeKind::Contact { reaction },
+            paths,
+            &stat_path,
+            &OutputKind::KneeContact.table(),
+        );
+    }
+    Ok((!knees.is_empty()).then_some(knees))
+}
+
 /// The tables of a run's `specs` that the run's own consumers read after
 /// writing them, once per consumer (`storage::results::want`): each
 /// JointReaction's ReactionLoads for its knee loads, the knee contact
@@ -569,26 +674,28 @@ fn read_by_this_run(
     problem: &SoProblem,
     sweep: bool,
     stats_from_tables: bool,
+    knees_from_tables: bool,
     dir: &std::path::Path,
 ) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();
     for spec in specs {
         for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
             let mut kinds = Vec::new();
-            if jr_setup.knee_loads {
+            let knee_loads = jr_setup.knee_loads && knees_from_tables;
+            if knee_loads {
                 kinds.push(OutputKind::ReactionLoads);
             }
             if sweep {
                 if stats_from_tables {
                     kinds.push(OutputKind::ReactionLoads);
                 }
-                if jr_setup.knee_loads {
+                if knee_loads {
                     kinds.push(OutputKind::KneeLoads);
                 }
             }
             out.extend(kinds.into_iter().map(|k| dir.join(jr.file(k))));
         }
-        if !problem.knees.is_empty() {
+        if knees_from_tables && !problem.knees.is_empty() {
             if let Some((jr, _)) = spec.reactions.last() {
                 out.push(dir.join(jr.file(OutputKind::ReactionLoads)));
             }
@@ -778,6 +885,7 @@ fn run_sweep(
     label: &str,
     keep_positions: bool,
     mut stats: Option<&mut SweepStatistics>,
+    mut knees: Option<&mut KneeTables>,
 ) -> Result<(Vec<RunSummary>, Option<Positions>)> {
     let log_names: Vec<LogNames> = runs
         .iter()
@@ -865,6 +973,9 @@ fn run_sweep(
         }
         if let Some(stats) = stats.as_deref_mut() {
             stats.push(results)?;
+        }
+        if let Some(knees) = knees.as_deref_mut() {
+            knees.push(results)?;
         }
         Ok(())
     };
