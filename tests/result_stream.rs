@@ -354,9 +354,9 @@ fn a_sweeps_knee_tables_are_a_sink_of_its_frames() {
     // KneeContact tables, and their mean, min and max, as the frames arrive
     // (`writers::knee_tables`): its capture keeps no per-w0 table for them
     // (before, every per-w0 ReactionLoads, KneeLoads and KneeContact table
-    // was kept for a post-pass that averaged them). Made again afterwards
-    // from its ReactionLoads files by that post-pass (a resumed run's
-    // route), they are the same bytes.
+    // was kept for a post-pass that averaged them). Made again by a resumed
+    // run, which feeds the same sink from its ReactionLoads files, they are
+    // the same bytes.
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let setup = root.join("setups/leg_extension_rajagopal_cam1_kc.xml");
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_knee_sink");
@@ -385,7 +385,7 @@ fn a_sweeps_knee_tables_are_a_sink_of_its_frames() {
         kept_per_w0.is_empty(),
         "per-w0 tables kept for a consumer: {kept_per_w0:?}"
     );
-    // The knee tables again, by the post-pass over the ReactionLoads files.
+    // The knee tables again, from the ReactionLoads files.
     let knee_table = |p: &Path| {
         let n = p.to_string_lossy();
         n.ends_with("_KneeLoads.sto") || n.ends_with("_KneeContact.sto")

@@ -125,6 +125,12 @@ impl<'a> KneeTables<'a> {
         });
     }
 
+    /// The joint reactions (indices in a frame's reaction rows) its tables
+    /// are made from.
+    pub fn reactions(&self) -> Vec<usize> {
+        self.tables.iter().map(|t| t.kind.reaction()).collect()
+    }
+
     /// Whether it has any table.
     pub fn is_empty(&self) -> bool {
         self.tables.is_empty()
