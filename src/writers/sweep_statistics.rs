@@ -6,9 +6,12 @@ use crate::error::{Error, Result};
 use crate::storage::StoWriter;
 
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
-/// (the paper's uncertainty band, section 3.2). The runs' tables are read
-/// row by row in step, so memory does not grow with the trial's length.
-/// `stat_path` names the table of each statistic (`writers::names`).
+/// (the paper's uncertainty band, section 3.2), from the runs' tables
+/// `files`: a resumed sweep's, whose tables hold frames it does not solve
+/// again. The tables are read row by row in step (memory does not grow with
+/// the trial's length) and fed to a [`SweepStatistics`], the sink a pass
+/// feeds from its frames. `stat_path` names the table of each statistic
+/// (`writers::names`).
 pub fn write_sweep_statistics(
     setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
@@ -31,28 +34,10 @@ pub fn write_sweep_statistics(
             )));
         }
     }
-    use crate::writers::names::Stat;
-    let stats = Stat::ALL;
-    let mut out = Vec::new();
-    let mut writers = Vec::new();
-    for stat in stats {
-        let path = stat_path(stat);
-        let stat = stat.as_str();
-        let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
-        writers.push(StoWriter::create_for_setup(
-            setup_file,
-            &path,
-            &format!("{kind} {stat}"),
-            &desc,
-            &labels,
-            precision,
-            false,
-        )?);
-        out.push(path);
-    }
+    let mut stats = SweepStatistics::new(setup_file, weights, 0, precision);
+    let index = stats.add(Source::Given, kind, &labels, stat_path);
     let nl = labels.len();
     let mut rows = vec![Vec::with_capacity(nl); readers.len()];
-    let mut row = vec![0.0; nl];
     'frames: loop {
         let mut time = None;
         for (k, (r, buf)) in readers.iter_mut().zip(rows.iter_mut()).enumerate() {
@@ -70,22 +55,9 @@ pub fn write_sweep_statistics(
             }
         }
         let t = time.expect("the first table's row");
-        for (stat, w) in stats.iter().zip(writers.iter_mut()) {
-            for (j, v) in row.iter_mut().enumerate() {
-                let vals = rows.iter().map(|r| r[j]);
-                *v = match *stat {
-                    Stat::Mean => vals.sum::<f64>() / rows.len() as f64,
-                    Stat::Min => vals.fold(f64::INFINITY, f64::min),
-                    Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
-                };
-            }
-            w.write_row(t, &row)?;
-        }
+        stats.push_rows(index, t, rows.iter().map(|r| r.as_slice()))?;
     }
-    for w in writers {
-        w.finish()?;
-    }
-    Ok(out)
+    Ok(stats.finish()?.into_iter().next().unwrap_or_default())
 }
 
 /// Which values of a frame's outputs one table of a sweep holds.
