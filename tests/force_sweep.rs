@@ -618,6 +618,15 @@ fn a_study_force_sweep_element_writes_its_metrics() {
     )
     .unwrap();
     let summary = tools::run_setup(&study_file, &RunOptions::default()).unwrap();
+    // The candidates' KneeLoads are made from each frame's reactions as
+    // they are solved (`writers::knee_tables`): no table it wrote is opened
+    // for reading (before, each candidate's ReactionLoads file was).
+    let out = dir.join("out");
+    let read_back: Vec<_> = storage::opened()
+        .into_iter()
+        .filter(|(p, _)| p.starts_with(&out))
+        .collect();
+    assert!(read_back.is_empty(), "read back: {read_back:?}");
     let csv = dir.join("out/shapes_force_sweep.csv");
     assert!(summary.files.contains(&csv));
     let text = std::fs::read_to_string(&csv).unwrap();

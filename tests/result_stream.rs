@@ -61,7 +61,27 @@ fn the_leg_extension_study_reads_back_no_file_it_wrote() {
     // the tables the study's own figures and metrics draw (a few of its
     // 54 MB of tables; it kept them all before).
     let (kept, kept_bytes) = capture.kept();
+    let ever = capture.ever_kept();
     drop(capture);
+    // Of the per-w0 tables, only those the study's figures draw were ever
+    // kept (a few SO tables): none for the knee tables, which are sinks of
+    // the frame stream (before, every per-w0 ReactionLoads, KneeLoads and
+    // KneeContact table was kept for a post-pass).
+    let knee_inputs: Vec<&PathBuf> = ever
+        .iter()
+        .filter(|p| {
+            let n = p.file_name().unwrap().to_string_lossy().into_owned();
+            let per_w0 = n
+                .split("_w0_")
+                .nth(1)
+                .is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit()));
+            per_w0
+                && (n.ends_with("_ReactionLoads.sto")
+                    || n.ends_with("_KneeLoads.sto")
+                    || n.ends_with("_KneeContact.sto"))
+        })
+        .collect();
+    assert!(knee_inputs.is_empty(), "kept: {knee_inputs:?}");
     let table_bytes: u64 = written
         .iter()
         .filter(|p| p.extension().is_some_and(|e| e == "sto"))
@@ -366,4 +386,75 @@ fn a_cycle_of_joint_reactions_across_setups_is_found_by_check_as_by_a_run() {
             .map(|e| e.to_string())
             .collect::<Vec<_>>()
     );
+}
+
+#[test]
+fn a_sweeps_knee_tables_are_a_sink_of_its_frames() {
+    // The Rajagopal cam 1 sweep with the knee contact method (w0 = 1, 500,
+    // 1000; its JointReaction with knee loads) makes its KneeLoads and
+    // KneeContact tables, and their mean, min and max, as the frames arrive
+    // (`writers::knee_tables`): its capture keeps no per-w0 table for them
+    // (before, every per-w0 ReactionLoads, KneeLoads and KneeContact table
+    // was kept for a post-pass that averaged them). Made again by a resumed
+    // run, which feeds the same sink from its ReactionLoads files, they are
+    // the same bytes.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let setup = root.join("setups/leg_extension_rajagopal_cam1_kc.xml");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_knee_sink");
+    let again = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("result_stream_knee_again");
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&again);
+    let capture = statopt::storage::results::Capture::new(Some(&out));
+    run_setup(
+        &setup,
+        &RunOptions {
+            results_dir: Some(out.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let ever = capture.ever_kept();
+    drop(capture);
+    let per_w0 = |p: &Path| {
+        let n = p.file_name().unwrap().to_string_lossy().into_owned();
+        n.split("_w0_")
+            .nth(1)
+            .is_some_and(|rest| rest.starts_with(|c: char| c.is_ascii_digit()))
+    };
+    let kept_per_w0: Vec<&PathBuf> = ever.iter().filter(|p| per_w0(p)).collect();
+    assert!(
+        kept_per_w0.is_empty(),
+        "per-w0 tables kept for a consumer: {kept_per_w0:?}"
+    );
+    // The knee tables again, from the ReactionLoads files.
+    let knee_table = |p: &Path| {
+        let n = p.to_string_lossy();
+        n.ends_with("_KneeLoads.sto") || n.ends_with("_KneeContact.sto")
+    };
+    std::fs::create_dir_all(&again).unwrap();
+    let mut knee = Vec::new();
+    for p in files_under(&out) {
+        let name = p.file_name().unwrap().to_owned();
+        if knee_table(&p) {
+            knee.push(name);
+        } else {
+            std::fs::copy(&p, again.join(name)).unwrap();
+        }
+    }
+    // Per w0 and mean/min/max, KneeLoads and KneeContact.
+    assert_eq!(knee.len(), 12, "{knee:?}");
+    run_setup(
+        &setup,
+        &RunOptions {
+            results_dir: Some(again.clone()),
+            resume: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    for name in &knee {
+        let a = std::fs::read(out.join(name)).unwrap();
+        let b = std::fs::read(again.join(name)).unwrap();
+        assert!(a == b, "{name:?} differs from the post-pass's");
+    }
 }

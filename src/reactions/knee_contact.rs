@@ -1,7 +1,7 @@
 //! The knee contact method's reactions (each knee's reaction on its
 //! tibia) and the rows of its table, `<name>_KneeContact.sto` (per knee:
 //! flexion, total, medial and lateral force; written by
-//! `tools::knee_contact_table`).
+//! `writers::knee_tables` as the frames stream).
 
 use crate::dynamics::Data;
 use crate::frame::knee_contact::{compartments, Knee};

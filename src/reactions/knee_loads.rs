@@ -1,6 +1,7 @@
 //! Knee loads from a frame's joint reactions (issue 15), the rows of
-//! `<reaction table prefix>KneeLoads.sto` (written by `tools::knee_loads`,
-//! which documents the frame and signs): per side, the knee flexion angle,
+//! `<reaction table prefix>KneeLoads.sto` (written by
+//! `writers::knee_tables` as the frames stream; `tools::knee_loads`
+//! documents the frame and signs): per side, the knee flexion angle,
 //! tibiofemoral compression and shear, and patellofemoral compression.
 
 use std::path::Path;

@@ -260,6 +260,10 @@ struct Kept {
     /// Outputs by normalised path, in the order they were finished.
     outputs: Vec<(PathBuf, Output)>,
     index: HashMap<PathBuf, usize>,
+    /// Every path an output was kept at, in the order kept (those dropped
+    /// since included; a path kept again after a drop twice): what the
+    /// run's consumers read from memory.
+    ever: Vec<PathBuf>,
 }
 
 impl Run {
@@ -403,6 +407,13 @@ impl Capture {
         (kept.outputs.len(), bytes)
     }
 
+    /// The paths of every output the capture has kept while it lasted
+    /// (those dropped once read included), in the order first kept,
+    /// normalised (absolute): the outputs this run's consumers wanted.
+    pub fn ever_kept(&self) -> Vec<PathBuf> {
+        self.run.kept().ever.clone()
+    }
+
     /// The outputs kept so far, in the order they were finished: (path,
     /// output). The paths are normalised (absolute).
     pub fn outputs(&self) -> Vec<(PathBuf, Output)> {
@@ -533,6 +544,7 @@ pub fn keep(path: &Path, output: Output) {
         None => {
             let i = kept.outputs.len();
             kept.index.insert(k.clone(), i);
+            kept.ever.push(k.clone());
             kept.outputs.push((k, output));
         }
     }

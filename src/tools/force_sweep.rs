@@ -158,7 +158,7 @@ fn run_streamed(
     progress.finish_and_clear();
     let mut outcome = outcome?;
     if let Some(t) = tables {
-        outcome.files = t.finish(setup, &plan, opts)?;
+        outcome.files = t.finish()?;
     }
     Ok(outcome)
 }
@@ -195,24 +195,21 @@ pub fn run_scene(
 }
 
 /// Every candidate's open tables ([`SweepOptions::tables`]).
-struct CandidateWriters {
+struct CandidateWriters<'a> {
     tables: Vec<crate::writers::so_tables::SoTables>,
-    /// Per candidate: its folder and its runs' naming.
-    runs: Vec<(std::path::PathBuf, crate::writers::names::Sweep)>,
-    /// The frames' times and positions (for the knee loads' flexion), as
-    /// a run keeps them from its pass.
-    time: Vec<f64>,
-    q: Vec<Vec<f64>>,
+    /// Every candidate's KneeLoads and KneeContact tables, made from each
+    /// frame's reactions as a run makes them (`writers::knee_tables`).
+    knees: crate::writers::knee_tables::KneeTables<'a>,
 }
 
-impl CandidateWriters {
+impl<'a> CandidateWriters<'a> {
     fn open(
         setup: &AnalyzeSetup,
-        plan: &SweepPlan,
+        plan: &'a SweepPlan,
         cands: &[crate::frame::candidates::ForceCandidate],
         specs: &[CandidateTables],
         opts: &RunOptions,
-    ) -> Result<CandidateWriters> {
+    ) -> Result<CandidateWriters<'a>> {
         use crate::writers::so_tables::{SoTables, TablesSpec};
         if specs.len() != cands.len() {
             return Err(Error::input(
@@ -255,65 +252,75 @@ impl CandidateWriters {
             )?);
             runs.push((spec.dir.clone(), run));
         }
-        Ok(CandidateWriters {
-            tables,
-            runs,
-            time: Vec::new(),
-            q: Vec::new(),
-        })
+        // Per candidate, in the order of the coupled reactions: the
+        // KneeLoads of each with knee loads, the KneeContact of the knee
+        // contact method's.
+        use crate::writers::knee_tables::{KneeKind, KneeTables};
+        let problem = &plan.problem;
+        let mut knees = KneeTables::new(
+            &problem.model,
+            &problem.knees,
+            &setup.setup_file,
+            &[],
+            precision,
+        );
+        let no_stats = |_| std::path::PathBuf::new();
+        for (j, c) in plan.coupled.iter().enumerate() {
+            let jr = |run| RunKey::analysis(&setup.name, &c.name, run);
+            if c.knee.is_some() {
+                let (dir, run) = &runs[0];
+                let table = crate::storage::Storage {
+                    labels: crate::reactions::column_labels(&c.specs),
+                    ..Default::default()
+                };
+                let path = dir.join(jr(*run).file(OutputKind::KneeLoads));
+                let (sides, patella) =
+                    crate::reactions::knee_loads::sides(&problem.model, &table, &path)?;
+                let paths = runs
+                    .iter()
+                    .map(|(dir, run)| dir.join(jr(*run).file(OutputKind::KneeLoads)))
+                    .collect();
+                knees.add(
+                    KneeKind::Loads {
+                        reaction: j,
+                        sides: Box::new(sides),
+                        patella,
+                    },
+                    paths,
+                    &no_stats,
+                    "",
+                );
+            }
+            if c.knee_contact {
+                let paths = runs
+                    .iter()
+                    .map(|(dir, run)| {
+                        dir.join(RunKey::setup(&setup.name, *run).file(OutputKind::KneeContact))
+                    })
+                    .collect();
+                knees.add(KneeKind::Contact { reaction: j }, paths, &no_stats, "");
+            }
+        }
+        Ok(CandidateWriters { tables, knees })
     }
 
     /// One frame's rows of every candidate (frames in order).
     fn write(&mut self, fv: &FrameValues) -> Result<()> {
-        if let Some((r, _)) = fv.results.first() {
-            self.time.push(r.time);
-            self.q.push(r.q.clone());
-        }
         for (t, (r, rows)) in self.tables.iter_mut().zip(&fv.results) {
             t.write(r, rows)?;
         }
-        Ok(())
+        self.knees.push(&fv.results)
     }
 
-    /// Close the tables and write each candidate's KneeLoads and
-    /// KneeContact tables from its reactions, as a run does.
-    fn finish(
-        self,
-        setup: &AnalyzeSetup,
-        plan: &SweepPlan,
-        opts: &RunOptions,
-    ) -> Result<Vec<std::path::PathBuf>> {
-        let precision = opts.precision.unwrap_or(setup.output_precision);
-        let problem = &plan.problem;
+    /// Close the tables: per candidate, its tables, then its KneeLoads and
+    /// KneeContact tables, as a run lists them.
+    fn finish(self) -> Result<Vec<std::path::PathBuf>> {
+        let (knees, _) = self.knees.finish()?;
         let mut files = Vec::new();
-        for (t, (dir, run)) in self.tables.into_iter().zip(&self.runs) {
+        for (i, t) in self.tables.into_iter().enumerate() {
             files.extend(t.finish()?);
-            for c in &plan.coupled {
-                let jr = RunKey::analysis(&setup.name, &c.name, *run);
-                let table = dir.join(jr.file(OutputKind::ReactionLoads));
-                if c.knee.is_some() {
-                    files.push(crate::tools::knee_loads::write(
-                        &problem.model,
-                        &self.time,
-                        &self.q,
-                        &table,
-                        &dir.join(jr.file(OutputKind::KneeLoads)),
-                        &setup.setup_file,
-                        precision,
-                    )?);
-                }
-                if c.knee_contact {
-                    files.push(crate::tools::knee_contact_table::write(
-                        &problem.model,
-                        &problem.knees,
-                        &self.time,
-                        &self.q,
-                        &table,
-                        &dir.join(RunKey::setup(&setup.name, *run).file(OutputKind::KneeContact)),
-                        &setup.setup_file,
-                        precision,
-                    )?);
-                }
+            if let Some(k) = knees.get(i) {
+                files.extend(k.iter().cloned());
             }
         }
         Ok(files)

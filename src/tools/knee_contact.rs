@@ -16,9 +16,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::parse::setup::{Analysis, Setup};
 use crate::storage;
-pub use crate::tools::knee_contact_table::{
-    labels, reaction_specs, write, DESCRIPTION, REACTIONS_NAME,
-};
+pub use crate::tools::knee_contact_table::{labels, reaction_specs, DESCRIPTION, REACTIONS_NAME};
 use crate::tools::{RunOptions, RunSummary};
 
 /// The subcommand: run `setup_file`'s static optimization with

@@ -26,53 +26,10 @@
 //!   positive in flexion, whatever sign convention the model's knee
 //!   coordinate has (gait2392: negative in flexion; Rajagopal: positive).
 //!
-//! The rows are computed by `reactions::knee_loads` (a force sweep makes
-//! them in memory); this module writes the table.
-use std::path::{Path, PathBuf};
-
-use crate::dynamics::{kinematics, Data};
-use crate::error::Result;
-use crate::model::Model;
-use crate::storage::{self, StoWriter};
-
+//! The rows are computed by `reactions::knee_loads` from each frame's
+//! reactions; `writers::knee_tables` writes the table as the frames
+//! stream.
 pub use crate::reactions::knee_loads::{flexion_degrees, knee_row, labels, sides, Side};
 
 /// Header text of the table.
-pub const DESCRIPTION: &str = "Knee loads per side (statopt, docs/leg_extension_results.md): knee_flexion in degrees (flexion positive); tibiofemoral reaction on the tibia in the tibia frame: tf_compression = -Fy (along the tibial long axis, compression positive), tf_shear = +Fx (anterior, perpendicular to the long axis: PCL-type positive, ACL-type negative); pf_compression = magnitude of the patellofemoral reaction on the patella (absent without a patella body). Units N.";
-
-/// Write the knee loads of the reaction table `reactions` to `out`, knee
-/// angles from the positions `q` at `time` at the table's times (each
-/// table time must be one of `time`).
-pub fn write(
-    model: &Model,
-    time: &[f64],
-    q: &[Vec<f64>],
-    reactions: &Path,
-    out: &Path,
-    setup_file: &Path,
-    precision: usize,
-) -> Result<PathBuf> {
-    let table = storage::read(reactions)?;
-    let (sides, patella) = sides(model, &table, reactions)?;
-    let mut w = StoWriter::create_for_setup(
-        setup_file,
-        out,
-        "Knee loads",
-        DESCRIPTION,
-        &labels(patella),
-        precision,
-        false,
-    )?;
-    let mut data = Data::new(model);
-    let mut row = Vec::with_capacity(8);
-    for (i, &t) in table.time.iter().enumerate() {
-        let k = crate::motion::coordinates::find_index(time, t);
-        data.q.copy_from_slice(&q[k]);
-        data.u.iter_mut().for_each(|x| *x = 0.0);
-        kinematics::full(model, &mut data);
-        knee_row(&data, &sides, patella, &table.rows[i], &mut row);
-        w.write_row(t, &row)?;
-    }
-    w.finish()?;
-    Ok(out.to_path_buf())
-}
+pub use crate::writers::knee_tables::LOADS_DESCRIPTION as DESCRIPTION;

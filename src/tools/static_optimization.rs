@@ -29,6 +29,7 @@ use crate::storage::TableFile;
 use crate::tools::inputs::{open_motion_stream, results_dir};
 use crate::tools::{RunOptions, RunSummary};
 use crate::writers::frame_log::{FrameLog, LogNames};
+use crate::writers::knee_tables::{KneeKind, KneeTables};
 use crate::writers::resume::resume_point;
 use crate::writers::run_statistics::RunStatistics;
 use crate::writers::so_tables::{SoTables, TablesSpec};
@@ -155,10 +156,6 @@ pub fn run(
             }
         })
         .collect();
-    // The knee loads and the knee contact table take the knee angles of
-    // the frames the pass solved (the motion is read once); a resumed pass
-    // solves only its remaining frames, and they read the motion again.
-    let wants_positions = reactions.iter().any(|jr| jr.knee_loads) || !problem.knees.is_empty();
     // The tables this run's own consumers read (the knee tables, the
     // sweep's statistics): the run keeps them in memory until read
     // (`storage::results::want`), the others are in their files only.
@@ -177,13 +174,20 @@ pub fn run(
             precision,
         )
     });
+    // The knee tables are a sink of the frame stream too (a resumed run's
+    // are fed from its tables, which hold the frames it does not solve
+    // again).
+    let mut knees = knee_tables_sink(
+        setup, &problem, &specs, reactions, &weights, &dir, precision,
+    )?;
+    let knees_from_tables = opts.resume && knees.is_some();
     let read_later = read_by_this_run(
-        &setup.name,
         &specs,
         reactions,
         &problem,
         sweep,
         stats.is_none(),
+        knees_from_tables,
         &dir,
     );
     read_later
@@ -198,60 +202,30 @@ pub fn run(
         &specs,
         opts,
         &RunKey::analysis(&setup.name, so_name, Sweep::Single).label(),
-        wants_positions,
         stats.as_mut(),
+        if knees_from_tables {
+            None
+        } else {
+            knees.as_mut()
+        },
     );
-    let (summaries, positions) = match swept {
+    let summaries = match swept {
         Ok(s) => s,
         Err(e) => {
             if let Some(stats) = stats {
                 stats.abandon();
             }
+            if let Some(knees) = knees {
+                knees.abandon();
+            }
             return Err(e);
         }
     };
-    let mut knee_states = positions;
     // A statement about a contact that every w0 of a sweep makes alike is
     // said once, for all of them (summary.contacts keeps one per w0).
     let mut summaries = summaries;
     let common = common_contact_lines(&mut summaries);
     for (spec, s) in specs.iter().zip(summaries) {
-        let stopped = s.stopped.is_some();
-        if !stopped {
-            for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
-                if jr_setup.knee_loads {
-                    let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
-                    let table = dir.join(jr.file(OutputKind::ReactionLoads));
-                    knee_files.push(crate::tools::knee_loads::write(
-                        &problem.model,
-                        &states.0,
-                        &states.1,
-                        &table,
-                        &dir.join(jr.file(OutputKind::KneeLoads)),
-                        &setup.setup_file,
-                        opts.precision.unwrap_or(setup.output_precision),
-                    )?);
-                    crate::storage::results::done(&table);
-                }
-            }
-        }
-        if !stopped && !problem.knees.is_empty() {
-            let states = knee_states_of(&mut knee_states, setup, motion, &problem)?;
-            let (jr, _) = spec.reactions.last().expect("the knee contact reactions");
-            let out = RunKey::setup(&setup.name, spec.run.sweep).file(OutputKind::KneeContact);
-            let table = dir.join(jr.file(OutputKind::ReactionLoads));
-            knee_files.push(crate::tools::knee_contact_table::write(
-                &problem.model,
-                &problem.knees,
-                &states.0,
-                &states.1,
-                &table,
-                &dir.join(out),
-                &setup.setup_file,
-                opts.precision.unwrap_or(setup.output_precision),
-            )?);
-            crate::storage::results::done(&table);
-        }
         let label = format!("w0 = {}", spec.w0);
         summary.absorb(s, sweep.then_some(label.as_str()));
         runs.push(spec.run.clone());
@@ -267,6 +241,9 @@ pub fn run(
         if let Some(stats) = stats {
             stats.abandon();
         }
+        if let Some(knees) = knees {
+            knees.abandon();
+        }
         warnings.extend(std::mem::take(&mut summary.warnings));
         summary.warnings = warnings;
         return Ok(summary);
@@ -275,6 +252,21 @@ pub fn run(
     let mut streamed = match stats {
         Some(s) => s.finish()?.into_iter(),
         None => Vec::new().into_iter(),
+    };
+    // A resumed run's knee tables are made from its ReactionLoads tables,
+    // which hold the frames it did not solve again.
+    if let (true, Some(k)) = (knees_from_tables, knees.as_mut()) {
+        knees_from_reaction_tables(k, setup, motion, &problem, &specs, &dir)?;
+    }
+    // The knee tables: per run, and their statistics (KneeLoads per
+    // JointReaction, then KneeContact).
+    let mut knee_stats = match knees {
+        Some(k) => {
+            let (per_run, stats) = k.finish()?;
+            knee_files.extend(per_run.into_iter().flatten());
+            Some(stats.into_iter())
+        }
+        None => None,
     };
     if sweep {
         for kind in OutputKind::SWEEP_TABLES {
@@ -309,11 +301,17 @@ pub fn run(
                 &[OutputKind::ReactionLoads]
             };
             for kind in kinds {
-                if *kind == OutputKind::ReactionLoads {
-                    if let Some(files) = streamed.next() {
-                        summary.files.extend(files);
-                        continue;
-                    }
+                // (The KneeLoads' statistics are the knee tables'.)
+                let made = match kind {
+                    OutputKind::ReactionLoads => streamed.next(),
+                    _ => knee_stats.as_mut().and_then(|k| k.next()),
+                };
+                if let Some(files) = made {
+                    summary.files.extend(files);
+                    continue;
+                }
+                if *kind != OutputKind::ReactionLoads {
+                    return Err(Error::internal("a sweep's KneeLoads statistics not made"));
                 }
                 let run = |sweep| RunKey::analysis(&setup.name, name, sweep);
                 let files: Vec<std::path::PathBuf> = weights
@@ -333,28 +331,9 @@ pub fn run(
             }
         }
     }
-    if sweep && !problem.knees.is_empty() {
-        // The knee contact method's table: mean, min and max over w0 too.
-        let files: Vec<std::path::PathBuf> = weights
-            .iter()
-            .map(|w0| {
-                dir.join(
-                    RunKey::setup(&setup.name, Sweep::Weight(*w0)).file(OutputKind::KneeContact),
-                )
-            })
-            .collect();
-        let stat_path = |stat| {
-            dir.join(RunKey::setup(&setup.name, Sweep::Stat(stat)).file(OutputKind::KneeContact))
-        };
-        summary.files.extend(write_sweep_statistics(
-            &setup.setup_file,
-            &files,
-            &stat_path,
-            &OutputKind::KneeContact.table(),
-            &weights,
-            precision,
-        )?);
-        files.iter().for_each(|f| crate::storage::results::done(f));
+    // The knee contact method's table: mean, min and max over w0 too.
+    if let Some(files) = knee_stats.as_mut().and_then(|k| k.next()) {
+        summary.files.extend(files);
     }
     summary.files.extend(knee_files);
     warnings.extend(summary.warnings);
@@ -421,30 +400,65 @@ fn common_contact_lines(summaries: &mut [RunSummary]) -> Vec<String> {
     common
 }
 
-/// The frames' times and positions (`q`) for the knee loads and the knee
-/// contact table: those the pass solved (`cache`), or, when it did not keep
-/// them all (a resumed run), the run's states read from the motion once.
-#[allow(clippy::type_complexity)]
-fn knee_states_of<'a>(
-    cache: &'a mut Option<Positions>,
+/// A resumed run's knee tables (`knees`) fed from its runs' ReactionLoads
+/// tables (which hold the frames it did not solve again) and the motion's
+/// positions at their times; each table read is then done with.
+fn knees_from_reaction_tables(
+    knees: &mut KneeTables,
     setup: &AnalyzeSetup,
     motion: &TableFile,
-    problem: &crate::frame::problem::SoProblem,
-) -> Result<&'a Positions> {
-    if cache.is_none() {
-        let states = crate::tools::inputs::load_motion_states(
-            setup,
-            motion,
-            &problem.model,
-            &problem.contacts,
-        )?;
-        *cache = Some((states.time, states.q));
+    problem: &SoProblem,
+    specs: &[RunSpec],
+    dir: &std::path::Path,
+) -> Result<()> {
+    let states =
+        crate::tools::inputs::load_motion_states(setup, motion, &problem.model, &problem.contacts)?;
+    let used = knees.reactions();
+    let mut paths = Vec::new();
+    // Per run, per joint reaction: its table (the ones the knees use).
+    let mut tables: Vec<Vec<Option<crate::storage::Storage>>> = Vec::new();
+    for spec in specs {
+        let mut run = Vec::new();
+        for (k, (jr, _)) in spec.reactions.iter().enumerate() {
+            if used.contains(&k) {
+                let path = dir.join(jr.file(OutputKind::ReactionLoads));
+                run.push(Some(crate::storage::read(&path)?));
+                paths.push(path);
+            } else {
+                run.push(None);
+            }
+        }
+        tables.push(run);
     }
-    Ok(cache.as_ref().expect("just read"))
+    let first = tables
+        .iter()
+        .flatten()
+        .flatten()
+        .next()
+        .ok_or_else(|| Error::internal("knee tables without reactions"))?;
+    let times = first.time.clone();
+    let mut rows: Vec<Vec<Vec<f64>>> = tables
+        .iter()
+        .map(|run| vec![Vec::new(); run.len()])
+        .collect();
+    for (i, &t) in times.iter().enumerate() {
+        for (run, out) in tables.iter().zip(rows.iter_mut()) {
+            for (table, row) in run.iter().zip(out.iter_mut()) {
+                if let Some(table) = table {
+                    let r = table.rows.get(i).ok_or_else(|| {
+                        Error::internal("a resumed run's ReactionLoads tables differ in length")
+                    })?;
+                    row.clone_from(r);
+                }
+            }
+        }
+        let q = &states.q[crate::motion::coordinates::find_index(&states.time, t)];
+        let refs: Vec<&[Vec<f64>]> = rows.iter().map(|r| r.as_slice()).collect();
+        knees.push_rows(t, q, &refs)?;
+    }
+    paths.iter().for_each(|p| crate::storage::results::done(p));
+    Ok(())
 }
-
-/// Frames' times and generalized coordinates, in frame order.
-type Positions = (Vec<f64>, Vec<Vec<f64>>);
 
 fn frame_count(i0: usize, i1: usize, step_interval: usize) -> usize {
     if i1 < i0 {
@@ -557,44 +571,107 @@ fn sweep_statistics_sink(
     stats
 }
 
+/// The knee tables of a run (each JointReaction's KneeLoads, then the
+/// knee contact method's KneeContact) as a sink of the frame stream, with
+/// their statistics in a sweep; None when the run has none.
+fn knee_tables_sink<'a>(
+    setup: &AnalyzeSetup,
+    problem: &'a SoProblem,
+    specs: &[RunSpec],
+    reactions: &[JointReactionSetup],
+    weights: &[f64],
+    dir: &std::path::Path,
+    precision: usize,
+) -> Result<Option<KneeTables<'a>>> {
+    let mut knees = KneeTables::new(
+        &problem.model,
+        &problem.knees,
+        &setup.setup_file,
+        weights,
+        precision,
+    );
+    let Some(first) = specs.first() else {
+        return Ok(None);
+    };
+    for (k, (jr_setup, (jr, jr_specs))) in reactions.iter().zip(&first.reactions).enumerate() {
+        if !jr_setup.knee_loads {
+            continue;
+        }
+        // The sides' columns in the ReactionLoads table (its path in errors).
+        let table = crate::storage::Storage {
+            labels: crate::reactions::column_labels(jr_specs),
+            ..Default::default()
+        };
+        let path = dir.join(jr.file(OutputKind::ReactionLoads));
+        let (sides, patella) = crate::reactions::knee_loads::sides(&problem.model, &table, &path)?;
+        let paths = specs
+            .iter()
+            .map(|s| dir.join(s.reactions[k].0.file(OutputKind::KneeLoads)))
+            .collect();
+        let stat_path =
+            |stat| dir.join(jr.with_sweep(Sweep::Stat(stat)).file(OutputKind::KneeLoads));
+        knees.add(
+            KneeKind::Loads {
+                reaction: k,
+                sides: Box::new(sides),
+                patella,
+            },
+            paths,
+            &stat_path,
+            &OutputKind::KneeLoads.table(),
+        );
+    }
+    if !problem.knees.is_empty() {
+        let reaction = first.reactions.len() - 1;
+        let paths = specs
+            .iter()
+            .map(|s| {
+                dir.join(RunKey::setup(&setup.name, s.run.sweep).file(OutputKind::KneeContact))
+            })
+            .collect();
+        let stat_path = |stat| {
+            dir.join(RunKey::setup(&setup.name, Sweep::Stat(stat)).file(OutputKind::KneeContact))
+        };
+        knees.add(
+            KneeKind::Contact { reaction },
+            paths,
+            &stat_path,
+            &OutputKind::KneeContact.table(),
+        );
+    }
+    Ok((!knees.is_empty()).then_some(knees))
+}
+
 /// The tables of a run's `specs` that the run's own consumers read after
 /// writing them, once per consumer (`storage::results::want`): each
 /// JointReaction's ReactionLoads for its knee loads, the knee contact
 /// reactions for the knee contact table, and in a w0 sweep every table
 /// the statistics average. [`run`] reads exactly these.
 fn read_by_this_run(
-    name: &str,
     specs: &[RunSpec],
     reactions: &[JointReactionSetup],
     problem: &SoProblem,
     sweep: bool,
     stats_from_tables: bool,
+    knees_from_tables: bool,
     dir: &std::path::Path,
 ) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();
     for spec in specs {
         for (jr_setup, (jr, _)) in reactions.iter().zip(&spec.reactions) {
             let mut kinds = Vec::new();
-            if jr_setup.knee_loads {
+            let knee_loads = jr_setup.knee_loads && knees_from_tables;
+            if knee_loads {
                 kinds.push(OutputKind::ReactionLoads);
             }
-            if sweep {
-                if stats_from_tables {
-                    kinds.push(OutputKind::ReactionLoads);
-                }
-                if jr_setup.knee_loads {
-                    kinds.push(OutputKind::KneeLoads);
-                }
+            if sweep && stats_from_tables {
+                kinds.push(OutputKind::ReactionLoads);
             }
             out.extend(kinds.into_iter().map(|k| dir.join(jr.file(k))));
         }
-        if !problem.knees.is_empty() {
+        if knees_from_tables && !problem.knees.is_empty() {
             if let Some((jr, _)) = spec.reactions.last() {
                 out.push(dir.join(jr.file(OutputKind::ReactionLoads)));
-            }
-            if sweep {
-                let knee = RunKey::setup(name, spec.run.sweep).file(OutputKind::KneeContact);
-                out.push(dir.join(knee));
             }
         }
         if sweep && stats_from_tables {
@@ -776,9 +853,9 @@ fn run_sweep(
     runs: &[RunSpec],
     opts: &RunOptions,
     label: &str,
-    keep_positions: bool,
     mut stats: Option<&mut SweepStatistics>,
-) -> Result<(Vec<RunSummary>, Option<Positions>)> {
+    mut knees: Option<&mut KneeTables>,
+) -> Result<Vec<RunSummary>> {
     let log_names: Vec<LogNames> = runs
         .iter()
         .map(|r| LogNames::new(problem, r.reactions.first().map(|(_, s)| *s)))
@@ -852,19 +929,15 @@ fn run_sweep(
         .iter_mut()
         .filter_map(|w| w.log.take().map(|log| (log, w.skip_until)))
         .collect();
-    let mut positions: Positions = Default::default();
     let mut tables = |results: &[FrameOutput]| -> Result<()> {
-        if keep_positions {
-            if let Some((r, _)) = results.first() {
-                positions.0.push(r.time);
-                positions.1.push(r.q.clone());
-            }
-        }
         for (w, (r, rows)) in writers.iter_mut().zip(results.iter()) {
             w.write(r, rows)?;
         }
         if let Some(stats) = stats.as_deref_mut() {
             stats.push(results)?;
+        }
+        if let Some(knees) = knees.as_deref_mut() {
+            knees.push(results)?;
         }
         Ok(())
     };
@@ -891,8 +964,6 @@ fn run_sweep(
     for (w, (log, _)) in writers.iter_mut().zip(logs) {
         w.log = Some(log);
     }
-    // Every frame's, unless a resumed run skipped those it held.
-    let positions = (keep_positions && skip_until == f64::NEG_INFINITY).then_some(positions);
     progress.finish_and_clear();
     let shared = runs.len();
     let loop_seconds = start.elapsed().as_secs_f64() / shared as f64;
@@ -910,7 +981,7 @@ fn run_sweep(
             Ok(s)
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok((summaries, positions))
+    Ok(summaries)
 }
 
 /// The one line that says how long a w0 sweep took (it used to be said

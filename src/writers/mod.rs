@@ -27,6 +27,7 @@ pub mod contact_findings;
 pub mod emg;
 pub mod frame_log;
 pub mod kinematics_tables;
+pub mod knee_tables;
 pub mod names;
 pub mod resume;
 pub mod run_statistics;

@@ -6,9 +6,12 @@ use crate::error::{Error, Result};
 use crate::storage::StoWriter;
 
 /// Mean, minimum and maximum over the runs of a sweep, per column and frame
-/// (the paper's uncertainty band, section 3.2). The runs' tables are read
-/// row by row in step, so memory does not grow with the trial's length.
-/// `stat_path` names the table of each statistic (`writers::names`).
+/// (the paper's uncertainty band, section 3.2), from the runs' tables
+/// `files`: a resumed sweep's, whose tables hold frames it does not solve
+/// again. The tables are read row by row in step (memory does not grow with
+/// the trial's length) and fed to a [`SweepStatistics`], the sink a pass
+/// feeds from its frames. `stat_path` names the table of each statistic
+/// (`writers::names`).
 pub fn write_sweep_statistics(
     setup_file: &std::path::Path,
     files: &[std::path::PathBuf],
@@ -31,28 +34,10 @@ pub fn write_sweep_statistics(
             )));
         }
     }
-    use crate::writers::names::Stat;
-    let stats = Stat::ALL;
-    let mut out = Vec::new();
-    let mut writers = Vec::new();
-    for stat in stats {
-        let path = stat_path(stat);
-        let stat = stat.as_str();
-        let desc = format!("{stat} over contact weights w0 = {weights:?} of the static optimization {kind} results.\n");
-        writers.push(StoWriter::create_for_setup(
-            setup_file,
-            &path,
-            &format!("{kind} {stat}"),
-            &desc,
-            &labels,
-            precision,
-            false,
-        )?);
-        out.push(path);
-    }
+    let mut stats = SweepStatistics::new(setup_file, weights, 0, precision);
+    let index = stats.add(Source::Given, kind, &labels, stat_path);
     let nl = labels.len();
     let mut rows = vec![Vec::with_capacity(nl); readers.len()];
-    let mut row = vec![0.0; nl];
     'frames: loop {
         let mut time = None;
         for (k, (r, buf)) in readers.iter_mut().zip(rows.iter_mut()).enumerate() {
@@ -70,22 +55,9 @@ pub fn write_sweep_statistics(
             }
         }
         let t = time.expect("the first table's row");
-        for (stat, w) in stats.iter().zip(writers.iter_mut()) {
-            for (j, v) in row.iter_mut().enumerate() {
-                let vals = rows.iter().map(|r| r[j]);
-                *v = match *stat {
-                    Stat::Mean => vals.sum::<f64>() / rows.len() as f64,
-                    Stat::Min => vals.fold(f64::INFINITY, f64::min),
-                    Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
-                };
-            }
-            w.write_row(t, &row)?;
-        }
+        stats.push_rows(index, t, rows.iter().map(|r| r.as_slice()))?;
     }
-    for w in writers {
-        w.finish()?;
-    }
-    Ok(out)
+    Ok(stats.finish()?.into_iter().next().unwrap_or_default())
 }
 
 /// Which values of a frame's outputs one table of a sweep holds.
@@ -99,6 +71,9 @@ pub enum Source {
     MusclePower,
     /// The rows of the k-th joint reaction.
     Reaction(usize),
+    /// Rows the caller computes and hands over ([`SweepStatistics::push_rows`]:
+    /// the knee tables, `writers::knee_tables`).
+    Given,
 }
 
 impl Source {
@@ -116,6 +91,7 @@ impl Source {
             Source::GeneralizedForcesBySource => &r.by_source,
             Source::MusclePower => &r.muscle_power,
             Source::Reaction(k) => &rows[k],
+            Source::Given => &[],
         }
     }
 }
@@ -168,14 +144,14 @@ impl SweepStatistics {
 
     /// The mean, min and max tables of one kind of table: `kind` its name,
     /// `labels` its columns, `stat_path` the path of each statistic's table
-    /// (`writers::names`).
+    /// (`writers::names`). Returns the tables' index ([`Self::push_rows`]).
     pub fn add(
         &mut self,
         source: Source,
         kind: &str,
         labels: &[String],
         stat_path: &dyn Fn(crate::writers::names::Stat) -> std::path::PathBuf,
-    ) {
+    ) -> usize {
         use crate::writers::names::Stat;
         self.tables.push(StatTables {
             source,
@@ -184,6 +160,7 @@ impl SweepStatistics {
             paths: Stat::ALL.iter().map(|&s| stat_path(s)).collect(),
             writers: Vec::new(),
         });
+        self.tables.len() - 1
     }
 
     /// Create the tables (as [`write_sweep_statistics`] does).
@@ -211,10 +188,10 @@ impl SweepStatistics {
         Ok(())
     }
 
-    /// One frame's outputs, one per w0 in the sweep's order.
+    /// One frame's outputs, one per w0 in the sweep's order (the tables
+    /// of [`Source::Given`] are fed by [`Self::push_rows`]).
     pub fn push(&mut self, results: &[crate::frame::so_loop::FrameOutput]) -> Result<()> {
         use crate::storage::results::as_printed;
-        use crate::writers::names::Stat;
         let Some((first, _)) = results.first() else {
             return Ok(());
         };
@@ -226,6 +203,9 @@ impl SweepStatistics {
         let n = results.len();
         self.printed.resize_with(n, Vec::new);
         for table in &mut self.tables {
+            if let Source::Given = table.source {
+                continue;
+            }
             for ((r, rows), printed) in results.iter().zip(self.printed.iter_mut()) {
                 printed.clear();
                 printed.extend(
@@ -236,21 +216,41 @@ impl SweepStatistics {
                         .map(|&v| as_printed(v, p)),
                 );
             }
-            let nl = table.labels.len();
-            for (stat, w) in Stat::ALL.iter().zip(table.writers.iter_mut()) {
-                self.row.clear();
-                for j in 0..nl {
-                    let vals = self.printed.iter().map(|r| r[j]);
-                    self.row.push(match *stat {
-                        Stat::Mean => vals.sum::<f64>() / n as f64,
-                        Stat::Min => vals.fold(f64::INFINITY, f64::min),
-                        Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
-                    });
-                }
-                w.write_row(t, &self.row)?;
-            }
+            write_stats(table, &self.printed, t, &mut self.row)?;
         }
         Ok(())
+    }
+
+    /// One frame's rows of the tables `index` ([`Self::add`], of
+    /// [`Source::Given`]), one per w0 in the sweep's order, at `time`:
+    /// taken as their tables print them, as [`Self::push`] does.
+    pub fn push_rows<'r>(
+        &mut self,
+        index: usize,
+        time: f64,
+        rows: impl Iterator<Item = &'r [f64]>,
+    ) -> Result<()> {
+        use crate::storage::results::as_printed;
+        if self.tables[index].writers.is_empty() {
+            self.open()?;
+        }
+        let p = self.precision;
+        let mut n = 0;
+        for row in rows {
+            if self.printed.len() <= n {
+                self.printed.push(Vec::new());
+            }
+            let printed = &mut self.printed[n];
+            printed.clear();
+            printed.extend(row.iter().map(|&v| as_printed(v, p)));
+            n += 1;
+        }
+        write_stats(
+            &mut self.tables[index],
+            &self.printed[..n],
+            as_printed(time, p),
+            &mut self.row,
+        )
     }
 
     /// The tables finished, their paths per kind in the order added.
@@ -281,4 +281,30 @@ impl SweepStatistics {
             }
         }
     }
+}
+
+/// The mean, min and max rows of one frame of `table` from the runs'
+/// printed rows `printed`, at the printed time `t`.
+fn write_stats(
+    table: &mut StatTables,
+    printed: &[Vec<f64>],
+    t: f64,
+    row: &mut Vec<f64>,
+) -> Result<()> {
+    use crate::writers::names::Stat;
+    let n = printed.len();
+    let nl = table.labels.len();
+    for (stat, w) in Stat::ALL.iter().zip(table.writers.iter_mut()) {
+        row.clear();
+        for j in 0..nl {
+            let vals = printed.iter().map(|r| r[j]);
+            row.push(match *stat {
+                Stat::Mean => vals.sum::<f64>() / n as f64,
+                Stat::Min => vals.fold(f64::INFINITY, f64::min),
+                Stat::Max => vals.fold(f64::NEG_INFINITY, f64::max),
+            });
+        }
+        w.write_row(t, row)?;
+    }
+    Ok(())
 }
