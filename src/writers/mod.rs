@@ -26,6 +26,7 @@ pub mod bench_grid;
 pub mod contact_findings;
 pub mod emg;
 pub mod frame_log;
+pub mod grf;
 pub mod kinematics_tables;
 pub mod names;
 pub mod resume;
