@@ -681,7 +681,6 @@ fn weak_root_residuals(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage;
     #[test]
     fn treadmill_option_reads_a_speed_or_a_vector() {
         assert_eq!(
