@@ -19,6 +19,7 @@ use crate::contacts::feet::{self, FootContactParameters, FootContactSet};
 pub use crate::contacts::floor::FloorMotion;
 use crate::error::{Error, Location, Result};
 use crate::forces::external_loads::ExternalLoads;
+pub use crate::forces::root_residuals::{weak_root_residuals, ROOT_RESIDUAL_OPTIMAL_FORCE};
 use crate::parse::setup::AnalyzeSetup;
 use crate::tools::{analyze, inputs, RunOptions, RunSummary};
 use crate::writers::grf::{
@@ -329,7 +330,7 @@ pub fn run_with(
     let contacts_file = dir.join(own.file(OutputKind::FootContacts));
     let contacts_xml = contacts.force_set_xml();
     crate::storage::results::write(&contacts_file, contacts_xml.clone().into_bytes())?;
-    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves)?;
+    let (force_sets, mut written) = write_weak_root_residuals(&setup, &model, &dir, reserves)?;
     setup.set_force_set_documents(force_sets);
     setup
         .force_set_documents
@@ -600,81 +601,37 @@ fn take_reserve_actuators(setup: &mut AnalyzeSetup) -> Result<Option<f64>> {
     Ok(None)
 }
 
-/// Optimal force (N or N·m) of the weak root residuals predict-grf uses: 100 N
-/// on the pelvis costs as much as 100 muscles at full activation.
-pub const ROOT_RESIDUAL_OPTIMAL_FORCE: f64 = 1.0;
-
-/// One policy for the root (pelvis) residuals, whatever the setup defines:
-/// in each force-set file the actuators acting on the root joint only (point
-/// and torque actuators on the root body, coordinate actuators on its
-/// coordinates) are dropped (a filtered copy is written to the results
-/// folder), and one coordinate actuator per root coordinate, named
-/// `<coordinate>_residual`, with [`ROOT_RESIDUAL_OPTIMAL_FORCE`], is added
-/// in `<name>_root_residuals.xml`. The model's own ForceSet is left as it
-/// is. Returns the force-set documents of the prediction's plan (each
-/// file read once) and the files written.
-fn weak_root_residuals(
+/// [`weak_root_residuals`]'s documents, its filtered copies and its
+/// `<name>_root_residuals.xml` written to the results folder `dir`.
+/// Returns the force-set documents of the prediction's plan and the files
+/// written.
+fn write_weak_root_residuals(
     setup: &AnalyzeSetup,
     model: &crate::model::Model,
     dir: &std::path::Path,
     reserves: Option<f64>,
 ) -> Result<(Vec<crate::xml::Element>, Vec<PathBuf>)> {
-    let mut documents = setup.force_set_documents.clone();
-    for f in &setup.force_set_files {
-        documents.push(crate::forces::read_force_set_document(f)?);
-    }
-    let roots: Vec<usize> = (0..model.nq())
-        .filter(|&c| model.is_root_coordinate(c))
-        .collect();
-    if roots.is_empty() && reserves.is_none() {
-        return Ok((documents, Vec::new()));
-    }
-    let root_body = roots
-        .first()
-        .map(|&c| model.bodies[model.coordinates[c].body].name.clone())
-        .unwrap_or_default();
-    let root_names: Vec<&str> = roots
-        .iter()
-        .map(|&c| model.coordinates[c].name.as_str())
-        .collect();
+    let policy = weak_root_residuals(
+        &setup.force_set_documents,
+        &setup.force_set_files,
+        model,
+        reserves,
+    )?;
+    let mut documents = policy.documents;
     let mut written = Vec::new();
-    for (k, doc) in documents.iter_mut().enumerate() {
-        let Some(filtered) = crate::forces::without_root_actuators(doc, &root_names, &root_body)
-        else {
-            continue;
-        };
-        let out = dir.join(
-            RunKey::setup(&setup.name, Sweep::Single)
-                .file(OutputKind::ForceSetWithoutRootResiduals(k)),
-        );
-        let text = crate::tools::scene::to_xml_string(&filtered);
+    let own = RunKey::setup(&setup.name, Sweep::Single);
+    for &k in &policy.filtered {
+        let out = dir.join(own.file(OutputKind::ForceSetWithoutRootResiduals(k)));
+        let text = crate::tools::scene::to_xml_string(&documents[k]);
         crate::storage::results::write(&out, text.into_bytes())?;
         written.push(out);
-        *doc = filtered;
     }
-    let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Weak root residuals of statopt predict-grf (docs/grf_prediction.md). -->\n<OpenSimDocument Version=\"40000\">\n\t<ForceSet name=\"root_residuals\">\n\t\t<objects>\n");
-    for name in &root_names {
-        xml.push_str(&format!(
-            "\t\t\t<CoordinateActuator name=\"{name}_residual\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{ROOT_RESIDUAL_OPTIMAL_FORCE}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
-        ));
+    if let Some(xml) = policy.residuals {
+        let out = dir.join(own.file(OutputKind::RootResiduals));
+        crate::storage::results::write(&out, xml.clone().into_bytes())?;
+        documents.push(crate::forces::force_set_document(&xml, &out)?);
+        written.push(out);
     }
-    // The setup's <reserve_actuators>, on every unconstrained coordinate
-    // but the root's (those are the weak residuals above).
-    if let Some(f) = reserves {
-        for c in (0..model.nq())
-            .filter(|&c| !model.coordinates[c].is_constrained() && !model.is_root_coordinate(c))
-        {
-            let name = &model.coordinates[c].name;
-            xml.push_str(&format!(
-                "\t\t\t<CoordinateActuator name=\"{name}_reserve\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{f}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
-            ));
-        }
-    }
-    xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
-    let out = dir.join(RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::RootResiduals));
-    crate::storage::results::write(&out, xml.clone().into_bytes())?;
-    documents.push(crate::forces::force_set_document(&xml, &out)?);
-    written.push(out);
     Ok((documents, written))
 }
 
