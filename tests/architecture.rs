@@ -1005,13 +1005,14 @@ fn a_run_owns_its_outputs_in_no_process_wide_registry() {
 /// lines not counted) stay under `TOOLS_SHIPPED_LIMIT`. Issue 37 found 9.1k
 /// lines there, more than any stage, with engine work in them (motion
 /// generation, the model reduction, EMG statistics, the grid's errors);
-/// moving those and the force sweep's engine into their stages brought it to
-/// 5.3k, and the limit is 5 % over that, and a
-/// numerical routine added back to a tool instead of its stage fails here.
+/// moving those, the force sweep's engine, predict-grf's writers and root
+/// residual policy and --check's facing-away contacts into their stages
+/// brought it to 5.1k; the limit is 2 % over that, so a numerical routine
+/// added back to a tool instead of its stage fails here.
 /// The test prints every stage's count (the numbers the document quotes).
 #[test]
 fn tools_stay_thin_drivers() {
-    const TOOLS_SHIPPED_LIMIT: usize = 5_600;
+    const TOOLS_SHIPPED_LIMIT: usize = 5_200;
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut counts = std::collections::BTreeMap::new();
     for stage in PIPELINE {

@@ -7,6 +7,8 @@
 //! - [`kinematics`]: per-frame geometry ([`ContactState`]: distance, weight
 //!   w(d), projection p*, slip velocity, friction regime), the generalized
 //!   force of each multiplier, and the contact forces for output;
+//! - [`facing`]: contacts whose plane faces away from their point's body
+//!   (`--check`);
 //! - [`feet`]: foot contact sets built from a model's feet and the motion,
 //!   for ground-reaction prediction;
 //! - [`ground`]: ground reactions per foot from the contacts' forces and
@@ -19,6 +21,7 @@
 pub mod closure;
 pub mod element;
 pub mod events;
+pub mod facing;
 pub mod feet;
 pub mod floor;
 pub mod ground;

@@ -8,6 +8,7 @@ pub mod external_loads;
 pub mod actuators;
 pub mod lepton;
 pub mod passive;
+pub mod root_residuals;
 #[cfg(test)]
 mod tests;
 

@@ -393,12 +393,12 @@ impl Checker {
 /// A contact whose plane faces away from its point's body: at the first
 /// frame of the motion (the model's default pose when the motion cannot be
 /// read), the point body's mass centre lies behind the plane (on the side
-/// opposite its normal) by more than [`FACING_MARGIN`]. The contact pushes
-/// its point body along the normal, away from the plane, so such a contact
+/// opposite its normal) by more than [`FACING_MARGIN`](crate::contacts::facing::FACING_MARGIN).
+/// The contact pushes its point body along the normal, away from the plane, so such a contact
 /// would pull the body through it: every frame that needs it fails. A grip
 /// is not reported: a contact with a partner between the same two bodies
 /// whose normal points the other way and whose point lies within
-/// [`GRIP_SPAN`] of its own (a hand holding a bar from both sides, as the
+/// [`GRIP_SPAN`](crate::contacts::facing::GRIP_SPAN) of its own (a hand holding a bar from both sides, as the
 /// leg extension's handle_push and handle_hold do). Each is named with the
 /// contact's file and line (its element among `forces`): `--check`'s errors
 /// for a compiled problem.
@@ -406,12 +406,10 @@ pub fn contacts_facing_away(
     setup: &AnalyzeSetup,
     problem: &static_optimization::SoProblem,
 ) -> Vec<Error> {
-    let mut errors = Vec::new();
     if problem.contacts.is_empty() {
-        return errors;
+        return Vec::new();
     }
     let model = &problem.model;
-    let mut data = crate::dynamics::Data::new(model);
     let (q, when) = match inputs::open_state_stream_with(setup, model, &problem.contacts)
         .and_then(|mut s| s.next_block())
     {
@@ -427,56 +425,5 @@ pub fn contacts_facing_away(
             "in the model's default pose".to_string(),
         ),
     };
-    data.q.copy_from_slice(&q);
-    crate::dynamics::kinematics::positions(model, &mut data);
-    let ground = |c: &crate::contacts::Contact| {
-        (
-            data.rotation[c.plane_body] * c.normal,
-            data.station_position(c.point_body, &c.point),
-        )
-    };
-    for c in &problem.contacts {
-        let Some((d_point, d_com)) = c.sides(model, &data) else {
-            continue;
-        };
-        if d_com >= -FACING_MARGIN {
-            continue;
-        }
-        let (n, p) = ground(c);
-        let grip = problem.contacts.iter().any(|o| {
-            let (n_o, p_o) = ground(o);
-            o.point_body == c.point_body
-                && o.plane_body == c.plane_body
-                && n_o.dot(&n) < 0.0
-                && (p_o - p).norm() <= GRIP_SPAN
-        });
-        if grip {
-            continue;
-        }
-        errors.push(Error::input(
-            c.loc.clone(),
-            format!(
-                "contact {}: its plane faces away from its point's body {}: {when} the body's mass centre lies {:.1} mm behind the plane (the point {:.1} mm {}), but a contact pushes its point body along the plane normal, away from the plane, so it would pull the body through the plane and every frame that needs it fails; flip <plane_normal> (or check the plane's body and origin)",
-                c.name,
-                model.bodies[c.point_body].name,
-                -1e3 * d_com,
-                1e3 * d_point.abs(),
-                if d_point >= 0.0 { "in front of it" } else { "behind it" },
-            ),
-        ));
-    }
-    errors
+    crate::contacts::facing::facing_away(model, &problem.contacts, &q, &when)
 }
-
-/// How far (m) behind a contact's plane its point body's mass centre must
-/// lie for `--check` to report the plane as facing away from the body: a
-/// mass centre within 1 mm of the plane says nothing of the side (the same
-/// millimetre the run's summary allows a loaded contact into its plane).
-const FACING_MARGIN: f64 = 1e-3;
-
-/// Two contacts of one body on one plane body with opposite normals and
-/// points at most this far apart (m) are a grip, not a plane facing away:
-/// both sides of a bar a hand holds lie within a hand's breadth (8 cm for
-/// an adult, e.g. the hand breadth of ANSUR II, about 8.5–9 cm at the
-/// metacarpals; the leg extension's grips use one point for both sides).
-const GRIP_SPAN: f64 = 0.05;

@@ -19,9 +19,12 @@ use crate::contacts::feet::{self, FootContactParameters, FootContactSet};
 pub use crate::contacts::floor::FloorMotion;
 use crate::error::{Error, Location, Result};
 use crate::forces::external_loads::ExternalLoads;
+pub use crate::forces::root_residuals::{weak_root_residuals, ROOT_RESIDUAL_OPTIMAL_FORCE};
 use crate::parse::setup::AnalyzeSetup;
-use crate::storage::StoWriter;
 use crate::tools::{analyze, inputs, RunOptions, RunSummary};
+use crate::writers::grf::{
+    write_external_loads, write_foot_loads, write_metrics, write_root_residual,
+};
 use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 use crate::contacts::ground::{flight_frames, keep_frames, plate_samples};
@@ -328,7 +331,8 @@ pub fn run_with(
     let contacts_file = dir.join(own.file(OutputKind::FootContacts));
     let contacts_xml = contacts.force_set_xml();
     crate::storage::results::write(&contacts_file, contacts_xml.clone().into_bytes())?;
-    let (force_sets, mut written) = weak_root_residuals(&setup, &model, &dir, reserves, &toes)?;
+    let (force_sets, mut written) =
+        write_weak_root_residuals(&setup, &model, &dir, reserves, &toes)?;
     setup.set_force_set_documents(force_sets);
     setup
         .force_set_documents
@@ -429,21 +433,12 @@ pub fn run_with(
         prediction.contacts.parameters.contact_tolerance + prediction.contacts.parameters.transition_zone,
     ));
     let rr = dir.join(own.file(OutputKind::RootResidual));
-    {
-        let mut w = StoWriter::create_for_setup(
-            &setup.setup_file,
-            &rr,
-            "Root residual",
-            "Per frame: the size of the summed force of every actuator on the pelvis translations (N; residuals and reserves included) and as a share of body weight (%).\n",
-            &["root_residual_force".to_string(), "root_residual_percent_bw".to_string()],
-            8,
-            false,
-        )?;
-        for &(t, f) in &prediction.root_residual {
-            w.write_row(t, &[f, 100.0 * f / body_weight])?;
-        }
-        w.finish()?;
-    }
+    write_root_residual(
+        &prediction.root_residual,
+        body_weight,
+        &rr,
+        &setup.setup_file,
+    )?;
     prediction.summary.files.push(rr);
     let out = dir.join(own.file(OutputKind::PredictedGrf));
     write_foot_loads(&prediction.predicted, &out, &setup.setup_file)?;
@@ -583,83 +578,6 @@ fn use_contact_weight(setup: &mut AnalyzeSetup, default: f64) -> Result<(f64, bo
     Ok((default, false))
 }
 
-fn write_foot_loads(
-    loads: &FootLoads,
-    path: &std::path::Path,
-    setup: &std::path::Path,
-) -> Result<()> {
-    let mut labels = Vec::new();
-    for side in ['r', 'l'] {
-        for what in [
-            "force_vx",
-            "force_vy",
-            "force_vz",
-            "cop_px",
-            "cop_py",
-            "cop_pz",
-            "free_moment_ty",
-        ] {
-            labels.push(format!("{side}_{what}"));
-        }
-    }
-    let mut w = StoWriter::create_for_setup(
-        setup,
-        path,
-        "Predicted ground reactions",
-        "Per foot: force on the foot (N, ground), centre of pressure on the floor (m, ground; NaN without load) and free moment about the floor normal (N m).\n",
-        &labels,
-        8,
-        false,
-    )?;
-    for i in 0..loads.time.len() {
-        let mut row = Vec::with_capacity(14);
-        for s in 0..2 {
-            let (f, p) = (loads.force[s][i], loads.cop[s][i]);
-            let p = p.map(|x| if x.is_finite() { x } else { 0.0 });
-            row.extend([f.x, f.y, f.z, p.x, p.y, p.z, loads.free_moment[s][i]]);
-        }
-        w.write_row(loads.time[i], &row)?;
-    }
-    w.finish()
-}
-
-fn write_metrics(metrics: &[AxisMetrics], stance: &[StanceMetrics], path: &PathBuf) -> Result<()> {
-    let err = |e: csv::Error| Error::input(Location::file(path), e.to_string());
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "foot",
-        "axis",
-        "rho",
-        "rmse_N",
-        "rmse_percent_bw",
-        "peak_error_N",
-        "cop_error_mm",
-        "heel_strike_error_ms",
-        "toe_off_error_ms",
-    ])
-    .map_err(err)?;
-    for m in metrics {
-        let st = stance.iter().find(|s| s.side == m.side);
-        let f = |v: Option<f64>| v.map(|x| format!("{x:.1}")).unwrap_or_default();
-        w.write_record([
-            m.side.to_string(),
-            m.axis.to_string(),
-            format!("{:.4}", m.rho),
-            format!("{:.2}", m.rmse_n),
-            format!("{:.2}", m.rmse_bw),
-            format!("{:.2}", m.peak_error_n),
-            f(st.map(|s| s.cop_error_mm)),
-            f(st.map(|s| s.heel_strike_error_ms)),
-            f(st.map(|s| s.toe_off_error_ms)),
-        ])
-        .map_err(err)?;
-    }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
-    crate::storage::results::write(path, bytes)
-}
-
 pub use crate::forces::external_loads::ForceLayout;
 
 /// OpenSim's usual names: right foot `ground_force_v`, left `1_ground_force_v`.
@@ -674,88 +592,6 @@ fn default_layout() -> Vec<ForceLayout> {
             torque_identifier: format!("{prefix}ground_torque_"),
         })
         .collect()
-}
-
-/// Write `<name>_predicted_grf.mot` and `.xml`: per ExternalForce of the
-/// layout, the predicted loads of the foot of its body (force and point in
-/// ground, the free moment as a torque about the vertical).
-fn write_external_loads(
-    loads: &FootLoads,
-    layout: &[ForceLayout],
-    dir: &std::path::Path,
-    name: &str,
-    setup_file: &std::path::Path,
-) -> Result<(PathBuf, PathBuf)> {
-    let own = RunKey::setup(name, Sweep::Single);
-    let mot = dir.join(own.file(OutputKind::PredictedGrfMot));
-    let xml = dir.join(own.file(OutputKind::PredictedGrfXml));
-    let mut labels = Vec::new();
-    for f in layout {
-        for id in [
-            &f.force_identifier,
-            &f.point_identifier,
-            &f.torque_identifier,
-        ] {
-            if !id.is_empty() {
-                labels.extend(["x", "y", "z"].iter().map(|a| format!("{id}{a}")));
-            }
-        }
-    }
-    let mut w = StoWriter::create_for_setup(
-        setup_file,
-        &mot,
-        "predicted_grf",
-        "Ground reactions predicted by statopt predict-grf (force N, point m, torque N m; ground frame).\n",
-        &labels,
-        8,
-        false,
-    )?;
-    // Several plates under one foot: the first of them carries the foot's
-    // loads, the others nothing (else the foot would be loaded twice).
-    let first_of_foot: Vec<bool> = layout
-        .iter()
-        .enumerate()
-        .map(|(k, f)| {
-            let side = f.body.ends_with("_l");
-            !layout[..k].iter().any(|g| g.body.ends_with("_l") == side)
-        })
-        .collect();
-    for i in 0..loads.time.len() {
-        let mut row = Vec::with_capacity(labels.len());
-        for (f, &first) in layout.iter().zip(&first_of_foot) {
-            let s = usize::from(f.body.ends_with("_l"));
-            let gain = if first { 1.0 } else { 0.0 };
-            let force = loads.force[s][i] * gain;
-            let cop = loads.cop[s][i].map(|x| if x.is_finite() { x } else { 0.0 });
-            if !f.force_identifier.is_empty() {
-                row.extend(force.iter());
-            }
-            if !f.point_identifier.is_empty() {
-                row.extend(cop.iter());
-            }
-            if !f.torque_identifier.is_empty() {
-                row.extend([0.0, gain * loads.free_moment[s][i], 0.0]);
-            }
-        }
-        w.write_row(loads.time[i], &row)?;
-    }
-    w.finish()?;
-    let mut objects = String::new();
-    for f in layout {
-        objects.push_str(&format!(
-            "\t\t\t<ExternalForce name=\"{}\">\n\t\t\t\t<applied_to_body>{}</applied_to_body>\n\t\t\t\t<force_expressed_in_body>ground</force_expressed_in_body>\n\t\t\t\t<point_expressed_in_body>ground</point_expressed_in_body>\n\t\t\t\t<force_identifier>{}</force_identifier>\n\t\t\t\t<point_identifier>{}</point_identifier>\n\t\t\t\t<torque_identifier>{}</torque_identifier>\n\t\t\t</ExternalForce>\n",
-            f.name, f.body, f.force_identifier, f.point_identifier, f.torque_identifier
-        ));
-    }
-    let datafile = mot
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let text = format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Ground reactions predicted by statopt predict-grf; replaces the measured loads in an OpenSim or statopt setup. -->\n<OpenSimDocument Version=\"40000\">\n\t<ExternalLoads name=\"predicted_grf\">\n\t\t<objects>\n{objects}\t\t</objects>\n\t\t<groups />\n\t\t<datafile>{datafile}</datafile>\n\t</ExternalLoads>\n</OpenSimDocument>\n"
-    );
-    crate::storage::results::write(&xml, text.into_bytes())?;
-    Ok((mot, xml))
 }
 
 /// The StaticOptimization's `<reserve_actuators>` (statopt), taken out of
@@ -774,146 +610,46 @@ fn take_reserve_actuators(setup: &mut AnalyzeSetup) -> Result<Option<f64>> {
     Ok(None)
 }
 
-/// Optimal force (N or N·m) of the weak root residuals predict-grf uses: 100 N
-/// on the pelvis costs as much as 100 muscles at full activation.
-pub const ROOT_RESIDUAL_OPTIMAL_FORCE: f64 = 1.0;
-
-/// One policy for the root (pelvis) residuals, whatever the setup defines:
-/// in each force-set file the actuators acting on the root joint only (point
-/// and torque actuators on the root body, coordinate actuators on its
-/// coordinates) are dropped (a filtered copy is written to the results
-/// folder), and one coordinate actuator per root coordinate, named
-/// `<coordinate>_residual`, with [`ROOT_RESIDUAL_OPTIMAL_FORCE`], is added
-/// in `<name>_root_residuals.xml`. The model's own ForceSet is left as it
-/// is. Returns the force-set documents of the prediction's plan (each
-/// file read once) and the files written.
-fn weak_root_residuals(
+/// [`weak_root_residuals`]'s documents, its filtered copies and its
+/// `<name>_root_residuals.xml` written to the results folder `dir`.
+/// Returns the force-set documents of the prediction's plan and the files
+/// written.
+fn write_weak_root_residuals(
     setup: &AnalyzeSetup,
     model: &crate::model::Model,
     dir: &std::path::Path,
     reserves: Option<f64>,
     toes: &[usize],
 ) -> Result<(Vec<crate::xml::Element>, Vec<PathBuf>)> {
-    let mut documents = setup.force_set_documents.clone();
-    for f in &setup.force_set_files {
-        documents.push(crate::forces::read_force_set_document(f)?);
-    }
-    let roots: Vec<usize> = (0..model.nq())
-        .filter(|&c| model.is_root_coordinate(c))
-        .collect();
-    if roots.is_empty() && reserves.is_none() && toes.is_empty() {
-        return Ok((documents, Vec::new()));
-    }
-    let root_body = roots
-        .first()
-        .map(|&c| model.bodies[model.coordinates[c].body].name.clone())
-        .unwrap_or_default();
-    let root_names: Vec<&str> = roots
-        .iter()
-        .map(|&c| model.coordinates[c].name.as_str())
-        .collect();
+    let policy = weak_root_residuals(
+        &setup.force_set_documents,
+        &setup.force_set_files,
+        model,
+        reserves,
+        toes,
+        crate::contacts::ground::plantar_aponeurosis_strength(model),
+    )?;
+    let mut documents = policy.documents;
     let mut written = Vec::new();
-    for (k, doc) in documents.iter_mut().enumerate() {
-        let Some(filtered) = crate::forces::without_root_actuators(doc, &root_names, &root_body)
-        else {
-            continue;
-        };
-        let out = dir.join(
-            RunKey::setup(&setup.name, Sweep::Single)
-                .file(OutputKind::ForceSetWithoutRootResiduals(k)),
-        );
-        let text = crate::tools::scene::to_xml_string(&filtered);
+    let own = RunKey::setup(&setup.name, Sweep::Single);
+    for &k in &policy.filtered {
+        let out = dir.join(own.file(OutputKind::ForceSetWithoutRootResiduals(k)));
+        let text = crate::tools::scene::to_xml_string(&documents[k]);
         crate::storage::results::write(&out, text.into_bytes())?;
         written.push(out);
-        *doc = filtered;
     }
-    let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!-- Weak root residuals of statopt predict-grf (docs/grf_prediction.md). -->\n<OpenSimDocument Version=\"40000\">\n\t<ForceSet name=\"root_residuals\">\n\t\t<objects>\n");
-    for name in &root_names {
-        xml.push_str(&format!(
-            "\t\t\t<CoordinateActuator name=\"{name}_residual\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{ROOT_RESIDUAL_OPTIMAL_FORCE}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
-        ));
+    if let Some(xml) = policy.residuals {
+        let out = dir.join(own.file(OutputKind::RootResiduals));
+        crate::storage::results::write(&out, xml.clone().into_bytes())?;
+        documents.push(crate::forces::force_set_document(&xml, &out)?);
+        written.push(out);
     }
-    // The setup's <reserve_actuators>, on every unconstrained coordinate
-    // but the root's (those are the weak residuals above).
-    if let Some(f) = reserves {
-        for c in (0..model.nq())
-            .filter(|&c| !model.coordinates[c].is_constrained() && !model.is_root_coordinate(c))
-        {
-            let name = &model.coordinates[c].name;
-            xml.push_str(&format!(
-                "\t\t\t<CoordinateActuator name=\"{name}_reserve\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{f}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
-            ));
-        }
-    }
-    // The plantar aponeurosis on the toe joints nothing else drives.
-    let pa = crate::contacts::ground::plantar_aponeurosis_strength(model);
-    for &c in toes {
-        let name = &model.coordinates[c].name;
-        xml.push_str(&format!(
-            "\t\t\t<CoordinateActuator name=\"{name}_plantar_aponeurosis\">\n\t\t\t\t<coordinate>{name}</coordinate>\n\t\t\t\t<optimal_force>{pa}</optimal_force>\n\t\t\t\t<min_control>-Inf</min_control>\n\t\t\t\t<max_control>Inf</max_control>\n\t\t\t</CoordinateActuator>\n"
-        ));
-    }
-    xml.push_str("\t\t</objects>\n\t</ForceSet>\n</OpenSimDocument>\n");
-    let out = dir.join(RunKey::setup(&setup.name, Sweep::Single).file(OutputKind::RootResiduals));
-    crate::storage::results::write(&out, xml.clone().into_bytes())?;
-    documents.push(crate::forces::force_set_document(&xml, &out)?);
-    written.push(out);
     Ok((documents, written))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage;
-    /// The predicted loads in a measured layout with three plates under the
-    /// right foot (`ground_force_calcn_r` style names) and one under the
-    /// left: each foot is loaded once (the first of its plates carries it),
-    /// not once per plate.
-    #[test]
-    fn predicted_loads_load_each_foot_once_whatever_its_plates() {
-        let tmp = crate::test_dir::TempDir::new("plates");
-        let dir = tmp.path().to_path_buf();
-        let plate = |name: &str, body: &str, id: &str| ForceLayout {
-            name: name.into(),
-            body: body.into(),
-            force_identifier: format!("{id}_v"),
-            point_identifier: format!("{id}_p"),
-            torque_identifier: format!("{id}_m"),
-        };
-        let layout = [
-            plate("r1", "calcn_r", "ground_force_calcn_r"),
-            plate("r2", "calcn_r", "1_ground_force"),
-            plate("l1", "calcn_l", "L_ground_force"),
-            plate("r3", "calcn_r", "3_ground_force"),
-        ];
-        let loads = FootLoads {
-            time: vec![0.0, 0.01],
-            force: [
-                vec![Vector3::new(1.0, 700.0, 2.0); 2],
-                vec![Vector3::new(-1.0, 100.0, 0.0); 2],
-            ],
-            cop: [
-                vec![Vector3::new(0.1, 0.0, 0.2); 2],
-                vec![Vector3::zeros(); 2],
-            ],
-            free_moment: [vec![0.5; 2], vec![0.0; 2]],
-        };
-        let (mot, _) =
-            write_external_loads(&loads, &layout, &dir, "t", &dir.join("setup.xml")).unwrap();
-        let t = storage::read(&mot).unwrap();
-        let sum = |ids: &[&str]| -> f64 {
-            ids.iter()
-                .map(|id| t.rows[0][t.column_index(&format!("{id}_vy")).unwrap()])
-                .sum()
-        };
-        assert_eq!(
-            sum(&["ground_force_calcn_r", "1_ground_force", "3_ground_force"]),
-            700.0
-        );
-        assert_eq!(sum(&["L_ground_force"]), 100.0);
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-
     #[test]
     fn treadmill_option_reads_a_speed_or_a_vector() {
         assert_eq!(

@@ -257,8 +257,9 @@ fn cross_references(runs: &[PlannedRun]) -> Result<(Vec<usize>, Vec<CrossReferen
     Err(Error::input(
         Location::file(&runs[c.consumer].file).with_element("<JointReaction>"),
         format!(
-            "its <forces_file> {} is written by a setup that waits, in turn, for this one's tables",
-            c.moved.display()
+            "its <forces_file> {} is written by {}, a setup that waits, in turn, for this one's tables",
+            c.moved.display(),
+            runs[c.producer].file.display()
         ),
     ))
 }
@@ -295,6 +296,9 @@ pub fn check(plan: &StudyPlan) -> Result<()> {
 }
 
 /// [`check`] for a run whose outputs go under `moved_to` (the study's `-o`).
+/// The setups' order too: a cycle among cross-setup JointReaction
+/// references is the error the run gives ([`cross_references`], called by
+/// [`prepare`] for both).
 pub fn check_in(plan: &StudyPlan, moved_to: Option<&Path>) -> Result<()> {
     prepare(plan, moved_to).map(|_| ())
 }

@@ -20,12 +20,15 @@
 //! - [`contact_findings`]: what the run's contacts did that the summary
 //!   names (slid or too deep while loaded, carried nothing, at a limit on
 //!   an unsolved frame), from the rows the ContactForces table holds;
+//! - [`grf`]: predict-grf's predicted ground reactions, root residual,
+//!   comparison metrics and ExternalLoads pair;
 //! - [`emg`]: emg-compare's table and figure;
 //! - [`bench_grid`]: bench --grid's table and chart.
 pub mod bench_grid;
 pub mod contact_findings;
 pub mod emg;
 pub mod frame_log;
+pub mod grf;
 pub mod kinematics_tables;
 pub mod knee_tables;
 pub mod names;
