@@ -489,9 +489,7 @@ impl Scene {
         threads: Option<usize>,
     ) -> PyResult<Self> {
         let scene = py
-            .allow_threads(|| {
-                statopt::tools::force_sweep::compile_scene(&setup, text.as_deref(), threads)
-            })
+            .allow_threads(|| statopt::sweep::compile_scene(&setup, text.as_deref(), threads))
             .map_err(|e| to_py(py, e))?;
         Ok(Scene {
             inner: std::sync::Mutex::new(scene),
@@ -523,16 +521,12 @@ impl Scene {
         warm: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let specs = candidate_specs(&candidates)?;
-        let sweep = statopt::tools::force_sweep::SweepOptions {
-            warm,
-            ..Default::default()
-        };
         let result = py.allow_threads(|| {
             let mut scene = self
                 .inner
                 .lock()
                 .map_err(|_| statopt::Error::internal("the scene's lock is poisoned"))?;
-            statopt::tools::force_sweep::run_scene(&mut scene, &specs, self.threads, &sweep)
+            statopt::sweep::run_scene(&mut scene, &specs, self.threads, warm)
         });
         outcome_dict(py, result.map_err(|e| to_py(py, e))?)
     }

@@ -15,6 +15,8 @@
 //! - [`reduce`]: `<reduce_model>`, the run's model reduced to what the
 //!   motion moves.
 //! - [`workspace`]: the per-thread buffers a frame is evaluated in.
+//! - [`inputs`]: the setup's motion opened for the frames (read once,
+//!   filtered, its contacts closed, streamed or kept).
 //! - [`driver`]: frames in parallel chunks over per-thread workspaces,
 //!   results in frame order; [`interrupt`]: stopping it cleanly;
 //!   [`threads`]: the run's worker pool, started in one place.
@@ -24,6 +26,7 @@
 pub mod candidates;
 pub mod compile;
 pub mod driver;
+pub mod inputs;
 pub mod interrupt;
 pub mod knee_contact;
 pub mod options;

@@ -30,12 +30,16 @@
 //!   candidate;
 //! - [`metrics`]: the `<Metric>`s compiled, the candidates' series
 //!   collected into their values ([`SweepOutcome`]);
-//! - [`run`]: the motion streamed ([`solve_stream`]) or kept ([`Scene`]).
+//! - [`run`]: the motion streamed ([`solve_stream`]) or kept ([`Scene`]);
+//! - [`setup`]: the setup read and its motion opened, a [`Scene`] compiled
+//!   and solved on a pool ([`compile_scene`], [`run_scene`]).
 pub mod candidates;
 pub mod metrics;
 pub mod plan;
 pub mod run;
+pub mod setup;
 
 pub use metrics::SweepOutcome;
 pub use plan::{FrameValues, SweepPlan};
 pub use run::{solve_stream, Scene, Solve};
+pub use setup::{compile_scene, run_scene};

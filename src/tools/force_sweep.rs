@@ -7,10 +7,10 @@
 //! `<name>_force_sweep.csv`.
 
 use crate::error::{Error, Location, Result};
-use crate::parse::setup::{AnalyzeSetup, Setup};
+use crate::parse::setup::AnalyzeSetup;
 use crate::sweep::candidates::resolve;
+use crate::sweep::setup::{open_stream, read_setup};
 use crate::sweep::{solve_stream, FrameValues, Solve, SweepPlan};
-use crate::tools::inputs::open_state_stream_with;
 use crate::tools::RunOptions;
 use crate::writers::names::{OutputKind, RunKey, Sweep};
 
@@ -64,24 +64,6 @@ pub fn run_file(
     run(&setup, candidates, opts, sweep)
 }
 
-fn read_setup(
-    setup_file: &std::path::Path,
-    text: Option<&str>,
-    allow_unknown: bool,
-) -> Result<AnalyzeSetup> {
-    let setup = match text {
-        Some(t) => Setup::parse_with(t, setup_file, allow_unknown)?,
-        None => Setup::read_with(setup_file, allow_unknown)?,
-    };
-    match setup {
-        Setup::Analyze(s) => Ok(s),
-        _ => Err(Error::input(
-            Location::file(setup_file),
-            "a force sweep runs an AnalyzeTool setup with a StaticOptimization",
-        )),
-    }
-}
-
 /// Run a force sweep of `setup` (see the `sweep` stage): the motion
 /// streamed once, each frame prepared and solved for every candidate as it
 /// comes (memory does not grow with the motion but for the metrics'
@@ -95,23 +77,6 @@ pub fn run(
     crate::frame::threads::in_pool(opts.threads, || {
         run_streamed(setup, candidates, opts, sweep)
     })
-}
-
-/// The setup's motion, its warnings added to `warnings`.
-fn open_stream<'m>(
-    setup: &AnalyzeSetup,
-    plan: &'m SweepPlan,
-    warnings: &mut Vec<String>,
-) -> Result<crate::motion::stream::StateStream<'m>> {
-    let stream = open_state_stream_with(setup, &plan.problem.model, &plan.problem.contacts)?;
-    warnings.extend(stream.motion_warnings(&[]));
-    if !stream.missing.is_empty() {
-        warnings.push(format!(
-            "the coordinates file lacks {:?}; they are set to 0 as OpenSim's AnalyzeTool does",
-            stream.missing
-        ));
-    }
-    Ok(stream)
 }
 
 fn run_streamed(
@@ -161,37 +126,6 @@ fn run_streamed(
         outcome.files = t.finish()?;
     }
     Ok(outcome)
-}
-
-/// A [`Scene`] of the AnalyzeTool setup in `setup_file` (or `text`, read
-/// as if it were that file): compiled and every frame prepared, on a pool
-/// of `threads` as `RunOptions`'.
-pub fn compile_scene(
-    setup_file: &std::path::Path,
-    text: Option<&str>,
-    threads: Option<usize>,
-) -> Result<Scene> {
-    let setup = read_setup(setup_file, text, false)?;
-    crate::frame::threads::in_pool(threads, move || {
-        let plan = SweepPlan::compile(&setup)?;
-        Scene::prepare(plan, |plan, warnings| open_stream(&setup, plan, warnings))
-    })
-}
-
-/// Solve `scene`'s frames for `candidates` on a pool of `threads`
-/// (metrics only: `sweep.tables` must be empty, [`run`] writes them).
-pub fn run_scene(
-    scene: &mut Scene,
-    candidates: &[CandidateSpec],
-    threads: Option<usize>,
-    sweep: &SweepOptions,
-) -> Result<SweepOutcome> {
-    if !sweep.tables.is_empty() {
-        return Err(Error::msg(
-            "a Scene solves metrics only: write candidates' tables with a force sweep (tools::force_sweep::run)",
-        ));
-    }
-    crate::frame::threads::in_pool(threads, || scene.run(candidates, sweep.warm))
 }
 
 /// Every candidate's open tables ([`SweepOptions::tables`]).
