@@ -15,12 +15,6 @@ use clap::{Args, Parser, Subcommand};
 use statopt::parse::setup::Setup;
 use statopt::tools::{self, bench, bench_grid, RunOptions};
 
-/// mimalloc instead of the system allocator: reading a model and its
-/// motion allocates tens of thousands of small strings and rows, which
-/// glibc's malloc and free spent about a quarter of the setup on.
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 #[derive(Parser, Debug)]
 #[command(
     name = "statopt-tool",
