@@ -256,19 +256,99 @@ pub fn apply_transition(
     let h = (h - n * h.dot(&n)).normalize();
     set.target_optimal_force = vec![root_optimal_force; 2];
     let points = set.points.clone();
-    set.force_target = trailing_targets(
+    let trailing = trailing_targets(
         events,
         h,
         n,
         |t| required_force(model, states, t),
         |t, side| toe_to_com(model, states, &points, t, side),
     );
+    let landing = landing_targets(events, h, n, |t, side| {
+        point_to_com(model, states, &points, t, side, "heel")
+    });
+    set.force_target = merge_targets(trailing, landing, &set.held_intervals);
+}
+
+/// The **landing** foot's force along its leg over each double support
+/// (issue 36): the compliant leg (Geyer, Seyfarth & Blickhan 2006) for both
+/// legs, as in the dynamic-walking account of the step-to-step transition,
+/// where the trailing leg's push-off and the leading leg's collision each
+/// act along the leg (Kuo, Donelan & Ruina 2005, Exerc Sport Sci Rev
+/// 33:88; Donelan, Kram & Kuo 2002, J Exp Biol 205:3717). Over the double
+/// support T_ds after each transition strike at t_s of foot s, foot s's
+/// force has no part across `lean(t, s)`, the line from its heel (the
+/// midpoint of its heel points: the loading response's centre of pressure,
+/// Perry & Burnfield 2010) to the body's mass centre, in the plane of the
+/// walking direction h and the floor normal n. A leading leg then brakes in
+/// proportion to its load. Knots every [`TRANSITION_KNOT_STEP`], rows
+/// (across, 0) and a zero row (the trailing target's second row; it holds
+/// nothing, [`super::targets`]); the target ends just after the double
+/// support. A transition whose lean is not known gets none.
+pub fn landing_targets(
+    events: &GaitEvents,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
+    mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for s in 0..2 {
+        let f = &events.feet[s];
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if !f.transitions.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            let t_ds = double_support(events, 1 - s, ts);
+            let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
+            let mut knots = Vec::new();
+            for i in 0..=steps {
+                let tau = t_ds * i as f64 / steps as f64;
+                let Some(l) = lean(ts + tau, s) else {
+                    knots.clear();
+                    break;
+                };
+                let across = (h * l.dot(&n) - n * l.dot(&h)).normalize();
+                knots.push((ts + tau, true, vec![(across, 0.0), (Vector3::zeros(), 0.0)]));
+            }
+            if let Some(last) = knots.last() {
+                let rows = last.2.clone();
+                knots.push((ts + t_ds + 1e-6, false, rows));
+            }
+            out[s].extend(knots);
+        }
+    }
+    out
+}
+
+/// Whether a knot is a landing foot's ([`landing_targets`]: its second row
+/// holds nothing).
+pub fn is_landing_knot(k: &TargetKnot) -> bool {
+    k.2.get(1).is_some_and(|r| r.0 == Vector3::zeros())
+}
+
+/// Per foot, its trailing and landing knots in one target (the contacts of
+/// a foot share one group): time-ordered; a landing knot inside a double
+/// support the foot trails through (`held`, [`held_intervals`]) is dropped,
+/// so that the two never interleave.
+pub fn merge_targets(
+    trailing: [Vec<TargetKnot>; 2],
+    landing: [Vec<TargetKnot>; 2],
+    held: &[Vec<(f64, f64)>; 2],
+) -> [Vec<TargetKnot>; 2] {
+    let mut out = trailing;
+    for s in 0..2 {
+        let inside = |t: f64| held[s].iter().any(|&(a, b)| t >= a - 1e-9 && t <= b + 1e-6);
+        out[s].extend(landing[s].iter().filter(|k| !inside(k.0)).cloned());
+        out[s].sort_by(|a, b| a.0.total_cmp(&b.0));
+        out[s].dedup_by(|b, a| b.0 <= a.0);
+    }
+    out
 }
 
 /// The summary's line on the force targets of foot `side` (None without
 /// any): each double support it trails through.
 pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     let mut spans = Vec::new();
+    let mut landing = Vec::new();
     let mut start: Option<&TargetKnot> = None;
     for (i, k) in knots.iter().enumerate() {
         if k.1 && start.is_none() {
@@ -277,21 +357,35 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
         let ends = !k.1 || i + 1 == knots.len();
         if let (true, Some(a)) = (ends, start) {
             let last = if k.1 { k } else { &knots[i - 1] };
-            spans.push(format!(
-                "[{:.3}, {:.3}] s from {:.0} N",
-                a.0,
-                last.0,
-                a.2.first().map_or(0.0, |r| r.1)
-            ));
+            if is_landing_knot(a) {
+                landing.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
+            } else {
+                spans.push(format!(
+                    "[{:.3}, {:.3}] s from {:.0} N",
+                    a.0,
+                    last.0,
+                    a.2.first().map_or(0.0, |r| r.1)
+                ));
+            }
             start = None;
         }
     }
-    (!spans.is_empty()).then(|| {
+    let lands = (!landing.is_empty()).then(|| {
+        format!(
+            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load)",
+            landing.join(", ")
+        )
+    });
+    let trails = (!spans.is_empty()).then(|| {
         format!(
             "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
             spans.join(", ")
         )
-    })
+    });
+    match (trails, lands) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    }
 }
 
 /// The line from foot `side`'s toe (its hallux point, the mean of them if
@@ -304,6 +398,20 @@ pub fn toe_to_com(
     t: f64,
     side: usize,
 ) -> Option<Vector3<f64>> {
+    point_to_com(model, states, points, t, side, "hallux")
+}
+
+/// The line from the mean of foot `side`'s points whose name contains
+/// `stem` to the body's mass centre at the row of `states` nearest `t`
+/// (ground); None without such points.
+pub fn point_to_com(
+    model: &Model,
+    states: &States,
+    points: &[FootPoint],
+    t: f64,
+    side: usize,
+    stem: &str,
+) -> Option<Vector3<f64>> {
     let i = (0..states.time.len()).min_by(|&a, &b| {
         (states.time[a] - t)
             .abs()
@@ -315,7 +423,7 @@ pub fn toe_to_com(
     let c = if side == 0 { 'r' } else { 'l' };
     let (sum, k) = points
         .iter()
-        .filter(|p| p.side == c && p.name.contains("hallux"))
+        .filter(|p| p.side == c && p.name.contains(stem))
         .fold((Vector3::zeros(), 0usize), |(s, k), p| {
             (s + data.station_position(p.body, &p.local), k + 1)
         });
@@ -668,6 +776,61 @@ mod tests {
         let m = extrema(&time, &x, 0.1, true);
         assert_eq!(m.len(), 1, "{m:?}");
         assert!((time[m[0]] - 0.5).abs() <= 0.03, "{}", time[m[0]]);
+    }
+
+    /// The landing foot's force along its leg: over the double support
+    /// after its strike (to the other foot's foot-off), no force across the
+    /// line from its heel to the mass centre, a second row that holds
+    /// nothing; the trailing foot's own target unchanged. Merged per foot
+    /// in time order, a landing knot inside a double support the foot
+    /// trails through dropped; the summary names both roles.
+    #[test]
+    fn the_landing_foot_pushes_along_its_leg() {
+        let mut ev = GaitEvents::default();
+        ev.feet[0] = FootEvents {
+            strikes: vec![0.5],
+            offs: vec![],
+            transitions: vec![true],
+        };
+        ev.feet[1].offs = vec![0.62];
+        let (h, n) = (Vector3::x(), Vector3::y());
+        // The mass centre 0.35 m behind the landing heel and 0.9 m above.
+        let lean = Vector3::new(-0.35, 0.9, 0.0);
+        let k = landing_targets(&ev, h, n, |_, _| Some(lean));
+        assert!(k[1].is_empty(), "the trailing foot gets no landing target");
+        let t = &k[0];
+        assert_eq!(t.first().unwrap().0, 0.5);
+        assert!(t.windows(2).all(|w| w[0].0 < w[1].0));
+        let last = t.last().unwrap();
+        assert!(!last.1 && (last.0 - 0.62).abs() < 1e-5, "{last:?}");
+        for knot in &t[..t.len() - 1] {
+            assert!(knot.1 && is_landing_knot(knot));
+            let (across, f) = knot.2[0];
+            assert_eq!(f, 0.0);
+            assert!(across.dot(&lean).abs() < 1e-12 && across.z == 0.0);
+            assert!((across.norm() - 1.0).abs() < 1e-12);
+        }
+        // Merged with the trailing foot's target: foot 0 lands at 0.5 and
+        // trails from 0.9; its landing knots after 0.9 (a second strike of
+        // its own inside that span) are dropped.
+        let trailing_knot = |t: f64, on: bool| (t, on, vec![(n, 300.0), (h, 0.0)]);
+        let trailing = [
+            vec![trailing_knot(0.9, true), trailing_knot(1.0, false)],
+            Vec::new(),
+        ];
+        let mut landing = k.clone();
+        landing[0].push((0.95, true, vec![(h, 0.0), (Vector3::zeros(), 0.0)]));
+        let held = [vec![(0.9, 1.0)], Vec::new()];
+        let m = merge_targets(trailing, landing, &held);
+        assert_eq!(m[0].len(), t.len() + 2, "{:?}", m[0]);
+        assert!(m[0].windows(2).all(|w| w[0].0 < w[1].0));
+        assert!(m[0].iter().all(|k| k.0 < 0.9 || !is_landing_knot(k)));
+        let note = targets_note('r', &m[0]).unwrap();
+        assert!(
+            note.contains("trails through double support over [0.900, 0.900] s")
+                && note.contains("lands into double support over [0.500, 0.620] s"),
+            "{note}"
+        );
     }
 
     /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off. The

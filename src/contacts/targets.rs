@@ -12,9 +12,10 @@
 //! is as doubtful as a newton on the pelvis. Outside the knots' time span
 //! the row is `x = 0` and the group is free.
 //!
-//! predict-grf uses it for the trailing foot through double support: Ren,
-//! Jones & Howard's smooth transition (2008, J Biomech 41:2750;
-//! docs/grf_prediction.md, "The step-to-step transition").
+//! predict-grf uses it for both feet through double support: the trailing
+//! foot's Ren, Jones & Howard's smooth transition (2008, J Biomech
+//! 41:2750) and each foot's force along its leg (docs/grf_prediction.md,
+//! "The step-to-step transition").
 
 use nalgebra::Vector3;
 
@@ -32,7 +33,8 @@ pub struct TargetSpec {
     pub rows: usize,
     /// `force_target`: knots (t, on, m pairs (unit axis in ground, force
     /// in N along it)), times ascending; the target holds between two
-    /// knots that are both on.
+    /// knots that are both on. A row of axis 0 and force 0 holds nothing
+    /// at its knot (its program row is −S x = 0).
     pub knots: Vec<Knot>,
     /// `force_target_optimal_force` S (N), > 0, per row.
     pub optimal_force: Vec<f64>,
@@ -85,7 +87,13 @@ impl TargetSpec {
         let kn = el.child("force_target").unwrap();
         let v = kn.numbers()?;
         let w = 2 + 4 * m;
-        let unit = |c: &[f64]| (Vector3::new(c[0], c[1], c[2]).norm() - 1.0).abs() <= 1e-6;
+        // A unit axis; or 0 0 0 with force 0: the row holds nothing at that
+        // knot (a group whose knots need fewer rows in one span than in
+        // another, e.g. a foot's target when it lands and when it trails).
+        let unit = |c: &[f64]| {
+            (Vector3::new(c[0], c[1], c[2]).norm() - 1.0).abs() <= 1e-6
+                || c.iter().all(|x| *x == 0.0)
+        };
         let ok = !v.is_empty()
             && v.len() % w == 0
             && v.chunks(w)
@@ -95,7 +103,7 @@ impl TargetSpec {
                 .all(|(a, b)| a[0] < b[0]);
         if !ok {
             return Err(kn.error(format!(
-                "{} '{name}': <force_target> takes knots t on, then {m} times ax ay az f (s; 1 or 0; a unit axis in ground and the force in N along it), with the times ascending, found '{}'",
+                "{} '{name}': <force_target> takes knots t on, then {m} times ax ay az f (s; 1 or 0; a unit axis in ground and the force in N along it, or 0 0 0 0 for a row that holds nothing at that knot), with the times ascending, found '{}'",
                 el.name,
                 kn.text()
             )));
@@ -210,4 +218,40 @@ pub fn groups(contacts: &[Contact]) -> Result<Vec<ForceTarget>> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn spec(knots: &str) -> Result<Option<TargetSpec>> {
+        let text = format!(
+            "<PointOnPlaneContact name=\"c\"><force_target_group>g</force_target_group><force_target_rows>2</force_target_rows><force_target>{knots}</force_target></PointOnPlaneContact>"
+        );
+        let el = crate::xml::parse_str(&text, Path::new("contacts.xml")).unwrap();
+        TargetSpec::from_xml(&el, "c")
+    }
+
+    /// A row of axis 0 0 0 and force 0 holds nothing at its knot, so one
+    /// group can hold two rows in one span and one in another (a foot that
+    /// trails, then lands); a zero axis with a force, or an axis that is
+    /// neither unit nor zero, is refused.
+    #[test]
+    fn a_zero_row_holds_nothing_and_other_axes_must_be_unit() {
+        let s = spec("0 1 0 1 0 50 1 0 0 0  0.1 1 0 1 0 50 1 0 0 0  0.12 0 0 1 0 50 1 0 0 0  0.2 1 1 0 0 0 0 0 0 0  0.3 1 1 0 0 0 0 0 0 0")
+            .unwrap()
+            .unwrap();
+        let v = s.value_at(0.05).unwrap();
+        assert_eq!(v[0], (Vector3::new(0.0, 1.0, 0.0), 50.0));
+        let v = s.value_at(0.25).unwrap();
+        assert_eq!(v[0], (Vector3::new(1.0, 0.0, 0.0), 0.0));
+        assert_eq!(v[1], (Vector3::zeros(), 0.0));
+        // Between the spans (the knot at 0.12 is off): no target.
+        assert!(s.value_at(0.15).is_none());
+        for bad in ["0 1 0 0 0 5 1 0 0 0", "0 1 0 2 0 5 1 0 0 0"] {
+            let e = spec(bad).unwrap_err().to_string();
+            assert!(e.contains("contacts.xml") && e.contains("0 0 0 0"), "{e}");
+        }
+    }
 }
