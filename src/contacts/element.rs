@@ -28,9 +28,9 @@
 //! | `held_intervals` | none | statopt: pairs of times `t0 t1 ...` (s, ascending, t0 < t1): for t0 <= t < t1 the contact's point is on the floor whatever its slip: its slip-speed gate (`speed_weight`) is not applied and its regime is static; predict-grf writes a trailing foot's double support, where the model's rigid toe point moves as the real foot rolls over its toes (docs/grf_prediction.md, step 8). Absent: never |
 //! | `off_weight` | 0 | statopt: the factor on the contact's weight within `off_intervals`, in [0, 1) (0: off) |
 //! | `time_weight` | none | statopt: knots `t0 f0 t1 f1 ...` (times ascending, factors in [0, 1]): the contact's weight is multiplied by f, linear between the knots and the end knots' values before and after them; predict-grf writes the smooth transition of double support (docs/grf_prediction.md) |
-//! | `force_target_group` | none | statopt: a name shared by the contacts whose summed force on their point bodies is held to `force_target` (a soft equality, [`super::targets`]); predict-grf writes the trailing foot's share of double support (Ren et al. 2008) |
+//! | `force_target_group` | none | statopt: a name shared by the contacts whose summed force on their point bodies is held to `force_target` (a soft equality, [`super::targets`]); predict-grf writes the trailing foot's share of double support (Ren et al. 2008) and each foot's force along its leg |
 //! | `force_target_rows` | none | statopt: m, the number of axes (1–3) along which the group's force is targeted |
-//! | `force_target` | none | statopt: knots `t on ax ay az f ...` (s; 1 or 0; then m times a unit axis in ground and the force in N along it; times ascending): linear between two knots that are both on (the axis renormalised); no target elsewhere |
+//! | `force_target` | none | statopt: knots `t on ax ay az f ...` (s; 1 or 0; then m times a unit axis in ground and the force in N along it, or 0 0 0 0, a row that holds nothing at that knot; times ascending): linear between two knots that are both on (the axis renormalised); no target elsewhere |
 //! | `force_target_optimal_force` | 1 | statopt: S (N), one for all rows or one per row: a departure e from the target costs (e/S)², what an actuator of optimal force S costs |
 //! | `appliesForce` / `isDisabled` | true / false | as for every OpenSim force |
 //!
