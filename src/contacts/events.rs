@@ -335,11 +335,11 @@ pub fn merge_targets(
     held: &[Vec<(f64, f64)>; 2],
 ) -> [Vec<TargetKnot>; 2] {
     let mut out = trailing;
-    for s in 0..2 {
-        let inside = |t: f64| held[s].iter().any(|&(a, b)| t >= a - 1e-9 && t <= b + 1e-6);
-        out[s].extend(landing[s].iter().filter(|k| !inside(k.0)).cloned());
-        out[s].sort_by(|a, b| a.0.total_cmp(&b.0));
-        out[s].dedup_by(|b, a| b.0 <= a.0);
+    for ((knots, land), held) in out.iter_mut().zip(landing).zip(held) {
+        let inside = |t: f64| held.iter().any(|&(a, b)| t >= a - 1e-9 && t <= b + 1e-6);
+        knots.extend(land.into_iter().filter(|k| !inside(k.0)));
+        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+        knots.dedup_by(|b, a| b.0 <= a.0);
     }
     out
 }
