@@ -63,6 +63,8 @@ def main():
     ap.add_argument("--only", default="")
     ap.add_argument("--walk-ap", action="store_true",
                     help="the AP error of the muscle-model walking trials, phase by phase")
+    ap.add_argument("--frames", default="",
+                    help="with --walk-ap: T0:T1, print every frame in [T0, T1] s (forces, contacts, plantarflexors)")
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared"))
     a = ap.parse_args()
     if a.walk_ap:
@@ -176,7 +178,10 @@ def walk_ap(a):
     less the requirement: the root residual's AP part). Counterfactuals of
     the bar's figure (mean over the feet of rho): the prediction's sum
     split as the plates split their vertical force ("split right"), the
-    plates' sum split as the prediction splits it ("sum right").
+    plates' sum split as the prediction splits it ("sum right"); and per
+    double-support half and single support, the bar's figure with that
+    phase alone set right (and with its split alone right). With
+    --frames T0:T1, every frame in that window (see frames()).
     """
     shared = os.path.abspath(a.shared)
     trials = [
@@ -254,6 +259,39 @@ def walk_ap(a):
                 print(f"    DS {t[rr[0]]:.3f}-{t[rr[-1]]:.3f} s, trailing {s}: trailing AP pred - meas mean {e[s][rr].mean():+.0f} N "
                       f"(max {e[s][rr].max():+.0f}), leading {e[lead][rr].mean():+.0f} N (min {e[lead][rr].min():+.0f}); "
                       f"sum error {E[rr].mean():+.0f}, kinematics {(req - M)[rr].mean():+.0f}")
+        # Each phase set right (the plates' AP there, the prediction
+        # elsewhere): what the bar's figure would gain from that phase alone,
+        # and from its split alone (the prediction's sum shared equally).
+        S = pr[("r", "x")] + pr[("l", "x")]
+        phases = []
+        for lab, sel in (("double support", ds), ("single support", ss)):
+            k = np.flatnonzero(sel)
+            for rr in np.split(k, np.flatnonzero(np.diff(k) > 1) + 1) if len(k) else []:
+                if lab == "double support" and len(rr) >= 4:
+                    phases.append((f"{lab} {t[rr[0]]:.3f}-{t[rr[-1]]:.3f} s, first half", rr[: len(rr) // 2]))
+                    phases.append((f"{lab} {t[rr[0]]:.3f}-{t[rr[-1]]:.3f} s, second half", rr[len(rr) // 2:]))
+                else:
+                    phases.append((f"{lab} {t[rr[0]]:.3f}-{t[rr[-1]]:.3f} s", rr))
+        for lab, rr in phases:
+            q = {s_: pr[(s_, "x")].copy() for s_ in "rl"}
+            q2 = {s_: pr[(s_, "x")].copy() for s_ in "rl"}
+            for s_ in "rl":
+                q[s_][rr] = m[(s_, "x")][rr]
+                q2[s_][rr] = m[(s_, "x")][rr] + (S - M)[rr] / 2
+            right = np.mean([np.corrcoef(q[s_], m[(s_, "x")])[0, 1] for s_ in "rl"])
+            split = np.mean([np.corrcoef(q2[s_], m[(s_, "x")])[0, 1] for s_ in "rl"])
+            print(f"    set right: {lab}: AP rho {bar:.3f} -> {right:.3f} (its split alone {split:.3f})")
+        # The vertical force the filtered motion requires against the
+        # plates' sum, per phase: the model's weight and the collision's peak
+        # (a 6 Hz filter smooths it) fall on whichever foot the effort
+        # minimum unloads.
+        ry = np.interp(t, gen_[:, 0], gen_[:, gl_.index("pelvis_ty_required")])
+        vd = ry - vy
+        print(f"  vertical: required - plates' sum mean {vd.mean():+.0f} N (model weight {bw:.0f} N, plates' mean {vy.mean():.0f} N); "
+              f"double support mean {vd[ds].mean() if ds.any() else float('nan'):+.0f}, min {vd[ds].min() if ds.any() else float('nan'):+.0f} N; "
+              f"single support mean {vd[ss].mean() if ss.any() else float('nan'):+.0f} N")
+        if a.frames:
+            frames(a, out, pre, t, p, pl, m, req, ry)
         # Peaks per stance: braking (min) and propulsion (max).
         for s in "rl":
             k = np.flatnonzero(on[s])
@@ -268,6 +306,38 @@ def walk_ap(a):
                 print(f"    stance {s} {t[rr[0]]:.3f}-{t[rr[-1]]:.3f}: braking {mm[i]:.0f} N at {t[rr[i]]:.3f} vs pred {pp[j]:.0f} at {t[rr[j]]:.3f}; "
                       f"push-off {mm[I]:.0f} at {t[rr[I]]:.3f} vs {pp[J]:.0f} at {t[rr[J]]:.3f}")
     return 0
+
+
+def frames(a, out, pre, t, p, pl, m, req, ry):
+    """Every frame in --frames T0:T1: the requirement and the plates' sum
+    (AP / vertical), per foot the plates and the prediction (AP / vertical),
+    the contact points that carry or are within reach (fx / fy N, weight,
+    slip speed m/s, shear / normal), and the plantarflexors' activation and
+    strength (force / activation, N: what a full activation would give at
+    that frame's fibre length and speed)."""
+    t0, t1 = (float(x) for x in a.frames.split(":"))
+    cl, c = read(os.path.join(out, pre + "_StaticOptimization_ContactForces.sto"))
+    al, act = read(os.path.join(out, pre + "_StaticOptimization_activation.sto"))
+    fl, frc = read(os.path.join(out, pre + "_StaticOptimization_force.sto"))
+    pts = sorted({x[:-3] for x in cl if x.endswith("_fx")}, key=lambda q: (q[-1], q))
+    pf = [n for n in al if re.match(r"(soleus|gas|med_gas|lat_gas|gastroc)", n)]
+    ci = np.searchsorted(c[:, 0], t - 1e-9)
+    for i in np.flatnonzero((t >= t0 - 1e-9) & (t <= t1 + 1e-9)):
+        j = min(ci[i], len(c) - 1)
+        print(f"    {t[i]:.3f} s: required AP {req[i]:+.0f} / vertical {ry[i]:.0f} N, plates' sum "
+              f"{m[('r', 'x')][i] + m[('l', 'x')][i]:+.0f} / {m[('r', 'y')][i] + m[('l', 'y')][i]:.0f}; "
+              + "; ".join(f"{s} plates {m[(s, 'x')][i]:+.0f} / {m[(s, 'y')][i]:.0f}, predicted "
+                          f"{p[i, pl.index(s + '_force_vx')]:+.0f} / {p[i, pl.index(s + '_force_vy')]:.0f}" for s in "rl"))
+        row = []
+        for q in pts:
+            fx, fy, w = c[j, cl.index(q + "_fx")], c[j, cl.index(q + "_fy")], c[j, cl.index(q + "_weight")]
+            if fy > 1 or w > 0.05:
+                row.append(f"{q[5:] if q.startswith('foot_') else q} {fx:+.0f}/{fy:.0f} w {w:.2f} v {c[j, cl.index(q + '_slip_speed')]:.2f}"
+                           + (f" ({abs(fx) / fy:.2f})" if fy > 10 else ""))
+        print("      " + ", ".join(row))
+        if pf:
+            k = min(np.searchsorted(act[:, 0], t[i] - 1e-9), len(act) - 1)
+            print("      " + ", ".join(f"{n} {act[k, al.index(n)]:.2f} ({frc[k, fl.index(n)] / max(act[k, al.index(n)], 1e-3):.0f} N)" for n in pf))
 
 
 if __name__ == "__main__":
