@@ -1077,3 +1077,42 @@ fn the_python_scene_calls_the_sweep_stage_not_a_tool() {
             .join("\n")
     );
 }
+
+/// The Python binding's `force_sweep` (which writes candidates' tables on
+/// request) runs through the sweep stage (`sweep::stream`) and stops on
+/// Ctrl-C through `frame::interrupt`: its body names no `tools::`. (It went
+/// through `tools::force_sweep::run_file` before.)
+#[test]
+fn the_python_force_sweep_calls_the_sweep_stage_not_a_tool() {
+    let lib =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("python/src/lib.rs"))
+            .unwrap();
+    let start = lib
+        .find("fn force_sweep<")
+        .expect("the binding's fn force_sweep");
+    let end = lib[start..]
+        .find("\n}\n")
+        .map(|e| start + e)
+        .expect("its end");
+    let body = &lib[start..end];
+    assert!(
+        body.contains("statopt::sweep::stream") && body.contains("stream::run_file"),
+        "the binding's force_sweep should run through statopt::sweep::stream"
+    );
+    assert!(
+        body.contains("statopt::frame::interrupt"),
+        "the binding's force_sweep should stop through statopt::frame::interrupt"
+    );
+    assert!(
+        !body.contains("tools::")
+            && !body.contains("RunOptions")
+            && !body.contains("progress_hook"),
+        "the binding's force_sweep calls a tool: {}",
+        body.lines()
+            .filter(|l| l.contains("tools::")
+                || l.contains("RunOptions")
+                || l.contains("progress_hook"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
