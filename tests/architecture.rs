@@ -1007,13 +1007,14 @@ fn a_run_owns_its_outputs_in_no_process_wide_registry() {
 /// generation, the model reduction, EMG statistics, the grid's errors);
 /// moving those, the force sweep's engine, predict-grf's writers and root
 /// residual policy, --check's facing-away contacts and the opening of a
-/// run's motion (frame::inputs) into their stages brought it to 4.8k; the
+/// run's motion (frame::inputs) into their stages brought it to 4.8k, the
+/// force sweep's run and candidates' tables (sweep::stream) to 4.6k; the
 /// limit is 2 % over that, so a numerical routine
 /// added back to a tool instead of its stage fails here.
 /// The test prints every stage's count (the numbers the document quotes).
 #[test]
 fn tools_stay_thin_drivers() {
-    const TOOLS_SHIPPED_LIMIT: usize = 4_900;
+    const TOOLS_SHIPPED_LIMIT: usize = 4_700;
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut counts = std::collections::BTreeMap::new();
     for stage in PIPELINE {
