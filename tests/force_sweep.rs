@@ -1,8 +1,9 @@
-//! Force sweeps (tools::force_sweep): candidates that differ only in forces
-//! — the cam's torque expression, w0, the reserves' optimal force — solved
-//! on one compiled scene give every metric of the setup as a run of the
-//! candidate's own setup does (1e-9 relative), warm-started or cold, and a
-//! study's <ForceSweep> element writes them.
+//! Force sweeps (sweep::stream, and its driver tools::force_sweep):
+//! candidates that differ only in forces — the cam's torque expression, w0,
+//! the reserves' optimal force — solved on one compiled scene give every
+//! metric of the setup as a run of the candidate's own setup does (1e-9
+//! relative), warm-started or cold, and a study's <ForceSweep> element
+//! writes them.
 
 use std::path::{Path, PathBuf};
 
@@ -899,4 +900,61 @@ fn metrics_of_every_table_equal_those_of_the_written_tables() {
             "{name}: metrics only {s} vs tables {v}"
         );
     }
+}
+
+/// The sweep stage runs a force sweep without the tool, as the Python
+/// binding's `force_sweep` does (`sweep::stream::run_file`): its metrics
+/// are the tool's bit for bit (on 2 threads against the tool's 1), and its
+/// progress callback is told (0, n) once the motion is open, then every
+/// frame in order up to (n, n), n the frames solved.
+#[test]
+fn the_sweep_stage_runs_a_sweep_without_the_tool() {
+    use std::sync::{Arc, Mutex};
+    let text = setup_text(None, 100.0, None);
+    let specs: Vec<CandidateSpec> = [(CAM2, 500.0), ("-50", 1.0)]
+        .iter()
+        .map(|&(e, w0)| CandidateSpec {
+            w0,
+            expressions: vec![("cam_torque".into(), e.into())],
+            ..Default::default()
+        })
+        .collect();
+    let told = Arc::new(Mutex::new(Vec::new()));
+    let seen = told.clone();
+    let stage = statopt::sweep::stream::run_file(
+        &root().join(SETUP),
+        Some(&text),
+        false,
+        &specs,
+        &statopt::sweep::stream::SweepOptions {
+            threads: Some(2),
+            progress: Some(Arc::new(move |done, total| {
+                seen.lock().unwrap().push((done, total))
+            })),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let tool = force_sweep::run_file(
+        &root().join(SETUP),
+        Some(&text),
+        &specs,
+        &RunOptions {
+            threads: Some(1),
+            ..Default::default()
+        },
+        &SweepOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(stage.frames, 21);
+    assert_eq!(stage.metric_names, tool.metric_names);
+    assert_eq!(stage.failed, tool.failed);
+    for (a, b) in stage.values.iter().zip(&tool.values) {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(a), bits(b));
+    }
+    let told = told.lock().unwrap();
+    let n = stage.frames as u64;
+    let expected: Vec<(u64, u64)> = (0..=n).map(|d| (d, n)).collect();
+    assert_eq!(*told, expected);
 }

@@ -532,16 +532,17 @@ impl Scene {
     }
 }
 
-/// A force sweep (`statopt::tools::force_sweep`): candidates of one
+/// A force sweep (`statopt::sweep::stream`): candidates of one
 /// AnalyzeTool setup that differ only in forces, solved on one compiled
 /// scene. `candidates` is a list of dicts with `w0` (a number),
 /// `expressions` ({force name: Lepton text}) and `optimal_forces`
 /// ({actuator name: N}); `text`, when given, is the setup document read as
 /// if it were the file `setup`. With `tables`, a list of one folder per
 /// candidate, each candidate's tables are written there, named as a run of
-/// its own setup of one w0 names them. Returns {"metric_names", "values"
-/// (per candidate, per metric), "failed", "frames", "loop_seconds",
-/// "warnings", "files"}.
+/// its own setup of one w0 names them. Ctrl-C stops it (checked every
+/// tenth of a second, `statopt::frame::interrupt`). Returns
+/// {"metric_names", "values" (per candidate, per metric), "failed",
+/// "frames", "loop_seconds", "warnings", "files"}.
 #[pyfunction]
 #[pyo3(signature = (setup, candidates, text=None, threads=None, warm=true, allow_unknown=false, tables=None))]
 fn force_sweep<'py>(
@@ -554,26 +555,49 @@ fn force_sweep<'py>(
     allow_unknown: bool,
     tables: Option<Vec<PathBuf>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use statopt::tools::force_sweep::{self, SweepOptions};
+    use statopt::frame::interrupt;
+    use statopt::sweep::stream::{self, CandidateTables, SweepOptions};
     let specs = candidate_specs(&candidates)?;
-    let (hook, pending) = progress_hook(None);
-    let opts = RunOptions {
-        threads,
-        progress: Some(hook),
-        allow_unknown,
-        ..Default::default()
+    // Ctrl-C: Python's signal check, every tenth of a second of frames; a
+    // signal (or an error of the check) asks the frame loop to stop and is
+    // raised afterwards.
+    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
+    let slot = pending.clone();
+    let last = Mutex::new(std::time::Instant::now());
+    let check = move |done: u64, total: u64| {
+        let mut at = last.lock().unwrap_or_else(|p| p.into_inner());
+        if done != 0 && done != total && at.elapsed() < std::time::Duration::from_millis(100) {
+            return;
+        }
+        *at = std::time::Instant::now();
+        Python::with_gil(|py| {
+            if let Err(e) = py.check_signals() {
+                let mut p = slot.lock().unwrap_or_else(|p| p.into_inner());
+                if p.is_none() {
+                    *p = Some(e);
+                    interrupt::request(interrupt::EXIT_SIGINT);
+                }
+            }
+        })
     };
     let sweep = SweepOptions {
         warm,
         tables: tables
             .unwrap_or_default()
             .into_iter()
-            .map(|dir| force_sweep::CandidateTables { dir, w0_tag: false })
+            .map(|dir| CandidateTables { dir, w0_tag: false })
             .collect(),
+        threads,
+        precision: None,
+        progress: Some(Arc::new(check)),
     };
-    let result =
-        py.allow_threads(|| force_sweep::run_file(&setup, text.as_deref(), &specs, &opts, &sweep));
-    if let Some(e) = take_pending(&pending) {
+    let result = py
+        .allow_threads(|| stream::run_file(&setup, text.as_deref(), allow_unknown, &specs, &sweep));
+    let stopped = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
+    if let Some(e) = stopped {
+        // The stop it asked for is cleared, so that the next run is not
+        // stopped.
+        interrupt::request(0);
         return Err(e);
     }
     outcome_dict(py, result.map_err(|e| to_py(py, e))?)

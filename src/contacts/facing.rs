@@ -55,6 +55,35 @@ pub fn facing_away(model: &Model, contacts: &[Contact], q: &[f64], when: &str) -
     errors
 }
 
+/// [`facing_away`] at the start of a motion: in the pose of its first
+/// frame `first` (time, q), or in the model's default pose when there is
+/// none (the motion cannot be read). The contact pushes its point body
+/// along the normal, away from the plane, so such a contact would pull the
+/// body through it: every frame that needs it fails. A grip is not
+/// reported: a contact with a partner between the same two bodies whose
+/// normal points the other way and whose point lies within [`GRIP_SPAN`]
+/// of its own (a hand holding a bar from both sides, as the leg
+/// extension's handle_push and handle_hold do).
+pub fn facing_away_at_start(
+    model: &Model,
+    contacts: &[Contact],
+    first: Option<(f64, &[f64])>,
+) -> Vec<Error> {
+    if contacts.is_empty() {
+        return Vec::new();
+    }
+    match first {
+        Some((t, q)) => {
+            let when = format!("at the first frame (t = {})", crate::storage::fmt_time(t));
+            facing_away(model, contacts, q, &when)
+        }
+        None => {
+            let q: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
+            facing_away(model, contacts, &q, "in the model's default pose")
+        }
+    }
+}
+
 /// How far (m) behind a contact's plane its point body's mass centre must
 /// lie for `--check` to report the plane as facing away from the body: a
 /// mass centre within 1 mm of the plane says nothing of the side (the same

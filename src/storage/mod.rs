@@ -5,6 +5,7 @@
 //! legacy format exactly as OpenSim's `Storage::print` does (§1.1), row by
 //! row, so that an interrupted run leaves a valid file.
 
+pub mod key;
 mod read;
 pub mod results;
 mod source;

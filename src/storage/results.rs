@@ -1,7 +1,9 @@
 //! A run's results in memory: every output a run writes while a
 //! [`Capture`] covers its path is kept as the exact bytes the file gets
 //! (tables: what [`super::StoWriter`] formatted, rounded to the run's
-//! precision, `nRows=` final), keyed by the file's path. Files are one sink
+//! precision, `nRows=` final), keyed by the output's typed key in its folder
+//! ([`OutputId`]: `storage::key::OutputKey`, the key its name was made
+//! from, [`name`]), or by its path when no key names it. Files are one sink
 //! of them: a capture that writes no files ([`Capture::in_memory`]) keeps the
 //! outputs in memory only and no file is created.
 //!
@@ -27,6 +29,8 @@ use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+
+use super::key::OutputKey;
 
 use crate::error::{Error, Result};
 
@@ -252,18 +256,51 @@ struct Run {
     kept: Mutex<Kept>,
 }
 
+/// An output's identity in a capture: the typed key of an output the run
+/// names (`writers::names::file_name` of an [`OutputKey`]) in its folder
+/// (normalised), or the normalised path of a file no key names (a figure,
+/// a study's CSV, a file a user names).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum OutputId {
+    Keyed { dir: PathBuf, key: OutputKey },
+    File(PathBuf),
+}
+
 #[derive(Default)]
 struct Kept {
-    /// The outputs a consumer of the run will read, by normalised path:
-    /// how many consumers have not read it yet ([`want`], [`done`]).
-    wanted: HashMap<PathBuf, usize>,
-    /// Outputs by normalised path, in the order they were finished.
+    /// The file names the run made from typed keys, and their keys
+    /// ([`name`]): how the path a writer or reader gives is known as its
+    /// key, by the names made, never by taking a name apart.
+    names: HashMap<String, OutputKey>,
+    /// The outputs a consumer of the run will read: how many consumers
+    /// have not read it yet ([`want`], [`done`]).
+    wanted: HashMap<OutputId, usize>,
+    /// Outputs (normalised path, output), in the order they were finished.
     outputs: Vec<(PathBuf, Output)>,
-    index: HashMap<PathBuf, usize>,
+    /// Where each output is in `outputs`, by its identity.
+    index: HashMap<OutputId, usize>,
     /// Every path an output was kept at, in the order kept (those dropped
     /// since included; a path kept again after a drop twice): what the
     /// run's consumers read from memory.
     ever: Vec<PathBuf>,
+}
+
+impl Kept {
+    /// The identity of the output at (normalised) `k`: its folder and the
+    /// key its file name was made from, when the run made it from one.
+    fn id(&self, k: &Path) -> OutputId {
+        let key = k
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| self.names.get(n));
+        match (k.parent(), key) {
+            (Some(dir), Some(key)) => OutputId::Keyed {
+                dir: dir.to_path_buf(),
+                key: key.clone(),
+            },
+            _ => OutputId::File(k.to_path_buf()),
+        }
+    }
 }
 
 impl Run {
@@ -273,7 +310,11 @@ impl Run {
 
     /// Whether the output at (normalised) `k` is kept.
     fn keeps(&self, k: &Path) -> bool {
-        self.keep_all || self.kept().wanted.contains_key(k)
+        if self.keep_all {
+            return true;
+        }
+        let kept = self.kept();
+        kept.wanted.contains_key(&kept.id(k))
     }
 }
 
@@ -419,6 +460,17 @@ impl Capture {
     pub fn outputs(&self) -> Vec<(PathBuf, Output)> {
         self.run.kept().outputs.clone()
     }
+
+    /// The output of typed key `key` the run wrote in folder `dir`, when
+    /// the capture keeps it.
+    pub fn output(&self, dir: &Path, key: &OutputKey) -> Option<Output> {
+        let kept = self.run.kept();
+        let id = OutputId::Keyed {
+            dir: self::key(dir),
+            key: key.clone(),
+        };
+        kept.index.get(&id).map(|&i| kept.outputs[i].1.clone())
+    }
 }
 
 impl Drop for Capture {
@@ -499,8 +551,62 @@ pub(super) fn budget(path: &Path) -> Option<Budget> {
 pub fn want(path: &Path) {
     let k = key(path);
     if let Some(r) = run_of(&k) {
-        *r.kept().wanted.entry(k).or_default() += 1;
+        let mut kept = r.kept();
+        let id = kept.id(&k);
+        *kept.wanted.entry(id).or_default() += 1;
     }
+}
+
+/// The entries of `map` of a file named `file`, keyed by `key` in their
+/// folder instead (two entries of one output merged by `merge`).
+fn rekey<V: Copy>(
+    map: &mut HashMap<OutputId, V>,
+    file: &str,
+    key: &OutputKey,
+    merge: impl Fn(V, V) -> V,
+) {
+    let named: Vec<PathBuf> = map
+        .keys()
+        .filter_map(|id| match id {
+            OutputId::File(p) if p.file_name().and_then(|n| n.to_str()) == Some(file) => {
+                Some(p.clone())
+            }
+            _ => None,
+        })
+        .collect();
+    for p in named {
+        let (Some(v), Some(dir)) = (map.remove(&OutputId::File(p.clone())), p.parent()) else {
+            continue;
+        };
+        let id = OutputId::Keyed {
+            dir: dir.to_path_buf(),
+            key: key.clone(),
+        };
+        let v = match map.remove(&id) {
+            Some(w) => merge(v, w),
+            None => v,
+        };
+        map.insert(id, v);
+    }
+}
+
+/// Tell this thread's runs that the file name `file` is made from the
+/// typed key `key` (`writers::names::file_name` does, for every name it
+/// makes): their outputs of that name are kept under the key, in their
+/// folder ([`OutputId::Keyed`]; what was wanted or kept by that name
+/// before is keyed so from now on). The first key said for a name holds.
+pub fn name(file: &str, key: &OutputKey) {
+    let _ = ENTERED.try_with(|e| {
+        for r in e.borrow().iter() {
+            let mut kept = r.kept();
+            if kept.names.contains_key(file) {
+                continue;
+            }
+            kept.names.insert(file.to_string(), key.clone());
+            rekey(&mut kept.wanted, file, key, |a, b| a + b);
+            rekey(&mut kept.index, file, key, |a, _| a);
+        }
+    });
 }
 
 /// A consumer that [`want`]ed the output at `path` has read it: once its
@@ -512,15 +618,16 @@ pub fn done(path: &Path) {
         return;
     };
     let mut kept = r.kept();
-    let Some(n) = kept.wanted.get_mut(&k) else {
+    let id = kept.id(&k);
+    let Some(n) = kept.wanted.get_mut(&id) else {
         return;
     };
     *n = n.saturating_sub(1);
     if *n > 0 || r.keep_all {
         return;
     }
-    kept.wanted.remove(&k);
-    if let Some(i) = kept.index.remove(&k) {
+    kept.wanted.remove(&id);
+    if let Some(i) = kept.index.remove(&id) {
         let (_, output) = kept.outputs.remove(i);
         r.budget.give(output.size() as usize);
         for j in kept.index.values_mut() {
@@ -539,11 +646,12 @@ pub fn keep(path: &Path, output: Output) {
         return;
     };
     let mut kept = r.kept();
-    match kept.index.get(&k) {
+    let id = kept.id(&k);
+    match kept.index.get(&id) {
         Some(&i) => kept.outputs[i].1 = output,
         None => {
             let i = kept.outputs.len();
-            kept.index.insert(k.clone(), i);
+            kept.index.insert(id, i);
             kept.ever.push(k.clone());
             kept.outputs.push((k, output));
         }
@@ -556,7 +664,9 @@ pub fn get(path: &Path) -> Option<Output> {
     ENTERED.with(|e| {
         e.borrow().iter().rev().find_map(|r| {
             let kept = r.kept();
-            kept.index.get(&k).map(|&i| kept.outputs[i].1.clone())
+            kept.index
+                .get(&kept.id(&k))
+                .map(|&i| kept.outputs[i].1.clone())
         })
     })
 }

@@ -31,7 +31,8 @@ pub struct SweepOutcome {
     /// Solver iterations over every candidate and frame (Newton's linear
     /// solves, see the diagnostics table's `iterations`).
     pub iterations: u64,
-    /// The candidates' tables written ([`SweepOptions::tables`]).
+    /// The candidates' tables written
+    /// ([`SweepOptions::tables`](crate::sweep::stream::SweepOptions::tables)).
     pub files: Vec<std::path::PathBuf>,
 }
 

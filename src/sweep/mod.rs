@@ -17,7 +17,7 @@
 //! `metrics::series::metric_value`), with the candidate's own w0 whatever
 //! w0 tag a metric's file names; only the outputs its metrics read are
 //! made (`frame::problem::Outputs`) unless its tables are kept
-//! ([`Solve::keep_results`]: `tools::force_sweep` writes them).
+//! ([`Solve::keep_results`]: [`stream`] writes them).
 //!
 //! Candidates' metrics equal those of runs of each candidate's own setup
 //! (tests/force_sweep.rs: 1e-9 relative), as the frames are those runs'
@@ -32,12 +32,15 @@
 //!   collected into their values ([`SweepOutcome`]);
 //! - [`run`]: the motion streamed ([`solve_stream`]) or kept ([`Scene`]);
 //! - [`setup`]: the setup read and its motion opened, a [`Scene`] compiled
-//!   and solved on a pool ([`compile_scene`], [`run_scene`]).
+//!   and solved on a pool ([`compile_scene`], [`run_scene`]);
+//! - [`stream`]: a sweep run whole on a pool, its candidates' tables
+//!   written on request ([`stream::run_file`], [`stream::SweepOptions`]).
 pub mod candidates;
 pub mod metrics;
 pub mod plan;
 pub mod run;
 pub mod setup;
+pub mod stream;
 
 pub use metrics::SweepOutcome;
 pub use plan::{FrameValues, SweepPlan};

@@ -1,6 +1,6 @@
 //! A sweep's setup read and its motion opened: the entry points a caller
-//! without a command line (the Python binding's `Scene`) and the force
-//! sweep tool share.
+//! without a command line (the Python binding's `Scene` and `force_sweep`)
+//! and the force sweep tool share.
 
 use crate::error::{Error, Location, Result};
 use crate::motion::stream::StateStream;
@@ -70,7 +70,7 @@ pub fn compile_scene(
 
 /// Solve `scene`'s frames for `candidates` on a pool of `threads`, each
 /// warm-started from the previous one of its w0 when `warm` (metrics only;
-/// a force sweep writes candidates' tables, `tools::force_sweep`).
+/// a force sweep writes candidates' tables, `sweep::stream`).
 pub fn run_scene(
     scene: &mut Scene,
     candidates: &[CandidateSpec],

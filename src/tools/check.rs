@@ -390,18 +390,11 @@ impl Checker {
     }
 }
 
-/// A contact whose plane faces away from its point's body: at the first
-/// frame of the motion (the model's default pose when the motion cannot be
-/// read), the point body's mass centre lies behind the plane (on the side
-/// opposite its normal) by more than [`FACING_MARGIN`](crate::contacts::facing::FACING_MARGIN).
-/// The contact pushes its point body along the normal, away from the plane, so such a contact
-/// would pull the body through it: every frame that needs it fails. A grip
-/// is not reported: a contact with a partner between the same two bodies
-/// whose normal points the other way and whose point lies within
-/// [`GRIP_SPAN`](crate::contacts::facing::GRIP_SPAN) of its own (a hand holding a bar from both sides, as the
-/// leg extension's handle_push and handle_hold do). Each is named with the
-/// contact's file and line (its element among `forces`): `--check`'s errors
-/// for a compiled problem.
+/// The contacts of `problem` whose plane faces away from their point's
+/// body at the first frame of the motion (the model's default pose when the
+/// motion cannot be read): `contacts::facing::facing_away_at_start`, each
+/// named with the contact's file and line (its element among `forces`):
+/// `--check`'s errors for a compiled problem.
 pub fn contacts_facing_away(
     setup: &AnalyzeSetup,
     problem: &static_optimization::SoProblem,
@@ -410,20 +403,11 @@ pub fn contacts_facing_away(
         return Vec::new();
     }
     let model = &problem.model;
-    let (q, when) = match inputs::open_state_stream_with(setup, model, &problem.contacts)
-        .and_then(|mut s| s.next_block())
-    {
-        Ok(Some(block)) if !block.q.is_empty() => (
-            block.q[0].clone(),
-            format!(
-                "at the first frame (t = {})",
-                crate::storage::fmt_time(block.time[0])
-            ),
-        ),
-        _ => (
-            model.coordinates.iter().map(|c| c.default_value).collect(),
-            "in the model's default pose".to_string(),
-        ),
+    let block = inputs::open_state_stream_with(setup, model, &problem.contacts)
+        .and_then(|mut s| s.next_block());
+    let first = match &block {
+        Ok(Some(b)) if !b.q.is_empty() => Some((b.time[0], b.q[0].as_slice())),
+        _ => None,
     };
-    crate::contacts::facing::facing_away(model, &problem.contacts, &q, &when)
+    crate::contacts::facing::facing_away_at_start(model, &problem.contacts, first)
 }

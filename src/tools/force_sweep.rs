@@ -1,58 +1,21 @@
-//! The force sweep tool: reads a sweep's setup (or a study's
-//! `<ForceSweep>` plan), opens its motion, hands both to the engine
-//! (`sweep`: the candidates resolved, each frame solved for every
-//! candidate, the metrics collected) and its results to the writers: each
-//! candidate's tables on request ([`SweepOptions::tables`]: those a run of
-//! its own setup writes, named as it names them) and a study's
+//! The force sweep tool: a thin driver over the sweep stage
+//! (`crate::sweep::stream`: the setup compiled, the motion streamed, each
+//! frame solved for every candidate, the metrics collected and, on
+//! request, each candidate's tables written). It adds the command line's
+//! threads, precision and progress bar, and writes a study's
 //! `<name>_force_sweep.csv`.
 
 use crate::error::{Error, Location, Result};
-use crate::parse::setup::AnalyzeSetup;
-use crate::sweep::candidates::resolve;
-use crate::sweep::setup::{open_stream, read_setup};
-use crate::sweep::{solve_stream, FrameValues, Solve, SweepPlan};
 use crate::tools::RunOptions;
 use crate::writers::names::{OutputKind, RunKey, Sweep};
 
 pub use crate::plan::force_sweep::CandidateSpec;
+pub use crate::sweep::stream::{CandidateTables, SweepOptions};
 pub use crate::sweep::{Scene, SweepOutcome};
 
-/// Where one candidate's tables go ([`SweepOptions::tables`]): the tables
-/// a run of the candidate's own setup writes (static optimization, joint
-/// reactions, KneeLoads, KneeContact; not its log or statistics), named as
-/// that run names them (`writers::names`).
-#[derive(Debug, Clone)]
-pub struct CandidateTables {
-    /// Its folder.
-    pub dir: std::path::PathBuf,
-    /// Whether the names carry the candidate's w0 tag (as the runs of a w0
-    /// sweep of several weights), or not (a run of one weight).
-    pub w0_tag: bool,
-}
-
-/// Sweep options.
-#[derive(Debug, Clone)]
-pub struct SweepOptions {
-    /// Warm-start each candidate from the previous one of the same w0 in
-    /// the frame (answers equal cold starts up to rounding).
-    pub warm: bool,
-    /// Per candidate, where its tables go; empty (the default): metrics
-    /// only. Every candidate's tables stay open while the motion streams:
-    /// meant for tens of candidates, not thousands.
-    pub tables: Vec<CandidateTables>,
-}
-
-impl Default for SweepOptions {
-    fn default() -> Self {
-        SweepOptions {
-            warm: true,
-            tables: Vec::new(),
-        }
-    }
-}
-
 /// Run a force sweep of the AnalyzeTool setup in `setup_file` (or `text`,
-/// read as if it were that file).
+/// read as if it were that file): `crate::sweep::stream::run_file` with
+/// the command line's threads, precision and progress bar.
 pub fn run_file(
     setup_file: &std::path::Path,
     text: Option<&str>,
@@ -60,205 +23,41 @@ pub fn run_file(
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    let setup = read_setup(setup_file, text, opts.allow_unknown)?;
+    let setup = crate::sweep::setup::read_setup(setup_file, text, opts.allow_unknown)?;
     run(&setup, candidates, opts, sweep)
 }
 
-/// Run a force sweep of `setup` (see the `sweep` stage): the motion
-/// streamed once, each frame prepared and solved for every candidate as it
-/// comes (memory does not grow with the motion but for the metrics'
-/// series).
+/// Run a force sweep of `setup` (`crate::sweep::stream::run`), with the
+/// command line's threads and precision (when `sweep` names none) and a
+/// progress bar (`tools::progress`).
 pub fn run(
-    setup: &AnalyzeSetup,
+    setup: &crate::parse::setup::AnalyzeSetup,
     candidates: &[CandidateSpec],
     opts: &RunOptions,
     sweep: &SweepOptions,
 ) -> Result<SweepOutcome> {
-    crate::frame::threads::in_pool(opts.threads, || {
-        run_streamed(setup, candidates, opts, sweep)
-    })
-}
-
-fn run_streamed(
-    setup: &AnalyzeSetup,
-    candidates: &[CandidateSpec],
-    opts: &RunOptions,
-    sweep: &SweepOptions,
-) -> Result<SweepOutcome> {
-    let mut plan = SweepPlan::compile(setup)?;
-    if !sweep.tables.is_empty() {
-        plan.use_every_reaction();
+    use std::sync::{Arc, Mutex};
+    let bar: Arc<Mutex<Option<crate::tools::progress::Progress>>> = Arc::default();
+    let label = format!("{}_force_sweep", setup.name);
+    let mut with = sweep.clone();
+    with.threads = sweep.threads.or(opts.threads);
+    with.precision = sweep.precision.or(opts.precision);
+    let (b, o, outer) = (bar.clone(), opts.clone(), sweep.progress.clone());
+    with.progress = Some(Arc::new(move |done, total| {
+        let mut b = b.lock().unwrap_or_else(|p| p.into_inner());
+        match b.as_mut() {
+            Some(p) => p.inc(1),
+            None => *b = Some(crate::tools::progress::bar(total, &o, &label)),
+        }
+        if let Some(outer) = &outer {
+            outer(done, total);
+        }
+    }));
+    let outcome = crate::sweep::stream::run(setup, candidates, &with);
+    if let Some(p) = bar.lock().unwrap_or_else(|p| p.into_inner()).as_mut() {
+        p.finish_and_clear();
     }
-    let cands = resolve(&setup.setup_file, &plan.problem, candidates)?;
-    let mut tables = if sweep.tables.is_empty() {
-        None
-    } else {
-        Some(CandidateWriters::open(
-            setup,
-            &plan,
-            &cands,
-            &sweep.tables,
-            opts,
-        )?)
-    };
-    let how = Solve {
-        warm: sweep.warm,
-        keep_results: tables.is_some(),
-    };
-    let mut warnings = plan.warnings.clone();
-    let mut stream = open_stream(setup, &plan, &mut warnings)?;
-    let (i0, i1, step) = (stream.first_row, stream.last_row, plan.step_interval);
-    let nframes = (i0..=i1)
-        .filter(|&i| crate::frame::driver::is_frame(i, i0, i1, step))
-        .count();
-    let mut progress =
-        crate::tools::progress::bar(nframes as u64, opts, &format!("{}_force_sweep", setup.name));
-    let outcome = solve_stream(&plan, &cands, &mut stream, how, warnings, |fv| {
-        if let Some(t) = tables.as_mut() {
-            t.write(fv)?;
-        }
-        progress.inc(1);
-        Ok(())
-    });
-    progress.finish_and_clear();
-    let mut outcome = outcome?;
-    if let Some(t) = tables {
-        outcome.files = t.finish()?;
-    }
-    Ok(outcome)
-}
-
-/// Every candidate's open tables ([`SweepOptions::tables`]).
-struct CandidateWriters<'a> {
-    tables: Vec<crate::writers::so_tables::SoTables>,
-    /// Every candidate's KneeLoads and KneeContact tables, made from each
-    /// frame's reactions as a run makes them (`writers::knee_tables`).
-    knees: crate::writers::knee_tables::KneeTables<'a>,
-}
-
-impl<'a> CandidateWriters<'a> {
-    fn open(
-        setup: &AnalyzeSetup,
-        plan: &'a SweepPlan,
-        cands: &[crate::frame::candidates::ForceCandidate],
-        specs: &[CandidateTables],
-        opts: &RunOptions,
-    ) -> Result<CandidateWriters<'a>> {
-        use crate::writers::so_tables::{SoTables, TablesSpec};
-        if specs.len() != cands.len() {
-            return Err(Error::input(
-                Location::file(&setup.setup_file),
-                format!(
-                    "force sweep: {} candidates but {} table folders",
-                    cands.len(),
-                    specs.len()
-                ),
-            ));
-        }
-        let precision = opts.precision.unwrap_or(setup.output_precision);
-        let mut tables = Vec::with_capacity(cands.len());
-        let mut runs = Vec::with_capacity(cands.len());
-        for (c, spec) in cands.iter().zip(specs) {
-            let run = Sweep::of(c.w0, spec.w0_tag);
-            std::fs::create_dir_all(&spec.dir).map_err(|e| Error::io(&spec.dir, e))?;
-            let reactions: Vec<(RunKey, &[crate::reactions::ReactionSpec])> = plan
-                .coupled
-                .iter()
-                .map(|cp| {
-                    (
-                        RunKey::analysis(&setup.name, &cp.name, run),
-                        cp.specs.as_slice(),
-                    )
-                })
-                .collect();
-            let so_run = RunKey::analysis(&setup.name, &plan.so_name, run);
-            tables.push(SoTables::open(
-                &plan.problem,
-                &TablesSpec {
-                    setup_file: &setup.setup_file,
-                    dir: &spec.dir,
-                    run: &so_run,
-                    w0: c.w0,
-                    reactions: &reactions,
-                    precision,
-                    keep: None,
-                },
-            )?);
-            runs.push((spec.dir.clone(), run));
-        }
-        // Per candidate, in the order of the coupled reactions: the
-        // KneeLoads of each with knee loads, the KneeContact of the knee
-        // contact method's.
-        use crate::writers::knee_tables::{KneeKind, KneeTables};
-        let problem = &plan.problem;
-        let mut knees = KneeTables::new(
-            &problem.model,
-            &problem.knees,
-            &setup.setup_file,
-            &[],
-            precision,
-        );
-        let no_stats = |_| std::path::PathBuf::new();
-        for (j, c) in plan.coupled.iter().enumerate() {
-            let jr = |run| RunKey::analysis(&setup.name, &c.name, run);
-            if c.knee.is_some() {
-                let (dir, run) = &runs[0];
-                let table = crate::storage::Storage {
-                    labels: crate::reactions::column_labels(&c.specs),
-                    ..Default::default()
-                };
-                let path = dir.join(jr(*run).file(OutputKind::KneeLoads));
-                let (sides, patella) =
-                    crate::reactions::knee_loads::sides(&problem.model, &table, &path)?;
-                let paths = runs
-                    .iter()
-                    .map(|(dir, run)| dir.join(jr(*run).file(OutputKind::KneeLoads)))
-                    .collect();
-                knees.add(
-                    KneeKind::Loads {
-                        reaction: j,
-                        sides: Box::new(sides),
-                        patella,
-                    },
-                    paths,
-                    &no_stats,
-                    "",
-                );
-            }
-            if c.knee_contact {
-                let paths = runs
-                    .iter()
-                    .map(|(dir, run)| {
-                        dir.join(RunKey::setup(&setup.name, *run).file(OutputKind::KneeContact))
-                    })
-                    .collect();
-                knees.add(KneeKind::Contact { reaction: j }, paths, &no_stats, "");
-            }
-        }
-        Ok(CandidateWriters { tables, knees })
-    }
-
-    /// One frame's rows of every candidate (frames in order).
-    fn write(&mut self, fv: &FrameValues) -> Result<()> {
-        for (t, (r, rows)) in self.tables.iter_mut().zip(&fv.results) {
-            t.write(r, rows)?;
-        }
-        self.knees.push(&fv.results)
-    }
-
-    /// Close the tables: per candidate, its tables, then its KneeLoads and
-    /// KneeContact tables, as a run lists them.
-    fn finish(self) -> Result<Vec<std::path::PathBuf>> {
-        let (knees, _) = self.knees.finish()?;
-        let mut files = Vec::new();
-        for (i, t) in self.tables.into_iter().enumerate() {
-            files.extend(t.finish()?);
-            if let Some(k) = knees.get(i) {
-                files.extend(k.iter().cloned());
-            }
-        }
-        Ok(files)
-    }
+    outcome
 }
 
 /// A study's `<ForceSweep>` element (see `tools::study`):

@@ -14,13 +14,7 @@
 //! keys a plan writes ([`find`]), and the Python package gets keys, names and
 //! w0 values through its binding.
 
-/// A statistic over a contact-weight sweep's runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Stat {
-    Mean,
-    Min,
-    Max,
-}
+pub use crate::storage::key::{MuscleTable, OutputKey, OutputKind, Quantity, RunKey, Stat, Sweep};
 
 impl Stat {
     /// Every statistic, in the order the tables are written.
@@ -38,17 +32,6 @@ impl Stat {
 
 /// The tags of a sweep's statistics tables.
 pub const SWEEP_STATS: [&str; 3] = ["mean", "min", "max"];
-
-/// Which run of a contact-weight sweep a file belongs to.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Sweep {
-    /// The run of a single weight: no `w0_` part.
-    Single,
-    /// The run of weight w0 in a sweep.
-    Weight(f64),
-    /// A statistic over the sweep's runs: `mean`, `min` or `max`.
-    Stat(Stat),
-}
 
 impl Sweep {
     /// The run of weight `w0`: [`Sweep::Weight`] in a sweep of several
@@ -83,19 +66,6 @@ impl Sweep {
     }
 }
 
-impl Eq for Sweep {}
-
-impl std::hash::Hash for Sweep {
-    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
-        std::mem::discriminant(self).hash(h);
-        match self {
-            Sweep::Single => {}
-            Sweep::Weight(w) => w.to_bits().hash(h),
-            Sweep::Stat(s) => s.hash(h),
-        }
-    }
-}
-
 /// A contact weight as file names carry it: `500`, `0.001`, `1e6`.
 pub fn w0_tag(w0: f64) -> String {
     let t = format!("{w0}");
@@ -104,14 +74,6 @@ pub fn w0_tag(w0: f64) -> String {
     } else {
         format!("{w0:e}")
     }
-}
-
-/// Position, velocity or acceleration (the kinematics analyses' tables).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Quantity {
-    Pos,
-    Vel,
-    Acc,
 }
 
 impl Quantity {
@@ -124,69 +86,6 @@ impl Quantity {
             Quantity::Acc => "acc",
         }
     }
-}
-
-/// Every kind of output file a run writes (the table, log or document,
-/// without the run's part of the name).
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum OutputKind {
-    // A static-optimization run (`<setup>_<analysis>_[w0_<tag>_]...`).
-    Activation,
-    Force,
-    Diagnostics,
-    ContactForces,
-    ContactBodyForces,
-    /// The contact forces as OpenSim external loads: the data (`.mot`) and
-    /// its ExternalLoads document (`.xml`).
-    ContactExternalLoads,
-    ContactExternalLoadsXml,
-    GeneralizedForcesBySource,
-    MusclePower,
-    /// The run's MCAP log.
-    Log,
-    /// `--reduce`'s record of what it dropped.
-    Reduction,
-    // A JointReaction analysis (coupled to a static optimization, or the
-    // knee contact method's reactions, analysis `KneeContact`).
-    ReactionLoads,
-    KneeLoads,
-    // A setup's own outputs (no analysis in the name).
-    /// The knee contact method's compartment table.
-    KneeContact,
-    /// A setup's (or a study's) `<Metric>` values.
-    Metrics,
-    /// predict-grf: the predicted ground reactions (`.sto`), as OpenSim
-    /// external loads (`.mot` and its `.xml`), the root residual, the foot
-    /// contacts and the weak root residuals it adds (force sets), the
-    /// comparison with measured loads (`.csv`).
-    PredictedGrf,
-    PredictedGrfMot,
-    PredictedGrfXml,
-    RootResidual,
-    FootContacts,
-    RootResiduals,
-    GrfComparison,
-    /// The figure comparing them (its stem: the plot writes `.png`, `.svg`).
-    GrfComparisonFigure,
-    /// The k-th force set of the setup without its root actuators.
-    ForceSetWithoutRootResiduals(usize),
-    /// A force sweep's table of candidates (`.csv`) and the folder of a
-    /// candidate's tables (`<setup>_force_sweep/<candidate>`).
-    ForceSweep,
-    ForceSweepDir(String),
-    /// A MuscleAnalysis table.
-    MuscleAnalysis(MuscleTable),
-    /// OpenSim's BodyKinematics: positions in ground, velocities and
-    /// accelerations in ground or in the bodies' frames.
-    BodyKinematics {
-        quantity: Quantity,
-        body_frame: bool,
-    },
-    /// OpenSim's PointKinematics of a point.
-    PointKinematics {
-        point: String,
-        quantity: Quantity,
-    },
 }
 
 impl OutputKind {
@@ -299,17 +198,6 @@ impl OutputKind {
     }
 }
 
-/// A MuscleAnalysis table.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum MuscleTable {
-    Length,
-    LengtheningSpeed,
-    MaxActiveFiberForceRigidTendon,
-    PassiveFiberForceRigidTendon,
-    /// The moment arms about a coordinate.
-    MomentArm(String),
-}
-
 impl MuscleTable {
     /// The tables every MuscleAnalysis writes, before its moment arms.
     pub const ALWAYS: [MuscleTable; 4] = [
@@ -330,15 +218,6 @@ impl MuscleTable {
             MuscleTable::MomentArm(c) => format!("MomentArm_{c}"),
         }
     }
-}
-
-/// Which run an output belongs to: its setup, its analysis (None: the
-/// setup's own outputs) and its place in a contact-weight sweep.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct RunKey {
-    pub setup: String,
-    pub analysis: Option<String>,
-    pub sweep: Sweep,
 }
 
 impl RunKey {
@@ -390,15 +269,11 @@ impl RunKey {
     }
 }
 
-/// One output file: its run and its kind.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct OutputKey {
-    pub run: RunKey,
-    pub kind: OutputKind,
-}
-
 /// The file name of an output: `<setup>_[<analysis>_][w0_<tag>_]<kind>`,
-/// with its extension. The one function that makes output names.
+/// with its extension. The one function that makes output names; it tells
+/// the run's capture which key the name is made from
+/// (`storage::results::name`), so that the run keeps the output under its
+/// typed key.
 pub fn file_name(key: &OutputKey) -> String {
     let r = &key.run;
     let mut name = r.setup.clone();
@@ -413,6 +288,7 @@ pub fn file_name(key: &OutputKey) -> String {
         name.push('_');
     }
     name.push_str(&key.kind.suffix());
+    crate::storage::results::name(&name, key);
     name
 }
 
@@ -628,6 +504,52 @@ pub fn point_kinematics_files(setup: &str, analysis: &str, point: &str) -> [Stri
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A run keeps an output under the typed key its name was made from
+    /// (`storage::results::OutputId`): found by key in its folder, and by
+    /// its path; a consumer that wanted its path before the name was made
+    /// (a JointReaction's `<forces_file>`) still finds it; a file no key
+    /// names is kept by its path.
+    #[test]
+    fn a_run_keeps_its_outputs_under_their_typed_keys() {
+        use crate::storage::results::{get, want, Capture, Output};
+        let tmp = crate::test_dir::TempDir::new("names_typed_keys");
+        let dir = tmp.path();
+        // A capture that writes files keeps only what is wanted.
+        let c = Capture::new(Some(dir));
+        let table = |p: &std::path::Path| {
+            let mut w = crate::storage::StoWriter::create(p, "t", "", &["a".to_string()], 8, false)
+                .unwrap();
+            w.write_row(0.0, &[0.5]).unwrap();
+            w.finish().unwrap();
+        };
+        let run = RunKey::analysis("setup", "SO", Sweep::Weight(500.0));
+        // Wanted by its path before any name was made from its key.
+        let early = dir.join("setup_SO_w0_500_activation.sto");
+        want(&early);
+        let (force, activation) = (run.key(OutputKind::Force), run.key(OutputKind::Activation));
+        let forces = dir.join(file_name(&force));
+        want(&forces);
+        let other = dir.join("figure_data.sto");
+        want(&other);
+        table(&forces);
+        table(&dir.join(file_name(&activation)));
+        table(&other);
+        table(&dir.join(file_name(&run.key(OutputKind::Diagnostics))));
+        assert_eq!(c.kept().0, 3, "{:?}", c.outputs());
+        for (key, path) in [(&force, &forces), (&activation, &early)] {
+            let by_key = c.output(dir, key).expect("kept by its key");
+            let by_path = get(path).expect("kept by its path");
+            assert!(matches!(
+                (&by_key, &by_path),
+                (Output::Table(a), Output::Table(b)) if std::sync::Arc::ptr_eq(a, b)
+            ));
+        }
+        assert!(get(&other).is_some());
+        // Not wanted: in its file only. Another folder: not this output.
+        assert!(c.output(dir, &run.key(OutputKind::Diagnostics)).is_none());
+        assert!(c.output(&dir.join("sub"), &force).is_none());
+    }
 
     /// Every kind, with the name it had before the kinds were typed (the
     /// names the shipped setups' outputs carry, byte for byte).
