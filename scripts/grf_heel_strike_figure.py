@@ -41,6 +41,10 @@ def main():
     ap.add_argument("--right", default="ground_force_1")
     ap.add_argument("--left", default="ground_force_2")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--component", choices=["vertical", "ap"], default="vertical",
+                    help="the vertical force (vy) or the anteroposterior one (vx)")
+    ap.add_argument("--labels", default="before,after",
+                    help="the legend's names of the two runs, comma-separated")
     a = ap.parse_args()
     b = read_sto(os.path.join(a.before, f"{a.trial}_predicted_grf.sto"))
     n = read_sto(os.path.join(a.after, f"{a.trial}_predicted_grf.sto"))
@@ -50,18 +54,20 @@ def main():
     t0, t1 = n["time"][0], n["time"][-1]
     lo = max(t0, (strikes[0] - 0.12) if strikes else t0)
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    c = "vy" if a.component == "vertical" else "vx"
+    before, after = a.labels.split(",")
     for side, col, plate in [("r", "tab:red", a.right), ("l", "tab:blue", a.left)]:
-        mt = [(t, f) for t, f in zip(m["time"], m[f"{plate}_vy"]) if lo <= t <= t1]
+        mt = [(t, f) for t, f in zip(m["time"], m[f"{plate}_{c}"]) if lo <= t <= t1]
         ax.plot([x[0] for x in mt], [x[1] for x in mt], color=col, lw=1.2, ls="--", label=f"{side}: plates")
-        ax.plot(b["time"], b[f"{side}_force_vy"], color=col, lw=1.0, alpha=0.45, marker=".", label=f"{side}: before")
-        ax.plot(n["time"], n[f"{side}_force_vy"], color=col, lw=1.8, marker="o", ms=3, label=f"{side}: after")
+        ax.plot(b["time"], b[f"{side}_force_{c}"], color=col, lw=1.0, alpha=0.45, marker=".", label=f"{side}: {before}")
+        ax.plot(n["time"], n[f"{side}_force_{c}"], color=col, lw=1.8, marker="o", ms=3, label=f"{side}: {after}")
     for s in strikes:
         ax.axvline(s, color="k", lw=0.8, ls=":")
         ax.text(s, ax.get_ylim()[1] * 0.97, " strike (raw kinematics)", fontsize=8, va="top")
     ax.set_xlim(lo, t1)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("vertical force (N)")
-    ax.set_title(f"{a.trial}: heel strike, before and after the step-to-step transition")
+    ax.set_ylabel("vertical force (N)" if c == "vy" else "anteroposterior force (N)")
+    ax.set_title(f"{a.trial}: heel strike, {before} and {after}")
     ax.legend(fontsize=7, ncol=3, loc="center left")
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
