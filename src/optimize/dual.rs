@@ -1806,6 +1806,8 @@ impl DualWorkspace {
         r.extend(p.b.iter().map(|b| -b));
         if m > 0 {
             let layout = &self.layout;
+            let r = r.as_mut_slice();
+            let (col_ptr, src_row, val) = (&layout.cols.col_ptr, &layout.src_row, &layout.cols.val);
             for (j, (column, &xj)) in a.chunks_exact(m).zip(x.iter()).enumerate() {
                 if xj == 0.0 {
                     continue;
@@ -1816,11 +1818,8 @@ impl DualWorkspace {
                         *ri += aij * xj;
                     }
                 } else {
-                    let (start, end) = (layout.cols.col_ptr[c], layout.cols.col_ptr[c + 1]);
-                    for (&i, aij) in layout.src_row[start..end]
-                        .iter()
-                        .zip(&layout.cols.val[start..end])
-                    {
+                    let (start, end) = (col_ptr[c], col_ptr[c + 1]);
+                    for (&i, aij) in src_row[start..end].iter().zip(&val[start..end]) {
                         r[i] += aij * xj;
                     }
                 }
