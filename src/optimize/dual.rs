@@ -77,7 +77,10 @@
 //! of nonzero entries alone: each call checks both against the new problem
 //! (one pass over A, which also takes its values) and rebuilds the
 //! structure when either differs, so the answer is the same bit for bit as
-//! from a fresh workspace.
+//! from a fresh workspace. A caller that solves one A for many right-hand
+//! sides and weights (a force sweep's candidates) names it by a key
+//! ([`DualWorkspace::solve_into_keyed`]), and the pass over A is skipped
+//! when the layout last took its values under that key.
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
