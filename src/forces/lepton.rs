@@ -627,7 +627,7 @@ impl Expression {
 
     /// Value at coordinate value `q` and speed `qdot`: the parsed tree
     /// evaluated directly (no allocation), by its postfix program (the same
-    /// operations in the same order as the tree walk, [`Self::eval_tree`]).
+    /// operations in the same order as the tree walk, `eval_tree`).
     /// A NaN is reported downstream as a non-finite force.
     pub fn eval(&self, q: f64, qdot: f64) -> f64 {
         if self.program.is_empty() {
