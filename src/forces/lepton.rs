@@ -39,6 +39,65 @@ pub struct Expression {
     pub translated: String,
     tree: Node<DefaultNumericTypes>,
     ast: Ast,
+    /// The parsed tree in postfix order, one contiguous program ([`Self::eval`]
+    /// runs it on a stack of [`STACK`] values; empty when it needs more, and
+    /// the tree is walked instead): a sweep evaluates thousands of
+    /// expressions per frame, and a tree's boxed nodes, scattered in memory,
+    /// are fetched one after the other.
+    program: Vec<Op>,
+}
+
+/// One instruction of [`Expression::program`]: pushes a value, or replaces
+/// the top one or two.
+#[derive(Debug, Clone, Copy)]
+enum Op {
+    Num(f64),
+    Var(Var),
+    Neg,
+    Bin(BinOp),
+    Call1(Func),
+    Call2(Func),
+}
+
+/// The stack depth [`Expression::program`] is limited to.
+const STACK: usize = 16;
+
+/// `a` in postfix order into `out`; returns the stack depth it needs.
+fn postfix(a: &Ast, out: &mut Vec<Op>) -> usize {
+    match a {
+        Ast::Num(v) => {
+            out.push(Op::Num(*v));
+            1
+        }
+        Ast::Var(v) => {
+            out.push(Op::Var(*v));
+            1
+        }
+        Ast::Neg(x) => {
+            let d = postfix(x, out);
+            out.push(Op::Neg);
+            d
+        }
+        Ast::Bin(op, x, y) => {
+            let dx = postfix(x, out);
+            let dy = postfix(y, out);
+            out.push(Op::Bin(*op));
+            dx.max(1 + dy)
+        }
+        Ast::Call(f, args) => {
+            // As the tree walk: two arguments, or the first.
+            if args.len() == 2 {
+                let dx = postfix(&args[0], out);
+                let dy = postfix(&args[1], out);
+                out.push(Op::Call2(*f));
+                dx.max(1 + dy)
+            } else {
+                let d = postfix(&args[0], out);
+                out.push(Op::Call1(*f));
+                d
+            }
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -533,11 +592,16 @@ impl Expression {
         emit(&ast, &mut translated);
         let tree = evalexpr::build_operator_tree::<DefaultNumericTypes>(&translated)
             .map_err(|e| format!("cannot compile translated expression '{translated}': {e}"))?;
+        let mut program = Vec::new();
+        if postfix(&ast, &mut program) > STACK {
+            program.clear();
+        }
         let expr = Expression {
             source,
             translated,
             tree,
             ast,
+            program,
         };
         // Evaluate once so that a translation problem shows at load time.
         let (a, b) = (expr.eval_evalexpr(0.0, 0.0)?, expr.eval(0.0, 0.0));
@@ -562,9 +626,53 @@ impl Expression {
     }
 
     /// Value at coordinate value `q` and speed `qdot`: the parsed tree
-    /// evaluated directly (no allocation). A NaN is reported downstream as
-    /// a non-finite force.
+    /// evaluated directly (no allocation), by its postfix program (the same
+    /// operations in the same order as the tree walk, `eval_tree`).
+    /// A NaN is reported downstream as a non-finite force.
     pub fn eval(&self, q: f64, qdot: f64) -> f64 {
+        if self.program.is_empty() {
+            return self.eval_tree(q, qdot);
+        }
+        let mut st = [0.0f64; STACK];
+        let mut n = 0;
+        for op in &self.program {
+            match *op {
+                Op::Num(v) => {
+                    st[n] = v;
+                    n += 1;
+                }
+                Op::Var(Var::Q) => {
+                    st[n] = q;
+                    n += 1;
+                }
+                Op::Var(Var::Qdot) => {
+                    st[n] = qdot;
+                    n += 1;
+                }
+                Op::Neg => st[n - 1] = -st[n - 1],
+                Op::Bin(op) => {
+                    n -= 1;
+                    let (x, y) = (st[n - 1], st[n]);
+                    st[n - 1] = match op {
+                        BinOp::Add => x + y,
+                        BinOp::Sub => x - y,
+                        BinOp::Mul => x * y,
+                        BinOp::Div => x / y,
+                        BinOp::Pow => x.powf(y),
+                    };
+                }
+                Op::Call1(f) => st[n - 1] = f.apply1(st[n - 1]),
+                Op::Call2(f) => {
+                    n -= 1;
+                    st[n - 1] = f.apply2(st[n - 1], st[n]);
+                }
+            }
+        }
+        st[0]
+    }
+
+    /// [`Self::eval`] by walking the parsed tree.
+    fn eval_tree(&self, q: f64, qdot: f64) -> f64 {
         fn ev(a: &Ast, q: f64, qd: f64) -> f64 {
             match a {
                 Ast::Num(v) => *v,
@@ -660,7 +768,29 @@ mod tests {
             "{s}: evalexpr {a} vs direct {b} ({})",
             e.translated
         );
+        // The postfix program and the tree walk: the same bits.
+        assert_eq!(b.to_bits(), e.eval_tree(q, qdot).to_bits(), "{s}");
         b
+    }
+
+    /// An expression deeper than the program's stack is evaluated by
+    /// walking its tree; one within it by the program.
+    #[test]
+    fn deep_expressions_walk_the_tree() {
+        let shallow = Expression::compile("-50*sqrt(1-0.91*sin(q+0.0873)^2)").unwrap();
+        assert!(!shallow.program.is_empty());
+        // q+(q+(q+...)): each level keeps one more value on the stack.
+        let deep_text = format!("{}q{}", "q+(".repeat(STACK), ")".repeat(STACK));
+        let deep = Expression::compile(&deep_text).unwrap();
+        assert!(deep.program.is_empty());
+        assert_eq!(ev(&deep_text, 0.5, 0.0), 0.5 * (STACK + 1) as f64);
+        let right = format!("{}q{}", "q+(".repeat(STACK - 2), ")".repeat(STACK - 2));
+        assert!(!Expression::compile(&right).unwrap().program.is_empty());
+        assert_eq!(ev(&right, 0.5, 0.0), 0.5 * (STACK - 1) as f64);
+        for q in [-1.7, 0.0, 0.3, 2.2] {
+            ev("-50*sqrt(1-0.91*sin(q+0.0873)^2)", q, 0.1);
+            ev("max(q,qdot)*min(-q,2)/exp(-q^2)", q, -0.4);
+        }
     }
 
     #[test]

@@ -86,6 +86,10 @@ pub struct CandidateScratch {
     /// Per passive force of the problem: its generalized force at the
     /// frame, once a candidate replaced it (empty until then).
     passive_g0: Vec<Vec<f64>>,
+    /// The frame's A as assembled, named for the solver
+    /// (`optimize::solve_into_valid_keyed`): a candidate that scales no
+    /// column solves this A.
+    a_key: u64,
 }
 
 impl SoProblem {
@@ -99,6 +103,7 @@ impl SoProblem {
         scratch: &mut CandidateScratch,
     ) -> crate::error::Result<()> {
         let asm = &ws.assembly;
+        scratch.a_key = optimize::fresh_a_key();
         scratch.a_finite = asm.problem.a.iter().all(|v| v.is_finite());
         scratch.valid_but_a_b = asm.problem.validate_but_a_entries_and_b().is_ok();
         scratch.passive_g0.resize_with(self.passive.len(), Vec::new);
@@ -292,7 +297,12 @@ impl SoProblem {
                 .all(|(v, _, _)| asm.problem.a.column(*v).iter().all(|x| x.is_finite()));
         let valid =
             scratch.valid_but_a_b && a_finite && asm.problem.b.iter().all(|v| v.is_finite());
-        optimize::solve_into_valid(&asm.problem, y0, &mut out.solution, valid);
+        if scratch.saved.is_empty() {
+            let key = scratch.a_key;
+            optimize::solve_into_valid_keyed(&asm.problem, y0, &mut out.solution, valid, key);
+        } else {
+            optimize::solve_into_valid(&asm.problem, y0, &mut out.solution, valid);
+        }
         self.frame_outputs_into(t, asm, None, data, mf, want, out);
         for (v, col, f0) in scratch.saved.drain(..) {
             asm.problem.a.column_mut(v).copy_from_slice(&col);

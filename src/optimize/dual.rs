@@ -77,7 +77,10 @@
 //! of nonzero entries alone: each call checks both against the new problem
 //! (one pass over A, which also takes its values) and rebuilds the
 //! structure when either differs, so the answer is the same bit for bit as
-//! from a fresh workspace.
+//! from a fresh workspace. A caller that solves one A for many right-hand
+//! sides and weights (a force sweep's candidates) names it by a key
+//! ([`DualWorkspace::solve_into_keyed`]), and the pass over A is skipped
+//! when the layout last took its values under that key.
 //!
 //! Starting point: the multipliers of the unconstrained problem (every
 //! bound and cone inactive), (A W⁻¹ Aᵀ/2) y = b, or a caller's warm start.
@@ -1329,6 +1332,12 @@ struct Layout {
     cols: SparseCols,
     src_row: Vec<usize>,
     block_col: Vec<usize>,
+    /// Per variable: its column in `cols` (usize::MAX: a fixed variable or
+    /// one of an idle group).
+    var_col: Vec<usize>,
+    /// The caller's key of the A this layout last took its values from
+    /// ([`DualWorkspace::solve_into_keyed`]); None after any other call.
+    a_key: Option<u64>,
     /// Each block's equations (global rows) in the block's order, and each
     /// block's first (n_blocks + 1 entries).
     rows: Vec<usize>,
@@ -1511,6 +1520,16 @@ impl Layout {
         }
         self.block_group.push(self.order.len());
         self.block_col.push(cols.col_ptr.len() - 1);
+        self.var_col.clear();
+        self.var_col.resize(n, usize::MAX);
+        let mut c = 0;
+        for &gi in &self.order {
+            let gr = &groups[gi];
+            for &v in &gr.vars[..gr.len()] {
+                self.var_col[v] = c;
+                c += 1;
+            }
+        }
         self.idle_groups.clear();
         self.idle_groups
             .extend((0..groups.len()).filter(|&gi| block_of_group[gi] == usize::MAX));
@@ -1545,6 +1564,9 @@ pub struct DualWorkspace {
     /// Layouts built (to test that they are reused and rebuilt).
     #[cfg(test)]
     rebuilds: u64,
+    /// Calls that took A's values from the last call's (its key matched).
+    #[cfg(test)]
+    refills_skipped: u64,
 }
 
 impl DualWorkspace {
@@ -1578,6 +1600,24 @@ impl DualWorkspace {
         y0: Option<&[f64]>,
         x: &mut Vec<f64>,
         y: &mut Vec<f64>,
+    ) -> Result<DualInfo, DualFailure> {
+        self.solve_into_keyed(p, y0, x, y, None)
+    }
+
+    /// [`solve_into`](Self::solve_into) of a problem whose A the caller
+    /// names by `a_key`: a key given to this workspace before names the
+    /// same A bit for bit (the caller's promise; keys from
+    /// [`super::solve::fresh_a_key`]). When the last problem laid out had
+    /// that key, A's values are not read again (a force sweep solves one
+    /// frame's A for thousands of candidates). The same answer as without
+    /// the key.
+    pub fn solve_into_keyed(
+        &mut self,
+        p: &FrameProblem,
+        y0: Option<&[f64]>,
+        x: &mut Vec<f64>,
+        y: &mut Vec<f64>,
+        a_key: Option<u64>,
     ) -> Result<DualInfo, DualFailure> {
         use DualFailure::NotHandled;
         if p.exponent != 2.0 {
@@ -1677,13 +1717,22 @@ impl DualWorkspace {
 
         // The block structure: the last problem's when it applies.
         let layout = &mut self.layout;
-        if !(layout.fits(m, n, groups) && layout.refill(a, m, groups)) {
+        let same_a = a_key.is_some() && layout.a_key == a_key;
+        // (Forgotten until the values are in: a panic in between leaves
+        // no key behind.)
+        layout.a_key = None;
+        if !(layout.fits(m, n, groups) && (same_a || layout.refill(a, m, groups))) {
             layout.rebuild(a, m, n, groups);
             #[cfg(test)]
             {
                 self.rebuilds += 1;
             }
         }
+        #[cfg(test)]
+        if same_a && layout.valid {
+            self.refills_skipped += 1;
+        }
+        layout.a_key = a_key;
         for &g in &layout.idle_groups {
             // In no equation: the projection of 0.
             let gr = &groups[g];
@@ -1751,14 +1800,30 @@ impl DualWorkspace {
         // Safety net: the whole system, with the original matrix: as
         // FrameProblem::eq_residual, without allocating, and skipping the
         // columns of variables at 0 (which add ±0 to a finite A's sums).
+        // A grouped variable's column is summed from its nonzero entries
+        // in the layout (the same values as A's, in the same order of
+        // variables and rows: the same sums bit for bit, since A's zeros
+        // add ±0), a fixed one's from A.
         let r = &mut self.residual;
         r.clear();
         r.extend(p.b.iter().map(|b| -b));
         if m > 0 {
-            for (column, &xj) in a.chunks_exact(m).zip(x.iter()) {
-                if xj != 0.0 {
+            let layout = &self.layout;
+            let r = r.as_mut_slice();
+            let (col_ptr, src_row, val) = (&layout.cols.col_ptr, &layout.src_row, &layout.cols.val);
+            for (j, (column, &xj)) in a.chunks_exact(m).zip(x.iter()).enumerate() {
+                if xj == 0.0 {
+                    continue;
+                }
+                let c = layout.var_col[j];
+                if c == usize::MAX {
                     for (ri, aij) in r.iter_mut().zip(column) {
                         *ri += aij * xj;
+                    }
+                } else {
+                    let (start, end) = (col_ptr[c], col_ptr[c + 1]);
+                    for (&i, aij) in src_row[start..end].iter().zip(&val[start..end]) {
+                        r[i] += aij * xj;
                     }
                 }
             }

@@ -861,3 +861,45 @@ fn reused_workspace_answers_as_a_fresh_one() {
     check(&infeasible, true, None);
     check(&p, true, Some(2));
 }
+
+/// Keyed solves (a force sweep's candidates: one A, other b and weights)
+/// answer bit for bit as a fresh workspace, and skip reading A exactly
+/// when the last problem laid out had the same key; a call without a key,
+/// or with another, reads A again.
+#[test]
+fn keyed_solves_answer_as_fresh_ones() {
+    let mut ws = DualWorkspace::new();
+    let (p, x) = two_blocks(3);
+    let mut fixed = p.clone();
+    let j = (0..10).find(|&j| p.lower[j] != p.upper[j]).unwrap();
+    fixed.lower[j] = x[j];
+    fixed.upper[j] = x[j];
+    let mut solve = |q: &FrameProblem, key: Option<u64>, skips: bool| {
+        let before = ws.refills_skipped;
+        let (mut xs, mut ys) = (Vec::new(), Vec::new());
+        let keyed = ws
+            .solve_into_keyed(q, None, &mut xs, &mut ys, key)
+            .map(|d| (d.iterations, d.eq_residual.to_bits()));
+        let fresh = solve_dual(q, None).unwrap();
+        assert_eq!(keyed, Ok((fresh.iterations, fresh.eq_residual.to_bits())));
+        let bits = |v: &[f64]| v.iter().map(|e| e.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&xs), bits(&fresh.x));
+        assert_eq!(bits(&ys), bits(&fresh.y));
+        assert_eq!(ws.refills_skipped - before, u64::from(skips), "A not read");
+    };
+    for (base, key) in [(&p, 7), (&fixed, 8)] {
+        solve(base, Some(key), false);
+        for k in 1..4 {
+            // Same A, another right-hand side and other weights.
+            let mut q = base.clone();
+            let xk: Vec<f64> = x.iter().map(|v| v * (1.0 + 0.1 * k as f64)).collect();
+            q.b = &q.a * DVector::from_column_slice(&xk);
+            q.weights[3] *= 1.0 + k as f64;
+            solve(&q, Some(key), true);
+        }
+        // Another A under no key, then the key again: A is read.
+        solve(&rescaled(base, &x, 1.0), None, false);
+        solve(base, Some(key), false);
+        solve(&rescaled(base, &x, 2.0), Some(key + 100), false);
+    }
+}

@@ -34,7 +34,10 @@ pub use problem::{
     FrameProblem, FrameSolution, SolveSettings, SolveStatus, SolverChoice, SolverKind,
     StaticContact,
 };
-pub use solve::{solve, solve_clarabel, solve_into, solve_into_finite_a, solve_into_valid};
+pub use solve::{
+    fresh_a_key, solve, solve_clarabel, solve_into, solve_into_finite_a, solve_into_valid,
+    solve_into_valid_keyed,
+};
 
 #[cfg(test)]
 mod tests;

@@ -98,7 +98,40 @@ pub fn solve_into_valid(
     solve_into_checked(p, y0, out, valid);
 }
 
+/// [`solve_into_valid`] of a problem whose A the caller names by `a_key`
+/// (from [`fresh_a_key`]): the caller promises that every problem it gives
+/// with this key has the same A bit for bit, so this thread's Newton
+/// workspace, when its last problem had the key, does not read A's values
+/// again. The same answer as [`solve_into_valid`].
+pub fn solve_into_valid_keyed(
+    p: &FrameProblem,
+    y0: Option<&[f64]>,
+    out: &mut FrameSolution,
+    valid: bool,
+    a_key: u64,
+) {
+    solve_into_keyed(p, y0, out, valid, Some(a_key));
+}
+
+/// A key no other call of this process returned (for
+/// [`solve_into_valid_keyed`]).
+pub fn fresh_a_key() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    NEXT.fetch_add(1, Ordering::Relaxed)
+}
+
 fn solve_into_checked(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolution, valid: bool) {
+    solve_into_keyed(p, y0, out, valid, None);
+}
+
+fn solve_into_keyed(
+    p: &FrameProblem,
+    y0: Option<&[f64]>,
+    out: &mut FrameSolution,
+    valid: bool,
+    a_key: Option<u64>,
+) {
     if p.settings.solver == SolverChoice::Clarabel || !valid {
         *out = solve_clarabel(p);
         return;
@@ -113,7 +146,7 @@ fn solve_into_checked(p: &FrameProblem, y0: Option<&[f64]>, out: &mut FrameSolut
     let mut attempt = |y0: Option<&[f64]>| {
         let newton = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             WORKSPACE.with(|ws| match ws.try_borrow_mut() {
-                Ok(mut ws) => ws.solve_into(p, y0, &mut out.x, &mut out.y),
+                Ok(mut ws) => ws.solve_into_keyed(p, y0, &mut out.x, &mut out.y, a_key),
                 // (Only if a solve were re-entered.)
                 Err(_) => dual::DualWorkspace::new().solve_into(p, y0, &mut out.x, &mut out.y),
             })
