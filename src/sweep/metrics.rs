@@ -179,10 +179,15 @@ pub(crate) struct Collected {
 }
 
 impl Collected {
-    pub(crate) fn new(nc: usize, nm: usize) -> Self {
+    /// Buffers for `nc` candidates × `nm` metrics over about `frames`
+    /// frames, allocated once (a hint: more frames still fit).
+    pub(crate) fn new(nc: usize, nm: usize, frames: usize) -> Self {
+        let series = || (Vec::with_capacity(frames), Vec::with_capacity(frames));
         Collected {
-            time: Vec::new(),
-            series: vec![vec![(Vec::new(), Vec::new()); nm]; nc],
+            time: Vec::with_capacity(frames),
+            series: (0..nc)
+                .map(|_| (0..nm).map(|_| series()).collect())
+                .collect(),
             failed: vec![0; nc],
             iterations: 0,
         }

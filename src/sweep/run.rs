@@ -38,7 +38,8 @@ pub fn solve_stream(
 ) -> Result<SweepOutcome> {
     let chain_of = chains(candidates);
     let (i0, i1, step) = (stream.first_row, stream.last_row, plan.step_interval);
-    let mut collected = Collected::new(candidates.len(), plan.metrics.len());
+    let frames = i1.saturating_sub(i0) / step.max(1) + 1;
+    let mut collected = Collected::new(candidates.len(), plan.metrics.len(), frames);
     let started = Instant::now();
     let first = stream.next_block()?;
     let mut source =
@@ -158,7 +159,7 @@ impl Scene {
                 plan.solve(&cands, &chain_of, warm, false, frame, buf)
             })
             .collect();
-        let mut collected = Collected::new(cands.len(), plan.metrics.len());
+        let mut collected = Collected::new(cands.len(), plan.metrics.len(), values.len());
         for fv in &values {
             collected.push(fv);
         }
