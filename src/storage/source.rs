@@ -25,160 +25,12 @@ use crate::error::{Error, Result};
 /// system's page cache serves the repeated passes.
 pub const IN_MEMORY_LIMIT: u64 = 256 << 20;
 
-/// Largest file whose data rows [`TableFile::read`] also parses ahead, on
-/// a thread of its own: 2 MiB (a motion of some 150,000 values; gait2392's
-/// coordinates are 0.6 MB). The parsed values take about half the file's
-/// size again, so longer files are parsed only as they are streamed.
-pub const PARSE_AHEAD_LIMIT: usize = 2 << 20;
-
-/// A table file: its path and, when it was read into memory, its bytes
-/// (and, for a small file, its data rows parsed ahead). Cloning shares them.
+/// A table file: its path and, when it was read into memory, its bytes.
+/// Cloning shares them.
 #[derive(Clone)]
 pub struct TableFile {
     path: PathBuf,
     bytes: Option<SharedBytes>,
-    ahead: Option<Arc<ParseAhead>>,
-}
-
-/// The data rows of a file being parsed on a thread while the run reads
-/// and compiles its model, or parsed.
-struct ParseAhead {
-    state: std::sync::Mutex<AheadState>,
-}
-
-enum AheadState {
-    Running(std::thread::JoinHandle<ParsedRows>),
-    Done(Option<Arc<ParsedRows>>),
-}
-
-/// A legacy table's data lines as the row reader's fast path parses them
-/// (`read::parse_line_fast`, the same function on the same bytes), from
-/// the first after the column labels up to the first line it does not
-/// take (a blank or unusual line, and the rest of the file, are left to
-/// the row reader). Each line by its byte range in the file.
-pub(super) struct ParsedRows {
-    columns: usize,
-    starts: Vec<u64>,
-    ends: Vec<u64>,
-    times: Vec<f64>,
-    values: Vec<f64>,
-}
-
-impl ParsedRows {
-    /// Data columns per row (time not counted).
-    pub(super) fn columns(&self) -> usize {
-        self.columns
-    }
-
-    /// Index of the line starting at byte `offset` (tried first: `hint`).
-    pub(super) fn find(&self, offset: u64, hint: usize) -> Option<usize> {
-        if self.starts.get(hint) == Some(&offset) {
-            return Some(hint);
-        }
-        self.starts.binary_search(&offset).ok()
-    }
-
-    /// Byte offset after line `k` (after its newline).
-    pub(super) fn end(&self, k: usize) -> u64 {
-        self.ends[k]
-    }
-
-    pub(super) fn time(&self, k: usize) -> f64 {
-        self.times[k]
-    }
-
-    pub(super) fn values(&self, k: usize) -> &[f64] {
-        &self.values[k * self.columns..(k + 1) * self.columns]
-    }
-
-    /// Parse the data lines of the legacy table `b` (see [`ParsedRows`]).
-    fn parse(b: &[u8]) -> ParsedRows {
-        let mut rows = ParsedRows {
-            columns: 0,
-            starts: Vec::new(),
-            ends: Vec::new(),
-            times: Vec::new(),
-            values: Vec::new(),
-        };
-        // Lines as the row reader reads them: up to '\n', without it and
-        // a trailing '\r'; the offset after each.
-        let mut lines = b.split_inclusive(|&c| c == b'\n').scan(0u64, |offset, l| {
-            let start = *offset;
-            *offset += l.len() as u64;
-            let l = l.strip_suffix(b"\n").unwrap_or(l);
-            Some((start, *offset, l.strip_suffix(b"\r").unwrap_or(l)))
-        });
-        // The header up to `endheader` (the reader's rule: the line trimmed
-        // of spaces and tabs, up to a space, tab or '='), then the labels.
-        let endheader = |l: &[u8]| {
-            let t = l
-                .iter()
-                .position(|&c| c != b' ' && c != b'\t')
-                .map_or(&l[l.len()..], |i| &l[i..]);
-            let key = t.split(|&c| matches!(c, b' ' | b'\t' | b'=')).next();
-            key == Some(b"endheader".as_slice())
-        };
-        if !lines.by_ref().any(|(_, _, l)| endheader(l)) {
-            return rows;
-        }
-        let mut lines = lines
-            .skip_while(|(_, _, l)| l.trim_ascii().is_empty())
-            .skip(1) // the column labels
-            .peekable();
-        // Columns as counted on the first data line; the reader uses these
-        // rows only when its labels say the same.
-        let Some((_, _, first)) = lines.peek() else {
-            return rows;
-        };
-        let tokens = first
-            .split(|&c| c <= b' ' && matches!(c, b' ' | b'\t' | b'\n' | 0x0B | 0x0C | b'\r'))
-            .filter(|t| !t.is_empty())
-            .count();
-        if tokens < 2 {
-            return rows;
-        }
-        rows.columns = tokens - 1;
-        let mut row = Vec::with_capacity(rows.columns);
-        for (start, end, l) in lines {
-            let Some(t) = super::read::parse_line_fast(l, rows.columns, &mut row) else {
-                break;
-            };
-            rows.starts.push(start);
-            rows.ends.push(end);
-            rows.times.push(t);
-            rows.values.extend_from_slice(&row);
-        }
-        rows
-    }
-}
-
-impl ParseAhead {
-    fn start(bytes: SharedBytes) -> Option<Arc<ParseAhead>> {
-        let handle = std::thread::Builder::new()
-            .name("parse-ahead".into())
-            .spawn(move || ParsedRows::parse(bytes.as_ref()))
-            .ok()?;
-        Some(Arc::new(ParseAhead {
-            state: std::sync::Mutex::new(AheadState::Running(handle)),
-        }))
-    }
-
-    /// The parsed rows, waiting for the thread if it is still at work;
-    /// None if it failed (the reader then parses every line itself).
-    fn rows(&self) -> Option<Arc<ParsedRows>> {
-        let mut state = self.state.lock().ok()?;
-        if let AheadState::Running(_) = &*state {
-            let AheadState::Running(h) = std::mem::replace(&mut *state, AheadState::Done(None))
-            else {
-                unreachable!()
-            };
-            *state = AheadState::Done(h.join().ok().map(Arc::new));
-        }
-        match &*state {
-            AheadState::Done(rows) => rows.clone(),
-            AheadState::Running(_) => None,
-        }
-    }
 }
 
 /// A file's bytes, shared by the readers of a [`TableFile`] (kept in the
@@ -216,15 +68,9 @@ impl TableFile {
             return Ok(Self::on_disk(path));
         }
         let bytes = SharedBytes(Arc::new(read_bytes(path)?));
-        let ahead = if bytes.0.len() <= PARSE_AHEAD_LIMIT {
-            ParseAhead::start(bytes.clone())
-        } else {
-            None
-        };
         Ok(TableFile {
             path: path.to_path_buf(),
             bytes: Some(bytes),
-            ahead,
         })
     }
 
@@ -233,7 +79,6 @@ impl TableFile {
         TableFile {
             path: path.to_path_buf(),
             bytes: None,
-            ahead: None,
         }
     }
 
@@ -243,7 +88,6 @@ impl TableFile {
         TableFile {
             path: path.to_path_buf(),
             bytes: Some(SharedBytes(bytes)),
-            ahead: None,
         }
     }
 
@@ -254,7 +98,6 @@ impl TableFile {
         TableFile {
             path: path.to_path_buf(),
             bytes: Some(SharedBytes(Arc::new(bytes))),
-            ahead: None,
         }
     }
 
@@ -271,11 +114,6 @@ impl TableFile {
     /// The bytes, when held in memory.
     pub(super) fn bytes(&self) -> Option<&SharedBytes> {
         self.bytes.as_ref()
-    }
-
-    /// The data rows parsed ahead (see [`PARSE_AHEAD_LIMIT`]), once parsed.
-    pub(super) fn parsed_rows(&self) -> Option<Arc<ParsedRows>> {
-        self.ahead.as_ref()?.rows()
     }
 }
 

@@ -219,51 +219,39 @@ fn push_fixed_fast(out: &mut Vec<u8>, x: f64, width: usize, prec: usize) -> bool
             (m >> s, m & ((1u64 << s) - 1), s)
         }
     };
-    // Fraction digits in (at most) two groups, then the rounding remainder.
-    // The second step multiplies a remainder below 2^(s-k1) <= 2^(120-k1)
-    // by 5^k2: below 2^128 while 2.33·k2 <= 8 + k1, so a first group of 16
-    // (written as two blocks of eight) serves up to 26 decimals.
-    let (k1, k2) = if p <= 19 {
-        (p, 0)
-    } else if p <= 26 {
-        (16, p - 16)
-    } else {
-        (p / 2, p - p / 2)
-    };
-    let (mut d1, rem, sh) = fraction_times_pow10(f as u128, s, k1);
-    let (mut d2, rem, sh) = if k2 > 0 {
-        fraction_times_pow10(rem, sh, k2)
-    } else {
-        (0, rem, sh)
-    };
-    if sh > 0 {
-        let half = 1u128 << (sh - 1);
-        let last_odd = if k2 > 0 {
-            d2 & 1 == 1
-        } else if k1 > 0 {
-            d1 & 1 == 1
+    let (k1, k2, d1, d2) = if (1..=ONE_STEP_MAX_PREC).contains(&p) {
+        // One step: f / 2^s · 10^p = f · 5^p / 2^(s−p), and f · 5^p <
+        // 2^53 · 5^23 < 2^107: the digits and the rounding remainder at
+        // once.
+        let prod = f as u128 * POW5[p as usize] as u128;
+        let (mut q, rem, sh) = if s >= p {
+            let sh = s - p;
+            (prod >> sh, prod & ((1u128 << sh) - 1), sh)
         } else {
-            int_part & 1 == 1
+            (prod << (p - s), 0, 0)
         };
-        if rem > half || (rem == half && last_odd) {
-            // Add one unit in the last place, carrying leftwards.
-            if k2 > 0 {
-                d2 += 1;
-                if d2 == POW10[k2 as usize] {
-                    d2 = 0;
-                    d1 += 1;
+        if sh > 0 {
+            let half = 1u128 << (sh - 1);
+            if rem > half || (rem == half && q & 1 == 1) {
+                q += 1;
+                if q == (POW5[p as usize] as u128) << p {
+                    q = 0;
+                    int_part += 1;
                 }
-            } else {
-                d1 += 1;
-            }
-            if k1 > 0 && d1 == POW10[k1 as usize] {
-                d1 = 0;
-                int_part += 1;
-            } else if k1 == 0 {
-                int_part += 1;
             }
         }
-    }
+        if p <= 19 {
+            (p, 0, q as u64, 0)
+        } else {
+            // q < 10^23: the first p − 16 digits are (q >> 16) / 5^16
+            // (below 2^61), the last 16 the rest.
+            let hi = ((q >> 16) as u64) / POW5[16];
+            let lo = (q as u64).wrapping_sub(hi.wrapping_mul(POW10[16]));
+            (p - 16, 16, hi, lo)
+        }
+    } else {
+        fraction_two_steps(f, s, p, &mut int_part)
+    };
     let int_len = decimal_len(int_part);
     let len = usize::from(negative) + int_len + if p > 0 { 1 + prec } else { 0 };
     // Right-aligned in `width`: spaces, then the body, built in a local
@@ -290,6 +278,62 @@ fn push_fixed_fast(out: &mut Vec<u8>, x: f64, width: usize, prec: usize) -> bool
     }
     out.extend_from_slice(&buf[CAP - total..]);
     true
+}
+
+/// Most decimals [`push_fixed_fast`] writes in one step (one product below
+/// 2^128 and a quotient below 2^61 · 10^16).
+const ONE_STEP_MAX_PREC: u32 = 23;
+
+/// The `p` fraction digits of f / 2^s in (at most) two groups of k1 and k2
+/// digits, rounded half to even (a carry out of the fraction goes to
+/// `int_part`): (k1, k2, first group, second group).
+fn fraction_two_steps(f: u64, s: u32, p: u32, int_part: &mut u64) -> (u32, u32, u64, u64) {
+    // Fraction digits in (at most) two groups, then the rounding remainder.
+    // The second step multiplies a remainder below 2^(s-k1) <= 2^(120-k1)
+    // by 5^k2: below 2^128 while 2.33·k2 <= 8 + k1, so a first group of 16
+    // (written as two blocks of eight) serves up to 26 decimals.
+    let (k1, k2) = if p <= 19 {
+        (p, 0)
+    } else if p <= 26 {
+        (16, p - 16)
+    } else {
+        (p / 2, p - p / 2)
+    };
+    let (mut d1, rem, sh) = fraction_times_pow10(f as u128, s, k1);
+    let (mut d2, rem, sh) = if k2 > 0 {
+        fraction_times_pow10(rem, sh, k2)
+    } else {
+        (0, rem, sh)
+    };
+    if sh > 0 {
+        let half = 1u128 << (sh - 1);
+        let last_odd = if k2 > 0 {
+            d2 & 1 == 1
+        } else if k1 > 0 {
+            d1 & 1 == 1
+        } else {
+            *int_part & 1 == 1
+        };
+        if rem > half || (rem == half && last_odd) {
+            // Add one unit in the last place, carrying leftwards.
+            if k2 > 0 {
+                d2 += 1;
+                if d2 == POW10[k2 as usize] {
+                    d2 = 0;
+                    d1 += 1;
+                }
+            } else {
+                d1 += 1;
+            }
+            if k1 > 0 && d1 == POW10[k1 as usize] {
+                d1 = 0;
+                *int_part += 1;
+            } else if k1 == 0 {
+                *int_part += 1;
+            }
+        }
+    }
+    (k1, k2, d1, d2)
 }
 
 /// Append `x` as C `printf("%W.Pf", x)` with glibc (see [`format_c_fixed`]).
