@@ -158,6 +158,39 @@ pub fn held_intervals(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
 /// A knot of a foot's force target ([`super::targets::Knot`]).
 pub type TargetKnot = super::targets::Knot;
 
+/// The knots of one double support from `ts` over `t_ds`: every
+/// [`TRANSITION_KNOT_STEP`] (at least the two ends) the rows `rows(τ)`
+/// gives, then a last knot just after the double support that switches the
+/// target off. None from `rows` at any knot (a lean or a requirement not
+/// known there) gives no knots at all.
+fn double_support_knots(
+    ts: f64,
+    t_ds: f64,
+    mut rows: impl FnMut(f64) -> Option<Vec<(Vector3<f64>, f64)>>,
+) -> Vec<TargetKnot> {
+    let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
+    let mut knots = Vec::with_capacity(steps + 2);
+    for i in 0..=steps {
+        let tau = t_ds * i as f64 / steps as f64;
+        let Some(r) = rows(tau) else {
+            return Vec::new();
+        };
+        knots.push((ts + tau, true, r));
+    }
+    if let Some(last) = knots.last() {
+        let r = last.2.clone();
+        knots.push((ts + t_ds + 1e-6, false, r));
+    }
+    knots
+}
+
+/// The unit direction across a leg whose line is `lean`: in the plane of
+/// the walking direction h and the floor normal n, perpendicular to the
+/// line.
+fn across_leg(lean: Vector3<f64>, h: Vector3<f64>, n: Vector3<f64>) -> Vector3<f64> {
+    (h * lean.dot(&n) - n * lean.dot(&h)).normalize()
+}
+
 /// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
 /// force targets of the **trailing** foot, with its force along its leg:
 /// over the double support T_ds after each transition strike at t_s of the
@@ -198,28 +231,14 @@ pub fn trailing_targets(
                 continue;
             };
             let t_ds = double_support(events, o, ts);
-            let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
-            let mut knots = Vec::new();
-            for i in 0..=steps {
-                let tau = t_ds * i as f64 / steps as f64;
-                let Some(l) = lean(ts + tau, o) else {
-                    knots.clear();
-                    break;
-                };
-                // Across the leg: in the plane of h and n, perpendicular to
-                // the leg's line.
-                let across = (h * l.dot(&n) - n * l.dot(&h)).normalize();
+            out[o].extend(double_support_knots(ts, t_ds, |tau| {
+                let across = across_leg(lean(ts + tau, o)?, h, n);
                 // A foot cannot pull: the trailing foot carries at most what
                 // the motion requires of the floor then.
                 let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
                 let vertical = (r.dot(&n) * trailing_share(tau, t_ds)).min(now.max(0.0));
-                knots.push((ts + tau, true, vec![(n, vertical), (across, 0.0)]));
-            }
-            if let Some(last) = knots.last() {
-                let rows = last.2.clone();
-                knots.push((ts + t_ds + 1e-6, false, rows));
-            }
-            out[o].extend(knots);
+                Some(vec![(n, vertical), (across, 0.0)])
+            }));
         }
     }
     for k in out.iter_mut() {
@@ -298,22 +317,10 @@ pub fn landing_targets(
                 continue;
             }
             let t_ds = double_support(events, 1 - s, ts);
-            let steps = (t_ds / TRANSITION_KNOT_STEP).ceil().max(1.0) as usize;
-            let mut knots = Vec::new();
-            for i in 0..=steps {
-                let tau = t_ds * i as f64 / steps as f64;
-                let Some(l) = lean(ts + tau, s) else {
-                    knots.clear();
-                    break;
-                };
-                let across = (h * l.dot(&n) - n * l.dot(&h)).normalize();
-                knots.push((ts + tau, true, vec![(across, 0.0), (Vector3::zeros(), 0.0)]));
-            }
-            if let Some(last) = knots.last() {
-                let rows = last.2.clone();
-                knots.push((ts + t_ds + 1e-6, false, rows));
-            }
-            out[s].extend(knots);
+            out[s].extend(double_support_knots(ts, t_ds, |tau| {
+                let across = across_leg(lean(ts + tau, s)?, h, n);
+                Some(vec![(across, 0.0), (Vector3::zeros(), 0.0)])
+            }));
         }
     }
     out
