@@ -113,58 +113,176 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
-/// The progress hook of a run: calls `progress(label, done, total)` and
-/// checks for signals (Ctrl-C); an error of either stops the run as a signal
-/// stops the CLI and is kept in the returned slot, to be raised afterwards.
-fn progress_hook(progress: Option<PyObject>) -> (ProgressHook, Arc<Mutex<Option<PyErr>>>) {
-    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
+/// The error that stops a run (Ctrl-C seen by [`watched`], or an error of
+/// the progress callback), kept to be raised once the run has stopped.
+type Pending = Arc<Mutex<Option<PyErr>>>;
+
+/// Keep `e` as the run's pending error (the first one holds) and ask the
+/// frame loop to stop, as a signal stops the CLI
+/// (`statopt::frame::interrupt`).
+fn stop_with(pending: &Pending, e: PyErr) {
+    let mut p = pending.lock().unwrap_or_else(|p| p.into_inner());
+    if p.is_none() {
+        *p = Some(e);
+        statopt::frame::interrupt::request(statopt::frame::interrupt::EXIT_SIGINT);
+    }
+}
+
+/// The progress hook of a run: calls `progress(label, done, total)`; an
+/// error of it stops the run and is kept in the returned slot, to be
+/// raised afterwards. (Ctrl-C is [`watched`]'s: the hook runs on the
+/// engine's threads, where Python sees no signal.)
+fn progress_hook(progress: Option<PyObject>) -> (Option<ProgressHook>, Pending) {
+    let pending: Pending = Arc::new(Mutex::new(None));
     let slot = pending.clone();
-    let hook = ProgressHook(Arc::new(move |label: &str, done: u64, total: u64| {
-        Python::with_gil(|py| {
-            let r = py.check_signals().and_then(|_| match &progress {
-                Some(cb) => cb.call1(py, (label, done, total)).map(|_| ()),
-                None => Ok(()),
-            });
-            if let Err(e) = r {
-                let mut p = slot.lock().unwrap_or_else(|p| p.into_inner());
-                if p.is_none() {
-                    *p = Some(e);
-                    tools::interrupt::request(tools::interrupt::EXIT_SIGINT);
+    let hook = progress.map(|cb| {
+        ProgressHook(Arc::new(move |label: &str, done: u64, total: u64| {
+            Python::with_gil(|py| {
+                if let Err(e) = cb.call1(py, (label, done, total)) {
+                    stop_with(&slot, e);
                 }
+            })
+        }))
+    });
+    (hook, pending)
+}
+
+/// How often a run's caller looks for Ctrl-C ([`watched`]).
+const SIGNAL_CHECK: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// `work` (the engine) on a thread of its own, for the caller's run (its
+/// outputs' capture, `storage::results::context`), while the calling
+/// thread, without the GIL, looks for signals every [`SIGNAL_CHECK`] and
+/// returns as soon as `work` ends. Python runs signal handlers on its main
+/// thread only, so the engine's threads (`threads=N` runs the frame loop
+/// in a pool) never see Ctrl-C: this thread, the caller's, does. Ctrl-C
+/// (or any error of a signal handler) is kept in `pending` and stops the
+/// frame loop at its next chunk (`statopt::frame::interrupt`), which then
+/// closes every table with the frames solved, as the CLI does.
+fn watched<T: Send>(py: Python<'_>, pending: &Pending, work: impl FnOnce() -> T + Send) -> T {
+    let run = storage::results::context();
+    py.allow_threads(|| {
+        std::thread::scope(|s| {
+            let (done, finished) = std::sync::mpsc::channel::<()>();
+            let engine = std::thread::Builder::new()
+                .name("statopt-run".into())
+                // The stack of a main thread: the engine ran on the
+                // caller's thread before.
+                .stack_size(8 << 20)
+                .spawn_scoped(s, move || {
+                    let out = run.run(work);
+                    let _ = done.send(());
+                    out
+                })
+                .expect("a thread for the run");
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+                finished.recv_timeout(SIGNAL_CHECK)
+            {
+                Python::with_gil(|py| {
+                    if let Err(e) = py.check_signals() {
+                        stop_with(pending, e);
+                    }
+                });
+            }
+            match engine.join() {
+                Ok(out) => out,
+                Err(panic) => std::panic::resume_unwind(panic),
             }
         })
-    }));
-    (hook, pending)
+    })
 }
 
 /// The error the progress hook kept, if any (the stop it asked for is
 /// cleared, so that the next run is not stopped).
-fn take_pending(pending: &Mutex<Option<PyErr>>) -> Option<PyErr> {
+fn take_pending(pending: &Pending) -> Option<PyErr> {
     let e = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
     if e.is_some() {
-        tools::interrupt::request(0);
+        statopt::frame::interrupt::request(0);
     }
     e
 }
 
-/// A run in memory (`storage::results::Capture::in_memory`, no file
-/// written) when `in_memory`, with the results folder it is kept under;
-/// else no capture and `results_dir` as given. Both at once is an error.
-fn in_memory_capture(
+/// `e` (the error that stopped a run) with, when it is Ctrl-C's
+/// KeyboardInterrupt, the run's word on where it stopped and what the
+/// tables hold (`RunSummary::stopped_line`) as a note (PEP 678; Python
+/// 3.11 and later show it under the traceback).
+fn with_stop_note(
+    py: Python<'_>,
+    e: PyErr,
+    summary: Option<&RunSummary>,
+    in_memory: bool,
+) -> PyErr {
+    let Some(s) = summary else { return e };
+    if !e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+        return e;
+    }
+    let note = if in_memory {
+        s.stopped.map(|(_, t)| {
+            let at = match t {
+                Some(t) => format!("after the frame at t = {}", statopt::storage::fmt_time(t)),
+                None => "before the first frame".to_string(),
+            };
+            format!(
+                "stopped {at}: {} frames solved; results_dir=None, so no table is kept (give results_dir to keep the frames solved and resume=True to go on)",
+                s.frames
+            )
+        })
+    } else {
+        s.stopped_line().map(|l| python_words(&l))
+    };
+    if let Some(note) = note {
+        let _ = e.value(py).call_method1("add_note", (note,));
+    }
+    e
+}
+
+/// The run's capture of its outputs (`storage::results::Capture`), which
+/// knows each output's typed key: in memory (no file written) when
+/// `in_memory`, with the results folder it is kept under; else the
+/// capture of `results_dir` (every path when None) that the run would
+/// make itself, which writes the files. Both at once is an error.
+fn run_capture(
     in_memory: bool,
     results_dir: Option<PathBuf>,
-) -> PyResult<(Option<storage::results::Capture>, Option<PathBuf>)> {
+) -> PyResult<(storage::results::Capture, Option<PathBuf>)> {
+    use storage::results::Capture;
     if in_memory && results_dir.is_some() {
         return Err(StatoptError::new_err(
             "in_memory=True writes no file: give no results_dir",
         ));
     }
-    let capture = in_memory.then(storage::results::Capture::in_memory);
-    let results_dir = match &capture {
-        Some(c) => c.root().map(PathBuf::from),
-        None => results_dir,
-    };
-    Ok((capture, results_dir))
+    if in_memory {
+        let c = Capture::in_memory();
+        let root = c.root().map(PathBuf::from);
+        return Ok((c, root));
+    }
+    Ok((Capture::new(results_dir.as_deref()), results_dir))
+}
+
+/// The run's outputs in the summary `d` with their typed keys, from its
+/// capture: `keys`, one per path of `files` (the engine's key of that
+/// output, as [`key_dict`] gives it, or None for a file no key names: a
+/// figure, a study's CSV, an InverseDynamicsTool's table); with
+/// `in_memory`, `in_memory_root` and `outputs` ([`in_memory_outputs`]).
+fn run_outputs(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    s: &RunSummary,
+    c: &storage::results::Capture,
+    in_memory: bool,
+) -> PyResult<()> {
+    let keys = PyList::empty(py);
+    for f in &s.files {
+        match c.key_of(f) {
+            Some(k) => keys.append(key_dict(py, &k)?)?,
+            None => keys.append(py.None())?,
+        }
+    }
+    d.set_item("keys", keys)?;
+    if in_memory {
+        in_memory_outputs(py, d, c)?;
+    }
+    Ok(())
 }
 
 /// Run a setup (a study, an InverseDynamicsTool or an AnalyzeTool setup) as
@@ -172,16 +290,18 @@ fn in_memory_capture(
 /// as if it were the file `setup`. Returns the run summary as a dict. The
 /// GIL is released while the engine runs; `progress(label, done, total)` is
 /// called as frame loops advance (at most every 0.1 s), and Ctrl-C stops the
-/// run cleanly (the tables keep the frames solved) and raises
-/// KeyboardInterrupt. `external_scales`: (ExternalForce name or `*`,
-/// factor) on the external loads' force and torque data
-/// (`AnalyzeSetup::set_external_load_scales`).
+/// run cleanly, with any `threads` ([`watched`]: the tables keep the frames
+/// solved) and raises KeyboardInterrupt, noted with where the run stopped.
+/// `external_scales`: (ExternalForce name or `*`, factor) on the external
+/// loads' force and torque data (`AnalyzeSetup::set_external_load_scales`).
 ///
-/// With `in_memory` (no `results_dir`) the run writes no file
+/// The summary's `keys` give the run's typed key of each of its `files`
+/// ([`run_outputs`]: from the run's capture, no name taken apart). With
+/// `in_memory` (no `results_dir`) the run writes no file
 /// (`storage::results::Capture::in_memory`): the summary's `files` name
 /// the outputs under a folder that is not created (`in_memory_root`), and
-/// `outputs` holds each output, (path, output) in the order written: a
-/// table as its parts (`read_table`'s tuple, the values its file would
+/// `outputs` holds each output, (path, key, output) in the order written:
+/// a table as its parts (`read_table`'s tuple, the values its file would
 /// give), any other output as its bytes.
 #[pyfunction]
 #[pyo3(signature = (setup, text=None, results_dir=None, precision=None, threads=None, reduce=false, resume=false, sync=false, progress=None, allow_unknown=false, in_memory=false, external_scales=Vec::new()))]
@@ -202,7 +322,7 @@ fn run<'py>(
     external_scales: Vec<(String, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
-    let (capture, results_dir) = in_memory_capture(in_memory, results_dir)?;
+    let (capture, results_dir) = run_capture(in_memory, results_dir)?;
     let opts = RunOptions {
         results_dir,
         precision,
@@ -211,14 +331,14 @@ fn run<'py>(
         resume,
         reduce,
         sync,
-        progress: Some(hook),
+        progress: hook,
         // The CLI's rule: an unknown element is an error, a warning with
         // allow_unknown (`--allow-unknown`).
         allow_unknown,
         // The summary's warnings hold what it read on past.
         read_on_hook: None,
     };
-    let result = py.allow_threads(|| match (&text, external_scales.is_empty()) {
+    let result = watched(py, &pending, || match (&text, external_scales.is_empty()) {
         (Some(t), true) => tools::run_setup_text(&setup, t, &opts),
         (None, true) => tools::run_setup(&setup, &opts),
         (_, false) => {
@@ -233,15 +353,11 @@ fn run<'py>(
         }
     });
     if let Some(e) = take_pending(&pending) {
-        return Err(e);
+        return Err(with_stop_note(py, e, result.as_ref().ok(), in_memory));
     }
-    let d = match result {
-        Ok(s) => summary_dict(py, &s)?,
-        Err(e) => return Err(to_py(py, e)),
-    };
-    if let Some(c) = &capture {
-        in_memory_outputs(py, &d, c)?;
-    }
+    let s = result.map_err(|e| to_py(py, e))?;
+    let d = summary_dict(py, &s)?;
+    run_outputs(py, &d, &s, &capture, in_memory)?;
     Ok(d)
 }
 
@@ -319,18 +435,21 @@ fn predict_grf<'py>(
     in_memory: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (hook, pending) = progress_hook(progress);
-    let (capture, results_dir) = in_memory_capture(in_memory, results_dir)?;
+    let (capture, results_dir) = run_capture(in_memory, results_dir)?;
     let opts = RunOptions {
         results_dir,
         verbose: false,
         threads,
-        progress: Some(hook),
+        progress: hook,
         allow_unknown,
         ..Default::default()
     };
-    let result = py.allow_threads(|| tools::predict_grf::run_setup(&setup, text.as_deref(), &opts));
+    let result = watched(py, &pending, || {
+        tools::predict_grf::run_setup(&setup, text.as_deref(), &opts)
+    });
     if let Some(e) = take_pending(&pending) {
-        return Err(e);
+        let summary = result.as_ref().ok().map(|p| &p.summary);
+        return Err(with_stop_note(py, e, summary, in_memory));
     }
     let p = result.map_err(|e| to_py(py, e))?;
     let d = summary_dict(py, &p.summary)?;
@@ -374,14 +493,13 @@ fn predict_grf<'py>(
     pred.set_item("rejected", p.rejected.clone())?;
     pred.set_item("body_weight", p.body_weight)?;
     d.set_item("prediction", pred)?;
-    if let Some(c) = &capture {
-        in_memory_outputs(py, &d, c)?;
-    }
+    run_outputs(py, &d, &p.summary, &capture, in_memory)?;
     Ok(d)
 }
 
 /// A run in memory's folder name (never created) and its outputs, (path,
-/// table parts or bytes) in the order written, in the summary `d`.
+/// key, table parts or bytes) in the order written, in the summary `d`
+/// (the key as [`key_dict`] gives it, or None: [`run_outputs`]).
 fn in_memory_outputs(
     py: Python<'_>,
     d: &Bound<'_, PyDict>,
@@ -391,14 +509,20 @@ fn in_memory_outputs(
     d.set_item("in_memory_root", root)?;
     let outputs = PyList::empty(py);
     for (path, output) in c.outputs() {
+        let key = match c.key_of(&path) {
+            Some(k) => Some(key_dict(py, &k)?),
+            None => None,
+        };
         let path = path.display().to_string();
         match output {
             // A table as its values (nothing printed or parsed).
             storage::results::Output::Table(t) => {
                 let st = t.table(std::path::Path::new(&path)).cloned();
-                outputs.append((path, table_parts(py, st)?))?
+                outputs.append((path, key, table_parts(py, st)?))?
             }
-            storage::results::Output::Bytes(b) => outputs.append((path, PyBytes::new(py, &b)))?,
+            storage::results::Output::Bytes(b) => {
+                outputs.append((path, key, PyBytes::new(py, &b)))?
+            }
         }
     }
     d.set_item("outputs", outputs)
@@ -540,7 +664,8 @@ impl Scene {
 /// if it were the file `setup`. With `tables`, a list of one folder per
 /// candidate, each candidate's tables are written there, named as a run of
 /// its own setup of one w0 names them. Ctrl-C stops it (checked every
-/// tenth of a second, `statopt::frame::interrupt`). Returns
+/// tenth of a second on the caller's thread, [`watched`];
+/// `statopt::frame::interrupt`). Returns
 /// {"metric_names", "values" (per candidate, per metric), "failed",
 /// "frames", "loop_seconds", "warnings", "files"}.
 #[pyfunction]
@@ -555,31 +680,8 @@ fn force_sweep<'py>(
     allow_unknown: bool,
     tables: Option<Vec<PathBuf>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use statopt::frame::interrupt;
     use statopt::sweep::stream::{self, CandidateTables, SweepOptions};
     let specs = candidate_specs(&candidates)?;
-    // Ctrl-C: Python's signal check, every tenth of a second of frames; a
-    // signal (or an error of the check) asks the frame loop to stop and is
-    // raised afterwards.
-    let pending: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
-    let slot = pending.clone();
-    let last = Mutex::new(std::time::Instant::now());
-    let check = move |done: u64, total: u64| {
-        let mut at = last.lock().unwrap_or_else(|p| p.into_inner());
-        if done != 0 && done != total && at.elapsed() < std::time::Duration::from_millis(100) {
-            return;
-        }
-        *at = std::time::Instant::now();
-        Python::with_gil(|py| {
-            if let Err(e) = py.check_signals() {
-                let mut p = slot.lock().unwrap_or_else(|p| p.into_inner());
-                if p.is_none() {
-                    *p = Some(e);
-                    interrupt::request(interrupt::EXIT_SIGINT);
-                }
-            }
-        })
-    };
     let sweep = SweepOptions {
         warm,
         tables: tables
@@ -589,15 +691,19 @@ fn force_sweep<'py>(
             .collect(),
         threads,
         precision: None,
-        progress: Some(Arc::new(check)),
+        progress: None,
     };
-    let result = py
-        .allow_threads(|| stream::run_file(&setup, text.as_deref(), allow_unknown, &specs, &sweep));
+    // Ctrl-C: seen on this thread (`watched`), it asks the frame loop to
+    // stop (`statopt::frame::interrupt`) and is raised afterwards.
+    let pending: Pending = Arc::new(Mutex::new(None));
+    let result = watched(py, &pending, || {
+        stream::run_file(&setup, text.as_deref(), allow_unknown, &specs, &sweep)
+    });
     let stopped = pending.lock().unwrap_or_else(|p| p.into_inner()).take();
     if let Some(e) = stopped {
         // The stop it asked for is cleared, so that the next run is not
         // stopped.
-        interrupt::request(0);
+        statopt::frame::interrupt::request(0);
         return Err(e);
     }
     outcome_dict(py, result.map_err(|e| to_py(py, e))?)
@@ -770,45 +876,6 @@ fn key_dict<'py>(
     Ok(d)
 }
 
-/// The key of each of `files` (paths a run of `setup` wrote; `text`: the
-/// setup document it ran, when not the file's) among the outputs the
-/// setup's plan writes (`writers::names::Planned`), or None: how Python
-/// knows a table's kind and w0 without reading its name.
-#[pyfunction]
-#[pyo3(signature = (setup, files, text=None))]
-fn output_keys<'py>(
-    py: Python<'py>,
-    setup: PathBuf,
-    files: Vec<PathBuf>,
-    text: Option<String>,
-) -> PyResult<Vec<Option<Bound<'py, PyDict>>>> {
-    use statopt::writers::names::{file_name, OutputKey, Planned};
-    let planned: Vec<Planned> = analyze_setups(&setup, text.as_deref())
-        .map_err(|e| to_py(py, e))?
-        .iter()
-        .map(Planned::of)
-        .collect();
-    // Each planned name once (a study plans hundreds of tables).
-    let mut by_name = std::collections::HashMap::<String, &OutputKey>::new();
-    for k in planned.iter().flat_map(|p| &p.keys) {
-        by_name.entry(file_name(k)).or_insert(k);
-    }
-    files
-        .iter()
-        .map(|f| {
-            let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            let found = match by_name.get(name) {
-                Some(k) => Some((*k).clone()),
-                None => planned.iter().find_map(|p| p.find(name)),
-            };
-            match found {
-                Some(k) => key_dict(py, &k).map(Some),
-                None => Ok(None),
-            }
-        })
-        .collect()
-}
-
 /// `values` (a setup's figure and metric references) pointed at the
 /// tables of a run of one w0: each that names a table of a w0 sweep of the
 /// setup `text` (its weights' or statistics') names the same table of the
@@ -921,7 +988,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parse_tables, m)?)?;
     m.add_function(wrap_pyfunction!(write_table, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
-    m.add_function(wrap_pyfunction!(output_keys, m)?)?;
     m.add_function(wrap_pyfunction!(single_w0_references, m)?)?;
     m.add_function(wrap_pyfunction!(output_name, m)?)?;
     m.add_function(wrap_pyfunction!(output_tables, m)?)?;

@@ -29,9 +29,9 @@ class FramesFailedWarning(RuntimeWarning):
 
 
 def _key_matches(key: Optional[Dict[str, Any]], kind: str, w0: Optional[float], stat: Optional[str]) -> bool:
-    """Whether a table's key (the engine's, ``statopt::writers::names``,
-    through the binding) is of ``kind`` at ``w0`` or ``stat`` (neither: every
-    run of a sweep, not its statistics)."""
+    """Whether a table's key (the run's own, ``statopt::storage::key``,
+    handed over with the table by the binding) is of ``kind`` at ``w0`` or
+    ``stat`` (neither: every run of a sweep, not its statistics)."""
     if key is None or key["table"] != kind:
         return False
     if stat is not None:
@@ -65,8 +65,9 @@ class Result:
         self.metrics = metrics
         self.files = files
         self._table_files = table_files
-        # Per table (by its key in ``tables``): the engine's key of it
-        # (setup, analysis, w0, stat, table), or None.
+        # Per table (by its key in ``tables``): the run's typed key of it
+        # (setup, analysis, w0, stat, table; the binding's ``keys``), or
+        # None (a table no key names: an InverseDynamicsTool's).
         self._keys: Dict[str, Optional[Dict[str, Any]]] = {
             k: key for (k, _), key in zip(table_files, keys or [None] * len(table_files))
         }
@@ -403,10 +404,17 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
         finally:
             if isinstance(cb, _TqdmProgress):
                 cb.close()
+        # Each output's key (setup, analysis, w0, stat, table) is the run's
+        # own, handed over with its path: no name is taken apart or
+        # matched against a plan.
+        key_of = {os.path.normpath(f): k for f, k in zip(summary["files"], summary.pop("keys"))}
         kept = None
         if in_memory:
             out = Path(summary.pop("in_memory_root"))
-            kept = {os.path.normpath(p): b for p, b in summary.pop("outputs")}
+            kept = {}
+            for p, k, v in summary.pop("outputs"):
+                kept[os.path.normpath(p)] = v
+                key_of.setdefault(os.path.normpath(p), k)
         if results_dir is None:
             # Messages name tables by file; here they are res.tables' keys.
             # The temporary folder is removed: the report names no folder.
@@ -434,10 +442,7 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
                 out = None  # never created
             elif table_files:
                 scratch, out = out, None  # the result removes it once read
-        # Each table's key, from the plan of what ran (names are the
-        # engine's to make and to know).
-        keys = (_native.output_keys(str(setup), [str(p) for _, p in table_files], text=text)
-                if table_files else [])
+        keys = [key_of.get(os.path.normpath(str(p))) for _, p in table_files]
         return Result(str(setup), summary, table_files, metrics, files, scratch, keys,
                       kept if tables else None)
     finally:

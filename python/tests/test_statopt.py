@@ -588,8 +588,8 @@ def test_sweep_own_local_cluster_of_processes(repo):
 
 def test_table_names_come_from_the_engine(repo):
     """The package names tables through the binding (the engine's
-    writers::names): a table's kind and w0 come from its key, looked up
-    among the names the setup's plan makes, never from its name."""
+    writers::names); a table's kind and w0 come from the key the run hands
+    over with it (test_table_keys_come_from_the_run), never from its name."""
     from statopt import _native
 
     assert _native.output_name("cam1", "force", analysis="SO", w0=500) == "cam1_SO_w0_500_force.sto"
@@ -597,13 +597,6 @@ def test_table_names_come_from_the_engine(repo):
     assert _native.output_name("cam1", "KneeContact") == "cam1_KneeContact.sto"
     assert "GeneralizedForcesBySource" in _native.output_tables()
     setup = repo / "setups" / "leg_extension_cam1.xml"
-    keys = _native.output_keys(str(setup), ["o/leg_extension_cam1_SO_w0_500_force.sto",
-                                            "leg_extension_cam1_JR_w0_mean_KneeLoads.sto",
-                                            "leg_extension_cam1_SO_w0_7_force.sto"])
-    assert keys[0] == {"setup": "leg_extension_cam1", "analysis": "SO", "w0": 500.0, "stat": None,
-                       "table": "force"}
-    assert keys[1]["stat"] == "mean" and keys[1]["w0"] is None and keys[1]["table"] == "KneeLoads"
-    assert keys[2] is None  # a w0 the setup does not run
     text = setup.read_text()
     assert _native.single_w0_references(str(setup), text, ["../o/leg_extension_cam1_SO_w0_1_force.sto",
                                                            "leg_extension_cam1_JR_w0_mean_KneeLoads.sto",
@@ -616,6 +609,158 @@ def test_table_names_come_from_the_engine(repo):
         src = open(m.__file__).read()
         for parse in ("_W0_PREFIX", 're.compile(r"_w0_', "split_table_stem", "without_w0", "_split_key"):
             assert parse not in src, (parse, m.__file__)
+
+
+def test_table_keys_come_from_the_run(repo, tmp_path):
+    """Each table's key (setup, analysis, w0, stat, table) is the run's own,
+    handed over by the binding with the table's path (the run's capture
+    knows the typed key each output's name was made from), in memory and
+    with results_dir. It used to be found by re-reading the setup after the
+    run and matching the file names against its plan's (``output_keys``):
+    a setup edited meanwhile (here its tool renamed, as a script preparing
+    the next run would) left every table without a key, and
+    ``res.activations`` raised KeyError."""
+    from statopt import _native
+
+    assert not hasattr(_native, "output_keys")
+    for d in ("models", "motions"):
+        (tmp_path / d).symlink_to(repo / d)
+    (tmp_path / "setups").mkdir()
+    setup = tmp_path / "setups" / "leg_extension_cam1.xml"
+    text = (repo / "setups" / "leg_extension_cam1.xml").read_text()
+    tool = '<AnalyzeTool name="leg_extension_cam1">'
+    assert tool in text
+
+    def edit(label, done, total):
+        setup.write_text(text.replace(tool, '<AnalyzeTool name="renamed">'))
+
+    for results_dir in (None, tmp_path / "out"):
+        setup.write_text(text)
+        res = statopt.run(setup, results_dir=results_dir, progress=edit)
+        assert "renamed" in setup.read_text()
+        keys = [res._keys[k] for k in res.tables]
+        assert len(keys) == 54 and None not in keys, [k for k in res.tables if res._keys[k] is None]
+        assert res._keys["leg_extension_cam1_SO_w0_500_force"] == {
+            "setup": "leg_extension_cam1", "analysis": "SO", "w0": 500.0, "stat": None, "table": "force"}
+        assert res._keys["leg_extension_cam1_JR_w0_mean_KneeLoads"] == {
+            "setup": "leg_extension_cam1", "analysis": "JR", "w0": None, "stat": "mean",
+            "table": "KneeLoads"}
+        assert res.activations.index.names == ["w0", "time"]
+        assert sorted(set(res.activations.index.get_level_values("w0"))) == [1.0, 500.0, 1000.0]
+        assert len(res.table("ReactionLoads", stat="max")) == 101
+    # The binding's own word: one key per file (None for a file no key
+    # names: the figures), and each output kept in memory with its key.
+    setup.write_text(text)
+    s = _native.run(str(setup), in_memory=True)
+    by_path = dict(zip(s["files"], s["keys"]))
+    assert len(s["outputs"]) == len(s["files"])
+    for path, key, _ in s["outputs"]:
+        assert by_path[path] == key
+        name = Path(path).name
+        if name.endswith((".png", ".svg")):
+            assert key is None, name
+        else:
+            assert key is not None and key["setup"] == "leg_extension_cam1", name
+            if key["table"] in _native.output_tables():
+                assert name == _native.output_name(key["setup"], key["table"], analysis=key["analysis"],
+                                                   w0=key["w0"], stat=key["stat"]), (name, key)
+
+
+def _long_motion(repo, rows: int) -> pd.DataFrame:
+    """The leg extension's motion resampled to ``rows`` rows (a long run)."""
+    m = statopt.read_table(repo / "motions" / "leg_extension.mot")
+    t = np.linspace(m.index[0], m.index[-1], rows)
+    df = pd.DataFrame({c: np.interp(t, m.index, m[c]) for c in m.columns}, index=pd.Index(t, name="time"))
+    df.attrs = dict(m.attrs)
+    return df
+
+
+def test_ctrl_c_stops_a_run_on_two_threads_and_keeps_its_frames(repo, tmp_path):
+    """Ctrl-C stops a run with threads=2 as it stops one on the caller's
+    thread: within a fraction of a second, KeyboardInterrupt noted with
+    where it stopped, every table holding the same frames, each frame the
+    progress counted as solved, bit for bit an uninterrupted run's; resume
+    then completes it. (With threads=N the frame loop runs on a pool, where
+    Python sees no signal: the run went on to its end before.)"""
+    import os
+    import signal
+
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    motion = _long_motion(repo, 6001)
+    kw = dict(contact_weight=1, motion=motion, threads=2)
+    out = tmp_path / "stopped"
+    seen = []
+    sent = []
+
+    def progress(label, done, total):
+        seen.append(done)
+        if done > 0 and not sent:
+            sent.append(time.monotonic())
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt) as stop:
+        statopt.run(setup, results_dir=out, progress=progress, **kw)
+        time.sleep(5)  # (the signal is handled on return at the latest)
+    stopped_in = time.monotonic() - sent[0]
+    assert stopped_in < 2.0, f"took {stopped_in:.2f} s to stop"
+    notes = getattr(stop.value, "__notes__", [])
+    assert len(notes) == 1 and "stopped by a signal after the frame at t = " in notes[0], notes
+    assert "resume=True" in notes[0], notes
+    tables = {p.name: statopt.read_table(p) for p in sorted(out.glob("*.sto"))}
+    n = len(tables["leg_extension_cam1_SO_activation.sto"])
+    assert 0 < n < len(motion), n
+    assert f"hold the {n} frames solved so far" in notes[0], notes
+    # Every frame the run counted as solved is in every table, and no more.
+    assert seen[-1] == n, (seen[-3:], n)
+    for name, df in tables.items():
+        assert len(df) == n, name
+    t_last = tables["leg_extension_cam1_SO_activation.sto"].index[-1]
+    # (The note's time unrounded, the table's to its 8 decimals.)
+    t_note = float(notes[0].split("after the frame at t = ")[1].split(";")[0])
+    assert abs(t_note - t_last) <= 5e-9, (t_note, t_last)
+    # The next run is not stopped: resumed, it completes, and equals an
+    # uninterrupted run bit for bit.
+    res = statopt.run(setup, results_dir=out, resume=True, progress=False, **kw)
+    full = statopt.run(setup, progress=False, **kw)
+    for kind in ("activation", "force", "ContactForces", "ReactionLoads"):
+        a, b = res.table(kind), full.table(kind)
+        assert len(a) == len(motion)
+        assert_same(a, b)
+        assert_same(tables[f"leg_extension_cam1_{'JR' if kind == 'ReactionLoads' else 'SO'}_{kind}.sto"],
+                    b.iloc[:n])
+
+
+def test_ctrl_c_stops_a_force_sweep_on_two_threads(repo):
+    """Ctrl-C stops statopt.force_sweep with threads=2 within a fraction of a
+    second (its frame loop runs on a pool of two threads, where Python sees
+    no signal): KeyboardInterrupt, and the next sweep runs."""
+    import os
+    import signal
+
+    setup = repo / "setups" / "leg_extension_cam1.xml"
+    motion = _long_motion(repo, 20001)
+    sent = []
+
+    def kill():
+        sent.append(time.monotonic())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(1.0, kill)
+    timer.start()
+    start = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            statopt.force_sweep(setup, [{"w0": 1}, {"w0": 500}, {"w0": 1000}, {"w0": 2}],
+                                threads=2, motion=motion)
+            time.sleep(5)
+    finally:
+        timer.join()
+    # (Not stopped before the signal, and soon after it.)
+    assert sent and sent[0] - start >= 0.9
+    stopped_in = time.monotonic() - sent[0]
+    assert stopped_in < 2.0, f"took {stopped_in:.2f} s to stop"
+    rows = statopt.force_sweep(setup, [{"w0": 1}], threads=2)
+    assert rows[0]["frames"] == 101 and rows[0]["failed"] == 0
 
 
 def test_summary_names_the_contacts_its_tables_show(repo):

@@ -461,6 +461,19 @@ impl Capture {
         self.run.kept().outputs.clone()
     }
 
+    /// The typed key of the output the run wrote at `path` (kept or not):
+    /// the key its file name was made from (`writers::names::file_name`
+    /// tells the capture, [`name`]), or None for a file no key names (a
+    /// figure, a study's CSV, a table named by its setup). What the run's
+    /// callers (the Python binding) hand on with each output, so that no
+    /// caller takes a name apart or matches it against a plan.
+    pub fn key_of(&self, path: &Path) -> Option<OutputKey> {
+        match self.run.kept().id(&key(path)) {
+            OutputId::Keyed { key, .. } => Some(key),
+            OutputId::File(_) => None,
+        }
+    }
+
     /// The output of typed key `key` the run wrote in folder `dir`, when
     /// the capture keeps it.
     pub fn output(&self, dir: &Path, key: &OutputKey) -> Option<Output> {
@@ -711,6 +724,55 @@ mod tests {
         assert_eq!(c.outputs().len(), 1);
         drop(c);
         assert!(get(&dir.join("a.txt")).is_none(), "kept past its capture");
+    }
+
+    /// The capture knows the typed key of every output the run wrote under
+    /// it, kept or not, in memory or in files (the key its name was made
+    /// from, said by [`name`] when the name was made); a file no key names
+    /// has none.
+    #[test]
+    fn a_capture_knows_the_key_of_every_output_written_kept_or_not() {
+        use crate::storage::key::{OutputKind, RunKey, Sweep};
+        let tmp = crate::test_dir::TempDir::new("results_key_of");
+        let key = |analysis: &str, sweep: Sweep, kind: OutputKind| OutputKey {
+            run: RunKey {
+                setup: "setup".into(),
+                analysis: Some(analysis.into()),
+                sweep,
+            },
+            kind,
+        };
+        let force = key("SO", Sweep::Weight(500.0), OutputKind::Force);
+        let loads = key("JR", Sweep::Single, OutputKind::ReactionLoads);
+        for c in [Capture::new(Some(tmp.path())), Capture::in_memory()] {
+            let dir = c.root().unwrap().to_path_buf();
+            // Named as `writers::names::file_name` names them.
+            name("setup_SO_w0_500_force.sto", &force);
+            name("setup_JR_ReactionLoads.sto", &loads);
+            let wanted = dir.join("setup_JR_ReactionLoads.sto");
+            want(&wanted);
+            for f in [
+                "setup_SO_w0_500_force.sto",
+                "setup_JR_ReactionLoads.sto",
+                "plot.svg",
+            ] {
+                write(&dir.join(f), b"x".to_vec()).unwrap();
+            }
+            assert_eq!(
+                c.key_of(&dir.join("setup_SO_w0_500_force.sto")),
+                Some(force.clone())
+            );
+            // Spelt another way, the same output.
+            let again = dir
+                .join("sub")
+                .join("..")
+                .join("setup_JR_ReactionLoads.sto");
+            assert_eq!(c.key_of(&again), Some(loads.clone()));
+            assert_eq!(c.key_of(&dir.join("plot.svg")), None);
+            // Kept: every output in memory, the wanted one with files.
+            assert_eq!(c.outputs().len(), if c.run.files { 1 } else { 3 });
+            drop(c);
+        }
     }
 
     #[test]
