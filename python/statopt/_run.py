@@ -241,15 +241,21 @@ def _table_files(files: List[str]) -> List[Tuple[str, Path]]:
     return out
 
 
-def _read_metrics(files: List[str], kept: Optional[Dict[str, Any]] = None) -> Dict[str, float]:
-    """The metrics of the ``_metrics.csv`` files among ``files`` (from their
+def _read_metrics(files: List[str], key_of: Dict[str, Optional[Dict[str, Any]]],
+                  kept: Optional[Dict[str, Any]] = None) -> Dict[str, float]:
+    """The metrics of the metrics files among ``files`` (their run's key,
+    ``key_of`` by normalised path, says which: table ``metrics``; from their
     bytes in ``kept`` for a run kept in memory)."""
     metrics: Dict[str, float] = {}
-    csvs = [Path(f) for f in files if f.endswith("_metrics.csv")]
-    for p in csvs:
+    csvs = []
+    for f in files:
+        k = key_of.get(os.path.normpath(f))
+        if k is not None and k["table"] == "metrics":
+            csvs.append((Path(f), k["setup"]))
+    for p, setup in csvs:
         # One file per setup (a study writes several, and its own): then
-        # each metric is named after its file, '<name>.<metric>'.
-        prefix = p.name[: -len("_metrics.csv")] + "." if len(csvs) > 1 else ""
+        # each metric is named after its setup (or study), '<name>.<metric>'.
+        prefix = setup + "." if len(csvs) > 1 else ""
         if kept is not None:
             rows = csv.DictReader(io.StringIO(kept[os.path.normpath(str(p))].decode("utf-8"), newline=""))
         else:
@@ -431,7 +437,7 @@ def _execute(native, setup, results_dir, progress, tables, overrides, options) -
                 log.warning("%s", w)
         if summary["failure_line"]:
             warnings.warn(summary["failure_line"], FramesFailedWarning, stacklevel=3)
-        metrics = _read_metrics(summary["files"], kept)
+        metrics = _read_metrics(summary["files"], key_of, kept)
         table_files = _table_files(summary["files"]) if tables else []
         files = list(summary["files"]) if results_dir is not None else []
         scratch = None
