@@ -1024,6 +1024,64 @@ fn the_landing_foot_brakes_along_its_leg_through_double_support() {
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
 }
 
+/// The heel-strike impact (issue 36, step 8): over the first
+/// `HEEL_STRIKE_IMPACT` (16 ms) after the strike the landing foot's force has
+/// no part along the walking direction (the plates' landing force is almost
+/// vertical then: +13 and +11 N AP on 120 and 266 N at 0.44 and 0.45 s of
+/// 2014001 C5_01). Along its leg the landing heel braked −45 and −56 N
+/// there and the trial's AP rho was 0.677; with the impact −37 and −47 N
+/// and 0.695, the vertical bar kept.
+#[test]
+fn the_landing_heel_brakes_less_through_its_impact() {
+    use statopt::contacts::events::HEEL_STRIKE_IMPACT;
+    let Some(d) = shared_models("walk_schreiber2019", "predict_grf heel impact") else {
+        return;
+    };
+    let s = d.join("2014001");
+    let ik = s.join("ik/C5_01/C5_01_ik.mot");
+    let (t0, t1) = time_range(&ik);
+    let setup = bar_setup(
+        "walk_2014001_c5_01_impact",
+        &s.join("scaling/2014001_scaledModelAdjusted.osim"),
+        &ik,
+        &s.join("dynamic/2014001_C5_01_grf.xml"),
+        (t0 + 0.03, t1 - 0.03),
+        6.0,
+        100.0,
+    );
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_walk_2014001_c5_01_impact")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    let ts = p.events.feet[0].strikes[0];
+    let m = p.measured.as_ref().expect("measured plates");
+    let mut frames = 0;
+    for (i, &t) in p.predicted.time.iter().enumerate() {
+        if t < ts - 1e-9 || t > ts + HEEL_STRIKE_IMPACT + 1e-9 {
+            continue;
+        }
+        let (own, f) = (m.force[0][i], p.predicted.force[0][i]);
+        println!("t = {t}: landing foot measured {own:?}, predicted {f:?}");
+        // Along its leg alone: −45 and −56 N.
+        let along_leg = [-45.0, -56.0][frames.min(1)];
+        assert!(
+            f.x > along_leg + 5.0,
+            "t = {t}: the landing heel brakes {} N",
+            f.x
+        );
+        frames += 1;
+    }
+    assert_eq!(frames, 2, "frames in the impact");
+    let (rho_v, rmse_v) = mean(&p.metrics, 'y');
+    let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
+    println!("vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW");
+    assert!(rho_ap >= 0.69, "AP rho {rho_ap}");
+    assert!(rho_v >= 0.95 && rmse_v <= 10.0, "vertical {rho_v} {rmse_v}");
+    assert!(p.rejected.is_none(), "{:?}", p.rejected);
+}
+
 /// An IK file as motion capture at 1200 Hz writes it: the Hamner running
 /// trial (subject02, 3 m/s; a SIMM header without `inDegrees`, degrees,
 /// 126 marker columns after the coordinates) resampled tenfold from 120 Hz
