@@ -401,8 +401,9 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     }
     let lands = (!landing.is_empty()).then(|| {
         format!(
-            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load)",
-            landing.join(", ")
+            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load), but over the heel-strike impact, its first {:.0} ms, it has none along the walking direction",
+            landing.join(", "),
+            HEEL_STRIKE_IMPACT * 1000.0
         )
     });
     let trails = (!spans.is_empty()).then(|| {
@@ -868,7 +869,8 @@ mod tests {
         let note = targets_note('r', &m[0]).unwrap();
         assert!(
             note.contains("trails through double support over [0.900, 0.900] s")
-                && note.contains("lands into double support over [0.500, 0.620] s"),
+                && note.contains("lands into double support over [0.500, 0.620] s")
+                && note.contains("its first 16 ms, it has none along the walking direction"),
             "{note}"
         );
     }
