@@ -348,6 +348,46 @@ pub fn landing_targets(
     out
 }
 
+/// The heel-strike impact alone (a muscle-driven model's walking,
+/// docs/grf_prediction.md, step 8): over the first [`HEEL_STRIKE_IMPACT`]
+/// after each transition strike of foot s, foot s's force has no part along
+/// the walking direction h; the rows of [`landing_targets`] over its impact
+/// (the line is the floor normal, so the row's axis is h), knots every
+/// [`TRANSITION_KNOT_STEP`] at most, the target off just after the impact.
+/// A strike in running takes over from no foot on the floor (not a
+/// transition) and gets none. Per foot (0 right, 1 left).
+pub fn impact_targets(events: &GaitEvents, h: Vector3<f64>) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for (f, knots) in events.feet.iter().zip(out.iter_mut()) {
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if f.transitions.get(k).copied().unwrap_or(false) {
+                knots.extend(double_support_knots(ts, HEEL_STRIKE_IMPACT, |_| {
+                    Some(vec![(h, 0.0), (Vector3::zeros(), 0.0)])
+                }));
+            }
+        }
+        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+        knots.dedup_by(|b, a| b.0 <= a.0);
+    }
+    out
+}
+
+/// The heel-strike impact written into a muscle-driven model's contact set
+/// `set` ([`impact_targets`], no other part of the step-to-step
+/// transition: its effort minimum shares the load between the feet
+/// itself): the same soft rows as [`apply_transition`]'s landing foot, a
+/// newton off them costing what one on the root residual of optimal force
+/// `root_optimal_force` costs.
+pub fn apply_impact(events: &GaitEvents, set: &mut FootContactSet, root_optimal_force: f64) {
+    let n = set.floor_normal();
+    let h = set.decision.evidence.heading;
+    let h = (h - n * h.dot(&n)).normalize();
+    set.force_target = impact_targets(events, h);
+    if set.force_target.iter().any(|k| !k.is_empty()) {
+        set.target_optimal_force = vec![root_optimal_force; 2];
+    }
+}
+
 /// Whether a knot is a landing foot's ([`landing_targets`]: its second row
 /// holds nothing).
 pub fn is_landing_knot(k: &TargetKnot) -> bool {
@@ -374,10 +414,12 @@ pub fn merge_targets(
 }
 
 /// The summary's line on the force targets of foot `side` (None without
-/// any): each double support it trails through.
+/// any): each double support it trails through or lands into, and each
+/// heel-strike impact held alone ([`impact_targets`]).
 pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     let mut spans = Vec::new();
     let mut landing = Vec::new();
+    let mut impact = Vec::new();
     let mut start: Option<&TargetKnot> = None;
     for (i, k) in knots.iter().enumerate() {
         if k.1 && start.is_none() {
@@ -386,7 +428,10 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
         let ends = !k.1 || i + 1 == knots.len();
         if let (true, Some(a)) = (ends, start) {
             let last = if k.1 { k } else { &knots[i - 1] };
-            if is_landing_knot(a) {
+            if is_landing_knot(a) && last.0 - a.0 <= HEEL_STRIKE_IMPACT + 1e-9 {
+                // The impact alone ([`impact_targets`]).
+                impact.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
+            } else if is_landing_knot(a) {
                 landing.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
             } else {
                 spans.push(format!(
@@ -412,10 +457,14 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
             spans.join(", ")
         )
     });
-    match (trails, lands) {
-        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
-        (a, b) => a.or(b),
-    }
+    let impacts = (!impact.is_empty()).then(|| {
+        format!(
+            "foot {side}'s heel-strike impact over {}: no force along the walking direction",
+            impact.join(", ")
+        )
+    });
+    let parts: Vec<String> = [trails, lands, impacts].into_iter().flatten().collect();
+    (!parts.is_empty()).then(|| parts.join("; "))
 }
 
 /// The line from foot `side`'s toe (its hallux point, the mean of them if
@@ -873,6 +922,57 @@ mod tests {
                 && note.contains("its first 16 ms, it has none along the walking direction"),
             "{note}"
         );
+    }
+
+    /// The impact alone (muscle-driven walking): per transition strike,
+    /// knots from the strike to 16 ms after it, each holding the force
+    /// along the walking direction h to zero (the landing target's impact
+    /// rows), then off; a strike that takes over from no foot (running)
+    /// gets none; the summary names the impact, not a landing along the leg.
+    #[test]
+    fn the_impact_alone_holds_the_landing_heels_ap_force() {
+        let mut ev = GaitEvents::default();
+        ev.feet[0] = FootEvents {
+            strikes: vec![0.5, 1.6],
+            offs: vec![],
+            transitions: vec![true, false],
+        };
+        ev.feet[1] = FootEvents {
+            strikes: vec![1.05],
+            offs: vec![0.62],
+            transitions: vec![true],
+        };
+        let h = Vector3::new(0.0, 0.0, -1.0);
+        let k = impact_targets(&ev, h);
+        for (foot, ts) in [(0, 0.5), (1, 1.05)] {
+            let t = &k[foot];
+            assert_eq!(t.first().unwrap().0, ts);
+            assert!(t.windows(2).all(|w| w[0].0 < w[1].0));
+            let last = t.last().unwrap();
+            assert!(
+                !last.1 && (last.0 - ts - HEEL_STRIKE_IMPACT).abs() < 1e-5,
+                "{t:?}"
+            );
+            // Knots every 4 ms (16 ms in 4 steps), both ends on.
+            assert_eq!(t.len(), 6, "{t:?}");
+            for knot in &t[..5] {
+                assert!(knot.1 && is_landing_knot(knot));
+                assert_eq!(knot.2[0], (h, 0.0));
+            }
+            // The same rows as the landing target's over its impact.
+            let landing = landing_targets(&ev, h, Vector3::y(), |_, _| {
+                Some(Vector3::new(0.0, 0.9, 0.3))
+            });
+            assert_eq!(landing[foot][0].2, t[0].2);
+        }
+        let note = targets_note('r', &k[0]).unwrap();
+        assert_eq!(
+            note,
+            "foot r's heel-strike impact over [0.500, 0.516] s: no force along the walking direction"
+        );
+        assert!(impact_targets(&GaitEvents::default(), h)
+            .iter()
+            .all(|t| t.is_empty()));
     }
 
     /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off. The
