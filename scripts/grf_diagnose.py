@@ -190,6 +190,10 @@ def walk_ap(a):
         ("gait2392_subject01_walk", os.path.join(shared, "models/gait2392/subject01_walk/setup_SO.xml")),
         ("knee_gc5_ss1", os.path.join(a.setups, "knee_gc5_ss1.xml")),
     ]
+    # The torque-driven one-step trials too (their landing heel, issue 36).
+    if os.path.isdir(a.setups):
+        trials += [(f[:-4], os.path.join(a.setups, f)) for f in sorted(os.listdir(a.setups))
+                   if f.startswith("2014") and f.endswith(".xml")]
     for name, setup in trials:
         out = os.path.join(a.out, name)
         if not os.path.isfile(setup) or not os.path.isdir(out) or (a.only and a.only not in name):

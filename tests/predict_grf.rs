@@ -86,7 +86,24 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
     let (f, _) = p.summary.root_force_peak.clone().unwrap();
     assert!(f < 0.03 * p.body_weight, "root residual {f} N");
     assert!(p.contacts.off_intervals.iter().all(|o| o.is_empty()));
-    assert!(p.contacts.force_target.iter().all(|k| k.is_empty()));
+    // Its only target is the landing heel's impact (step 8): every knot a
+    // landing one, within 16 ms of a strike of its foot. At 60 Hz the
+    // solver's frames fall 0.7 us before the strike and 16.7 ms after it,
+    // outside the impact, so its forces are those without (the table).
+    for (s, knots) in p.contacts.force_target.iter().enumerate() {
+        let strikes = &p.events.feet[s].strikes;
+        assert!(!knots.is_empty(), "foot {s}: no impact");
+        for k in knots {
+            assert!(statopt::contacts::events::is_landing_knot(k), "{k:?}");
+            assert!(
+                strikes
+                    .iter()
+                    .any(|&ts| k.0 >= ts && k.0 <= ts + 0.016 + 1e-5),
+                "foot {s}: knot at {} s, strikes {strikes:?}",
+                k.0
+            );
+        }
+    }
 }
 
 #[test]
@@ -122,6 +139,54 @@ fn moco_walk3d_overground_walk_against_force_plates() {
         .files
         .iter()
         .any(|f| f.to_string_lossy().ends_with("_root_residuals.xml")));
+}
+
+/// The heel-strike impact for muscle-driven walking too (step 8): over the
+/// first `HEEL_STRIKE_IMPACT` (16 ms) after each strike that takes over
+/// from a foot on the floor, the landing foot has no force along the
+/// walking direction (a soft row of the root residual's cost; nothing else
+/// competes with it in a muscle model, so it is met to well within 1 N).
+/// Without it moco_walk3d's landing heels braked -40 and -43 N at 1.445 and
+/// 1.455 s and -59 N at 0.875 s, and the trial's AP rho was 0.976 / 2.4 %
+/// BW; with it 0.980 / 2.2, asserted at 0.978 (a margin of 0.002, half
+/// the change).
+#[test]
+fn a_muscle_models_landing_heel_has_no_ap_force_over_its_impact() {
+    use statopt::contacts::events::HEEL_STRIKE_IMPACT;
+    let Some((metrics, p)) = predict("moco_walk3d", "moco_impact") else {
+        return;
+    };
+    let n = p.contacts.floor_normal();
+    let h = p.contacts.decision.evidence.heading;
+    let h = (h - n * h.dot(&n)).normalize();
+    // Overground along the lab's x axis.
+    assert!(h.x > 0.99, "walking direction {h:?}");
+    let m = p.measured.as_ref().expect("measured plates");
+    let mut frames = 0;
+    for (s, f) in p.events.feet.iter().enumerate() {
+        for (&ts, _) in f.strikes.iter().zip(&f.transitions).filter(|x| *x.1) {
+            for (i, &t) in p.predicted.time.iter().enumerate() {
+                if t < ts - 1e-9 || t > ts + HEEL_STRIKE_IMPACT + 1e-9 {
+                    continue;
+                }
+                let (own, ap) = (m.force[s][i], p.predicted.force[s][i].dot(&h));
+                println!(
+                    "t = {t}: foot {s} measured AP {:.1} N on {:.1}, predicted AP {ap:.2} N",
+                    own.dot(&h),
+                    own.dot(&n)
+                );
+                assert!(ap.abs() <= 1.0, "t = {t}: foot {s}: AP {ap} N");
+                frames += 1;
+            }
+        }
+    }
+    assert_eq!(frames, 3, "frames in the impacts");
+    let (rho_ap, rmse_ap) = mean(&metrics, 'x');
+    println!("moco_walk3d with the impact: AP {rho_ap:.3} / {rmse_ap:.1} % BW");
+    assert!(
+        rho_ap >= 0.978 && rmse_ap <= 2.3,
+        "anteroposterior {rho_ap} {rmse_ap}"
+    );
 }
 
 /// The trailing foot's toes push off in pre-swing (issue 36, muscle-driven
@@ -840,10 +905,15 @@ fn one_step_torque_driven_walking() {
     // newton on the pelvis costs): over the first 40 ms the leg's line asks
     // more shear of the trailing foot than the requirement's, which the
     // lightly loaded landing heel cannot brake within its friction cone, so
-    // the target and the pelvis share up to 54 N (8 % BW); the mean departure stays
-    // under 3 % BW. The landing (left) foot's force points along its leg,
-    // the line from its heel to the mass centre, over the same span, held
-    // as closely.
+    // the target and the pelvis share up to 54 N (8 % BW). The landing
+    // (left) foot's force points along its leg, the line from its heel to
+    // the mass centre, over the same span, held as closely, but for the
+    // heel-strike impact (its first 16 ms), where it has no force along the
+    // walking direction, departed from by 17 and 21 N (the requirement's
+    // AP lacks that there, shared with the trailing target and the pelvis).
+    // The mean departure: 2.9 % BW along the leg from the strike, 3.0 %
+    // with the impact (over the rows other than the impact's, 3.08 % before
+    // it and 3.05 % with it): under 3.5 % BW.
     use statopt::contacts::events::is_landing_knot;
     let (mut checked, mut off) = (0, 0.0);
     for side in 0..2 {
@@ -880,7 +950,7 @@ fn one_step_torque_driven_walking() {
     }
     assert!(checked >= 15, "{checked} rows in double support");
     let mean_off = off / checked as f64 / p.body_weight;
-    assert!(mean_off < 0.03, "mean departure {mean_off} BW");
+    assert!(mean_off < 0.035, "mean departure {mean_off} BW");
     // Walking at about 1.4 m/s: the walking slip gate, hardly scaled.
     let v = p.contacts.gait_speed;
     assert!(v > 1.2 && v < 1.6, "gait speed {v}");
@@ -1020,6 +1090,64 @@ fn the_landing_foot_brakes_along_its_leg_through_double_support() {
     println!("landing foot AP rho {rho:.3}; vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW");
     // 0.43 along its leg, −0.13 before; the trial's mean 0.677 (0.393).
     assert!(rho >= 0.3, "landing foot AP rho {rho}");
+    assert!(rho_v >= 0.95 && rmse_v <= 10.0, "vertical {rho_v} {rmse_v}");
+    assert!(p.rejected.is_none(), "{:?}", p.rejected);
+}
+
+/// The heel-strike impact (issue 36, step 8): over the first
+/// `HEEL_STRIKE_IMPACT` (16 ms) after the strike the landing foot's force has
+/// no part along the walking direction (the plates' landing force is almost
+/// vertical then: +13 and +11 N AP on 120 and 266 N at 0.44 and 0.45 s of
+/// 2014001 C5_01). Along its leg the landing heel braked −45 and −56 N
+/// there and the trial's AP rho was 0.677; with the impact −37 and −47 N
+/// and 0.695, the vertical bar kept.
+#[test]
+fn the_landing_heel_brakes_less_through_its_impact() {
+    use statopt::contacts::events::HEEL_STRIKE_IMPACT;
+    let Some(d) = shared_models("walk_schreiber2019", "predict_grf heel impact") else {
+        return;
+    };
+    let s = d.join("2014001");
+    let ik = s.join("ik/C5_01/C5_01_ik.mot");
+    let (t0, t1) = time_range(&ik);
+    let setup = bar_setup(
+        "walk_2014001_c5_01_impact",
+        &s.join("scaling/2014001_scaledModelAdjusted.osim"),
+        &ik,
+        &s.join("dynamic/2014001_C5_01_grf.xml"),
+        (t0 + 0.03, t1 - 0.03),
+        6.0,
+        100.0,
+    );
+    let opts = RunOptions {
+        results_dir: Some(common::out_dir("predict_grf_walk_2014001_c5_01_impact")),
+        verbose: false,
+        ..Default::default()
+    };
+    let p = predict_grf::run(&setup, &opts).unwrap();
+    let ts = p.events.feet[0].strikes[0];
+    let m = p.measured.as_ref().expect("measured plates");
+    let mut frames = 0;
+    for (i, &t) in p.predicted.time.iter().enumerate() {
+        if t < ts - 1e-9 || t > ts + HEEL_STRIKE_IMPACT + 1e-9 {
+            continue;
+        }
+        let (own, f) = (m.force[0][i], p.predicted.force[0][i]);
+        println!("t = {t}: landing foot measured {own:?}, predicted {f:?}");
+        // Along its leg alone: −45 and −56 N.
+        let along_leg = [-45.0, -56.0][frames.min(1)];
+        assert!(
+            f.x > along_leg + 5.0,
+            "t = {t}: the landing heel brakes {} N",
+            f.x
+        );
+        frames += 1;
+    }
+    assert_eq!(frames, 2, "frames in the impact");
+    let (rho_v, rmse_v) = mean(&p.metrics, 'y');
+    let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
+    println!("vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW");
+    assert!(rho_ap >= 0.69, "AP rho {rho_ap}");
     assert!(rho_v >= 0.95 && rmse_v <= 10.0, "vertical {rho_v} {rmse_v}");
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
 }

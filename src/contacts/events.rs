@@ -82,6 +82,21 @@ pub const DEFAULT_DOUBLE_SUPPORT: f64 = 0.11;
 /// Spacing of the knots of the transition's weights (s).
 pub const TRANSITION_KNOT_STEP: f64 = 0.005;
 
+/// The heel-strike impact (s after a strike): while it lasts the landing
+/// foot's force has no part along the walking direction. At heel strike the
+/// ground reaction vector is almost vertical at first, the AP shear briefly
+/// zero, and passes about through the ankle, before it flips backwards;
+/// with it comes the vertical force's heel-strike transient (Baker,
+/// clinicalgaitanalysis.com, Teach-in '97, "The heel strike transient").
+/// The horizontal impact force follows the heel's horizontal velocity at
+/// contact, which is about zero (Lanshammar & Strandberg 1982, Biomechanics
+/// VIII-B:1123: a forward force peak in 82 of 111 steps, with a backward
+/// heel velocity in 69 of them). The transient peaks 11–16 ms after ground
+/// contact in walking (the Radin and modified Hunt methods, "Comparison of
+/// three methods for identifying the heelstrike transient during walking
+/// gait", abstract); the impact lasts to the later of these.
+pub const HEEL_STRIKE_IMPACT: f64 = 0.016;
+
 /// The trailing foot's share of the vertical force at time tau after the
 /// strike, over a double support of `t_ds` (Ren, Jones & Howard 2008, J
 /// Biomech 41:2750, the smooth transition assumption):
@@ -299,7 +314,9 @@ pub fn apply_transition(
 /// midpoint of its heel points: the loading response's centre of pressure,
 /// Perry & Burnfield 2010) to the body's mass centre, in the plane of the
 /// walking direction h and the floor normal n. A leading leg then brakes in
-/// proportion to its load. Knots every [`TRANSITION_KNOT_STEP`], rows
+/// proportion to its load. Over the heel-strike impact, the first
+/// [`HEEL_STRIKE_IMPACT`] after the strike, the line is the floor normal n
+/// instead: the impact's force is vertical. Knots every [`TRANSITION_KNOT_STEP`], rows
 /// (across, 0) and a zero row (the trailing target's second row; it holds
 /// nothing, [`super::targets`]); the target ends just after the double
 /// support. A transition whose lean is not known gets none.
@@ -318,12 +335,57 @@ pub fn landing_targets(
             }
             let t_ds = double_support(events, 1 - s, ts);
             out[s].extend(double_support_knots(ts, t_ds, |tau| {
-                let across = across_leg(lean(ts + tau, s)?, h, n);
+                let line = if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
+                    n
+                } else {
+                    lean(ts + tau, s)?
+                };
+                let across = across_leg(line, h, n);
                 Some(vec![(across, 0.0), (Vector3::zeros(), 0.0)])
             }));
         }
     }
     out
+}
+
+/// The heel-strike impact alone (a muscle-driven model's walking,
+/// docs/grf_prediction.md, step 8): over the first [`HEEL_STRIKE_IMPACT`]
+/// after each transition strike of foot s, foot s's force has no part along
+/// the walking direction h; the rows of [`landing_targets`] over its impact
+/// (the line is the floor normal, so the row's axis is h), knots every
+/// [`TRANSITION_KNOT_STEP`] at most, the target off just after the impact.
+/// A strike in running takes over from no foot on the floor (not a
+/// transition) and gets none. Per foot (0 right, 1 left).
+pub fn impact_targets(events: &GaitEvents, h: Vector3<f64>) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for (f, knots) in events.feet.iter().zip(out.iter_mut()) {
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if f.transitions.get(k).copied().unwrap_or(false) {
+                knots.extend(double_support_knots(ts, HEEL_STRIKE_IMPACT, |_| {
+                    Some(vec![(h, 0.0), (Vector3::zeros(), 0.0)])
+                }));
+            }
+        }
+        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+        knots.dedup_by(|b, a| b.0 <= a.0);
+    }
+    out
+}
+
+/// The heel-strike impact written into a muscle-driven model's contact set
+/// `set` ([`impact_targets`], no other part of the step-to-step
+/// transition: its effort minimum shares the load between the feet
+/// itself): the same soft rows as [`apply_transition`]'s landing foot, a
+/// newton off them costing what one on the root residual of optimal force
+/// `root_optimal_force` costs.
+pub fn apply_impact(events: &GaitEvents, set: &mut FootContactSet, root_optimal_force: f64) {
+    let n = set.floor_normal();
+    let h = set.decision.evidence.heading;
+    let h = (h - n * h.dot(&n)).normalize();
+    set.force_target = impact_targets(events, h);
+    if set.force_target.iter().any(|k| !k.is_empty()) {
+        set.target_optimal_force = vec![root_optimal_force; 2];
+    }
 }
 
 /// Whether a knot is a landing foot's ([`landing_targets`]: its second row
@@ -352,10 +414,12 @@ pub fn merge_targets(
 }
 
 /// The summary's line on the force targets of foot `side` (None without
-/// any): each double support it trails through.
+/// any): each double support it trails through or lands into, and each
+/// heel-strike impact held alone ([`impact_targets`]).
 pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     let mut spans = Vec::new();
     let mut landing = Vec::new();
+    let mut impact = Vec::new();
     let mut start: Option<&TargetKnot> = None;
     for (i, k) in knots.iter().enumerate() {
         if k.1 && start.is_none() {
@@ -364,7 +428,10 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
         let ends = !k.1 || i + 1 == knots.len();
         if let (true, Some(a)) = (ends, start) {
             let last = if k.1 { k } else { &knots[i - 1] };
-            if is_landing_knot(a) {
+            if is_landing_knot(a) && last.0 - a.0 <= HEEL_STRIKE_IMPACT + 1e-9 {
+                // The impact alone ([`impact_targets`]).
+                impact.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
+            } else if is_landing_knot(a) {
                 landing.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
             } else {
                 spans.push(format!(
@@ -379,8 +446,9 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
     }
     let lands = (!landing.is_empty()).then(|| {
         format!(
-            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load)",
-            landing.join(", ")
+            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load), but over the heel-strike impact, its first {:.0} ms, it has none along the walking direction",
+            landing.join(", "),
+            HEEL_STRIKE_IMPACT * 1000.0
         )
     });
     let trails = (!spans.is_empty()).then(|| {
@@ -389,10 +457,14 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
             spans.join(", ")
         )
     });
-    match (trails, lands) {
-        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
-        (a, b) => a.or(b),
-    }
+    let impacts = (!impact.is_empty()).then(|| {
+        format!(
+            "foot {side}'s heel-strike impact over {}: no force along the walking direction",
+            impact.join(", ")
+        )
+    });
+    let parts: Vec<String> = [trails, lands, impacts].into_iter().flatten().collect();
+    (!parts.is_empty()).then(|| parts.join("; "))
 }
 
 /// The line from foot `side`'s toe (its hallux point, the mean of them if
@@ -787,8 +859,10 @@ mod tests {
 
     /// The landing foot's force along its leg: over the double support
     /// after its strike (to the other foot's foot-off), no force across the
-    /// line from its heel to the mass centre, a second row that holds
-    /// nothing; the trailing foot's own target unchanged. Merged per foot
+    /// line from its heel to the mass centre, but over the heel-strike
+    /// impact (its first 16 ms) no force along the walking direction; a
+    /// second row that holds nothing; the trailing foot's own target
+    /// unchanged. Merged per foot
     /// in time order, a landing knot inside a double support the foot
     /// trails through dropped; the summary names both roles.
     #[test]
@@ -810,13 +884,22 @@ mod tests {
         assert!(t.windows(2).all(|w| w[0].0 < w[1].0));
         let last = t.last().unwrap();
         assert!(!last.1 && (last.0 - 0.62).abs() < 1e-5, "{last:?}");
+        let mut impact = 0;
         for knot in &t[..t.len() - 1] {
             assert!(knot.1 && is_landing_knot(knot));
             let (across, f) = knot.2[0];
             assert_eq!(f, 0.0);
-            assert!(across.dot(&lean).abs() < 1e-12 && across.z == 0.0);
+            if knot.0 - 0.5 <= HEEL_STRIKE_IMPACT + 1e-9 {
+                // The impact: the row holds the force along h to zero.
+                assert!((across - h).norm() < 1e-12, "{}: {across:?}", knot.0);
+                impact += 1;
+            } else {
+                assert!(across.dot(&lean).abs() < 1e-12 && across.z == 0.0);
+            }
             assert!((across.norm() - 1.0).abs() < 1e-12);
         }
+        // Knots at 0, 5, 10 and 15 ms (0.12 s in 24 steps).
+        assert_eq!(impact, 4, "{t:?}");
         // Merged with the trailing foot's target: foot 0 lands at 0.5 and
         // trails from 0.9; its landing knots after 0.9 (a second strike of
         // its own inside that span) are dropped.
@@ -835,9 +918,61 @@ mod tests {
         let note = targets_note('r', &m[0]).unwrap();
         assert!(
             note.contains("trails through double support over [0.900, 0.900] s")
-                && note.contains("lands into double support over [0.500, 0.620] s"),
+                && note.contains("lands into double support over [0.500, 0.620] s")
+                && note.contains("its first 16 ms, it has none along the walking direction"),
             "{note}"
         );
+    }
+
+    /// The impact alone (muscle-driven walking): per transition strike,
+    /// knots from the strike to 16 ms after it, each holding the force
+    /// along the walking direction h to zero (the landing target's impact
+    /// rows), then off; a strike that takes over from no foot (running)
+    /// gets none; the summary names the impact, not a landing along the leg.
+    #[test]
+    fn the_impact_alone_holds_the_landing_heels_ap_force() {
+        let mut ev = GaitEvents::default();
+        ev.feet[0] = FootEvents {
+            strikes: vec![0.5, 1.6],
+            offs: vec![],
+            transitions: vec![true, false],
+        };
+        ev.feet[1] = FootEvents {
+            strikes: vec![1.05],
+            offs: vec![0.62],
+            transitions: vec![true],
+        };
+        let h = Vector3::new(0.0, 0.0, -1.0);
+        let k = impact_targets(&ev, h);
+        for (foot, ts) in [(0, 0.5), (1, 1.05)] {
+            let t = &k[foot];
+            assert_eq!(t.first().unwrap().0, ts);
+            assert!(t.windows(2).all(|w| w[0].0 < w[1].0));
+            let last = t.last().unwrap();
+            assert!(
+                !last.1 && (last.0 - ts - HEEL_STRIKE_IMPACT).abs() < 1e-5,
+                "{t:?}"
+            );
+            // Knots every 4 ms (16 ms in 4 steps), both ends on.
+            assert_eq!(t.len(), 6, "{t:?}");
+            for knot in &t[..5] {
+                assert!(knot.1 && is_landing_knot(knot));
+                assert_eq!(knot.2[0], (h, 0.0));
+            }
+            // The same rows as the landing target's over its impact.
+            let landing = landing_targets(&ev, h, Vector3::y(), |_, _| {
+                Some(Vector3::new(0.0, 0.9, 0.3))
+            });
+            assert_eq!(landing[foot][0].2, t[0].2);
+        }
+        let note = targets_note('r', &k[0]).unwrap();
+        assert_eq!(
+            note,
+            "foot r's heel-strike impact over [0.500, 0.516] s: no force along the walking direction"
+        );
+        assert!(impact_targets(&GaitEvents::default(), h)
+            .iter()
+            .all(|t| t.is_empty()));
     }
 
     /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off. The

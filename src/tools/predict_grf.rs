@@ -311,8 +311,8 @@ pub fn run_with(
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
     // The step-to-step transition of walking, for torque-driven models: a
-    // muscle-driven model's effort minimum shares the load itself
-    // (docs/grf_prediction.md, step 8).
+    // muscle-driven model's effort minimum shares the load itself, and it
+    // gets the heel-strike impact alone (docs/grf_prediction.md, step 8).
     if strength.is_some() {
         crate::contacts::events::apply_transition(
             &model,
@@ -320,6 +320,12 @@ pub fn run_with(
             &gait_events,
             &mut contacts,
             contact_weight,
+            ROOT_RESIDUAL_OPTIMAL_FORCE,
+        );
+    } else {
+        crate::contacts::events::apply_impact(
+            &gait_events,
+            &mut contacts,
             ROOT_RESIDUAL_OPTIMAL_FORCE,
         );
     }
