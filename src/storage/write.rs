@@ -931,7 +931,11 @@ mod fast_format_tests {
         }
         for len in 0..=20usize {
             for v in (0..10_000u64).chain([123_456_789, u64::MAX / 7, u64::MAX]) {
-                let v = if len < 20 { v % 10u64.pow(len as u32) } else { v };
+                let v = if len < 20 {
+                    v % 10u64.pow(len as u32)
+                } else {
+                    v
+                };
                 let mut got = vec![b'#'; len];
                 super::put_digits(&mut got, v);
                 let want = if len == 0 {

@@ -76,7 +76,9 @@ pub fn run(
         let (p, w) = SoProblem::build_from(setup, so, am.clone())?;
         (p, w, None)
     } else {
-        let (p, w) = SoProblem::build(setup, so)?;
+        // The motion's rows are parsed on the external loads' thread while
+        // the model is read (the stream below takes them).
+        let (p, w) = SoProblem::build_beside(setup, so, || motion.parse_rows_ahead())?;
         (p, w, None)
     };
     // The states are streamed block by block (motion::stream): memory stays
