@@ -628,6 +628,15 @@ impl StoWriter {
     /// row), so tables written frame by frame with the same `rows` stay in
     /// step. [`Self::finish`] (or dropping the writer) writes the rest.
     pub fn batch_rows(&mut self, rows: usize, max_age: Duration) {
+        // Room for a batch of rows whose numbers fill their width (the
+        // buffer is reused: it no longer grows by copies into fresh
+        // memory while the first batch is formatted); at most 4 MiB.
+        let row = (self.n_labels + 1) * (8 + self.precision + 1);
+        self.line.reserve(
+            (rows.max(1) * row)
+                .min(4 << 20)
+                .saturating_sub(self.line.len()),
+        );
         self.batch = Some(Batch {
             rows: rows.max(1),
             max_age,
