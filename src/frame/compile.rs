@@ -36,6 +36,19 @@ impl SoProblem {
         setup: &AnalyzeSetup,
         so: &StaticOptimizationSetup,
     ) -> Result<(SoProblem, Vec<String>)> {
+        Self::build_beside(setup, so, || ())
+    }
+
+    /// [`SoProblem::build`], running `beside` on the external loads'
+    /// thread once they are read (e.g. the motion's rows parsed ahead,
+    /// `storage::TableFile::parse_rows_ahead`), while the main thread is
+    /// still reading the model; `beside` is not run when the setup names no
+    /// external loads (no thread is started for it alone).
+    pub fn build_beside(
+        setup: &AnalyzeSetup,
+        so: &StaticOptimizationSetup,
+        beside: impl FnOnce() + Send,
+    ) -> Result<(SoProblem, Vec<String>)> {
         // The external loads' files are read (and their data splined) on a
         // thread of their own while the model is read and compiled; they are
         // bound to the model where `build_from` reads them, so errors come
@@ -43,10 +56,15 @@ impl SoProblem {
         let run = crate::storage::results::context();
         let (am, loads) = std::thread::scope(|scope| {
             let run = &run;
-            let loads = setup
-                .external_loads_file
-                .as_deref()
-                .map(|p| scope.spawn(move || run.run(|| ExternalLoadsFiles::read(p, setup.dir()))));
+            let loads = setup.external_loads_file.as_deref().map(|p| {
+                scope.spawn(move || {
+                    run.run(|| {
+                        let loads = ExternalLoadsFiles::read(p, setup.dir());
+                        beside();
+                        loads
+                    })
+                })
+            });
             let am = load_analysis_model(setup);
             let loads = loads.map(|h| {
                 h.join()

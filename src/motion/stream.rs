@@ -904,8 +904,13 @@ fn index_file(
         let Some(t) = r.next_row(&mut row)? else {
             break;
         };
-        let picked: Vec<f64> = sel.iter().map(|&j| row[j]).collect();
-        check(idx.n, t, &picked)?;
+        // The last row's values, in a buffer reused from row to row; a
+        // kept row gets a copy of its own.
+        idx.last.0 = t;
+        idx.last.1.clear();
+        idx.last.1.extend(sel.iter().map(|&j| row[j]));
+        let picked = &idx.last.1;
+        check(idx.n, t, picked)?;
         if idx.n == 0 {
             idx.first = (t, picked.clone());
         }
@@ -916,8 +921,10 @@ fn index_file(
                 idx.rows = None;
             }
         }
-        idx.last = (t, picked);
         idx.n += 1;
+    }
+    if idx.n == 0 {
+        idx.last = (0.0, Vec::new());
     }
     Ok(idx)
 }

@@ -656,12 +656,17 @@ fn create_output_replaces_files_and_keeps_links() {
     assert_eq!(read(&fresh), "made");
 }
 
-/// Rows read from a file's bytes in memory (`TableFile::read`) are the
-/// rows read from the disk, line numbers, errors and positions included: a
-/// blank line, a token off the fast path and a bad row midway, CR line
-/// ends, and seeking back.
+/// Rows read from a file's bytes in memory (`TableFile::read`), and rows
+/// parsed ahead (`TableFile::parse_rows_ahead`), are the rows read from the
+/// disk, line numbers, errors and positions included: a blank line, a token
+/// off the fast path and a bad row midway, CR line ends, and seeking back.
 #[test]
 fn rows_read_from_memory_are_the_files_rows() {
+    rows_from_memory_are_the_files_rows(false);
+    rows_from_memory_are_the_files_rows(true);
+}
+
+fn rows_from_memory_are_the_files_rows(ahead: bool) {
     let tmp = crate::test_dir::TempDir::new("statopt-rows-in-memory");
     let path = tmp.path().join("m.sto");
     let mut text = String::from("m\r\nversion=1\r\nnColumns=3\r\n endheader \r\ntime\ta\tb\r\n");
@@ -677,6 +682,19 @@ fn rows_read_from_memory_are_the_files_rows() {
     std::fs::write(&path, &text).unwrap();
     let file = TableFile::read(&path).unwrap();
     assert!(file.in_memory());
+    if ahead {
+        // Parsed on another thread, seen by a clone made before.
+        let clone = file.clone();
+        std::thread::scope(|s| s.spawn(|| clone.parse_rows_ahead()).join().unwrap());
+        let rows = file
+            .parsed_rows()
+            .expect("a small file's rows are parsed ahead");
+        // Rows 0..12 precede the blank line, where parsing ahead stops.
+        assert_eq!((rows.columns(), rows.find(rows.end(11), 0)), (2, None));
+        assert!(rows.find(rows.end(10), 11) == Some(11));
+    } else {
+        assert!(file.parsed_rows().is_none());
+    }
     let mut own = open_rows_in(&TableFile::on_disk(&path)).unwrap();
     let mut fast = open_rows_in(&file).unwrap();
     let (mut a, mut b) = (Vec::new(), Vec::new());

@@ -85,12 +85,51 @@ fn eight_digits(v: u32) -> [u8; 8] {
     (z | 0x3030_3030_3030_3030).to_le_bytes()
 }
 
+/// The four decimal digits of `v` < 10^4, as ASCII, most significant
+/// first ([`eight_digits`]' lanes, two of them in one u32).
+#[inline]
+fn four_digits(v: u32) -> [u8; 4] {
+    let x = (v / 100) | ((v % 100) << 16);
+    let tens = ((x * 103) >> 10) & 0x000F_000F;
+    let z = tens | ((x - tens * 10) << 8);
+    (z | 0x3030_3030).to_le_bytes()
+}
+
 /// Write `v` as exactly `out.len()` decimal digits (leading zeros; `v`
 /// must be below 10^len).
 #[inline(always)]
 fn put_digits(out: &mut [u8], mut v: u64) {
-    // The usual fraction groups (8 and 16 digits) without the loops.
+    // Up to 8 digits and the usual 16 without loops: the last digits of
+    // one lane conversion, copied with a fixed length per case.
     match out.len() {
+        1 => {
+            out[0] = b'0' + v as u8;
+            return;
+        }
+        2 => {
+            out.copy_from_slice(&four_digits(v as u32)[2..]);
+            return;
+        }
+        3 => {
+            out.copy_from_slice(&four_digits(v as u32)[1..]);
+            return;
+        }
+        4 => {
+            out.copy_from_slice(&four_digits(v as u32));
+            return;
+        }
+        5 => {
+            out.copy_from_slice(&eight_digits(v as u32)[3..]);
+            return;
+        }
+        6 => {
+            out.copy_from_slice(&eight_digits(v as u32)[2..]);
+            return;
+        }
+        7 => {
+            out.copy_from_slice(&eight_digits(v as u32)[1..]);
+            return;
+        }
         8 => {
             out.copy_from_slice(&eight_digits(v as u32));
             return;
@@ -589,6 +628,15 @@ impl StoWriter {
     /// row), so tables written frame by frame with the same `rows` stay in
     /// step. [`Self::finish`] (or dropping the writer) writes the rest.
     pub fn batch_rows(&mut self, rows: usize, max_age: Duration) {
+        // Room for a batch of rows whose numbers fill their width (the
+        // buffer is reused: it no longer grows by copies into fresh
+        // memory while the first batch is formatted); at most 4 MiB.
+        let row = (self.n_labels + 1) * (8 + self.precision + 1);
+        self.line.reserve(
+            (rows.max(1) * row)
+                .min(4 << 20)
+                .saturating_sub(self.line.len()),
+        );
         self.batch = Some(Batch {
             rows: rows.max(1),
             max_age,
@@ -876,6 +924,36 @@ mod fast_format_tests {
                 x.to_bits()
             );
             assert_eq!(format_c_fixed(x, width, prec), want);
+        }
+    }
+
+    /// The lane arithmetic of `four_digits`, and `put_digits` at every
+    /// length up to 20, for every value below 10^4 (and 10^4 · k + 9999).
+    #[test]
+    fn four_digits_and_put_digits_of_every_value() {
+        for v in 0..10_000u32 {
+            let d = super::four_digits(v);
+            let back = d
+                .iter()
+                .fold(0u32, |acc, &c| acc * 10 + u32::from(c.wrapping_sub(b'0')));
+            assert!(d.iter().all(u8::is_ascii_digit) && back == v, "{v}: {d:?}");
+        }
+        for len in 0..=20usize {
+            for v in (0..10_000u64).chain([123_456_789, u64::MAX / 7, u64::MAX]) {
+                let v = if len < 20 {
+                    v % 10u64.pow(len as u32)
+                } else {
+                    v
+                };
+                let mut got = vec![b'#'; len];
+                super::put_digits(&mut got, v);
+                let want = if len == 0 {
+                    String::new()
+                } else {
+                    format!("{v:0len$}")
+                };
+                assert_eq!(got, want.as_bytes(), "len {len}, v {v}");
+            }
         }
     }
 

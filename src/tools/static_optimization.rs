@@ -76,7 +76,14 @@ pub fn run(
         let (p, w) = SoProblem::build_from(setup, so, am.clone())?;
         (p, w, None)
     } else {
-        let (p, w) = SoProblem::build(setup, so)?;
+        // The motion's rows are parsed on the external loads' thread while
+        // the model is read (the stream below takes them), and the frames'
+        // worker threads are started there.
+        let global = crate::frame::threads::frames_in_global_pool();
+        let (p, w) = SoProblem::build_beside(setup, so, || {
+            motion.parse_rows_ahead();
+            crate::frame::threads::warm_global_pool(global);
+        })?;
         (p, w, None)
     };
     // The states are streamed block by block (motion::stream): memory stays
