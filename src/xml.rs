@@ -52,15 +52,11 @@ pub fn times_parsed(path: &Path) -> usize {
 /// Parse XML text; `file` is used only for error messages.
 pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
     let file: Arc<Path> = Arc::from(file);
-    let line_starts: Vec<usize> = std::iter::once(0)
-        .chain(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1))
-        .collect();
+    let bytes = text.as_bytes();
+    // Line of a byte position: one more than the newlines before it.
     let line_of = |pos: u64| -> usize {
-        let pos = pos as usize;
-        match line_starts.binary_search(&pos) {
-            Ok(i) => i + 1,
-            Err(i) => i,
-        }
+        let pos = (pos as usize).min(bytes.len());
+        1 + memchr::memchr_iter(b'\n', &bytes[..pos]).count()
     };
     let err_at = |pos: u64, msg: String| {
         Error::input(
@@ -73,17 +69,18 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
         )
     };
 
-    // Elements come in document order: their lines are found by walking
-    // the line starts forward from the previous element's.
-    let mut line_cursor = 0usize;
-    let line_after = |cursor: &mut usize, pos: usize| -> usize {
-        if line_starts[*cursor] > pos {
-            *cursor = line_of(pos as u64) - 1;
+    // Elements come in document order: each one's line is counted on from
+    // the previous element's (position, line).
+    let mut line_cursor = (0usize, 1usize);
+    let line_after = |cursor: &mut (usize, usize), pos: usize| -> usize {
+        let pos = pos.min(bytes.len());
+        if pos < cursor.0 {
+            *cursor = (pos, line_of(pos as u64));
+        } else {
+            cursor.1 += memchr::memchr_iter(b'\n', &bytes[cursor.0..pos]).count();
+            cursor.0 = pos;
         }
-        while *cursor + 1 < line_starts.len() && line_starts[*cursor + 1] <= pos {
-            *cursor += 1;
-        }
-        *cursor + 1
+        cursor.1
     };
 
     let mut reader = Reader::from_str(text);
@@ -118,7 +115,11 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
                 }
                 // Collected through a scratch list so that each element's
                 // list is allocated once, at its size.
-                let attrs = attr_scratch.drain(..).collect();
+                let attrs = if attr_scratch.is_empty() {
+                    Vec::new()
+                } else {
+                    attr_scratch.drain(..).collect()
+                };
                 let el = Element {
                     name,
                     attrs,
