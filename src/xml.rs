@@ -473,9 +473,9 @@ mod tests {
         assert_eq!(root.child("D").unwrap().text(), "x & y");
     }
 
-    /// Lines found by walking the line starts forward equal the binary
-    /// search's, with several elements on a line, CRLF line ends, comments
-    /// and whitespace before a tag.
+    /// Lines counted on from the previous element are each element's line,
+    /// with several elements on a line, CRLF line ends, comments and
+    /// whitespace before a tag.
     #[test]
     fn lines_in_document_order() {
         let src =
