@@ -14,14 +14,20 @@ use quick_xml::{Reader, XmlVersion};
 
 use crate::error::{Error, Location, Result};
 
+/// The string type of the tree's names, attribute keys and values and
+/// texts: up to 24 bytes are held inline (most of an OpenSim document's
+/// names and values, and short texts such as `0 0 0` or `true`), so that
+/// reading a document allocates for long texts only.
+pub use compact_str::CompactString as XmlString;
+
 /// One XML element: name, attributes, child elements, concatenated text and
 /// the line it starts on.
 #[derive(Debug, Clone)]
 pub struct Element {
-    pub name: String,
-    pub attrs: Vec<(String, String)>,
+    pub name: XmlString,
+    pub attrs: Vec<(XmlString, XmlString)>,
     pub children: Vec<Element>,
-    pub text: String,
+    pub text: XmlString,
     pub line: usize,
     pub file: Arc<Path>,
 }
@@ -46,15 +52,11 @@ pub fn times_parsed(path: &Path) -> usize {
 /// Parse XML text; `file` is used only for error messages.
 pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
     let file: Arc<Path> = Arc::from(file);
-    let line_starts: Vec<usize> = std::iter::once(0)
-        .chain(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1))
-        .collect();
+    let bytes = text.as_bytes();
+    // Line of a byte position: one more than the newlines before it.
     let line_of = |pos: u64| -> usize {
-        let pos = pos as usize;
-        match line_starts.binary_search(&pos) {
-            Ok(i) => i + 1,
-            Err(i) => i,
-        }
+        let pos = (pos as usize).min(bytes.len());
+        1 + memchr::memchr_iter(b'\n', &bytes[..pos]).count()
     };
     let err_at = |pos: u64, msg: String| {
         Error::input(
@@ -67,9 +69,24 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
         )
     };
 
+    // Elements come in document order: each one's line is counted on from
+    // the previous element's (position, line).
+    let mut line_cursor = (0usize, 1usize);
+    let line_after = |cursor: &mut (usize, usize), pos: usize| -> usize {
+        let pos = pos.min(bytes.len());
+        if pos < cursor.0 {
+            *cursor = (pos, line_of(pos as u64));
+        } else {
+            cursor.1 += memchr::memchr_iter(b'\n', &bytes[cursor.0..pos]).count();
+            cursor.0 = pos;
+        }
+        cursor.1
+    };
+
     let mut reader = Reader::from_str(text);
     reader.config_mut().check_end_names = true;
     let mut stack: Vec<Element> = Vec::new();
+    let mut attr_scratch: Vec<(XmlString, XmlString)> = Vec::new();
     let mut root: Option<Element> = None;
     let version = XmlVersion::Implicit1_0;
 
@@ -81,27 +98,37 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
                 let is_empty = matches!(ev, Event::Empty(_));
-                let name = e.name().as_ref().to_string();
-                let mut attrs = Vec::new();
+                let name = XmlString::from(e.name().as_ref());
                 for a in e.attributes() {
                     let a = a.map_err(|err| {
                         err_at(start, format!("malformed attribute in <{name}>: {err}"))
                     })?;
-                    let key = a.key.as_ref().to_string();
-                    let value = a
-                        .normalized_value(version)
-                        .map_err(|err| {
-                            err_at(start, format!("malformed attribute in <{name}>: {err}"))
-                        })?
-                        .into_owned();
-                    attrs.push((key, value));
+                    let key = XmlString::from(a.key.as_ref());
+                    let value = XmlString::from(
+                        a.normalized_value(version)
+                            .map_err(|err| {
+                                err_at(start, format!("malformed attribute in <{name}>: {err}"))
+                            })?
+                            .as_ref(),
+                    );
+                    attr_scratch.push((key, value));
                 }
+                // Collected through a scratch list so that each element's
+                // list is allocated once, at its size.
+                let attrs = if attr_scratch.is_empty() {
+                    Vec::new()
+                } else {
+                    attr_scratch.drain(..).collect()
+                };
                 let el = Element {
                     name,
                     attrs,
                     children: Vec::new(),
-                    text: String::new(),
-                    line: line_of(start + leading_ws(text, start as usize) as u64),
+                    text: XmlString::const_new(""),
+                    line: line_after(
+                        &mut line_cursor,
+                        start as usize + leading_ws(text, start as usize),
+                    ),
                     file: file.clone(),
                 };
                 if is_empty {
@@ -130,7 +157,13 @@ pub fn parse_str(text: &str, file: &Path) -> Result<Element> {
                             .iter()
                             .all(u8::is_ascii_whitespace))
                     {
-                        top.text.push_str(&t.xml_content(version));
+                        let piece = t.xml_content(version);
+                        if top.text.is_empty() {
+                            // One text event (the usual case) is stored at its size.
+                            top.text = XmlString::from(piece.as_ref());
+                        } else {
+                            top.text.push_str(&piece);
+                        }
                     }
                 }
             }
@@ -438,6 +471,40 @@ mod tests {
         );
         assert_eq!(root.child("C").unwrap().line, 4);
         assert_eq!(root.child("D").unwrap().text(), "x & y");
+    }
+
+    /// Lines counted on from the previous element are each element's line,
+    /// with several elements on a line, CRLF line ends, comments and
+    /// whitespace before a tag.
+    #[test]
+    fn lines_in_document_order() {
+        let src =
+            "<A>\r\n<B/><C>x</C>\r\n\r\n  <!-- c\n -->  <D a=\"1\"\n b=\"2\">\n<E/></D><F/>\n</A>";
+        let root = parse_str(src, Path::new("t.xml")).unwrap();
+        let lines: Vec<(&str, usize)> = root
+            .children
+            .iter()
+            .map(|c| (c.name.as_str(), c.line))
+            .collect();
+        assert_eq!(lines, vec![("B", 2), ("C", 2), ("D", 5), ("F", 7)]);
+        assert_eq!(root.child("D").unwrap().child("E").unwrap().line, 7);
+        assert_eq!(root.child("D").unwrap().attr("b"), Some("2"));
+    }
+
+    /// Long names, values and texts (kept on the heap) and short ones (kept
+    /// inline) read the same; several text pieces concatenate.
+    #[test]
+    fn long_and_short_strings() {
+        let long = "x".repeat(100);
+        let src = format!(
+            "<A n=\"{long}\"><{long}>{long} 1</{long}><b>1 2</b><c>a<!--x-->{long}</c></A>"
+        );
+        let root = parse_str(&src, Path::new("t.xml")).unwrap();
+        assert_eq!(root.attr("n"), Some(long.as_str()));
+        assert_eq!(root.children[0].name, long.as_str());
+        assert_eq!(root.children[0].text(), format!("{long} 1"));
+        assert_eq!(root.child_text("b"), Some("1 2"));
+        assert_eq!(root.child_text("c"), Some(format!("a{long}").as_str()));
     }
 
     #[test]

@@ -290,7 +290,7 @@ impl Contact {
         Ok(Some(Contact {
             loc: el.loc(),
             name,
-            type_name: el.name.clone(),
+            type_name: el.name.to_string(),
             point_body: point_frame.body,
             point,
             plane_body: plane_frame.body,

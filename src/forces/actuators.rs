@@ -96,7 +96,7 @@ impl Actuator {
         }
         Ok(Some(Actuator {
             name: el.name_attr().to_string(),
-            type_name: el.name.clone(),
+            type_name: el.name.to_string(),
             kind,
             optimal_force,
             min_control,

@@ -578,7 +578,7 @@ fn read_joint_40(spec: &mut ModelSpec, j: &Element) -> Result<JointSpec> {
     Ok(JointSpec {
         parent_frame: socket("socket_parent_frame")?,
         child_frame: socket("socket_child_frame")?,
-        kind: j.name.clone(),
+        kind: j.name.to_string(),
         path,
         coordinates,
         spatial_transform: read_spatial_transform(j)?,
@@ -759,7 +759,7 @@ fn read_joint_3x(spec: &mut ModelSpec, j: &Element, child_body: &str) -> Result<
     }
     spec.joints.push(JointSpec {
         name,
-        kind: j.name.clone(),
+        kind: j.name.to_string(),
         parent_frame: pf,
         child_frame: cf,
         path,

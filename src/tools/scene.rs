@@ -54,10 +54,10 @@ fn model_of<'a>(root: &'a Element, what: &str) -> Result<(u32, &'a Element)> {
 
 fn new_element(name: &str, like: &Element) -> Element {
     Element {
-        name: name.to_string(),
+        name: name.into(),
         attrs: Vec::new(),
         children: Vec::new(),
-        text: String::new(),
+        text: Default::default(),
         line: like.line,
         file: like.file.clone(),
     }
@@ -138,7 +138,7 @@ fn append_artifact(model: &mut Element, art: &Element) -> Result<()> {
                 let set = child_mut(model, name);
                 if set.attr("name").is_none() {
                     if let Some(n) = c.attr("name") {
-                        set.attrs.push(("name".into(), n.to_string()));
+                        set.attrs.push(("name".into(), n.into()));
                     }
                 }
                 append_unique(child_mut(set, "objects"), &members, name)?;
@@ -210,14 +210,16 @@ pub fn compose_scene(
                         .into_iter()
                         .filter(|w| !omitted_contacts.contains(w))
                         .collect();
-                    m.text = kept.join(" ");
+                    m.text = kept.join(" ").into();
                 }
             }
         }
     }
     match document.attrs.iter_mut().find(|(k, _)| k == "Version") {
-        Some((_, v)) => *v = version.to_string(),
-        None => document.attrs.push(("Version".into(), version.to_string())),
+        Some((_, v)) => *v = version.to_string().into(),
+        None => document
+            .attrs
+            .push(("Version".into(), version.to_string().into())),
     }
     Ok(Scene {
         document,
