@@ -285,9 +285,7 @@ pub fn apply_transition(
     }
     set.held_intervals = held_intervals(events);
     set.off_weight = off_weight(set.parameters.optimal_force, w0, root_optimal_force);
-    let n = set.floor_normal();
-    let h = set.decision.evidence.heading;
-    let h = (h - n * h.dot(&n)).normalize();
+    let (n, h) = floor_axes(set);
     set.target_optimal_force = vec![root_optimal_force; 2];
     let points = set.points.clone();
     let trailing = trailing_targets(
@@ -348,6 +346,14 @@ pub fn landing_targets(
     out
 }
 
+/// The floor normal n of `set` and its walking direction h in the floor's
+/// plane (the heading its decision found, with its part along n removed).
+fn floor_axes(set: &FootContactSet) -> (Vector3<f64>, Vector3<f64>) {
+    let n = set.floor_normal();
+    let h = set.decision.evidence.heading;
+    (n, (h - n * h.dot(&n)).normalize())
+}
+
 /// The heel-strike impact alone (a muscle-driven model's walking,
 /// docs/grf_prediction.md, step 8): over the first [`HEEL_STRIKE_IMPACT`]
 /// after each transition strike of foot s, foot s's force has no part along
@@ -379,9 +385,7 @@ pub fn impact_targets(events: &GaitEvents, h: Vector3<f64>) -> [Vec<TargetKnot>;
 /// newton off them costing what one on the root residual of optimal force
 /// `root_optimal_force` costs.
 pub fn apply_impact(events: &GaitEvents, set: &mut FootContactSet, root_optimal_force: f64) {
-    let n = set.floor_normal();
-    let h = set.decision.evidence.heading;
-    let h = (h - n * h.dot(&n)).normalize();
+    let (_, h) = floor_axes(set);
     set.force_target = impact_targets(events, h);
     if set.force_target.iter().any(|k| !k.is_empty()) {
         set.target_optimal_force = vec![root_optimal_force; 2];
