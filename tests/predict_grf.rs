@@ -87,9 +87,9 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
     assert!(f < 0.03 * p.body_weight, "root residual {f} N");
     assert!(p.contacts.off_intervals.iter().all(|o| o.is_empty()));
     // Its only target is the landing heel's impact (step 8): every knot a
-    // landing one, within 16 ms of a strike of its foot. At 60 Hz the
-    // solver's frames fall 0.7 us before the strike and 16.7 ms after it,
-    // outside the impact, so its forces are those without (the table).
+    // landing one, within 16 ms of a strike of its foot. At 60 Hz the next
+    // frame is 16.7 ms after the strike, outside the impact, so the strike's
+    // own frame is the one it holds (below).
     for (s, knots) in p.contacts.force_target.iter().enumerate() {
         let strikes = &p.events.feet[s].strikes;
         assert!(!knots.is_empty(), "foot {s}: no impact");
@@ -104,6 +104,30 @@ fn gait10dof18musc_treadmill_walk_against_force_plates() {
             );
         }
     }
+    // The resampled motion's frames drift from the file's times (a frame at
+    // 0.63333258 s for the sample at 0.63333333 s); a strike is put on its
+    // sample's frame, so the impact holds that frame: the landing heel has
+    // no force along the walking direction there. Before, the frame fell
+    // 0.7 us before the strike, outside every knot, and braked.
+    let n = p.contacts.floor_normal();
+    let h = p.contacts.decision.evidence.heading;
+    let h = (h - n * h.dot(&n)).normalize();
+    let mut held = 0;
+    for (s, f) in p.events.feet.iter().enumerate() {
+        for (&ts, _) in f.strikes.iter().zip(&f.transitions).filter(|x| *x.1) {
+            let i = p
+                .predicted
+                .time
+                .iter()
+                .position(|&t| t == ts)
+                .unwrap_or_else(|| panic!("foot {s}: no frame at its strike {ts} s"));
+            let ap = p.predicted.force[s][i].dot(&h);
+            println!("foot {s} strike at {ts} s: predicted AP {ap:.2} N");
+            assert!(ap.abs() <= 1.0, "foot {s} at {ts} s: AP {ap} N");
+            held += 1;
+        }
+    }
+    assert!(held >= 2, "strikes held: {held}");
 }
 
 #[test]

@@ -767,8 +767,34 @@ pub fn detect(model: &Model, raw: &States, filtered: &States, set: &FootContactS
             .iter()
             .map(|&t| foot_reaches(model, filtered, set, other, t, true))
             .collect();
+        for t in f.strikes.iter_mut().chain(f.offs.iter_mut()) {
+            *t = on_frames(*t, &filtered.time);
+        }
     }
     out
+}
+
+/// An event found at a sample of the raw motion, put at the time of the
+/// frame that stands for the same sample. A motion whose time column is not
+/// uniform is resampled at its smallest step before it is filtered, as
+/// OpenSim does, and that grid drifts from the file's rounded times (knee_gc5:
+/// a frame at 0.54999956 s for the sample at 0.55 s), so a strike's own frame
+/// fell just before the strike and none of the knots that start at it held
+/// there. Moved only when a frame lies within a hundredth of the grid's step
+/// of it: the same sample, never a neighbouring one.
+fn on_frames(t: f64, frames: &[f64]) -> f64 {
+    if frames.len() < 2 {
+        return t;
+    }
+    let i = frames.partition_point(|&f| f < t);
+    let k = i.clamp(1, frames.len() - 1);
+    let step = frames[k] - frames[k - 1];
+    [k - 1, k]
+        .into_iter()
+        .map(|j| frames[j])
+        .filter(|f| (f - t).abs() <= 0.01 * step)
+        .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
+        .unwrap_or(t)
 }
 
 /// Whether a point of foot `side` has a contact weight of at least
@@ -859,6 +885,27 @@ mod tests {
         let m = extrema(&time, &x, 0.1, true);
         assert_eq!(m.len(), 1, "{m:?}");
         assert!((time[m[0]] - 0.5).abs() <= 0.03, "{}", time[m[0]]);
+    }
+
+    /// An event at a raw sample goes to the frame of that sample when the
+    /// resampled grid drifted from it (knee_gc5: 0.54999956 s for 0.55 s),
+    /// and never to a neighbouring frame.
+    #[test]
+    fn events_are_put_on_the_frame_of_their_sample() {
+        // A 120 Hz grid that drifted 0.44 µs by 0.55 s, as OpenSim's
+        // resampling at the smallest rounded step makes it.
+        let dt = 1.0 / 120.0 - 6.7e-9;
+        let frames: Vec<f64> = (0..200).map(|i| i as f64 * dt).collect();
+        let at = |t: f64| frames[frames.iter().position(|f| (f - t).abs() < 1e-5).unwrap()];
+        assert!(at(0.55) < 0.55, "{}", at(0.55));
+        assert_eq!(on_frames(0.55, &frames), at(0.55));
+        assert_eq!(on_frames(0.0, &frames), 0.0);
+        assert_eq!(on_frames(frames[199] + 1e-7, &frames), frames[199]);
+        // Between two frames (a sample of a finer raw motion): unchanged.
+        assert_eq!(on_frames(0.5542, &frames), 0.5542);
+        assert_eq!(on_frames(0.5, &[0.5]), 0.5);
+        // On the frame itself: itself.
+        assert_eq!(on_frames(frames[7], &frames), frames[7]);
     }
 
     /// The landing foot's force along its leg: over the double support
