@@ -249,14 +249,12 @@ fn spawn_with(
     more: impl Fn() -> bool,
     args: &[&str],
 ) -> std::process::Child {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_statopt-tool"))
-        .arg(setup)
-        .args(args)
-        .arg("--threads")
-        .arg("1")
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_statopt-tool"));
+    cmd.arg(setup).args(args);
+    if !args.contains(&"--threads") {
+        cmd.arg("--threads").arg("1");
+    }
+    let mut child = cmd.stderr(std::process::Stdio::piped()).spawn().unwrap();
     let start = Instant::now();
     loop {
         if let Ok(Some(status)) = child.try_wait() {
@@ -362,16 +360,17 @@ fn force_file_columns_match_their_values_with_a_passive_force_among_actuators() 
 /// SIGINT or SIGTERM stops a run at a frame boundary: every solved frame is
 /// written, the tables and the MCAP log are closed (a standard reader opens
 /// the log without recovery), the tool says where it stopped and exits 130
-/// or 143. (A signal used to kill the process like SIGKILL.)
+/// or 143. (A signal used to kill the process like SIGKILL.) On one solving
+/// thread and on two, whose frames are solved in parallel chunks.
 #[test]
 fn a_signal_stops_the_run_cleanly() {
-    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+    for (signal, code, threads) in [("INT", 130, "1"), ("TERM", 143, "1"), ("INT", 130, "2")] {
         let so = "<StaticOptimization name=\"SO\"><contact_weight>1000</contact_weight></StaticOptimization>";
-        let (setup, out) = write_case(&format!("outputs_signal_{signal}"), 400_000, so);
+        let (setup, out) = write_case(&format!("outputs_signal_{signal}_{threads}"), 400_000, so);
         let act_path = out.join("block_SO_activation.sto");
         let log_path = out.join("block_SO_log.mcap");
         // Not quiet: the summary is printed too.
-        let child = spawn_with(&setup, &act_path, 2000, || true, &[]);
+        let child = spawn_with(&setup, &act_path, 2000, || true, &["--threads", threads]);
         let sent = Instant::now();
         let ok = Command::new("kill")
             .arg(format!("-{signal}"))
@@ -428,7 +427,7 @@ fn a_signal_stops_the_run_cleanly() {
         }
         assert_eq!(activations, act.time.len(), "SIG{signal}");
         println!(
-            "SIG{signal}: stopped after {} frames in {stopped_in:?}",
+            "SIG{signal}, {threads} thread(s): stopped after {} frames in {stopped_in:?}",
             act.time.len()
         );
     }
