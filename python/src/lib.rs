@@ -262,7 +262,7 @@ fn run_capture(
 /// The run's outputs in the summary `d` with their typed keys, from its
 /// capture: `keys`, one per path of `files` (the engine's key of that
 /// output, as [`key_dict`] gives it, or None for a file no key names: a
-/// figure, a study's CSV, an InverseDynamicsTool's table); with
+/// figure, a study's CSV); with
 /// `in_memory`, `in_memory_root` and `outputs` ([`in_memory_outputs`]).
 fn run_outputs(
     py: Python<'_>,

@@ -67,7 +67,7 @@ class Result:
         self._table_files = table_files
         # Per table (by its key in ``tables``): the run's typed key of it
         # (setup, analysis, w0, stat, table; the binding's ``keys``), or
-        # None (a table no key names: an InverseDynamicsTool's).
+        # None (a file no key names; every table the engine writes has one).
         self._keys: Dict[str, Optional[Dict[str, Any]]] = {
             k: key for (k, _), key in zip(table_files, keys or [None] * len(table_files))
         }
@@ -136,8 +136,8 @@ class Result:
             if _key_matches(k, kind, w0, stat):
                 found.append((key, (k["setup"], k["analysis"]), k["w0"], df))
             elif k is None and key == kind and w0 is None and stat is None:
-                # A table the engine keys not (an InverseDynamicsTool's, named
-                # by its setup): by its whole name.
+                # A table with no key (none the engine writes): by its whole
+                # name.
                 found.append((key, None, None, df))
         if not found:
             raise KeyError(
@@ -164,6 +164,8 @@ class Result:
                                   doc="Generalized forces by source (muscles, contacts, ...).")
     muscle_power = property(lambda self: self.table("MusclePower"), doc="Muscle power.")
     reactions = property(lambda self: self.table("ReactionLoads"), doc="Joint reaction loads.")
+    inverse_dynamics = property(lambda self: self.table("inverse_dynamics"),
+                                doc="An InverseDynamicsTool's generalized forces (its setup names the file).")
 
     @property
     def predicted_grf(self) -> pd.DataFrame:

@@ -145,6 +145,10 @@ def test_inverse_dynamics_setup(repo, cli, tmp_path):
     res = statopt.run(setup, progress=False)
     (key, df), = res.tables.items()
     assert_same(df, statopt.read_table(tmp_path / (key + ".sto")))
+    # Keyed by the engine as its setup's table, whatever the file's name.
+    assert res._keys[key] == {"setup": "double_pendulum", "analysis": None, "w0": None,
+                              "stat": None, "table": "inverse_dynamics"}
+    assert res.inverse_dynamics is df
     part = statopt.run(setup, time_range=(0.5, 1.0), progress=False)
     assert_same(part.tables[key], df.loc[0.5:1.0])
 

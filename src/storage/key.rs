@@ -107,6 +107,11 @@ pub enum OutputKind {
         point: String,
         quantity: Quantity,
     },
+    /// An InverseDynamicsTool's generalized forces, in the file its setup
+    /// names (`<output_gen_force_file>`, OpenSim's name, kept as it is).
+    InverseDynamics {
+        file: String,
+    },
 }
 
 /// A MuscleAnalysis table.

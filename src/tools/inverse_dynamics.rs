@@ -165,7 +165,11 @@ pub fn run(setup: &InverseDynamicsSetup, opts: &RunOptions) -> Result<RunSummary
         &setup.results_directory_loc,
         opts.results_dir.is_some(),
     )?;
-    let out = dir.join(&setup.output_gen_force_file);
+    use crate::writers::names::{file_name, OutputKind, RunKey, Sweep};
+    let key = RunKey::setup(&setup.name, Sweep::Single).key(OutputKind::InverseDynamics {
+        file: setup.output_gen_force_file.clone(),
+    });
+    let out = dir.join(file_name(&key));
     let mut writer = StoWriter::create_for_setup(
         &setup.setup_file,
         &out,

@@ -194,6 +194,7 @@ impl OutputKind {
             OutputKind::PointKinematics { point, quantity } => {
                 format!("{point}_{}", quantity.as_str())
             }
+            OutputKind::InverseDynamics { .. } => "inverse_dynamics".into(),
         }
     }
 }
@@ -275,6 +276,17 @@ impl RunKey {
 /// (`storage::results::name`), so that the run keeps the output under its
 /// typed key.
 pub fn file_name(key: &OutputKey) -> String {
+    if let OutputKind::InverseDynamics { file } = &key.kind {
+        // OpenSim's InverseDynamicsTool writes the file its setup names,
+        // with no part of the run in front; the capture learns the key by
+        // the name's last part (the file in the results folder).
+        let last = std::path::Path::new(file)
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or(file);
+        crate::storage::results::name(last, key);
+        return file.clone();
+    }
     let r = &key.run;
     let mut name = r.setup.clone();
     name.push('_');
@@ -631,6 +643,30 @@ mod tests {
                 "pad_vel.sto",
             ),
         ]
+    }
+
+    /// An InverseDynamicsTool's table keeps the name its setup gives it
+    /// (OpenSim's `<output_gen_force_file>`), and the run still knows it by
+    /// its typed key, so the Python package need not go by the file's stem.
+    #[test]
+    fn an_inverse_dynamics_table_keeps_its_setups_name_and_has_a_key() {
+        use crate::storage::results::Capture;
+        let c = Capture::in_memory();
+        let dir = c.root().unwrap().to_path_buf();
+        let key = RunKey::setup("pendulum", Sweep::Single).key(OutputKind::InverseDynamics {
+            file: "id_out.sto".into(),
+        });
+        assert_eq!(file_name(&key), "id_out.sto");
+        assert_eq!(key.kind.table(), "inverse_dynamics");
+        crate::storage::results::write(&dir.join("id_out.sto"), b"x".to_vec()).unwrap();
+        assert_eq!(c.key_of(&dir.join("id_out.sto")), Some(key.clone()));
+        // A name with a folder in it: known by its last part, in that folder.
+        let nested = RunKey::setup("p2", Sweep::Single).key(OutputKind::InverseDynamics {
+            file: "sub/forces.sto".into(),
+        });
+        assert_eq!(file_name(&nested), "sub/forces.sto");
+        assert_eq!(c.key_of(&dir.join("sub/forces.sto")), Some(nested));
+        assert_eq!(c.key_of(&dir.join("other.sto")), None);
     }
 
     #[test]
