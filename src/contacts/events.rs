@@ -206,6 +206,26 @@ fn across_leg(lean: Vector3<f64>, h: Vector3<f64>, n: Vector3<f64>) -> Vector3<f
     (h * lean.dot(&n) - n * lean.dot(&h)).normalize()
 }
 
+/// Per foot (0 right, 1 left), the knots `knots(o, t_s, T_ds)` gives the
+/// trailing foot o over each double support: from each transition strike
+/// t_s of the other foot, T_ds long ([`double_support`]).
+fn per_double_support(
+    events: &GaitEvents,
+    mut knots: impl FnMut(usize, f64, f64) -> Vec<TargetKnot>,
+) -> [Vec<TargetKnot>; 2] {
+    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
+    for s in 0..2 {
+        let o = 1 - s;
+        let f = &events.feet[s];
+        for (k, &ts) in f.strikes.iter().enumerate() {
+            if f.transitions.get(k).copied().unwrap_or(false) {
+                out[o].extend(knots(o, ts, double_support(events, o, ts)));
+            }
+        }
+    }
+    out
+}
+
 /// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
 /// force targets of the **trailing** foot, with its force along its leg:
 /// over the double support T_ds after each transition strike at t_s of the
@@ -234,28 +254,19 @@ pub fn trailing_targets(
     mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
     mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
 ) -> [Vec<TargetKnot>; 2] {
-    let mut out: [Vec<TargetKnot>; 2] = [Vec::new(), Vec::new()];
-    for s in 0..2 {
-        let o = 1 - s;
-        let f = &events.feet[s];
-        for (k, &ts) in f.strikes.iter().enumerate() {
-            if !f.transitions.get(k).copied().unwrap_or(false) {
-                continue;
-            }
-            let Some(r) = required(ts) else {
-                continue;
-            };
-            let t_ds = double_support(events, o, ts);
-            out[o].extend(double_support_knots(ts, t_ds, |tau| {
-                let across = across_leg(lean(ts + tau, o)?, h, n);
-                // A foot cannot pull: the trailing foot carries at most what
-                // the motion requires of the floor then.
-                let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
-                let vertical = (r.dot(&n) * trailing_share(tau, t_ds)).min(now.max(0.0));
-                Some(vec![(n, vertical), (across, 0.0)])
-            }));
-        }
-    }
+    let mut out = per_double_support(events, |o, ts, t_ds| {
+        let Some(r) = required(ts) else {
+            return Vec::new();
+        };
+        double_support_knots(ts, t_ds, |tau| {
+            let across = across_leg(lean(ts + tau, o)?, h, n);
+            // A foot cannot pull: the trailing foot carries at most what
+            // the motion requires of the floor then.
+            let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
+            let vertical = (r.dot(&n) * trailing_share(tau, t_ds)).min(now.max(0.0));
+            Some(vec![(n, vertical), (across, 0.0)])
+        })
+    });
     for k in out.iter_mut() {
         k.sort_by(|a, b| a.0.total_cmp(&b.0));
         k.dedup_by(|b, a| b.0 <= a.0);
@@ -392,6 +403,78 @@ pub fn apply_impact(events: &GaitEvents, set: &mut FootContactSet, root_optimal_
     }
 }
 
+/// The **trailing** foot of a muscle-driven model's double support: over
+/// T_ds after each transition strike at t_s of the other foot, its force
+/// has no part across `lean(t, foot)` (its toe to the mass centre, in the
+/// plane of h and n: [`trailing_targets`]' second row) once the landing
+/// heel's impact is over ([`HEEL_STRIKE_IMPACT`]; over the impact that row
+/// holds nothing), and its force along the lateral axis m (n × h) follows
+/// Ren, Jones & Howard's smooth transition (2008), F_m(t_s + τ) = F_m(t_s)
+/// exp(−(2τ/T_ds)³), F_m(t_s) the motion's lateral requirement at the
+/// strike (`required(t_s)`, all of it the trailing foot's then). How much
+/// it carries vertically is left to the effort minimum. Rows (across, 0)
+/// and (m, F_m).
+pub fn trailing_line_targets(
+    events: &GaitEvents,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
+    mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
+    mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+) -> [Vec<TargetKnot>; 2] {
+    let m = n.cross(&h).normalize();
+    per_double_support(events, |o, ts, t_ds| {
+        let Some(r) = required(ts) else {
+            return Vec::new();
+        };
+        double_support_knots(ts, t_ds, |tau| {
+            // Over the landing heel's impact the line holds nothing: the
+            // impact's row fixes the landing foot's horizontal force, and
+            // the requirement's own then goes to the trailing foot.
+            let across = if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
+                Vector3::zeros()
+            } else {
+                across_leg(lean(ts + tau, o)?, h, n)
+            };
+            let lateral = r.dot(&m) * trailing_share(tau, t_ds);
+            Some(vec![(across, 0.0), (m, lateral)])
+        })
+    })
+}
+
+/// The step-to-step transition of a muscle-driven model's walking
+/// (docs/grf_prediction.md, step 8): the landing foot's heel-strike impact
+/// ([`apply_impact`]) and the trailing foot's force along its leg, its
+/// mediolateral force on Ren's transition ([`trailing_line_targets`]); a
+/// newton off a row costs what one on the root residual of optimal force
+/// `root_optimal_force` costs. How the vertical load passes from foot to
+/// foot is left to the effort minimum.
+pub fn apply_muscle_transition(
+    model: &Model,
+    states: &States,
+    events: &GaitEvents,
+    set: &mut FootContactSet,
+    root_optimal_force: f64,
+) {
+    apply_impact(events, set, root_optimal_force);
+    let (n, h) = floor_axes(set);
+    let points = set.points.clone();
+    let trailing = trailing_line_targets(
+        events,
+        h,
+        n,
+        |t| required_force(model, states, t),
+        |t, side| toe_to_com(model, states, &points, t, side),
+    );
+    for (knots, trail) in set.force_target.iter_mut().zip(trailing) {
+        knots.extend(trail);
+        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+        knots.dedup_by(|b, a| b.0 <= a.0);
+    }
+    if set.force_target.iter().any(|k| !k.is_empty()) {
+        set.target_optimal_force = vec![root_optimal_force; 2];
+    }
+}
+
 /// Whether a knot is a landing foot's ([`landing_targets`]: its second row
 /// holds nothing).
 pub fn is_landing_knot(k: &TargetKnot) -> bool {
@@ -420,7 +503,7 @@ pub fn merge_targets(
 /// The summary's line on the force targets of foot `side` (None without
 /// any): each double support it trails through or lands into, and each
 /// heel-strike impact held alone ([`impact_targets`]).
-pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
+pub fn targets_note(side: char, knots: &[TargetKnot], torque_driven: bool) -> Option<String> {
     let mut spans = Vec::new();
     let mut landing = Vec::new();
     let mut impact = Vec::new();
@@ -438,11 +521,15 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
             } else if is_landing_knot(a) {
                 landing.push(format!("[{:.3}, {:.3}] s", a.0, last.0));
             } else {
+                // The force the target starts from: vertical (a torque-driven
+                // model's first row), mediolateral (a muscle-driven model's
+                // second, [`trailing_line_targets`]).
+                let row = usize::from(!torque_driven);
                 spans.push(format!(
                     "[{:.3}, {:.3}] s from {:.0} N",
                     a.0,
                     last.0,
-                    a.2.first().map_or(0.0, |r| r.1)
+                    a.2.get(row).map_or(0.0, |r| r.1)
                 ));
             }
             start = None;
@@ -456,10 +543,17 @@ pub fn targets_note(side: char, knots: &[TargetKnot]) -> Option<String> {
         )
     });
     let trails = (!spans.is_empty()).then(|| {
-        format!(
-            "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
-            spans.join(", ")
-        )
+        if torque_driven {
+            format!(
+                "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
+                spans.join(", ")
+            )
+        } else {
+            format!(
+                "foot {side} trails through double support over {}: its force points along the line from its toe to the body's mass centre, and its mediolateral force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3); how much it carries is the effort minimum's",
+                spans.join(", ")
+            )
+        }
     });
     let impacts = (!impact.is_empty()).then(|| {
         format!(
@@ -966,12 +1060,65 @@ mod tests {
         assert_eq!(m[0].len(), t.len() + 2, "{:?}", m[0]);
         assert!(m[0].windows(2).all(|w| w[0].0 < w[1].0));
         assert!(m[0].iter().all(|k| k.0 < 0.9 || !is_landing_knot(k)));
-        let note = targets_note('r', &m[0]).unwrap();
+        let note = targets_note('r', &m[0], true).unwrap();
         assert!(
             note.contains("trails through double support over [0.900, 0.900] s")
                 && note.contains("lands into double support over [0.500, 0.620] s")
                 && note.contains("its first 16 ms, it has none along the walking direction"),
             "{note}"
+        );
+    }
+
+    /// A muscle-driven model's trailing foot (step 8): over the double
+    /// support after the other foot's transition strike (to its own
+    /// foot-off), no force across the line from its toe to the mass centre
+    /// (in the plane of h and n), and its mediolateral force (along n × h)
+    /// on Ren's decay from the motion's lateral requirement at the strike;
+    /// then off. No vertical row. The landing foot gets none of it, a strike
+    /// that takes over from no foot none at all, and the summary says so.
+    #[test]
+    fn a_muscle_models_trailing_foot_pushes_along_its_leg() {
+        let mut ev = GaitEvents::default();
+        ev.feet[0] = FootEvents {
+            strikes: vec![0.5, 1.6],
+            offs: vec![],
+            transitions: vec![true, false],
+        };
+        ev.feet[1].offs = vec![0.62];
+        let (h, n) = (Vector3::x(), Vector3::y());
+        let m = n.cross(&h);
+        // The requirement at the strike: 700 N up, 40 N along m, 90 N ahead.
+        let r = n * 700.0 + m * 40.0 + h * 90.0;
+        let lean = Vector3::new(0.3, 0.9, 0.05);
+        let k = trailing_line_targets(&ev, h, n, |_| Some(r), |_, _| Some(lean));
+        assert!(k[0].is_empty(), "the landing foot trails through nothing");
+        let t = &k[1];
+        assert_eq!(t.first().unwrap().0, 0.5);
+        let last = t.last().unwrap();
+        assert!(!last.1 && (last.0 - 0.62).abs() < 1e-5, "{last:?}");
+        for knot in &t[..t.len() - 1] {
+            assert!(knot.1 && !is_landing_knot(knot));
+            let [(across, f0), (axis, f1)] = knot.2[..] else {
+                panic!("two rows: {knot:?}");
+            };
+            assert_eq!(f0, 0.0);
+            if knot.0 - 0.5 <= HEEL_STRIKE_IMPACT + 1e-9 {
+                // Over the landing heel's impact the line holds nothing.
+                assert_eq!(across, Vector3::zeros(), "{}", knot.0);
+            } else {
+                assert!((across.norm() - 1.0).abs() < 1e-12);
+                assert!(across.dot(&n.cross(&h)).abs() < 1e-12);
+                assert!(across.dot(&Vector3::new(0.3, 0.9, 0.0)).abs() < 1e-12);
+            }
+            assert!((axis - m).norm() < 1e-12);
+            let share = trailing_share(knot.0 - 0.5, 0.12);
+            assert!((f1 - 40.0 * share).abs() < 1e-9, "{}: {f1}", knot.0);
+        }
+        assert_eq!(t[0].2[1].1, 40.0);
+        let note = targets_note('l', t, false).unwrap();
+        assert_eq!(
+            note,
+            "foot l trails through double support over [0.500, 0.620] s from 40 N: its force points along the line from its toe to the body's mass centre, and its mediolateral force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3); how much it carries is the effort minimum's"
         );
     }
 
@@ -1016,7 +1163,7 @@ mod tests {
             });
             assert_eq!(landing[foot][0].2, t[0].2);
         }
-        let note = targets_note('r', &k[0]).unwrap();
+        let note = targets_note('r', &k[0], false).unwrap();
         assert_eq!(
             note,
             "foot r's heel-strike impact over [0.500, 0.516] s: no force along the walking direction"

@@ -310,9 +310,10 @@ pub fn run_with(
     };
     let gait_events = crate::contacts::events::detect(&model, &raw_states, &states, &contacts);
     let mut contacts = contacts;
-    // The step-to-step transition of walking, for torque-driven models: a
-    // muscle-driven model's effort minimum shares the load itself, and it
-    // gets the heel-strike impact alone (docs/grf_prediction.md, step 8).
+    // The step-to-step transition of walking (docs/grf_prediction.md, step
+    // 8): a torque-driven model's whole; a muscle-driven model's effort
+    // minimum shares the vertical load itself, and it gets the heel-strike
+    // impact and the trailing foot's leg line with Ren's mediolateral decay.
     if strength.is_some() {
         crate::contacts::events::apply_transition(
             &model,
@@ -323,7 +324,9 @@ pub fn run_with(
             ROOT_RESIDUAL_OPTIMAL_FORCE,
         );
     } else {
-        crate::contacts::events::apply_impact(
+        crate::contacts::events::apply_muscle_transition(
+            &model,
+            &states,
             &gait_events,
             &mut contacts,
             ROOT_RESIDUAL_OPTIMAL_FORCE,
@@ -400,6 +403,7 @@ pub fn run_with(
             .extend(crate::contacts::events::targets_note(
                 side,
                 &prediction.contacts.force_target[s],
+                strength.is_some(),
             ));
     }
     prediction.root_residual = prediction.summary.root_force_series.clone();
@@ -549,7 +553,7 @@ fn events_note(
         }
     };
     let off = if !torque_driven {
-        "no step-to-step transition model (a muscle-driven model's effort minimum shares the load between the feet itself)".to_string()
+        "its contacts are never switched off (a muscle-driven model's effort minimum shares the vertical load between the feet itself)".to_string()
     } else if off.is_empty() {
         "its contacts are never switched off (no strike takes over from a foot on the floor)"
             .to_string()
