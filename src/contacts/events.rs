@@ -526,10 +526,11 @@ pub fn targets_note(side: char, knots: &[TargetKnot], torque_driven: bool) -> Op
                 // second, [`trailing_line_targets`]).
                 let row = usize::from(!torque_driven);
                 spans.push(format!(
-                    "[{:.3}, {:.3}] s from {:.0} N",
+                    "[{:.3}, {:.3}] s from {:.0} N{}",
                     a.0,
                     last.0,
-                    a.2.get(row).map_or(0.0, |r| r.1)
+                    a.2.get(row).map_or(0.0, |r| r.1),
+                    if torque_driven { "" } else { " mediolateral" }
                 ));
             }
             start = None;
@@ -1118,7 +1119,7 @@ mod tests {
         let note = targets_note('l', t, false).unwrap();
         assert_eq!(
             note,
-            "foot l trails through double support over [0.500, 0.620] s from 40 N: its force points along the line from its toe to the body's mass centre, and its mediolateral force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3); how much it carries is the effort minimum's"
+            "foot l trails through double support over [0.500, 0.620] s from 40 N mediolateral: its force points along the line from its toe to the body's mass centre, and its mediolateral force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3); how much it carries is the effort minimum's"
         );
     }
 
