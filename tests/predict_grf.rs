@@ -1224,7 +1224,10 @@ fn the_landing_foot_brakes_along_its_leg_through_double_support() {
 /// vertical then: +13 and +11 N AP on 120 and 266 N at 0.44 and 0.45 s of
 /// 2014001 C5_01). Along its leg the landing heel braked −45 and −56 N
 /// there and the trial's AP rho was 0.677; with the impact −37 and −47 N
-/// and 0.695, the vertical bar kept.
+/// and 0.695, the trailing foot's leg line then taking the impact's frames
+/// from it at the same cost; with that line starting after the impact −7
+/// and −7 N and 0.767 (asserted: within 12 N of zero, rho at least 0.75),
+/// the vertical bar kept.
 #[test]
 fn the_landing_heel_brakes_less_through_its_impact() {
     use statopt::contacts::events::HEEL_STRIKE_IMPACT;
@@ -1258,10 +1261,10 @@ fn the_landing_heel_brakes_less_through_its_impact() {
         }
         let (own, f) = (m.force[0][i], p.predicted.force[0][i]);
         println!("t = {t}: landing foot measured {own:?}, predicted {f:?}");
-        // Along its leg alone: −45 and −56 N.
-        let along_leg = [-45.0, -56.0][frames.min(1)];
+        // Along its leg alone: −45 and −56 N; the impact against the
+        // trailing line: −37 and −47 N.
         assert!(
-            f.x > along_leg + 5.0,
+            f.x.abs() <= 12.0,
             "t = {t}: the landing heel brakes {} N",
             f.x
         );
@@ -1271,7 +1274,7 @@ fn the_landing_heel_brakes_less_through_its_impact() {
     let (rho_v, rmse_v) = mean(&p.metrics, 'y');
     let (rho_ap, rmse_ap) = mean(&p.metrics, 'x');
     println!("vertical {rho_v:.3} / {rmse_v:.1} % BW; AP {rho_ap:.3} / {rmse_ap:.1} % BW");
-    assert!(rho_ap >= 0.69, "AP rho {rho_ap}");
+    assert!(rho_ap >= 0.75, "AP rho {rho_ap}");
     assert!(rho_v >= 0.95 && rmse_v <= 10.0, "vertical {rho_v} {rmse_v}");
     assert!(p.rejected.is_none(), "{:?}", p.rejected);
 }

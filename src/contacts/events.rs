@@ -259,7 +259,13 @@ pub fn trailing_targets(
             return Vec::new();
         };
         double_support_knots(ts, t_ds, |tau| {
-            let across = across_leg(lean(ts + tau, o)?, h, n);
+            // Along its leg once the landing heel's impact is over (as a
+            // muscle model's, [`trailing_line_targets`]).
+            let across = if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
+                Vector3::zeros()
+            } else {
+                across_leg(lean(ts + tau, o)?, h, n)
+            };
             // A foot cannot pull: the trailing foot carries at most what
             // the motion requires of the floor then.
             let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
@@ -476,9 +482,15 @@ pub fn apply_muscle_transition(
 }
 
 /// Whether a knot is a landing foot's ([`landing_targets`]: its second row
-/// holds nothing).
+/// holds nothing and its first holds 0 N along an axis). A torque-driven
+/// model's trailing knot over the impact also has a second row that holds
+/// nothing, but its first holds the foot's vertical force, which is
+/// positive wherever a foot lands while the other stands.
 pub fn is_landing_knot(k: &TargetKnot) -> bool {
     k.2.get(1).is_some_and(|r| r.0 == Vector3::zeros())
+        && k.2
+            .first()
+            .is_some_and(|r| r.1 == 0.0 && r.0 != Vector3::zeros())
 }
 
 /// Per foot, its trailing and landing knots in one target (the contacts of
@@ -1208,6 +1220,12 @@ mod tests {
             let want = 700.0 * trailing_share(tk - 0.5, 0.12);
             assert_eq!(rows[0].0, n);
             assert!((rows[0].1 - want).abs() < 1e-9, "{tk}: {rows:?}");
+            assert!(!is_landing_knot(&(*tk, *on, rows.clone())));
+            if tk - 0.5 <= HEEL_STRIKE_IMPACT + 1e-9 {
+                // Over the landing heel's impact the line holds nothing.
+                assert_eq!(rows[1], (Vector3::zeros(), 0.0), "{tk}");
+                continue;
+            }
             // A force along the leg has no part across it.
             assert!(rows[1].0.dot(&lean).abs() < 1e-12 && rows[1].1 == 0.0);
             assert!((rows[1].0.norm() - 1.0).abs() < 1e-12);
