@@ -226,6 +226,31 @@ fn per_double_support(
     out
 }
 
+/// Knots in time order, one per time (the first kept).
+fn time_ordered(knots: &mut Vec<TargetKnot>) {
+    knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+    knots.dedup_by(|b, a| b.0 <= a.0);
+}
+
+/// The axis across a trailing leg τ after the other foot's strike: none
+/// over the landing heel's impact ([`HEEL_STRIKE_IMPACT`]; the row holds
+/// nothing then, since the impact's row fixes the landing foot's
+/// horizontal force and the two would fix both feet's by geometry alone),
+/// then across the leg's line `lean()` ([`across_leg`]); None where the
+/// line is not known.
+fn across_after_impact(
+    tau: f64,
+    lean: impl FnOnce() -> Option<Vector3<f64>>,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
+) -> Option<Vector3<f64>> {
+    if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
+        Some(Vector3::zeros())
+    } else {
+        Some(across_leg(lean()?, h, n))
+    }
+}
+
 /// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
 /// force targets of the **trailing** foot, with its force along its leg:
 /// over the double support T_ds after each transition strike at t_s of the
@@ -259,13 +284,7 @@ pub fn trailing_targets(
             return Vec::new();
         };
         double_support_knots(ts, t_ds, |tau| {
-            // Along its leg once the landing heel's impact is over (as a
-            // muscle model's, [`trailing_line_targets`]).
-            let across = if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
-                Vector3::zeros()
-            } else {
-                across_leg(lean(ts + tau, o)?, h, n)
-            };
+            let across = across_after_impact(tau, || lean(ts + tau, o), h, n)?;
             // A foot cannot pull: the trailing foot carries at most what
             // the motion requires of the floor then.
             let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
@@ -273,10 +292,7 @@ pub fn trailing_targets(
             Some(vec![(n, vertical), (across, 0.0)])
         })
     });
-    for k in out.iter_mut() {
-        k.sort_by(|a, b| a.0.total_cmp(&b.0));
-        k.dedup_by(|b, a| b.0 <= a.0);
-    }
+    out.iter_mut().for_each(time_ordered);
     out
 }
 
@@ -389,24 +405,9 @@ pub fn impact_targets(events: &GaitEvents, h: Vector3<f64>) -> [Vec<TargetKnot>;
                 }));
             }
         }
-        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
-        knots.dedup_by(|b, a| b.0 <= a.0);
+        time_ordered(knots);
     }
     out
-}
-
-/// The heel-strike impact written into a muscle-driven model's contact set
-/// `set` ([`impact_targets`], no other part of the step-to-step
-/// transition: its effort minimum shares the load between the feet
-/// itself): the same soft rows as [`apply_transition`]'s landing foot, a
-/// newton off them costing what one on the root residual of optimal force
-/// `root_optimal_force` costs.
-pub fn apply_impact(events: &GaitEvents, set: &mut FootContactSet, root_optimal_force: f64) {
-    let (_, h) = floor_axes(set);
-    set.force_target = impact_targets(events, h);
-    if set.force_target.iter().any(|k| !k.is_empty()) {
-        set.target_optimal_force = vec![root_optimal_force; 2];
-    }
 }
 
 /// The **trailing** foot of a muscle-driven model's double support: over
@@ -433,14 +434,7 @@ pub fn trailing_line_targets(
             return Vec::new();
         };
         double_support_knots(ts, t_ds, |tau| {
-            // Over the landing heel's impact the line holds nothing: the
-            // impact's row fixes the landing foot's horizontal force, and
-            // the requirement's own then goes to the trailing foot.
-            let across = if tau <= HEEL_STRIKE_IMPACT + 1e-9 {
-                Vector3::zeros()
-            } else {
-                across_leg(lean(ts + tau, o)?, h, n)
-            };
+            let across = across_after_impact(tau, || lean(ts + tau, o), h, n)?;
             let lateral = r.dot(&m) * trailing_share(tau, t_ds);
             Some(vec![(across, 0.0), (m, lateral)])
         })
@@ -448,12 +442,14 @@ pub fn trailing_line_targets(
 }
 
 /// The step-to-step transition of a muscle-driven model's walking
-/// (docs/grf_prediction.md, step 8): the landing foot's heel-strike impact
-/// ([`apply_impact`]) and the trailing foot's force along its leg, its
-/// mediolateral force on Ren's transition ([`trailing_line_targets`]); a
-/// newton off a row costs what one on the root residual of optimal force
-/// `root_optimal_force` costs. How the vertical load passes from foot to
-/// foot is left to the effort minimum.
+/// (docs/grf_prediction.md, step 8), written into its contact set `set`:
+/// the landing foot's heel-strike impact ([`impact_targets`], the same soft
+/// rows as [`apply_transition`]'s landing foot over its impact) and the
+/// trailing foot's force along its leg, its mediolateral force on Ren's
+/// transition ([`trailing_line_targets`]); a newton off a row costs what
+/// one on the root residual of optimal force `root_optimal_force` costs.
+/// How the vertical load passes from foot to foot is left to the effort
+/// minimum.
 pub fn apply_muscle_transition(
     model: &Model,
     states: &States,
@@ -461,7 +457,6 @@ pub fn apply_muscle_transition(
     set: &mut FootContactSet,
     root_optimal_force: f64,
 ) {
-    apply_impact(events, set, root_optimal_force);
     let (n, h) = floor_axes(set);
     let points = set.points.clone();
     let trailing = trailing_line_targets(
@@ -471,10 +466,10 @@ pub fn apply_muscle_transition(
         |t| required_force(model, states, t),
         |t, side| toe_to_com(model, states, &points, t, side),
     );
+    set.force_target = impact_targets(events, h);
     for (knots, trail) in set.force_target.iter_mut().zip(trailing) {
         knots.extend(trail);
-        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
-        knots.dedup_by(|b, a| b.0 <= a.0);
+        time_ordered(knots);
     }
     if set.force_target.iter().any(|k| !k.is_empty()) {
         set.target_optimal_force = vec![root_optimal_force; 2];
@@ -506,8 +501,7 @@ pub fn merge_targets(
     for ((knots, land), held) in out.iter_mut().zip(landing).zip(held) {
         let inside = |t: f64| held.iter().any(|&(a, b)| t >= a - 1e-9 && t <= b + 1e-6);
         knots.extend(land.into_iter().filter(|k| !inside(k.0)));
-        knots.sort_by(|a, b| a.0.total_cmp(&b.0));
-        knots.dedup_by(|b, a| b.0 <= a.0);
+        time_ordered(knots);
     }
     out
 }
