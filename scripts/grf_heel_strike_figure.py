@@ -7,8 +7,9 @@ step-to-step transition (docs/figures/grf_prediction/heel_strike_<trial>.png).
         --right ground_force_1 --left ground_force_2 --out PNG
 
 DIR: a predict-grf results folder of the trial (scripts/grf_dev_table.py's
---out, the "before" one run with the release build of the commit before
-issue 36). Plots per foot the vertical force of the prediction before and
+--out, the "before" one run with the release build of 560d239, the commit
+before issue 36's transition). Plots per foot the vertical (or, with
+--component ap, the anteroposterior) force of the prediction before and
 after, and the plates', around the landing, with the strike found on the
 raw kinematics (read from the run's contacts file, `off_intervals`).
 Needs matplotlib.
