@@ -542,14 +542,12 @@ fn events_note(
     off: &[(f64, f64)],
     torque_driven: bool,
 ) -> String {
-    let times = |v: &[f64]| {
+    let times = |v: &[f64], what: &str, none: &str| {
         if v.is_empty() {
-            "none".to_string()
+            none.to_string()
         } else {
-            v.iter()
-                .map(|t| format!("{t:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            let t: Vec<String> = v.iter().map(|t| format!("{t:.3}")).collect();
+            format!("{what} at {} s", t.join(", "))
         }
     };
     let off = if !torque_driven {
@@ -564,9 +562,9 @@ fn events_note(
         )
     };
     format!(
-        "gait events of foot {side} on the unfiltered kinematics (walking events: Zeni et al. 2008, strikes refined by O'Connor et al. 2007; a strike only where the foot reaches the floor, so in running, where Zeni's heel extremum falls in late swing, none may be found): strikes at {} s, foot-offs at {} s; {off}",
-        times(&f.strikes),
-        times(&f.offs)
+        "gait events of foot {side} on the unfiltered kinematics (walking events: Zeni et al. 2008, strikes refined by O'Connor et al. 2007; a strike only where the foot reaches the floor, so in running, where Zeni's heel extremum falls in late swing, none may be found): {}, {}; {off}",
+        times(&f.strikes, "strikes", "no strike"),
+        times(&f.offs, "foot-offs", "no foot-off")
     )
 }
 
@@ -677,5 +675,25 @@ mod tests {
         for bad in ["", "fast", "1,2", "nan", "1,2,inf"] {
             assert!(parse_treadmill(bad).is_err(), "{bad}");
         }
+    }
+
+    /// A foot with no strike or no foot-off in the trial is said so in
+    /// words ("strikes at none s" before).
+    #[test]
+    fn the_events_line_says_when_a_foot_has_no_strike_or_foot_off() {
+        let none = crate::contacts::events::FootEvents::default();
+        let line = events_note('l', &none, &[], true);
+        assert!(line.contains("no strike, no foot-off;"), "{line}");
+        assert!(!line.contains("none s"), "{line}");
+        let f = crate::contacts::events::FootEvents {
+            strikes: vec![0.44],
+            offs: vec![0.1, 1.25],
+            transitions: vec![true],
+        };
+        let line = events_note('r', &f, &[(0.1, 0.44)], true);
+        assert!(
+            line.contains("strikes at 0.440 s, foot-offs at 0.100, 1.250 s;"),
+            "{line}"
+        );
     }
 }
