@@ -51,7 +51,11 @@ def main():
     n = read_sto(os.path.join(a.after, f"{a.trial}_predicted_grf.sto"))
     m = read_sto(a.plates)
     contacts = open(os.path.join(a.after, f"{a.trial}_foot_contacts.xml")).read()
-    strikes = sorted({float(x.split()[1]) for x in re.findall(r"<off_intervals>([^<]*)</off_intervals>", contacts)})
+    # A landing foot's strike ends the swing its contacts are off over; its
+    # heel's contacts have no other off interval (the others are also off
+    # while it lands on its heel).
+    heels = re.findall(r'<PointOnPlaneContact name="[^"]*heel[^"]*">(.*?)</PointOnPlaneContact>', contacts, re.S)
+    strikes = sorted({float(x.split()[1]) for h in heels for x in re.findall(r"<off_intervals>([^<]*)</off_intervals>", h)})
     t0, t1 = n["time"][0], n["time"][-1]
     lo = max(t0, (strikes[0] - 0.12) if strikes else t0)
     fig, ax = plt.subplots(figsize=(7.5, 4.2))

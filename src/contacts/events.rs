@@ -97,16 +97,53 @@ pub const TRANSITION_KNOT_STEP: f64 = 0.005;
 /// gait", abstract); the impact lasts to the later of these.
 pub const HEEL_STRIKE_IMPACT: f64 = 0.016;
 
-/// The trailing foot's share of the vertical force at time tau after the
-/// strike, over a double support of `t_ds` (Ren, Jones & Howard 2008, J
-/// Biomech 41:2750, the smooth transition assumption):
-/// exp(−(2 tau / T_ds)³), 1 at the strike, 0.37 halfway, 3e-4 at the
-/// foot-off.
+/// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750, the
+/// smooth transition assumption) at time tau after the strike, over a
+/// double support of `t_ds`: exp(−(2 tau / T_ds)³), 1 at the strike, 0.37
+/// halfway, 3e-4 at the foot-off. A muscle-driven model's trailing foot's
+/// mediolateral force follows it ([`trailing_line_targets`]); the vertical
+/// force follows [`trailing_vertical_share`].
 pub fn trailing_share(tau: f64, t_ds: f64) -> f64 {
     if tau <= 0.0 {
         1.0
     } else {
         (-(2.0 * tau / t_ds).powi(3)).exp()
+    }
+}
+
+/// The generalized logistic A + K / (C + Q e^(−B (u − m)))^v of the
+/// trailing foot's vertical force over double support, u = τ / T_ds, fitted
+/// by OpenSimRT's authors to their own treadmill plates (Stanev et al. 2021,
+/// Sensors 21:1804; github.com/mitkof6/OpenSimRT, `GRFMPrediction.cpp`,
+/// `verticalForceTransition`, and its fitting script, which divides each
+/// double support's trailing force by its value at the strike and fixes
+/// T_ds = 0.12 s): their B = 61.30 s⁻¹ times that 0.12 s, so that the curve
+/// scales with the double support as Ren's does.
+const VERTICAL_LOGISTIC: [f64; 7] = [
+    1.119_368_182_649_245_2,      // A
+    -1.603_821_267_061_337_7,     // K
+    3.037_706_815_056_258,        // C
+    61.295_348_914_235_34 * 0.12, // B T_ds
+    0.506_763_999_601_545_7,      // Q
+    0.939_645_552_156_475_4,      // m
+    0.423_061_837_267_674_93,     // v
+];
+
+/// The trailing foot's share of its vertical force at the strike, τ after
+/// it over a double support of `t_ds`: [`VERTICAL_LOGISTIC`] divided by its
+/// value at the strike, within [0, 1]. 1 at the strike, 0.87 at a quarter
+/// of the double support, 0.62 halfway, 0.31 at three quarters, 0.16 at the
+/// foot-off (Ren's exp(−(2τ/T_ds)³), [`trailing_share`], gives 0.98, 0.37,
+/// 0.03 and 3e-4). Measured on the six development one-step trials' plates
+/// the share is 0.57–0.74 halfway and 0.27–0.37 at three quarters
+/// (docs/grf_prediction.md, step 8).
+pub fn trailing_vertical_share(tau: f64, t_ds: f64) -> f64 {
+    let [a, k, c, b, q, m, v] = VERTICAL_LOGISTIC;
+    let f = |u: f64| a + k / (c + q * (-b * (u - m)).exp()).powf(v);
+    if tau <= 0.0 {
+        1.0
+    } else {
+        (f(tau / t_ds) / f(0.0)).clamp(0.0, 1.0)
     }
 }
 
@@ -157,17 +194,50 @@ pub fn held_intervals(events: &GaitEvents) -> [Vec<(f64, f64)>; 2] {
         }
     }
     for v in out.iter_mut() {
-        v.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut merged: Vec<(f64, f64)> = Vec::new();
-        for &(a, b) in v.iter() {
-            match merged.last_mut() {
-                Some(last) if a <= last.1 => last.1 = last.1.max(b),
-                _ => merged.push((a, b)),
-            }
-        }
-        *v = merged;
+        *v = merged(std::mem::take(v));
     }
     out
+}
+
+/// Intervals [t0, t1) in time order, those that overlap or touch merged.
+pub fn merged(mut v: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (a, b) in v {
+        match out.last_mut() {
+            Some(last) if a <= last.1 => last.1 = last.1.max(b),
+            _ => out.push((a, b)),
+        }
+    }
+    out
+}
+
+/// Per contact point (in the order of `points`), the times [t0, t1) over
+/// which it carries nothing because its foot lands on its heel (issue 36):
+/// over each double support a foot lands into (the other foot's `held`,
+/// [`held_intervals`]) it is in loading response, on the heel rocker
+/// (Perry & Burnfield 2010), so its points but the heel's (names without
+/// "heel") carry nothing, and its centre of pressure stays at its heel, the
+/// point its leg line starts from ([`landing_targets`]). Without it the
+/// moments the filtered motion asks for put the landing foot's centre of
+/// pressure up to 17 cm ahead, on its forefoot, in loading response. (The
+/// trailing foot's forefoot rocker needs no such rule: its force already
+/// acts there.)
+pub fn heel_rocker_intervals(
+    points: &[FootPoint],
+    held: &[Vec<(f64, f64)>; 2],
+) -> Vec<Vec<(f64, f64)>> {
+    points
+        .iter()
+        .map(|p| {
+            let s = usize::from(p.side != 'r');
+            if p.name.contains("heel") {
+                Vec::new()
+            } else {
+                held[1 - s].clone()
+            }
+        })
+        .collect()
 }
 
 /// A knot of a foot's force target ([`super::targets::Knot`]).
@@ -251,15 +321,16 @@ fn across_after_impact(
     }
 }
 
-/// Ren, Jones & Howard's smooth transition (2008, J Biomech 41:2750) as
-/// force targets of the **trailing** foot, with its force along its leg:
-/// over the double support T_ds after each transition strike at t_s of the
-/// other foot,
-/// - its force along the floor normal n is F(t_s + τ) = F(t_s) ·
-///   exp(−(2τ/T_ds)³), F(t_s) the force the motion requires of the floor at
-///   the strike (`required(t_s)`, all of it on the trailing foot then: the
-///   landing foot has carried nothing before it), and at most what the
-///   motion requires then (`required(t)`: the landing foot cannot pull);
+/// The smooth transition of double support (Ren, Jones & Howard 2008, J
+/// Biomech 41:2750) as force targets of the **trailing** foot, with its
+/// force along its leg: over the double support T_ds after each transition
+/// strike at t_s of the other foot,
+/// - its force along the floor normal n is F(t_s + τ) = F(t_s) · s(τ), s
+///   the share measured on plates ([`trailing_vertical_share`]), F(t_s)
+///   the force the motion requires of the floor at the strike
+///   (`required(t_s)`, all of it on the trailing foot then: the landing
+///   foot has carried nothing before it), and at most what the motion
+///   requires then (`required(t)`: the landing foot cannot pull);
 /// - its force has no part across `lean(t, foot)`, the line from its toe
 ///   (hallux point) to the body's mass centre, in the plane of the walking
 ///   direction h and n: a leg pushes along itself (the compliant leg of
@@ -288,7 +359,7 @@ pub fn trailing_targets(
             // A foot cannot pull: the trailing foot carries at most what
             // the motion requires of the floor then.
             let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
-            let vertical = (r.dot(&n) * trailing_share(tau, t_ds)).min(now.max(0.0));
+            let vertical = (r.dot(&n) * trailing_vertical_share(tau, t_ds)).min(now.max(0.0));
             Some(vec![(n, vertical), (across, 0.0)])
         })
     });
@@ -317,6 +388,7 @@ pub fn apply_transition(
         set.off_intervals[s] = off_intervals(&events.feet[s]);
     }
     set.held_intervals = held_intervals(events);
+    set.heel_rocker_intervals = heel_rocker_intervals(&set.points, &set.held_intervals);
     set.off_weight = off_weight(set.parameters.optimal_force, w0, root_optimal_force);
     let (n, h) = floor_axes(set);
     set.target_optimal_force = vec![root_optimal_force; 2];
@@ -544,7 +616,7 @@ pub fn targets_note(side: char, knots: &[TargetKnot], torque_driven: bool) -> Op
     }
     let lands = (!landing.is_empty()).then(|| {
         format!(
-            "foot {side} lands into double support over {}: its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load), but over the heel-strike impact, its first {:.0} ms, it has none along the walking direction",
+            "foot {side} lands into double support over {}: it stands on its heel, and its force points along the line from its heel to the body's mass centre (a leading leg brakes in proportion to its load), but over the heel-strike impact, its first {:.0} ms, it has none along the walking direction",
             landing.join(", "),
             HEEL_STRIKE_IMPACT * 1000.0
         )
@@ -552,7 +624,7 @@ pub fn targets_note(side: char, knots: &[TargetKnot], torque_driven: bool) -> Op
     let trails = (!spans.is_empty()).then(|| {
         if torque_driven {
             format!(
-                "foot {side} trails through double support over {}: its vertical force falls as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
+                "foot {side} trails through double support over {}: its vertical force falls as the trailing foot's measured in double support (OpenSimRT's logistic, 0.62 of the strike's halfway), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
                 spans.join(", ")
             )
         } else {
@@ -1180,14 +1252,80 @@ mod tests {
             .all(|t| t.is_empty()));
     }
 
-    /// Ren's share: 1 at the strike, e^-1 halfway, ~0 at the foot-off. The
-    /// trailing foot's targets span the double support to its foot-off
+    /// The vertical share is OpenSimRT's fitted logistic: at their double
+    /// support of 0.12 s it is their function of time (B in 1/s, the
+    /// midpoint at m T_ds) divided by its value at the strike, and it
+    /// scales with T_ds; 1 at the strike, falling, 0.62 halfway (the
+    /// development plates 0.57–0.74, Ren 0.37), within [0, 1].
+    #[test]
+    fn the_vertical_share_is_the_measured_logistic_scaled_to_the_double_support() {
+        let their = |t: f64| {
+            let (a, k, c, b, q, m, v) = (
+                1.1193681826492452,
+                -1.6038212670613377,
+                3.037706815056258,
+                61.29534891423534,
+                0.5067639996015457,
+                0.9396455521564754,
+                0.42306183726767493,
+            );
+            a + k / (c + q * (-b * (t - m * 0.12f64)).exp()).powf(v)
+        };
+        assert_eq!(trailing_vertical_share(0.0, 0.12), 1.0);
+        for i in 1..=24 {
+            let t = 0.005 * i as f64;
+            let s = trailing_vertical_share(t, 0.12);
+            assert!((s - their(t) / their(0.0)).abs() < 1e-12, "{t}: {s}");
+            // Scaled: the same share at the same fraction of any T_ds.
+            assert!((trailing_vertical_share(t * 0.5, 0.06) - s).abs() < 1e-12);
+            assert!(s < trailing_vertical_share(t - 0.005, 0.12) && (0.0..=1.0).contains(&s));
+        }
+        let half = trailing_vertical_share(0.06, 0.12);
+        assert!((half - 0.62).abs() < 0.01, "halfway {half}");
+        assert!(half > trailing_share(0.06, 0.12) + 0.2);
+    }
+
+    /// Over the double support a foot lands into (the other foot's held
+    /// interval), its points but the heel's carry nothing; over the one it
+    /// trails through, none is switched off.
+    #[test]
+    fn a_landing_foot_stands_on_its_heel() {
+        let point = |name: &str, side: char| FootPoint {
+            name: format!("foot_{name}_{side}"),
+            side,
+            body: 0,
+            body_name: String::new(),
+            local: Vector3::zeros(),
+            contact_level: 0.0,
+            dwell_xz: (0.0, 0.0),
+        };
+        let points = [
+            point("heel_med", 'r'),
+            point("midfoot_lat", 'r'),
+            point("meta1", 'r'),
+            point("hallux", 'r'),
+            point("heel_lat", 'l'),
+            point("meta5", 'l'),
+        ];
+        // The left foot trails through [0.5, 0.6) (the right lands), the
+        // right through [1.0, 1.12) (the left lands).
+        let held = [vec![(1.0, 1.12)], vec![(0.5, 0.6)]];
+        let off = heel_rocker_intervals(&points, &held);
+        assert_eq!(off[0], Vec::<(f64, f64)>::new());
+        for k in 1..4 {
+            assert_eq!(off[k], vec![(0.5, 0.6)], "{}", points[k].name);
+        }
+        assert_eq!(off[4], Vec::<(f64, f64)>::new());
+        assert_eq!(off[5], vec![(1.0, 1.12)]);
+    }
+
+    /// The trailing foot's targets span the double support to its foot-off
     /// (else to the end of the kinematics, or 0.11 s), hold its vertical
     /// force to the requirement at the strike times the share, and its
     /// force along its leg (no part across the line from its toe to the
     /// mass centre); the landing foot gets none.
     #[test]
-    fn the_trailing_foot_follows_rens_transition_along_its_leg() {
+    fn the_trailing_foot_follows_its_transition_along_its_leg() {
         assert_eq!(trailing_share(0.0, 0.12), 1.0);
         assert!((trailing_share(0.06, 0.12) - (-1.0f64).exp()).abs() < 1e-12);
         assert!(trailing_share(0.12, 0.12) < 1e-3);
@@ -1211,7 +1349,7 @@ mod tests {
         assert!(!last.1 && (last.0 - 0.62).abs() < 1e-5, "{last:?}");
         for (tk, on, rows) in &t[..t.len() - 1] {
             assert!(*on);
-            let want = 700.0 * trailing_share(tk - 0.5, 0.12);
+            let want = 700.0 * trailing_vertical_share(tk - 0.5, 0.12);
             assert_eq!(rows[0].0, n);
             assert!((rows[0].1 - want).abs() < 1e-9, "{tk}: {rows:?}");
             assert!(!is_landing_knot(&(*tk, *on, rows.clone())));

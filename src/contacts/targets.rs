@@ -13,7 +13,7 @@
 //! the row is `x = 0` and the group is free.
 //!
 //! predict-grf uses it for both feet through double support: the trailing
-//! foot's Ren, Jones & Howard's smooth transition (2008, J Biomech
+//! foot's smooth transition (after Ren, Jones & Howard 2008, J Biomech
 //! 41:2750) and each foot's force along its leg (docs/grf_prediction.md,
 //! "The step-to-step transition").
 
