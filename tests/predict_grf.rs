@@ -1048,9 +1048,9 @@ fn one_step_torque_driven_walking() {
         assert!(knots.iter().all(|k| is_landing_knot(k) == (side == 1)));
         let spec = statopt::contacts::targets::TargetSpec {
             group: "foot".into(),
-            rows: 2,
+            rows: 3,
             knots: knots.clone(),
-            optimal_force: vec![1.0; 2],
+            optimal_force: vec![1.0; 3],
         };
         for (i, &t) in p.predicted.time.iter().enumerate() {
             let Some(rows) = spec.value_at(t) else {
@@ -1132,7 +1132,7 @@ fn the_load_passes_as_measured_onto_the_landing_heel() {
     let right = &p.events.feet[0];
     assert_eq!(right.transitions, vec![true], "{right:?}");
     // The right foot lands: its centre of pressure over stance, 88 mm from
-    // the plates' with Ren's share, 130 mm with the logistic alone; 25 mm.
+    // the plates' with Ren's share, 130 mm with the logistic alone; 20 mm.
     let cop = p
         .stance
         .iter()
@@ -1297,7 +1297,7 @@ fn the_landing_foot_brakes_along_its_leg_through_double_support() {
 /// and 0.695, the trailing foot's leg line then taking the impact's frames
 /// from it at the same cost; with that line starting after the impact −7
 /// and −7 N and 0.767 (asserted: within 12 N of zero, rho at least 0.75;
-/// −7 and −6 N and 0.762 with the measured share and the landing heel's
+/// −7 and −6 N and 0.761 with the measured share and the landing heel's
 /// rocker), the vertical rho bar kept.
 #[test]
 fn the_landing_heel_brakes_less_through_its_impact() {

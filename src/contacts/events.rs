@@ -336,11 +336,15 @@ fn across_after_impact(
 ///   direction h and n: a leg pushes along itself (the compliant leg of
 ///   walking, Geyer, Seyfarth & Blickhan 2006, Proc R Soc B 273:2861), and
 ///   in pre-swing the trailing foot rolls over its toes (Perry & Burnfield
-///   2010), so its force acts there.
+///   2010), so its force acts there;
+/// - its mediolateral force, along m = n × h, falls on Ren's
+///   [`trailing_share`] from what the motion requires at the strike, as a
+///   muscle-driven model's does ([`trailing_line_targets`]): without it the
+///   feet pushed against each other sideways.
 ///
 /// The landing foot takes the rest, R(t) − F(t), through the equations of
-/// motion. Knots every [`TRANSITION_KNOT_STEP`], rows (n, F) and (across,
-/// 0); the target ends just after the double support. Per foot (0 right,
+/// motion. Knots every [`TRANSITION_KNOT_STEP`], rows (n, F), (across, 0)
+/// and (m, F_m); the target ends just after the double support. Per foot (0 right,
 /// 1 left), the knots of the feet that trail; a transition whose
 /// requirement or lean is not known (at the first or last row) gets none.
 pub fn trailing_targets(
@@ -350,6 +354,7 @@ pub fn trailing_targets(
     mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
     mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
 ) -> [Vec<TargetKnot>; 2] {
+    let m = n.cross(&h).normalize();
     let mut out = per_double_support(events, |o, ts, t_ds| {
         let Some(r) = required(ts) else {
             return Vec::new();
@@ -360,7 +365,8 @@ pub fn trailing_targets(
             // the motion requires of the floor then.
             let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
             let vertical = (r.dot(&n) * trailing_vertical_share(tau, t_ds)).min(now.max(0.0));
-            Some(vec![(n, vertical), (across, 0.0)])
+            let lateral = r.dot(&m) * trailing_share(tau, t_ds);
+            Some(vec![(n, vertical), (across, 0.0), (m, lateral)])
         })
     });
     out.iter_mut().for_each(time_ordered);
@@ -391,7 +397,7 @@ pub fn apply_transition(
     set.heel_rocker_intervals = heel_rocker_intervals(&set.points, &set.held_intervals);
     set.off_weight = off_weight(set.parameters.optimal_force, w0, root_optimal_force);
     let (n, h) = floor_axes(set);
-    set.target_optimal_force = vec![root_optimal_force; 2];
+    set.target_optimal_force = vec![root_optimal_force; 3];
     let points = set.points.clone();
     let trailing = trailing_targets(
         events,
@@ -420,8 +426,8 @@ pub fn apply_transition(
 /// proportion to its load. Over the heel-strike impact, the first
 /// [`HEEL_STRIKE_IMPACT`] after the strike, the line is the floor normal n
 /// instead: the impact's force is vertical. Knots every [`TRANSITION_KNOT_STEP`], rows
-/// (across, 0) and a zero row (the trailing target's second row; it holds
-/// nothing, [`super::targets`]); the target ends just after the double
+/// (across, 0) and two zero rows (the trailing target's second and third
+/// rows; they hold nothing, [`super::targets`]); the target ends just after the double
 /// support. A transition whose lean is not known gets none.
 pub fn landing_targets(
     events: &GaitEvents,
@@ -444,7 +450,11 @@ pub fn landing_targets(
                     lean(ts + tau, s)?
                 };
                 let across = across_leg(line, h, n);
-                Some(vec![(across, 0.0), (Vector3::zeros(), 0.0)])
+                Some(vec![
+                    (across, 0.0),
+                    (Vector3::zeros(), 0.0),
+                    (Vector3::zeros(), 0.0),
+                ])
             }));
         }
     }
@@ -624,7 +634,7 @@ pub fn targets_note(side: char, knots: &[TargetKnot], torque_driven: bool) -> Op
     let trails = (!spans.is_empty()).then(|| {
         if torque_driven {
             format!(
-                "foot {side} trails through double support over {}: its vertical force falls as the trailing foot's measured in double support (OpenSimRT's logistic, 0.62 of the strike's halfway), and its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
+                "foot {side} trails through double support over {}: its vertical force falls as the trailing foot's measured in double support (OpenSimRT's logistic, 0.62 of the strike's halfway) and its mediolateral force as Ren et al. 2008's smooth transition, exp(-(2t/T)^3), its force points along the line from its toe to the body's mass centre, and its contacts stay on the floor whatever their slip (it rolls over its toes, it does not slide); the landing foot carries the rest",
                 spans.join(", ")
             )
         } else {
@@ -1236,11 +1246,14 @@ mod tests {
                 assert!(knot.1 && is_landing_knot(knot));
                 assert_eq!(knot.2[0], (h, 0.0));
             }
-            // The same rows as the landing target's over its impact.
+            // The same rows as the landing target's over its impact (whose
+            // third row, the trailing target's mediolateral one, holds
+            // nothing).
             let landing = landing_targets(&ev, h, Vector3::y(), |_, _| {
                 Some(Vector3::new(0.0, 0.9, 0.3))
             });
-            assert_eq!(landing[foot][0].2, t[0].2);
+            assert_eq!(landing[foot][0].2[..2], t[0].2[..]);
+            assert_eq!(landing[foot][0].2[2], (Vector3::zeros(), 0.0));
         }
         let note = targets_note('r', &k[0], false).unwrap();
         assert_eq!(
@@ -1353,6 +1366,11 @@ mod tests {
             assert_eq!(rows[0].0, n);
             assert!((rows[0].1 - want).abs() < 1e-9, "{tk}: {rows:?}");
             assert!(!is_landing_knot(&(*tk, *on, rows.clone())));
+            // The mediolateral force on Ren's share of the strike's.
+            let m = n.cross(&h).normalize();
+            assert_eq!(rows[2].0, m);
+            let ml = r.dot(&m) * trailing_share(tk - 0.5, 0.12);
+            assert!((rows[2].1 - ml).abs() < 1e-9, "{tk}: {rows:?}");
             if tk - 0.5 <= HEEL_STRIKE_IMPACT + 1e-9 {
                 // Over the landing heel's impact the line holds nothing.
                 assert_eq!(rows[1], (Vector3::zeros(), 0.0), "{tk}");
