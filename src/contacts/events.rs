@@ -344,33 +344,53 @@ fn across_after_impact(
 ///
 /// The landing foot takes the rest, R(t) − F(t), through the equations of
 /// motion. Knots every [`TRANSITION_KNOT_STEP`], rows (n, F), (across, 0)
-/// and (m, F_m); the target ends just after the double support. Per foot (0 right,
-/// 1 left), the knots of the feet that trail; a transition whose
+/// and (m, F_m); the target ends just after the double support. Per foot
+/// (0 right, 1 left), the knots of the feet that trail; a transition whose
 /// requirement or lean is not known (at the first or last row) gets none.
 pub fn trailing_targets(
     events: &GaitEvents,
     h: Vector3<f64>,
     n: Vector3<f64>,
+    required: impl FnMut(f64) -> Option<Vector3<f64>>,
+    lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+) -> [Vec<TargetKnot>; 2] {
+    let mut out = trailing_knots(events, h, n, required, lean, true);
+    out.iter_mut().for_each(time_ordered);
+    out
+}
+
+/// The trailing foot's knots over each double support: its line row
+/// (across its leg after the impact, [`across_after_impact`]) and its
+/// mediolateral row on Ren's [`trailing_share`] of the strike's lateral
+/// requirement, in that order; `with_vertical` puts its vertical row on
+/// [`trailing_vertical_share`] first ([`trailing_targets`]), without it
+/// the rows are a muscle-driven model's ([`trailing_line_targets`]).
+fn trailing_knots(
+    events: &GaitEvents,
+    h: Vector3<f64>,
+    n: Vector3<f64>,
     mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
     mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+    with_vertical: bool,
 ) -> [Vec<TargetKnot>; 2] {
     let m = n.cross(&h).normalize();
-    let mut out = per_double_support(events, |o, ts, t_ds| {
+    per_double_support(events, |o, ts, t_ds| {
         let Some(r) = required(ts) else {
             return Vec::new();
         };
         double_support_knots(ts, t_ds, |tau| {
-            let across = across_after_impact(tau, || lean(ts + tau, o), h, n)?;
+            let across = (across_after_impact(tau, || lean(ts + tau, o), h, n)?, 0.0);
+            let lateral = (m, r.dot(&m) * trailing_share(tau, t_ds));
+            if !with_vertical {
+                return Some(vec![across, lateral]);
+            }
             // A foot cannot pull: the trailing foot carries at most what
             // the motion requires of the floor then.
             let now = required(ts + tau).map_or(f64::INFINITY, |x| x.dot(&n));
             let vertical = (r.dot(&n) * trailing_vertical_share(tau, t_ds)).min(now.max(0.0));
-            let lateral = r.dot(&m) * trailing_share(tau, t_ds);
-            Some(vec![(n, vertical), (across, 0.0), (m, lateral)])
+            Some(vec![(n, vertical), across, lateral])
         })
-    });
-    out.iter_mut().for_each(time_ordered);
-    out
+    })
 }
 
 /// The step-to-step transition of walking written into the contact set
@@ -427,8 +447,8 @@ pub fn apply_transition(
 /// [`HEEL_STRIKE_IMPACT`] after the strike, the line is the floor normal n
 /// instead: the impact's force is vertical. Knots every [`TRANSITION_KNOT_STEP`], rows
 /// (across, 0) and two zero rows (the trailing target's second and third
-/// rows; they hold nothing, [`super::targets`]); the target ends just after the double
-/// support. A transition whose lean is not known gets none.
+/// rows; they hold nothing, [`super::targets`]); the target ends just after
+/// the double support. A transition whose lean is not known gets none.
 pub fn landing_targets(
     events: &GaitEvents,
     h: Vector3<f64>,
@@ -507,20 +527,10 @@ pub fn trailing_line_targets(
     events: &GaitEvents,
     h: Vector3<f64>,
     n: Vector3<f64>,
-    mut required: impl FnMut(f64) -> Option<Vector3<f64>>,
-    mut lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
+    required: impl FnMut(f64) -> Option<Vector3<f64>>,
+    lean: impl FnMut(f64, usize) -> Option<Vector3<f64>>,
 ) -> [Vec<TargetKnot>; 2] {
-    let m = n.cross(&h).normalize();
-    per_double_support(events, |o, ts, t_ds| {
-        let Some(r) = required(ts) else {
-            return Vec::new();
-        };
-        double_support_knots(ts, t_ds, |tau| {
-            let across = across_after_impact(tau, || lean(ts + tau, o), h, n)?;
-            let lateral = r.dot(&m) * trailing_share(tau, t_ds);
-            Some(vec![(across, 0.0), (m, lateral)])
-        })
-    })
+    trailing_knots(events, h, n, required, lean, false)
 }
 
 /// The step-to-step transition of a muscle-driven model's walking
